@@ -1,0 +1,28 @@
+#pragma once
+// One exception type for everything a user can get wrong or a run can hit. The program prints
+// what() as one line and exits with exit_code(): 2 for bad input, 3 for a run that went unstable.
+#include <stdexcept>
+#include <string>
+
+namespace talus {
+
+class Error : public std::runtime_error {
+ public:
+  enum class Kind { Input, Instability, Io };
+  Error(Kind kind, const std::string& message) : std::runtime_error(message), kind_(kind) {}
+  Kind kind() const { return kind_; }
+  int exit_code() const { return kind_ == Kind::Instability ? 3 : 2; }
+
+ private:
+  Kind kind_;
+};
+
+/// Bad scene, bad argument, value out of range: message names the key path and allowed range.
+inline Error input_error(const std::string& message) { return Error(Error::Kind::Input, message); }
+/// NaN, a particle leaving the grid, CFL breach: message names step, particle and quantity.
+inline Error instability_error(const std::string& message) {
+  return Error(Error::Kind::Instability, message);
+}
+inline Error io_error(const std::string& message) { return Error(Error::Kind::Io, message); }
+
+}  // namespace talus

@@ -1,0 +1,81 @@
+#pragma once
+// Operations on symmetric tensors stored as Voigt 6-vectors of tensor components (types.hpp).
+#include "talus/core/types.hpp"
+
+#include <cmath>
+
+namespace talus {
+
+inline double trace(const Sym6& s) { return s[XX] + s[YY] + s[ZZ]; }
+
+inline Sym6 deviator(const Sym6& s) {
+  Sym6 d = s;
+  const double p = trace(s) / 3.0;
+  d[XX] -= p;
+  d[YY] -= p;
+  d[ZZ] -= p;
+  return d;
+}
+
+/// Full double contraction a:b of two symmetric tensors (shear entries counted twice).
+inline double double_contract(const Sym6& a, const Sym6& b) {
+  return a[XX] * b[XX] + a[YY] * b[YY] + a[ZZ] * b[ZZ] +
+         2.0 * (a[YZ] * b[YZ] + a[XZ] * b[XZ] + a[XY] * b[XY]);
+}
+
+/// Second invariant of the deviator, J2 = 1/2 s:s.
+inline double j2(const Sym6& s) {
+  const Sym6 d = deviator(s);
+  return 0.5 * double_contract(d, d);
+}
+
+/// Identity tensor in Voigt form.
+inline Sym6 identity6() {
+  Sym6 i;
+  i << 1.0, 1.0, 1.0, 0.0, 0.0, 0.0;
+  return i;
+}
+
+inline Mat3 to_matrix(const Sym6& s) {
+  Mat3 m;
+  m << s[XX], s[XY], s[XZ],
+       s[XY], s[YY], s[YZ],
+       s[XZ], s[YZ], s[ZZ];
+  return m;
+}
+
+inline Sym6 from_matrix(const Mat3& m) {
+  Sym6 s;
+  s << m(0, 0), m(1, 1), m(2, 2), 0.5 * (m(1, 2) + m(2, 1)), 0.5 * (m(0, 2) + m(2, 0)),
+      0.5 * (m(0, 1) + m(1, 0));
+  return s;
+}
+
+/// Rotational part of the Jaumann (co-rotational) stress update over one step:
+/// sigma <- sigma + dW sigma - sigma dW, with dW the spin increment (w_yz, w_xz, w_xy),
+/// dW_ij = dt/2 (dv_i/dx_j - dv_j/dx_i). Written out so that it vectorises and allocates nothing.
+inline void jaumann_rotate(Sym6& s, double w_yz, double w_xz, double w_xy) {
+  // dW as a full antisymmetric matrix: W(0,1) = w_xy, W(0,2) = w_xz, W(1,2) = w_yz.
+  const double sxx = s[XX], syy = s[YY], szz = s[ZZ], syz = s[YZ], sxz = s[XZ], sxy = s[XY];
+  // (W S - S W)_ij = sum_k W_ik S_kj - S_ik W_kj ; with W antisymmetric this is W S + (W S)^T.
+  // (W S)_xx = W_xy S_yx + W_xz S_zx
+  const double ws_xx = w_xy * sxy + w_xz * sxz;
+  const double ws_yy = -w_xy * sxy + w_yz * syz;
+  const double ws_zz = -w_xz * sxz - w_yz * syz;
+  // Off-diagonals of W S + (W S)^T: (WS)_ij + (WS)_ji
+  // (W S)_yz = W_yx S_xz + W_yz S_zz = -w_xy sxz + w_yz szz
+  // (W S)_zy = W_zx S_xy + W_zy S_yy = -w_xz sxy - w_yz syy
+  const double r_yz = (-w_xy * sxz + w_yz * szz) + (-w_xz * sxy - w_yz * syy);
+  // (W S)_xz = W_xy S_yz + W_xz S_zz ; (W S)_zx = W_zx S_xx + W_zy S_yx = -w_xz sxx - w_yz sxy
+  const double r_xz = (w_xy * syz + w_xz * szz) + (-w_xz * sxx - w_yz * sxy);
+  // (W S)_xy = W_xy S_yy + W_xz S_zy ; (W S)_yx = W_yx S_xx + W_yz S_zx = -w_xy sxx + w_yz sxz
+  const double r_xy = (w_xy * syy + w_xz * syz) + (-w_xy * sxx + w_yz * sxz);
+  s[XX] += 2.0 * ws_xx;
+  s[YY] += 2.0 * ws_yy;
+  s[ZZ] += 2.0 * ws_zz;
+  s[YZ] += r_yz;
+  s[XZ] += r_xz;
+  s[XY] += r_xy;
+}
+
+}  // namespace talus

@@ -1,0 +1,90 @@
+#pragma once
+// Grid: structured background grid, uniform spacing h, with node fields in structure-of-arrays form.
+//
+// Index space. The scene's domain [origin, origin + cells*h] is surrounded by kPad ghost cells on
+// every side, so that any shape function's support stays inside the arrays. Node (i, j, k) sits at
+// origin + (i - kPad, j - kPad, k - kPad) * h (k measured in the terrain-following w).
+//
+// Memory. Nodes are stored in tiles of 4x4x4, tile after tile, so the nodes a block of particles
+// touches are contiguous. The arrays span the whole padded box but are committed lazily
+// (LazyArray): only tiles next to particles are ever written, so memory scales with the occupied
+// region, not the bounding box. `active_tiles` lists the tiles in use this step.
+#include "talus/core/lazy_array.hpp"
+#include "talus/core/types.hpp"
+#include "talus/grid/terrain.hpp"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace talus {
+
+inline constexpr int kPad = 2;        // ghost cells beyond each domain face
+inline constexpr int kTileEdge = 4;   // nodes per tile edge
+inline constexpr int kTileNodes = kTileEdge * kTileEdge * kTileEdge;
+
+struct GridGeometry {
+  Vec3 origin = Vec3::Zero();            // physical corner of the domain (a node)
+  double h = 1.0;                        // cell size
+  std::array<int, 3> cells{1, 1, 1};     // domain cells per axis
+  std::array<int, 3> nodes() const {     // nodes per axis including ghosts
+    return {cells[0] + 2 * kPad + 1, cells[1] + 2 * kPad + 1, cells[2] + 2 * kPad + 1};
+  }
+  /// Position in grid units (node spacing 1, ghost offset included).
+  double to_grid(int axis, double x) const { return (x - origin[axis]) / h + kPad; }
+  double node_position(int axis, int index) const { return origin[axis] + (index - kPad) * h; }
+};
+
+class Grid {
+ public:
+  Grid() = default;
+  explicit Grid(const GridGeometry& geometry);
+
+  const GridGeometry& geometry() const { return geometry_; }
+  const FlatTerrain& terrain() const { return terrain_; }
+
+  // Node index = x_part(i) + y_part(j) + z_part(k): separable, so the transfer kernels compute
+  // three small tables per particle instead of a full index per node.
+  std::size_t x_part(int i) const {
+    return static_cast<std::size_t>(i >> 2) * stride_x_ + static_cast<std::size_t>(i & 3) * 16;
+  }
+  std::size_t y_part(int j) const {
+    return static_cast<std::size_t>(j >> 2) * stride_y_ + static_cast<std::size_t>(j & 3) * 4;
+  }
+  std::size_t z_part(int k) const {
+    return static_cast<std::size_t>(k >> 2) * kTileNodes + static_cast<std::size_t>(k & 3);
+  }
+  std::size_t node(int i, int j, int k) const { return x_part(i) + y_part(j) + z_part(k); }
+
+  std::array<int, 3> tiles() const { return tiles_; }
+  std::size_t tile_count() const { return static_cast<std::size_t>(tiles_[0]) * tiles_[1] * tiles_[2]; }
+  /// Node (i, j, k) of local slot `s` of tile `t` (inverse of node()).
+  std::array<int, 3> node_of(std::size_t tile, int slot) const;
+
+  /// Replace the set of tiles in use. Only those tiles are cleared and updated each step.
+  void set_active_tiles(std::vector<std::uint32_t> tiles) { active_tiles_ = std::move(tiles); }
+  const std::vector<std::uint32_t>& active_tiles() const { return active_tiles_; }
+  /// Zero every field on the active tiles.
+  void clear_active();
+  /// Zero the momentum on the active tiles (before the MUSL remap re-scatters it).
+  void clear_momentum();
+  /// Bytes of node data in the active tiles (what the grid really occupies).
+  std::size_t active_bytes() const;
+
+  // Node fields. `momentum` holds m v after a scatter and v after update; `force` holds f, then
+  // the acceleration a; `velocity_l` is the updated (Lagrangian) velocity v^L = v + a dt.
+  LazyArray mass;
+  std::array<LazyArray, 3> momentum;
+  std::array<LazyArray, 3> force;
+  std::array<LazyArray, 3> velocity_l;
+  static constexpr int kFieldCount = 10;
+
+ private:
+  GridGeometry geometry_;
+  FlatTerrain terrain_;
+  std::array<int, 3> tiles_{0, 0, 0};
+  std::size_t stride_x_ = 0, stride_y_ = 0;
+  std::vector<std::uint32_t> active_tiles_;
+};
+
+}  // namespace talus

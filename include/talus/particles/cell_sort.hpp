@@ -1,0 +1,71 @@
+#pragma once
+// Sorting particles by cell, and the colour blocks that make the scatter race-free.
+//
+// Cells are grouped into cubic colour blocks of `block_cells`^3 cells; a block's colour is the parity
+// of its block coordinates (8 colours). Particles are sorted (stable counting sort, O(N)) by
+// (block, cell within block), so each block's particles are contiguous and ordered by cell.
+// A block of particles writes the nodes of its cells widened by the shape function's reach; two
+// blocks of one colour are one block apart, so with
+//     2 * slack + reach_low + reach_high <= block_cells
+// their writes never meet even after every particle has moved `slack` cells since the sort.
+// Each colour is then one parallel loop over blocks with no atomics, and every node receives its
+// contributions in the same order for any thread count: results are bit-identical.
+//
+// Work and memory scale with the occupied blocks: the only arrays over the bounding box are one
+// counter per block and one flag per 4^3 node tile.
+#include "talus/grid/grid.hpp"
+#include "talus/particles/particle_store.hpp"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace talus {
+
+class CellSort {
+ public:
+  CellSort() = default;
+  /// reach_low/high: the shape function's support in cells around the particle's cell.
+  CellSort(const Grid& grid, int reach_low, int reach_high);
+
+  /// Sort the store by (block, cell), rebuild offsets and colour lists, and activate the grid tiles
+  /// the blocks may write until the next sort.
+  void sort(ParticleStore& particles, Grid& grid);
+
+  int block_cells() const { return block_cells_; }
+  int slack() const { return slack_; }
+  std::size_t block_count() const { return blocks_.size(); }
+  /// Cell coordinates of the first cell of active block b.
+  std::array<int, 3> block_origin(std::size_t b) const;
+  std::uint32_t block_begin(std::size_t b) const { return block_start_[b]; }
+  std::uint32_t block_end(std::size_t b) const { return block_start_[b + 1]; }
+  const std::vector<std::uint32_t>& colour(int c) const { return colour_blocks_[c]; }
+  /// Particles of cell (local index l in block b): [cell_start[b*cells_per_block + l], ... + 1).
+  const std::vector<std::uint32_t>& cell_start() const { return cell_start_; }
+
+  /// Whether a particle sorted into block b may sit in cell (i, j, k) without breaking the colouring.
+  bool within_slack(std::size_t b, int i, int j, int k) const {
+    const auto o = block_origin(b);
+    return i >= o[0] - slack_ && i < o[0] + block_cells_ + slack_ && j >= o[1] - slack_ &&
+           j < o[1] + block_cells_ + slack_ && k >= o[2] - slack_ && k < o[2] + block_cells_ + slack_;
+  }
+
+ private:
+  void activate_tiles(Grid& grid);
+
+  int block_cells_ = 4;
+  int slack_ = 1;
+  int reach_low_ = 0, reach_high_ = 1;
+  std::array<int, 3> cells_{};         // cells per axis including ghosts
+  std::array<int, 3> block_counts_{};  // blocks per axis over the bounding box
+  std::vector<std::uint32_t> blocks_;       // bounding-box index of each active block, ascending
+  std::vector<std::uint32_t> block_start_;  // particle offsets per active block (+1 end)
+  std::vector<std::uint32_t> cell_start_;   // particle offsets per cell of active blocks (+1 end)
+  std::array<std::vector<std::uint32_t>, 8> colour_blocks_;
+  // Scratch reused between sorts.
+  std::vector<std::uint32_t> bbox_block_index_;   // per bounding-box block: count, then compact index + 1
+  std::vector<std::uint32_t> particle_block_, particle_cell_, order_;
+  std::vector<std::uint8_t> tile_flag_;
+};
+
+}  // namespace talus

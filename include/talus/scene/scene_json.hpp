@@ -1,0 +1,20 @@
+#pragma once
+// The one place where scene files are read and validated, and where a scene is written back out
+// with every default filled in (the run echoes it into its output folder).
+#include "talus/scene/scene.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+
+namespace talus {
+
+/// Parse and validate a scene. `source` names the file in error messages.
+/// Throws talus::Error (input) naming the key path and the allowed range.
+Scene parse_scene(const std::string& text, const std::string& source);
+Scene read_scene_file(const std::string& path);
+
+/// The fully resolved scene; parse_scene(scene_to_json(s).dump()) reproduces s.
+nlohmann::json scene_to_json(const Scene& scene);
+
+}  // namespace talus

@@ -1,0 +1,86 @@
+#pragma once
+// Solver: owns the particles, the grid and the time, and advances the scene one step at a time.
+// step() is the one place where the order of the phases is written down (solver.cpp).
+#include "talus/boundary/walls.hpp"
+#include "talus/grid/grid.hpp"
+#include "talus/material/linear_elastic.hpp"
+#include "talus/particles/cell_sort.hpp"
+#include "talus/particles/particle_store.hpp"
+#include "talus/scene/scene.hpp"
+#include "talus/solver/phase_timer.hpp"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace talus {
+
+/// The terms of the energy budget: kinetic + stored strain + gravitational potential + work
+/// dissipated by friction + plastic work. For a conservative continuum this total stays at its
+/// initial value; its drift measures the scheme's numerical dissipation or gain (and the energy
+/// lost in no-rebound impacts on walls, which a rigid wall's normal impulse does not account for).
+struct EnergyBudget {
+  double kinetic = 0.0;
+  double strain = 0.0;
+  double gravity = 0.0;         // -sum m g.x (zero at the grid origin)
+  double friction_work = 0.0;   // work dissipated by wall friction, accumulated
+  double plastic_work = 0.0;    // accumulated plastic dissipation
+  double total() const { return kinetic + strain + gravity + friction_work + plastic_work; }
+};
+
+class Solver {
+ public:
+  explicit Solver(Scene scene);
+
+  /// Advance one step with the stable time step, clipped so that the run ends at end_time.
+  /// Throws an instability Error (step, time, particle, quantity) if the state goes bad.
+  void step();
+  bool finished() const;
+
+  /// dt = courant * h / max_p (c_p + |v_p|) (seed 000 eq. 60), c_p the P-wave speed at the
+  /// particle's current density.
+  double stable_time_step() const;
+
+  double time() const { return time_; }
+  std::int64_t step_count() const { return step_; }
+  double last_dt() const { return last_dt_; }
+  EnergyBudget energies() const;
+
+  const Scene& scene() const { return scene_; }
+  const ParticleStore& particles() const { return particles_; }
+  ParticleStore& particles() { return particles_; }
+  const Grid& grid() const { return grid_; }
+  const CellSort& cell_sort() const { return sort_; }
+  PhaseTimes& phase_times() { return times_; }
+  const PhaseTimes& phase_times() const { return times_; }
+  std::int64_t sort_count() const { return sorts_; }
+
+ private:
+  template <class Shape, class Terrain>
+  void step_with(double dt);
+  template <class Shape, class Terrain>
+  void update_stress(const std::array<const double*, 3>& node_velocity, double dt);
+  void sort_particles();
+  [[noreturn]] void report_bad_particle(long long index, const char* what) const;
+
+  Scene scene_;
+  ParticleStore particles_;
+  Grid grid_;
+  CellSort sort_;
+  Walls walls_;
+  std::vector<LinearElastic> body_elastic_;   // per body
+  std::vector<double> body_p_wave_modulus_;   // per body
+  std::array<std::vector<double>, 3> displacement_;  // this step's dt sum N v^L, applied after the strain pass
+  double mass_floor_ = 0.0;
+  double time_ = 0.0;
+  std::int64_t step_ = 0;
+  double last_dt_ = 0.0;
+  bool needs_sort_ = true;
+  int steps_since_sort_ = 0;
+  std::int64_t sorts_ = 0;
+  double friction_work_ = 0.0;
+  double plastic_work_ = 0.0;
+  PhaseTimes times_;
+};
+
+}  // namespace talus

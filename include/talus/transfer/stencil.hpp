@@ -1,0 +1,52 @@
+#pragma once
+// The nodes and weights one particle talks to: per axis, kNodes node-index parts and weights, so
+// that node (a, b, c) is ix[a] + iy[b] + iz[c] and N = wx[a] wy[b] wz[c] (tensor product,
+// seed 000 eq. 32). Gradients are in physical units (1/h applied); for a terrain grid the x
+// derivative gains the mapping term -z_b'(x) dN/dw (docs/theory.md).
+#include "talus/grid/grid.hpp"
+
+#include <cstddef>
+
+namespace talus {
+
+template <class Shape>
+struct Stencil {
+  static constexpr int N = Shape::kNodes;
+  std::size_t ix[N], iy[N], iz[N];
+  double wx[N], wy[N], wz[N];
+  double gx[N], gy[N], gz[N];  // d w / d x in 1/m
+  double terrain_slope = 0.0;  // z_b'(x) at the particle (0 on a flat grid)
+
+  template <class Terrain>
+  void evaluate(const Grid& grid, const Terrain& terrain, double x, double y, double z, double half_width) {
+    const GridGeometry& g = grid.geometry();
+    const double inv_h = 1.0 / g.h;
+    double w_coord = z;
+    if constexpr (!Terrain::kIsFlat) {
+      w_coord = z - terrain.height(x);
+      terrain_slope = terrain.slope(x);
+    }
+    int bx, by, bz;
+    Shape::weights((x - g.origin[0]) * inv_h + kPad, half_width, bx, wx, gx);
+    Shape::weights((y - g.origin[1]) * inv_h + kPad, half_width, by, wy, gy);
+    Shape::weights((w_coord - g.origin[2]) * inv_h + kPad, half_width, bz, wz, gz);
+    for (int a = 0; a < N; ++a) {
+      ix[a] = grid.x_part(bx + a);
+      iy[a] = grid.y_part(by + a);
+      iz[a] = grid.z_part(bz + a);
+      gx[a] *= inv_h;
+      gy[a] *= inv_h;
+      gz[a] *= inv_h;
+    }
+  }
+
+  /// Shape-function gradient of node (a, b, c) in physical coordinates.
+  void gradient(int a, int b, int c, double& dx, double& dy, double& dz) const {
+    dx = gx[a] * wy[b] * wz[c];
+    dy = wx[a] * gy[b] * wz[c];
+    dz = wx[a] * wy[b] * gz[c];
+    if (terrain_slope != 0.0) dx -= terrain_slope * dz;  // dN/dx_phys = dN/dx - z_b' dN/dw
+  }
+};
+
+}  // namespace talus

@@ -1,0 +1,55 @@
+#pragma once
+// The particle <-> grid transfers of one step. Each is a template over the shape function and the
+// terrain type (instantiated in transfers.cpp), so the inner loops have compile-time extents.
+//
+//  scatter_to_grid    P2G: nodal mass, momentum and internal force (seed 000 eq. 47-49), as 8
+//                     colour passes over blocks: no atomics, same order for any thread count.
+//  gather_from_grid   G2P: v_p += sum N_i (v_i^L - v_i), x_p += dt sum N_i v_i^L (seed 000 eq. 50-51),
+//                     parallel over blocks (pure gather).
+//  strain_increments  d_eps_p = dt/2 sum (grad N_i (x) v_i + transpose) and the spin increment
+//                     (seed 000 eq. 33), for a range of particles into a small buffer.
+#include "talus/grid/grid.hpp"
+#include "talus/particles/cell_sort.hpp"
+#include "talus/particles/particle_store.hpp"
+
+#include <array>
+#include <cstddef>
+#include <vector>
+
+namespace talus {
+
+enum class ScatterFields {
+  MassMomentumForce,  // the full P2G of a step
+  Momentum,           // the MUSL remap: momentum only (nodal mass is unchanged)
+};
+
+template <class Shape, class Terrain>
+void scatter_to_grid(const ParticleStore& particles, const CellSort& sort, Grid& grid, ScatterFields fields);
+
+struct GatherResult {
+  bool needs_sort = false;          // some particle drifted beyond its block's slack
+  long long nonfinite = -1;         // index of a particle whose velocity became NaN/Inf, or -1
+  long long outside = -1;           // index of a particle that left the grid, or -1
+};
+
+/// Updates v_p and writes the step's displacement dt sum N_i v_i^L into `displacement`; positions
+/// are moved only after the strain pass, so every transfer of a step uses the weights at x_p^k.
+template <class Shape, class Terrain>
+GatherResult gather_from_grid(ParticleStore& particles, const CellSort& sort, const Grid& grid, double dt,
+                              std::array<std::vector<double>, 3>& displacement);
+
+/// Per-particle strain and spin increments of a range, structure of arrays.
+struct StrainIncrements {
+  static constexpr std::size_t kCapacity = 256;
+  std::array<std::array<double, kCapacity>, 6> strain;  // Voigt, tensor components
+  std::array<std::array<double, kCapacity>, 3> spin;    // w_yz, w_xz, w_xy
+};
+
+/// Strain increments of particles [begin, end) (end - begin <= kCapacity) from the node velocities
+/// `node_velocity` (v^{k+1} after the MUSL remap, v^L for USL).
+template <class Shape, class Terrain>
+void strain_increments(const ParticleStore& particles, const Grid& grid,
+                       const std::array<const double*, 3>& node_velocity, double dt, std::size_t begin,
+                       std::size_t end, StrainIncrements& out);
+
+}  // namespace talus

@@ -1,0 +1,12 @@
+#pragma once
+// Each subcommand of the talus program lives in its own file and registers itself here.
+// A command's callback does the work and throws talus::Error on failure; main() turns that into
+// one line on stderr and the error's exit code (2 bad input, 3 instability).
+#include <CLI/CLI.hpp>
+
+namespace talus::app {
+
+void add_run_command(CLI::App& app);
+void add_check_command(CLI::App& app);
+
+}  // namespace talus::app

@@ -1,0 +1,34 @@
+// The talus command-line program: parses the subcommand and reports errors in one line.
+#include "commands.hpp"
+#include "talus/core/error.hpp"
+#include "talus/core/version.hpp"
+
+#include <fmt/core.h>
+
+#include <exception>
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "talus: explicit 3D material point method (MPM) solver for granular runout.\n"
+      "Scene files are JSON (SI units); see docs/scene-reference.md."};
+  app.set_version_flag("--version", std::string("talus ") + talus::kVersion);
+  app.require_subcommand(1);
+  talus::app::add_run_command(app);
+  talus::app::add_check_command(app);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::Success& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return 2;
+  } catch (const talus::Error& e) {
+    fmt::print(stderr, "talus: error: {}\n", e.what());
+    return e.exit_code();
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "talus: internal error: {}\n", e.what());
+    return 4;
+  }
+  return 0;
+}

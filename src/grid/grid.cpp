@@ -1,0 +1,59 @@
+#include "talus/grid/grid.hpp"
+
+namespace talus {
+
+Grid::Grid(const GridGeometry& geometry) : geometry_(geometry) {
+  const auto n = geometry.nodes();
+  for (int d = 0; d < 3; ++d) tiles_[d] = (n[d] + kTileEdge - 1) / kTileEdge;
+  stride_y_ = static_cast<std::size_t>(tiles_[2]) * kTileNodes;
+  stride_x_ = static_cast<std::size_t>(tiles_[1]) * stride_y_;
+  const std::size_t count = tile_count() * kTileNodes;
+  mass = LazyArray(count);
+  for (int d = 0; d < 3; ++d) {
+    momentum[d] = LazyArray(count);
+    force[d] = LazyArray(count);
+    velocity_l[d] = LazyArray(count);
+  }
+}
+
+std::array<int, 3> Grid::node_of(std::size_t tile, int slot) const {
+  const int tk = static_cast<int>(tile % tiles_[2]);
+  const int tj = static_cast<int>((tile / tiles_[2]) % tiles_[1]);
+  const int ti = static_cast<int>(tile / (static_cast<std::size_t>(tiles_[2]) * tiles_[1]));
+  return {ti * kTileEdge + (slot >> 4), tj * kTileEdge + ((slot >> 2) & 3), tk * kTileEdge + (slot & 3)};
+}
+
+void Grid::clear_active() {
+  const auto& tiles = active_tiles_;
+  const std::size_t count = tiles.size();
+#pragma omp parallel for schedule(static)
+  for (std::size_t t = 0; t < count; ++t) {
+    const std::size_t begin = static_cast<std::size_t>(tiles[t]) * kTileNodes;
+    for (int s = 0; s < kTileNodes; ++s) {
+      const std::size_t n = begin + s;
+      mass[n] = 0.0;
+      for (int d = 0; d < 3; ++d) {
+        momentum[d][n] = 0.0;
+        force[d][n] = 0.0;
+        velocity_l[d][n] = 0.0;
+      }
+    }
+  }
+}
+
+void Grid::clear_momentum() {
+  const auto& tiles = active_tiles_;
+  const std::size_t count = tiles.size();
+#pragma omp parallel for schedule(static)
+  for (std::size_t t = 0; t < count; ++t) {
+    const std::size_t begin = static_cast<std::size_t>(tiles[t]) * kTileNodes;
+    for (int d = 0; d < 3; ++d)
+      for (int s = 0; s < kTileNodes; ++s) momentum[d][begin + s] = 0.0;
+  }
+}
+
+std::size_t Grid::active_bytes() const {
+  return active_tiles_.size() * kTileNodes * kFieldCount * sizeof(double);
+}
+
+}  // namespace talus

@@ -1,0 +1,137 @@
+#include "talus/particles/cell_sort.hpp"
+
+#include "talus/core/error.hpp"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace talus {
+
+CellSort::CellSort(const Grid& grid, int reach_low, int reach_high)
+    : reach_low_(reach_low), reach_high_(reach_high) {
+  // Smallest block (a multiple of the 4-node tile) that leaves each particle at least one cell of
+  // drift between sorts.
+  block_cells_ = kTileEdge;
+  while ((block_cells_ - reach_low - reach_high) / 2 < 1) block_cells_ += kTileEdge;
+  slack_ = (block_cells_ - reach_low - reach_high) / 2;
+  const auto& g = grid.geometry();
+  for (int d = 0; d < 3; ++d) {
+    cells_[d] = g.cells[d] + 2 * kPad;
+    block_counts_[d] = (cells_[d] + block_cells_ - 1) / block_cells_;
+  }
+  bbox_block_index_.assign(static_cast<std::size_t>(block_counts_[0]) * block_counts_[1] * block_counts_[2], 0);
+  tile_flag_.assign(grid.tile_count(), 0);
+}
+
+std::array<int, 3> CellSort::block_origin(std::size_t b) const {
+  const std::uint32_t index = blocks_[b];
+  const int bz = static_cast<int>(index % block_counts_[2]);
+  const int by = static_cast<int>((index / block_counts_[2]) % block_counts_[1]);
+  const int bx = static_cast<int>(index / (static_cast<std::uint32_t>(block_counts_[2]) * block_counts_[1]));
+  return {bx * block_cells_, by * block_cells_, bz * block_cells_};
+}
+
+void CellSort::sort(ParticleStore& particles, Grid& grid) {
+  const std::size_t n = particles.size();
+  const auto& g = grid.geometry();
+  const int bc = block_cells_;
+  const int cells_per_block = bc * bc * bc;
+  particle_block_.resize(n);
+  particle_cell_.resize(n);
+  order_.resize(n);
+
+  // 1. Block and local cell of every particle (parallel: independent per particle).
+  long long outside = -1;
+#pragma omp parallel for schedule(static) reduction(max : outside)
+  for (std::size_t p = 0; p < n; ++p) {
+    int c[3];
+    bool inside = true;
+    for (int d = 0; d < 3; ++d) {
+      const double xi = g.to_grid(d, particles.x[d][p]);
+      c[d] = static_cast<int>(std::floor(xi));
+      inside = inside && xi >= 0.0 && c[d] < cells_[d];
+    }
+    if (!inside) {
+      outside = std::max(outside, static_cast<long long>(p));
+      c[0] = c[1] = c[2] = 0;
+    }
+    const int b[3] = {c[0] / bc, c[1] / bc, c[2] / bc};
+    particle_block_[p] = static_cast<std::uint32_t>((static_cast<std::size_t>(b[0]) * block_counts_[1] + b[1]) * block_counts_[2] + b[2]);
+    particle_cell_[p] = static_cast<std::uint32_t>(((c[0] - b[0] * bc) * bc + (c[1] - b[1] * bc)) * bc + (c[2] - b[2] * bc));
+  }
+  if (outside >= 0) {
+    const auto p = static_cast<std::size_t>(outside);
+    throw instability_error(fmt::format("particle {} left the grid: position ({:.6g}, {:.6g}, {:.6g})",
+                                        particles.id[p], particles.x[0][p], particles.x[1][p], particles.x[2][p]));
+  }
+
+  // 2. Active blocks in ascending bounding-box order; bbox_block_index_ then maps a block to its compact index.
+  for (std::uint32_t b : blocks_) bbox_block_index_[b] = 0;  // clear only what the last sort set
+  blocks_.clear();
+  for (std::size_t p = 0; p < n; ++p) {
+    std::uint32_t& seen = bbox_block_index_[particle_block_[p]];
+    if (!seen) {
+      seen = 1;
+      blocks_.push_back(particle_block_[p]);
+    }
+  }
+  std::sort(blocks_.begin(), blocks_.end());
+  for (std::size_t b = 0; b < blocks_.size(); ++b) bbox_block_index_[blocks_[b]] = static_cast<std::uint32_t>(b);
+
+  // 3. Counting sort by key = compact block * cells_per_block + local cell (stable).
+  const std::size_t keys = blocks_.size() * cells_per_block;
+  cell_start_.assign(keys + 1, 0);
+  for (std::size_t p = 0; p < n; ++p) {
+    const std::size_t key = static_cast<std::size_t>(bbox_block_index_[particle_block_[p]]) * cells_per_block + particle_cell_[p];
+    particle_cell_[p] = static_cast<std::uint32_t>(key);
+    ++cell_start_[key + 1];
+  }
+  for (std::size_t k = 0; k < keys; ++k) cell_start_[k + 1] += cell_start_[k];
+  {
+    std::vector<std::uint32_t>& next = particle_block_;  // reuse as the running insert position
+    next.assign(cell_start_.begin(), cell_start_.end() - 1);
+    for (std::size_t p = 0; p < n; ++p) order_[next[particle_cell_[p]]++] = static_cast<std::uint32_t>(p);
+  }
+  particles.permute(order_);
+
+  block_start_.resize(blocks_.size() + 1);
+  for (std::size_t b = 0; b <= blocks_.size(); ++b) block_start_[b] = cell_start_[b * cells_per_block];
+
+  for (auto& c : colour_blocks_) c.clear();
+  for (std::size_t b = 0; b < blocks_.size(); ++b) {
+    const auto o = block_origin(b);
+    const int colour = ((o[0] / bc) & 1) * 4 + ((o[1] / bc) & 1) * 2 + ((o[2] / bc) & 1);
+    colour_blocks_[colour].push_back(static_cast<std::uint32_t>(b));
+  }
+  activate_tiles(grid);
+}
+
+void CellSort::activate_tiles(Grid& grid) {
+  for (std::uint32_t t : grid.active_tiles()) tile_flag_[t] = 0;
+  const auto tiles = grid.tiles();
+  const auto nodes = grid.geometry().nodes();
+  std::vector<std::uint32_t> active;
+  for (std::size_t b = 0; b < blocks_.size(); ++b) {
+    const auto o = block_origin(b);
+    int lo[3], hi[3];
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::max(0, o[d] - slack_ - reach_low_) / kTileEdge;
+      hi[d] = std::min(nodes[d] - 1, o[d] + block_cells_ - 1 + slack_ + reach_high_) / kTileEdge;
+    }
+    for (int i = lo[0]; i <= hi[0]; ++i)
+      for (int j = lo[1]; j <= hi[1]; ++j)
+        for (int k = lo[2]; k <= hi[2]; ++k) {
+          const std::size_t t = (static_cast<std::size_t>(i) * tiles[1] + j) * tiles[2] + k;
+          if (!tile_flag_[t]) {
+            tile_flag_[t] = 1;
+            active.push_back(static_cast<std::uint32_t>(t));
+          }
+        }
+  }
+  std::sort(active.begin(), active.end());
+  grid.set_active_tiles(std::move(active));
+}
+
+}  // namespace talus

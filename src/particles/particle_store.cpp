@@ -1,0 +1,83 @@
+#include "talus/particles/particle_store.hpp"
+
+#include <omp.h>
+
+namespace talus {
+
+std::size_t ParticleStore::add(std::int64_t particle_id, const Vec3& position, const Vec3& velocity,
+                               double particle_mass, double particle_volume,
+                               std::uint16_t body_index) {
+  id.push_back(particle_id);
+  for (int d = 0; d < 3; ++d) {
+    x[d].push_back(position[d]);
+    v[d].push_back(velocity[d]);
+  }
+  mass.push_back(particle_mass);
+  volume.push_back(particle_volume);
+  volume0.push_back(particle_volume);
+  for (int c = 0; c < 6; ++c) {
+    stress[c].push_back(0.0);
+    strain[c].push_back(0.0);
+  }
+  body.push_back(body_index);
+  if (plastic_enabled_) {
+    plastic_strain.push_back(0.0);
+    for (auto& b : back_stress) b.push_back(0.0);
+  }
+  return id.size() - 1;
+}
+
+void ParticleStore::enable_plastic_state() {
+  plastic_enabled_ = true;
+  plastic_strain.assign(size(), 0.0);
+  for (auto& b : back_stress) b.assign(size(), 0.0);
+}
+
+namespace {
+
+template <class T>
+void permute_field(std::vector<T>& field, const std::vector<std::uint32_t>& order,
+                   std::vector<T>& scratch) {
+  if (field.empty()) return;
+  const std::size_t n = order.size();
+  scratch.resize(n);
+  const T* src = field.data();
+  T* dst = scratch.data();
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < n; ++i) dst[i] = src[order[i]];
+  field.swap(scratch);
+}
+
+}  // namespace
+
+void ParticleStore::permute(const std::vector<std::uint32_t>& order) {
+  permute_field(id, order, id_scratch_);
+  permute_field(body, order, body_scratch_);
+  auto each = [&](std::vector<double>& f) { permute_field(f, order, scratch_); };
+  for (auto& f : x) each(f);
+  for (auto& f : v) each(f);
+  each(mass);
+  each(volume);
+  each(volume0);
+  for (auto& f : stress) each(f);
+  for (auto& f : strain) each(f);
+  each(plastic_strain);
+  for (auto& f : back_stress) each(f);
+}
+
+std::size_t ParticleStore::bytes() const {
+  std::size_t b = id.capacity() * sizeof(std::int64_t) + body.capacity() * sizeof(std::uint16_t);
+  auto add = [&](const std::vector<double>& f) { b += f.capacity() * sizeof(double); };
+  for (auto& f : x) add(f);
+  for (auto& f : v) add(f);
+  add(mass);
+  add(volume);
+  add(volume0);
+  for (auto& f : stress) add(f);
+  for (auto& f : strain) add(f);
+  add(plastic_strain);
+  for (auto& f : back_stress) add(f);
+  return b;
+}
+
+}  // namespace talus

@@ -1,0 +1,123 @@
+#pragma once
+// Reading one JSON object with full key paths in every error, and a check that no key was left
+// unread (a misspelt key is an error, not a silently ignored setting).
+#include "talus/core/error.hpp"
+#include "talus/core/types.hpp"
+
+#include <fmt/core.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <limits>
+#include <set>
+#include <string>
+
+namespace talus::scene_detail {
+
+using Json = nlohmann::json;
+
+inline std::string type_name(const Json& j) { return j.type_name(); }
+
+class ObjectReader {
+ public:
+  ObjectReader(const Json& object, std::string path) : object_(object), path_(std::move(path)) {
+    if (!object_.is_object())
+      throw input_error(fmt::format("{} must be an object, got {}", label(), type_name(object_)));
+  }
+
+  std::string key_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  const std::string& path() const { return path_; }
+  bool has(const std::string& key) const { return object_.contains(key); }
+
+  const Json& raw(const std::string& key) {
+    used_.insert(key);
+    if (!object_.contains(key)) throw input_error(fmt::format("missing required key {}", key_path(key)));
+    return object_.at(key);
+  }
+
+  /// A finite number in [lo, hi]; `open_lo`/`open_hi` exclude the end point.
+  double number(const std::string& key, double lo, double hi, bool open_lo = false, bool open_hi = false) {
+    return check_number(raw(key), key_path(key), lo, hi, open_lo, open_hi);
+  }
+  double number_or(const std::string& key, double fallback, double lo, double hi, bool open_lo = false,
+                   bool open_hi = false) {
+    if (!has(key)) return fallback;
+    return number(key, lo, hi, open_lo, open_hi);
+  }
+
+  int integer(const std::string& key, int lo, int hi) {
+    const Json& j = raw(key);
+    if (!j.is_number_integer())
+      throw input_error(fmt::format("{} must be an integer in [{}, {}], got {}", key_path(key), lo, hi, j.dump()));
+    const long long v = j.get<long long>();
+    if (v < lo || v > hi)
+      throw input_error(fmt::format("{} = {} is outside the allowed range [{}, {}]", key_path(key), v, lo, hi));
+    return static_cast<int>(v);
+  }
+  int integer_or(const std::string& key, int fallback, int lo, int hi) {
+    return has(key) ? integer(key, lo, hi) : fallback;
+  }
+
+  std::string string(const std::string& key) {
+    const Json& j = raw(key);
+    if (!j.is_string()) throw input_error(fmt::format("{} must be a string, got {}", key_path(key), j.dump()));
+    return j.get<std::string>();
+  }
+  std::string string_or(const std::string& key, const std::string& fallback) {
+    return has(key) ? string(key) : fallback;
+  }
+
+  /// One of a fixed set of words.
+  std::string choice(const std::string& key, const std::string& fallback, std::initializer_list<const char*> allowed) {
+    const std::string value = string_or(key, fallback);
+    std::string list;
+    for (const char* a : allowed) {
+      if (value == a) return value;
+      list += (list.empty() ? "" : ", ") + std::string(a);
+    }
+    throw input_error(fmt::format("{} = \"{}\" is not one of: {}", key_path(key), value, list));
+  }
+
+  Vec3 vec3(const std::string& key, double lo = -std::numeric_limits<double>::max(),
+            double hi = std::numeric_limits<double>::max()) {
+    const Json& j = raw(key);
+    if (!j.is_array() || j.size() != 3)
+      throw input_error(fmt::format("{} must be an array of 3 numbers, got {}", key_path(key), j.dump()));
+    Vec3 v;
+    for (int d = 0; d < 3; ++d) v[d] = check_number(j[d], fmt::format("{}[{}]", key_path(key), d), lo, hi, false, false);
+    return v;
+  }
+  Vec3 vec3_or(const std::string& key, const Vec3& fallback) { return has(key) ? vec3(key) : fallback; }
+
+  ObjectReader object(const std::string& key) { return ObjectReader(raw(key), key_path(key)); }
+
+  /// Every key of the object must have been read; call last.
+  void finish() const {
+    for (auto it = object_.begin(); it != object_.end(); ++it) {
+      if (!used_.count(it.key())) {
+        std::string known;
+        for (const auto& k : used_) known += (known.empty() ? "" : ", ") + k;
+        throw input_error(fmt::format("unknown key {} (keys read here: {})", key_path(it.key()), known));
+      }
+    }
+  }
+  /// Mark a key as understood without reading it (e.g. "comment").
+  void allow(const std::string& key) { used_.insert(key); }
+
+  static double check_number(const Json& j, const std::string& path, double lo, double hi, bool open_lo, bool open_hi) {
+    const auto range = fmt::format("{}{}, {}{}", open_lo ? "(" : "[", lo, hi, open_hi ? ")" : "]");
+    if (!j.is_number()) throw input_error(fmt::format("{} must be a number in {}, got {}", path, range, j.dump()));
+    const double v = j.get<double>();
+    const bool ok = std::isfinite(v) && (open_lo ? v > lo : v >= lo) && (open_hi ? v < hi : v <= hi);
+    if (!ok) throw input_error(fmt::format("{} = {} is outside the allowed range {}", path, v, range));
+    return v;
+  }
+
+ private:
+  std::string label() const { return path_.empty() ? "the scene" : path_; }
+  const Json& object_;
+  std::string path_;
+  std::set<std::string> used_;
+};
+
+}  // namespace talus::scene_detail

@@ -1,0 +1,36 @@
+#include "talus/scene/scene.hpp"
+
+namespace talus {
+
+double MaterialSpec::bulk_modulus() const {
+  return elastic.young / (3.0 * (1.0 - 2.0 * elastic.poisson));
+}
+double MaterialSpec::shear_modulus() const { return elastic.young / (2.0 * (1.0 + elastic.poisson)); }
+double MaterialSpec::p_wave_modulus() const { return bulk_modulus() + 4.0 / 3.0 * shear_modulus(); }
+
+const char* to_string(SchemeKind scheme) {
+  switch (scheme) {
+    case SchemeKind::Musl: return "musl";
+    case SchemeKind::Usl: return "usl";
+  }
+  return "?";
+}
+
+const char* to_string(ShapeKind shape) {
+  switch (shape) {
+    case ShapeKind::Linear: return "linear";
+  }
+  return "?";
+}
+
+const char* to_string(WallType type) {
+  switch (type) {
+    case WallType::Open: return "open";
+    case WallType::Slip: return "slip";
+    case WallType::Fixed: return "fixed";
+    case WallType::Friction: return "friction";
+  }
+  return "?";
+}
+
+}  // namespace talus

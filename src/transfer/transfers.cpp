@@ -1,0 +1,161 @@
+#include "talus/transfer/transfers.hpp"
+
+#include "talus/grid/terrain.hpp"
+#include "talus/shape/linear.hpp"
+#include "talus/transfer/stencil.hpp"
+
+#include <cmath>
+
+namespace talus {
+
+template <class Shape, class Terrain>
+void scatter_to_grid(const ParticleStore& P, const CellSort& sort, Grid& grid, ScatterFields fields) {
+  constexpr int N = Shape::kNodes;
+  const Terrain& terrain = grid.terrain();
+  const bool with_force = fields == ScatterFields::MassMomentumForce;
+  double* mass = grid.mass.data();
+  double* mom[3] = {grid.momentum[0].data(), grid.momentum[1].data(), grid.momentum[2].data()};
+  double* force[3] = {grid.force[0].data(), grid.force[1].data(), grid.force[2].data()};
+
+  for (int colour = 0; colour < 8; ++colour) {
+    const auto& blocks = sort.colour(colour);
+    const std::size_t count = blocks.size();
+#pragma omp parallel for schedule(dynamic, 1)
+    for (std::size_t bi = 0; bi < count; ++bi) {
+      const std::size_t b = blocks[bi];
+      Stencil<Shape> s;
+      for (std::size_t p = sort.block_begin(b); p < sort.block_end(b); ++p) {
+        const double half_width = Shape::kUsesDomain ? 0.5 * std::cbrt(P.volume0[p]) / grid.geometry().h : 0.0;
+        s.evaluate(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], half_width);
+        const double m = P.mass[p];
+        const double mv[3] = {m * P.v[0][p], m * P.v[1][p], m * P.v[2][p]};
+        // -V sigma, for f_int = -sum V_p sigma_p grad N (seed 000 eq. 22)
+        const double vol = P.volume[p];
+        const double sxx = -vol * P.stress[XX][p], syy = -vol * P.stress[YY][p], szz = -vol * P.stress[ZZ][p];
+        const double syz = -vol * P.stress[YZ][p], sxz = -vol * P.stress[XZ][p], sxy = -vol * P.stress[XY][p];
+        for (int a = 0; a < N; ++a)
+          for (int bb = 0; bb < N; ++bb) {
+            const std::size_t row = s.ix[a] + s.iy[bb];
+            const double wxy = s.wx[a] * s.wy[bb];
+            for (int c = 0; c < N; ++c) {
+              const std::size_t n = row + s.iz[c];
+              const double w = wxy * s.wz[c];
+              if (with_force) {
+                mass[n] += m * w;
+                double dx, dy, dz;
+                s.gradient(a, bb, c, dx, dy, dz);
+                force[0][n] += sxx * dx + sxy * dy + sxz * dz;
+                force[1][n] += sxy * dx + syy * dy + syz * dz;
+                force[2][n] += sxz * dx + syz * dy + szz * dz;
+              }
+              mom[0][n] += mv[0] * w;
+              mom[1][n] += mv[1] * w;
+              mom[2][n] += mv[2] * w;
+            }
+          }
+      }
+    }
+  }
+}
+
+template <class Shape, class Terrain>
+GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, const Grid& grid, double dt,
+                              std::array<std::vector<double>, 3>& displacement) {
+  constexpr int N = Shape::kNodes;
+  const Terrain& terrain = grid.terrain();
+  const GridGeometry& g = grid.geometry();
+  const auto nodes = g.nodes();
+  const double* dv[3] = {grid.force[0].data(), grid.force[1].data(), grid.force[2].data()};
+  const double* vl[3] = {grid.velocity_l[0].data(), grid.velocity_l[1].data(), grid.velocity_l[2].data()};
+  double* disp[3] = {displacement[0].data(), displacement[1].data(), displacement[2].data()};
+  const std::size_t blocks = sort.block_count();
+  bool needs_sort = false;
+  long long nonfinite = -1, outside = -1;
+#pragma omp parallel for schedule(dynamic, 1) reduction(|| : needs_sort) reduction(max : nonfinite, outside)
+  for (std::size_t b = 0; b < blocks; ++b) {
+    Stencil<Shape> s;
+    for (std::size_t p = sort.block_begin(b); p < sort.block_end(b); ++p) {
+      const double half_width = Shape::kUsesDomain ? 0.5 * std::cbrt(P.volume0[p]) / g.h : 0.0;
+      s.evaluate(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], half_width);
+      double dvp[3] = {0, 0, 0}, vlp[3] = {0, 0, 0};
+      for (int a = 0; a < N; ++a)
+        for (int bb = 0; bb < N; ++bb) {
+          const std::size_t row = s.ix[a] + s.iy[bb];
+          const double wxy = s.wx[a] * s.wy[bb];
+          for (int c = 0; c < N; ++c) {
+            const std::size_t n = row + s.iz[c];
+            const double w = wxy * s.wz[c];
+            for (int d = 0; d < 3; ++d) {
+              dvp[d] += w * dv[d][n];
+              vlp[d] += w * vl[d][n];
+            }
+          }
+        }
+      bool finite = true, inside = true;
+      int cell[3];
+      for (int d = 0; d < 3; ++d) {
+        P.v[d][p] += dvp[d];                 // seed 000 eq. 50: v_p += dt sum a_i N_i
+        disp[d][p] = dt * vlp[d];            // seed 000 eq. 51: x_p += dt sum v_i^L N_i (applied later)
+        finite = finite && std::isfinite(P.v[d][p]) && std::isfinite(disp[d][p]);
+        const double xi = g.to_grid(d, P.x[d][p] + disp[d][p]);
+        cell[d] = static_cast<int>(std::floor(xi));
+        // The support of the next step must stay inside the padded arrays.
+        inside = inside && cell[d] - Shape::kReachLow >= 0 && cell[d] + Shape::kReachHigh < nodes[d];
+      }
+      if (!finite) nonfinite = std::max(nonfinite, static_cast<long long>(p));
+      if (!inside) outside = std::max(outside, static_cast<long long>(p));
+      if (!sort.within_slack(b, cell[0], cell[1], cell[2])) needs_sort = true;
+    }
+  }
+  return {needs_sort, nonfinite, outside};
+}
+
+template <class Shape, class Terrain>
+void strain_increments(const ParticleStore& P, const Grid& grid, const std::array<const double*, 3>& nv,
+                       double dt, std::size_t begin, std::size_t end, StrainIncrements& out) {
+  constexpr int N = Shape::kNodes;
+  const Terrain& terrain = grid.terrain();
+  const double h = grid.geometry().h;
+  Stencil<Shape> s;
+  for (std::size_t p = begin; p < end; ++p) {
+    const double half_width = Shape::kUsesDomain ? 0.5 * std::cbrt(P.volume0[p]) / h : 0.0;
+    s.evaluate(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], half_width);
+    double L[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  // L_ij = dv_i / dx_j
+    for (int a = 0; a < N; ++a)
+      for (int bb = 0; bb < N; ++bb) {
+        const std::size_t row = s.ix[a] + s.iy[bb];
+        for (int c = 0; c < N; ++c) {
+          const std::size_t n = row + s.iz[c];
+          double grad[3];
+          s.gradient(a, bb, c, grad[0], grad[1], grad[2]);
+          for (int i = 0; i < 3; ++i) {
+            const double vi = nv[i][n];
+            for (int j = 0; j < 3; ++j) L[i][j] += vi * grad[j];
+          }
+        }
+      }
+    const std::size_t k = p - begin;
+    // seed 000 eq. 33: d_eps = dt/2 (L + L^T); spin dW = dt/2 (L - L^T)
+    out.strain[XX][k] = dt * L[0][0];
+    out.strain[YY][k] = dt * L[1][1];
+    out.strain[ZZ][k] = dt * L[2][2];
+    out.strain[YZ][k] = 0.5 * dt * (L[1][2] + L[2][1]);
+    out.strain[XZ][k] = 0.5 * dt * (L[0][2] + L[2][0]);
+    out.strain[XY][k] = 0.5 * dt * (L[0][1] + L[1][0]);
+    out.spin[0][k] = 0.5 * dt * (L[1][2] - L[2][1]);
+    out.spin[1][k] = 0.5 * dt * (L[0][2] - L[2][0]);
+    out.spin[2][k] = 0.5 * dt * (L[0][1] - L[1][0]);
+  }
+}
+
+#define TALUS_INSTANTIATE_TRANSFERS(SHAPE, TERRAIN)                                                          \
+  template void scatter_to_grid<SHAPE, TERRAIN>(const ParticleStore&, const CellSort&, Grid&, ScatterFields); \
+  template GatherResult gather_from_grid<SHAPE, TERRAIN>(ParticleStore&, const CellSort&, const Grid&, double,  \
+                                                         std::array<std::vector<double>, 3>&);               \
+  template void strain_increments<SHAPE, TERRAIN>(const ParticleStore&, const Grid&,                          \
+                                                  const std::array<const double*, 3>&, double, std::size_t,    \
+                                                  std::size_t, StrainIncrements&);
+
+TALUS_INSTANTIATE_TRANSFERS(LinearShape, FlatTerrain)
+
+}  // namespace talus

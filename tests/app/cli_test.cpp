@@ -1,0 +1,94 @@
+// The talus program as a user meets it: exit codes, one-line errors, no half-written output.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <sys/wait.h>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int exit_code;
+  std::string output;  // stdout and stderr together
+};
+
+Result run(const std::string& args) {
+  const std::string command = std::string(TALUS_BINARY) + " " + args + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buffer;
+  while (fgets(buffer.data(), buffer.size(), pipe)) out += buffer.data();
+  const int status = pclose(pipe);
+  return {WEXITSTATUS(status), out};
+}
+
+fs::path temp_dir(const std::string& name) {
+  fs::path dir = fs::temp_directory_path() / ("talus_cli_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  return dir;
+}
+
+const std::string kInputs = std::string(TALUS_SOURCE_DIR) + "/inputs/";
+
+TEST(Cli, HelpAndVersion) {
+  const Result help = run("--help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.output.find("run"), std::string::npos);
+  EXPECT_NE(help.output.find("check"), std::string::npos);
+  const Result version = run("--version");
+  EXPECT_EQ(version.exit_code, 0);
+  EXPECT_EQ(version.output.rfind("talus ", 0), 0u) << version.output;
+}
+
+TEST(Cli, CheckValidatesEveryShippedScene) {
+  for (const auto& entry : fs::directory_iterator(kInputs)) {
+    if (entry.path().extension() != ".json") continue;
+    const Result r = run("check " + entry.path().string());
+    EXPECT_EQ(r.exit_code, 0) << entry.path() << ": " << r.output;
+    EXPECT_NE(r.output.find("ok"), std::string::npos);
+  }
+}
+
+TEST(Cli, BadSceneGivesOneLineExitTwoAndNoOutputFolder) {
+  const fs::path dir = temp_dir("bad");
+  fs::create_directories(dir);
+  const fs::path scene = dir / "bad.json";
+  std::ifstream in(kInputs + "elastic_block_slide.json");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  text.replace(text.find("\"poisson\": 0.3"), 14, "\"poisson\": 0.7");
+  std::ofstream(scene) << text;
+  const fs::path out = dir / "out";
+  const Result r = run("run " + scene.string() + " --out " + out.string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.output, "talus: error: materials.rubber.poisson = 0.7 is outside the allowed range (-1, 0.5)\n");
+  EXPECT_FALSE(fs::exists(out));
+  const Result missing = run("run " + (dir / "nope.json").string());
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.output.find("cannot open scene file"), std::string::npos);
+  const Result usage = run("run");
+  EXPECT_EQ(usage.exit_code, 2);
+  fs::remove_all(dir);
+}
+
+TEST(Cli, RunWritesAParaViewSeries) {
+  const fs::path dir = temp_dir("run");
+  fs::create_directories(dir);
+  std::ifstream in(kInputs + "elastic_block_slide.json");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  text.replace(text.find("\"end\": 1.0"), 10, "\"end\": 0.02");
+  std::ofstream(dir / "short.json") << text;
+  const Result r = run("run " + (dir / "short.json").string() + " --out " + (dir / "out").string() + " --threads 2 --quiet");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("ParaView series"), std::string::npos);
+  EXPECT_TRUE(fs::exists(dir / "out" / "particles.pvd"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "energy.csv"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "scene.json"));
+  fs::remove_all(dir);
+}
+
+}  // namespace
