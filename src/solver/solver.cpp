@@ -139,7 +139,7 @@ void Solver::update_stress(const std::array<const double*, 3>& node_velocity, do
             s[c] = P.stress[c][p];
             de[c] = inc.strain[c][k];
           }
-          jaumann_rotate(s, inc.spin[0][k], inc.spin[1][k], inc.spin[2][k]);
+          rotate_objectively(s, inc.spin[0][k], inc.spin[1][k], inc.spin[2][k]);  // Jaumann rate, Hughes-Winget
           body_elastic_[P.body[p]].add_increment(s, de);  // seed 000 eq. 34
           for (int c = 0; c < 6; ++c) {
             P.stress[c][p] = s[c];

@@ -51,7 +51,8 @@ inline Sym6 from_matrix(const Mat3& m) {
   return s;
 }
 
-/// Rotational part of the Jaumann (co-rotational) stress update over one step:
+/// Forward-Euler form of the Jaumann rotation (kept as the first-order reference that
+/// rotate_objectively() is tested against; the solver uses rotate_objectively):
 /// sigma <- sigma + dW sigma - sigma dW, with dW the spin increment (w_yz, w_xz, w_xy),
 /// dW_ij = dt/2 (dv_i/dx_j - dv_j/dx_i). Written out so that it vectorises and allocates nothing.
 inline void jaumann_rotate(Sym6& s, double w_yz, double w_xz, double w_xy) {
@@ -76,6 +77,26 @@ inline void jaumann_rotate(Sym6& s, double w_yz, double w_xz, double w_xy) {
   s[YZ] += r_yz;
   s[XZ] += r_xz;
   s[XY] += r_xy;
+}
+
+/// Rotational part of the Jaumann stress update, integrated with the Hughes–Winget (1980)
+/// rotation R = (I - dW/2)^-1 (I + dW/2) = I + 2 (A + A^2) / (1 + |a|^2), A = dW/2 with axial
+/// vector a; then s <- R s R^T. R is exactly orthogonal, so I1, J2, J3 are kept to round-off for
+/// any spin (incrementally objective), and it equals talus::jaumann_rotate to first order in dW.
+/// jaumann_rotate (s += dW s - s dW, forward Euler) is not orthogonal: each step multiplies the
+/// in-plane part of J2 by 1 + 4 w^2, which on the yield surface turns into spurious plastic flow
+/// (and dilation) under pure rotation. Rotate the stress and the back stress with the SAME
+/// function; rotate_state() uses this one. Spin (w_yz, w_xz, w_xy) as in core/types.hpp.
+inline void rotate_objectively(Sym6& s, double w_yz, double w_xz, double w_xy) {
+  // A = dW/2 with A(0,1) = w_xy/2, A(0,2) = w_xz/2, A(1,2) = w_yz/2.
+  const double axy = 0.5 * w_xy, axz = 0.5 * w_xz, ayz = 0.5 * w_yz;
+  Mat3 a;
+  a << 0.0, axy, axz,
+       -axy, 0.0, ayz,
+       -axz, -ayz, 0.0;
+  const double norm2 = axy * axy + axz * axz + ayz * ayz;  // |a|^2
+  const Mat3 r = Mat3::Identity() + (2.0 / (1.0 + norm2)) * (a + a * a);
+  s = from_matrix(r * to_matrix(s) * r.transpose());
 }
 
 }  // namespace talus

@@ -1,0 +1,143 @@
+// `talus element-test`: runs the built program on a shipped spec and on bad specs.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class ElementTestCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("talus_element_test_cli_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  Result run(const std::string& args) const {
+    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
+    const std::string command = std::string("\"") + TALUS_BINARY + "\" " + args + " > \"" +
+                                out.string() + "\" 2> \"" + err.string() + "\"";
+    const int status = std::system(command.c_str());
+    Result r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(out);
+    r.err = slurp(err);
+    return r;
+  }
+
+  fs::path write_spec(const std::string& name, const std::string& text) const {
+    const fs::path p = dir_ / name;
+    std::ofstream(p) << text;
+    return p;
+  }
+
+  fs::path dir_;
+};
+
+const char* kGoodMaterial =
+    R"("material": {"young": 2.0e6, "poisson": 0.3, "friction_angle": 40.0, "cohesion": 10.0})";
+
+TEST_F(ElementTestCli, WritesTheCsvForAShippedSpec) {
+  const fs::path spec =
+      fs::path(TALUS_SOURCE_DIR) / "inputs" / "element_tests" / "fig13b_simple_shear_psi10.json";
+  const fs::path csv = dir_ / "shear.csv";
+  const Result r = run("element-test \"" + spec.string() + "\" --out \"" + csv.string() + "\"");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_TRUE(fs::exists(csv));
+  std::ifstream in(csv);
+  std::string header, line, last;
+  std::getline(in, header);
+  EXPECT_EQ(header.rfind("step,eps_xx,eps_yy,eps_zz,eps_yz,eps_xz,eps_xy,sig_xx", 0), 0u) << header;
+  int rows = 0;
+  while (std::getline(in, line)) {
+    ++rows;
+    last = line;
+  }
+  EXPECT_EQ(rows, 1001);  // initial state + 1000 increments
+  EXPECT_NE(last.find(",cone,"), std::string::npos) << last;
+  // eps_v (column 14) is positive: the sand dilates with psi = 10 degrees.
+  std::stringstream fields(last);
+  std::string field;
+  for (int i = 0; i < 14; ++i) std::getline(fields, field, ',');
+  EXPECT_GT(std::stod(field), 0.01);
+}
+
+TEST_F(ElementTestCli, OutOfRangeValueExitsTwoWithOneLine) {
+  const fs::path spec = write_spec(
+      "bad.json", R"({"material": {"young": 2.0e6, "poisson": 0.3, "friction_angle": 95.0},
+                     "path": {"type": "oedometer", "strain": 0.01, "increments": 10}})");
+  const Result r = run("element-test \"" + spec.string() + "\" --out \"" + (dir_ / "x.csv").string() + "\"");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find("material.friction_angle = 95"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("allowed (0, 90)"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "x.csv"));
+}
+
+TEST_F(ElementTestCli, UnknownKeyAndBadPathValuesExitTwoNamingTheKey) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {std::string("{") + kGoodMaterial +
+           R"(, "path": {"type": "simple_shear", "normal_stress": 1e4, "strian": 0.1, "increments": 10}})",
+       "unknown key path.strian"},
+      {std::string("{") + kGoodMaterial +
+           R"(, "path": {"type": "drained_triaxial", "confining_pressure": 1e5, "strain": 0.1, "increments": 0}})",
+       "path.increments = 0 is out of range; allowed integer in [1, 10000000]"},
+      {std::string("{") + kGoodMaterial +
+           R"(, "path": {"type": "drained_triaxial", "confining_pressure": -1, "strain": 0.1, "increments": 5}})",
+       "path.confining_pressure = -1 is out of range; allowed > 0"},
+      {std::string("{") + kGoodMaterial +
+           R"(, "path": {"type": "uniaxial_compression", "strain": [0.01, 2.0], "increments": 5}})",
+       "path.strain[1] = 2 is out of range; allowed [-1, 1]"},
+      {std::string("{") + kGoodMaterial + R"(, "path": {"type": "torsion", "strain": 0.1, "increments": 5}})",
+       "path.type must be one of"},
+      {R"({"material": {"young": 1e6, "poisson": 0.3, "friction_angle": 30, "cone": "outer"}, "path": {}})",
+       "material.cone must be one of"},
+      {R"({"material": {"young": 1e6, "poisson": 0.3}})", "material.friction_angle is required"},
+      {"{ not json", "invalid JSON"},
+  };
+  int i = 0;
+  for (const auto& [text, expected] : cases) {
+    const fs::path spec = write_spec("case" + std::to_string(i++) + ".json", text);
+    const Result r = run("element-test \"" + spec.string() + "\" --out \"" + (dir_ / "x.csv").string() + "\"");
+    EXPECT_EQ(r.exit_code, 2) << expected;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << "expected '" << expected << "' in: " << r.err;
+  }
+}
+
+TEST_F(ElementTestCli, MissingSpecFileExitsTwo) {
+  const Result r = run("element-test \"" + (dir_ / "nope.json").string() + "\" --out \"" +
+                    (dir_ / "x.csv").string() + "\"");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find("nope.json"), std::string::npos) << r.err;
+}
+
+}  // namespace

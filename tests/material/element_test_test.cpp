@@ -1,0 +1,148 @@
+// The single-point driver (talus::run_element_test): paths, mixed control, legs.
+#include "talus/core/error.hpp"
+#include "talus/core/tensor.hpp"
+#include "talus/material/element_test.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <sstream>
+#include <string>
+
+namespace talus {
+namespace {
+
+using Regime = DruckerPragerResult::Regime;
+
+DruckerPragerParameters material(double c = 1.0e4) {
+  DruckerPragerParameters p;
+  p.young = 2.0e6;
+  p.poisson = 0.3;
+  p.friction_angle_deg = 40.0;
+  p.cohesion = c;
+  return p;
+}
+
+ElementTestSpec spec(ElementPath path, DruckerPragerParameters p, double pressure,
+                     std::vector<double> targets, int increments) {
+  ElementTestSpec s;
+  s.material = p;
+  s.path = path;
+  s.pressure = pressure;
+  s.strain_targets = std::move(targets);
+  s.increments = increments;
+  return s;
+}
+
+TEST(ElementTest, OedometerElasticBranchIsUniaxialStrain) {
+  // Elastic uniaxial strain: d sigma_yy / d eps_yy = lambda + 2G, d sigma_xx = nu/(1-nu) d sigma_yy.
+  const auto pts = run_element_test(spec(ElementPath::Oedometer, material(1.0e6), 1.0e4, {0.001}, 10));
+  ASSERT_EQ(pts.size(), 11u);
+  const double e = 2.0e6, nu = 0.3;
+  const double constrained = e * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));
+  for (std::size_t i = 1; i < pts.size(); ++i) {
+    ASSERT_EQ(pts[i].regime, Regime::Elastic);
+    const Sym6 ds = pts[i].stress - pts[i - 1].stress;
+    const Sym6 de = pts[i].strain - pts[i - 1].strain;
+    EXPECT_NEAR(de[YY], -1.0e-4, 1e-18);
+    EXPECT_EQ(de[XX], 0.0);
+    EXPECT_NEAR(ds[YY] / de[YY], constrained, 1e-9 * constrained);
+    EXPECT_NEAR(ds[XX] / ds[YY], nu / (1.0 - nu), 1e-12);
+  }
+  EXPECT_NEAR(pts.back().stress[ZZ], -1.0e4 + nu / (1.0 - nu) * (pts.back().stress[YY] + 1.0e4), 1e-8);
+}
+
+TEST(ElementTest, LegsShareIncrementsByLength) {
+  // Targets 2 %, 0, 3 %: legs of length 2, 2, 3 (%) -> 200, 200, 300 of 700 increments.
+  const auto pts = run_element_test(
+      spec(ElementPath::UniaxialCompression, material(), 0.0, {0.02, 0.0, 0.03}, 700));
+  ASSERT_EQ(pts.size(), 701u);
+  EXPECT_NEAR(pts[200].strain[YY], -0.02, 1e-15);
+  EXPECT_NEAR(pts[400].strain[YY], 0.0, 1e-15);
+  EXPECT_NEAR(pts[700].strain[YY], -0.03, 1e-15);
+  EXPECT_EQ(pts[0].step, 0);
+  EXPECT_EQ(pts[700].step, 700);
+}
+
+TEST(ElementTest, MixedControlHoldsLateralStressThroughEveryRegime) {
+  // Uniaxial compression, then deep into tension with a tension cut-off and kinematic hardening:
+  // elastic, cone, cut-off and corner all occur, and the lateral stresses stay at 0 throughout.
+  DruckerPragerParameters p = material();
+  p.hardening_modulus = 5.0e5;
+  p.kinematic_fraction = 1.0;
+  p.tension_cutoff = 2.0e3;
+  const auto pts =
+      run_element_test(spec(ElementPath::UniaxialCompression, p, 0.0, {0.02, -0.02, 0.01}, 800));
+  bool seen[4] = {false, false, false, false};
+  for (const auto& pt : pts) {
+    seen[static_cast<int>(pt.regime)] = true;
+    const double scale = std::max(pt.stress.cwiseAbs().maxCoeff(), 1.0e4);
+    ASSERT_LE(std::abs(pt.stress[XX]), 1e-12 * scale) << "step " << pt.step;
+    ASSERT_LE(std::abs(pt.stress[ZZ]), 1e-12 * scale) << "step " << pt.step;
+    ASSERT_LE(pt.yield_function, 1e-10 * scale);
+    ASSERT_LE(trace(pt.stress), 3.0 * p.tension_cutoff * (1.0 + 1e-12));
+  }
+  EXPECT_TRUE(seen[static_cast<int>(Regime::Elastic)]);
+  EXPECT_TRUE(seen[static_cast<int>(Regime::Cone)]);
+  EXPECT_TRUE(seen[static_cast<int>(Regime::TensionCutoff)]);
+  // Uniaxial tension is capped at sigma_yy = 3 p_t (lateral stresses zero).
+  double max_tension = -1e300;
+  for (const auto& pt : pts) max_tension = std::max(max_tension, pt.stress[YY]);
+  EXPECT_NEAR(max_tension, 3.0 * p.tension_cutoff, 1e-9 * p.tension_cutoff);
+}
+
+TEST(ElementTest, SimpleShearSpinRotatesTheStress) {
+  // Elastic simple shear at constant normal stress: without spin tau = G gamma and the normal
+  // stresses stay at -p. With spin (Jaumann, w_xy = d gamma / 2) the rotation adds
+  // d sigma_xx = tau d gamma and d sigma_yy = -tau d gamma; holding sigma_yy takes
+  // d eps_yy = tau d gamma / (lambda + 2G), which adds lambda d eps_yy to sigma_xx, so to leading
+  // order sigma_xx - sigma_yy = G gamma^2 / 2 (1 + nu/(1 - nu)) = G gamma^2 / (2 (1 - nu)).
+  // The sum over N increments uses tau at the start of each: relative error 1/N = 1e-3.
+  const DruckerPragerParameters p = material(1.0e7);
+  const double g = p.young / (2.0 * (1.0 + p.poisson)), gamma = 0.01;
+  ElementTestSpec s = spec(ElementPath::SimpleShear, p, 1.0e4, {gamma}, 1000);
+  s.spin = false;
+  const auto plain = run_element_test(s);
+  EXPECT_NEAR(plain.back().stress[XY], g * gamma, 1e-9 * g * gamma);
+  EXPECT_NEAR(plain.back().stress[XX], -1.0e4, 1e-6);
+  s.spin = true;
+  const auto spun = run_element_test(s);
+  const Sym6& st = spun.back().stress;
+  EXPECT_NEAR(st[YY], -1.0e4, 1e-12 * 1.0e4);  // held
+  EXPECT_NEAR((st[XX] - st[YY]) / (g * gamma * gamma / (2.0 * (1.0 - p.poisson))), 1.0, 2e-3);
+}
+
+TEST(ElementTest, RejectsEmptyPath) {
+  EXPECT_THROW(run_element_test(spec(ElementPath::Oedometer, material(), 0.0, {0.0}, 10)), Error);
+  EXPECT_THROW(run_element_test(spec(ElementPath::Oedometer, material(), 0.0, {0.01}, 0)), Error);
+  DruckerPragerParameters bad = material();
+  bad.poisson = 0.5;
+  try {
+    run_element_test(spec(ElementPath::Oedometer, bad, 0.0, {0.01}, 10));
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("material.poisson"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ElementTest, CsvHasDocumentedColumns) {
+  const auto pts = run_element_test(spec(ElementPath::DrainedTriaxial, material(0.0), 1.0e5, {0.1}, 20));
+  std::ostringstream out;
+  write_element_test_csv(out, pts);
+  std::istringstream in(out.str());
+  std::string header, line;
+  std::getline(in, header);
+  EXPECT_EQ(header,
+            "step,eps_xx,eps_yy,eps_zz,eps_yz,eps_xz,eps_xy,sig_xx,sig_yy,sig_zz,sig_yz,sig_xz,"
+            "sig_xy,eps_v,gamma_xy,eps_q,p,q,eq_plastic_strain,yield_function,regime,plastic_work");
+  int rows = 0;
+  while (std::getline(in, line)) {
+    ++rows;
+    EXPECT_EQ(std::count(line.begin(), line.end(), ','), 21) << line;
+  }
+  EXPECT_EQ(rows, 21);
+  EXPECT_NE(out.str().find(",cone,"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace talus
