@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   talus::app::add_run_command(app);
   talus::app::add_check_command(app);
+  talus::app::add_bench_command(app);
   talus::app::add_element_test_command(app);
 
   try {
