@@ -92,3 +92,25 @@ TEST(Cli, RunWritesAParaViewSeries) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(Cli, BenchWritesTheJsonContract) {
+  const fs::path dir = temp_dir("bench");
+  fs::create_directories(dir);
+  const fs::path json = dir / "bench.json";
+  const Result r = run("bench --scene block --particles 2000 --shape linear --material elastic --mls off --threads 1 --steps 2 --json " +
+                       json.string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(json);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const char* key : {"\"particle_updates_per_second\"", "\"phases\"", "\"bytes_per_particle\"", "\"particles\"", "\"steps\": 2",
+                          "\"threads\": 1", "\"p2g\"", "\"g2p\""})
+    EXPECT_NE(text.find(key), std::string::npos) << key;
+  const Result refused = run("bench --shape quintic");
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_NE(refused.output.find("--shape quintic"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+}  // namespace
