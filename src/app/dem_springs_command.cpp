@@ -1,0 +1,104 @@
+// `talus dem-springs`: DEM contact spring constants kN, kT from continuum constants (seed 002;
+// docs/dem.md). Prints one JSON object; a continuum the packing cannot represent is refused with
+// exit code 2 and one line, never answered with a negative spring.
+#include "commands.hpp"
+#include "talus/core/error.hpp"
+#include "talus/dem/contact_calibration.hpp"
+#include "talus/dem/packing.hpp"
+
+#include <fmt/core.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace talus::app {
+namespace {
+
+struct DemSpringsOptions {
+  std::optional<double> young;
+  std::optional<double> shear;
+  double poisson = 0.0;
+  std::string packing;
+  bool plane_stress = false;
+  dem::PackingParameters parameters;
+};
+
+nlohmann::ordered_json compute_dem_springs(const DemSpringsOptions& options) {
+  const dem::Packing packing = dem::parse_packing(options.packing);
+  if (!options.young && !options.shear) throw input_error("give exactly one of --E and --G");
+  if (options.young && (!std::isfinite(*options.young) || *options.young <= 0.0)) {
+    throw input_error(fmt::format("--E = {} must be a finite number > 0", *options.young));
+  }
+  if (options.shear && (!std::isfinite(*options.shear) || *options.shear <= 0.0)) {
+    throw input_error(fmt::format("--G = {} must be a finite number > 0", *options.shear));
+  }
+  if (options.plane_stress && dem::is_three_dimensional(packing)) {
+    throw input_error(fmt::format("--plane-stress does not apply to packing '{}', which is 3D",
+                                  dem::packing_name(packing)));
+  }
+  const dem::PackingGeometry geometry = dem::make_packing_geometry(packing, options.parameters);
+  const dem::PlaneCondition plane = options.plane_stress ? dem::PlaneCondition::stress : dem::PlaneCondition::strain;
+  // E and nu are those of the material; plane stress changes only how nu enters (seed 002 §2(1)).
+  const dem::IsotropicElasticity target =
+      options.young ? dem::IsotropicElasticity::from_young(*options.young, options.poisson)
+                    : dem::IsotropicElasticity{*options.shear, options.poisson};
+  const dem::ContactSprings springs = dem::calibrate_contact_springs(target, geometry, plane);
+
+  nlohmann::ordered_json out;  // keeps kN, kT first
+  out["kN"] = springs.normal;
+  out["kT"] = springs.tangential;
+  out["kT_over_kN"] = springs.tangential_to_normal();
+  out["units"] = dem::is_three_dimensional(packing) ? "N/m" : "N/m per m of depth (= Pa)";
+  out["packing"] = dem::packing_name(packing);
+  out["E"] = target.young_modulus();
+  out["G"] = target.shear_modulus;
+  out["nu"] = target.poisson_ratio;
+  out["nu_limit"] = dem::poisson_ratio_limit(packing, plane);
+  if (!dem::is_three_dimensional(packing)) out["plane"] = options.plane_stress ? "stress" : "strain";
+  out["density_ratio"] = geometry.density_ratio;
+  out["coordination"] = geometry.coordination;
+  if (dem::is_three_dimensional(packing)) out["radius"] = geometry.radius;
+  return out;
+}
+
+}  // namespace
+
+void add_dem_springs_command(CLI::App& app) {
+  auto options = std::make_shared<DemSpringsOptions>();
+  CLI::App* command = app.add_subcommand(
+      "dem-springs",
+      "DEM contact springs kN, kT that reproduce an isotropic elastic continuum (seed 002, Abe 1996).\n"
+      "Prints one JSON object with kN and kT (2D: per unit depth, N/m/m = Pa; 3D: N/m).\n"
+      "Packings:\n"
+      "  hex         2D hexagonal close packing, eq. 34 (plane strain; nu <= 1/4)\n"
+      "  hex-locked  the same with disc rotations suppressed, eq. 53; matches the continuum's equilibrium\n"
+      "              equation, but under boundary tractions the lattice responds with nu = (1 - kT/kN)/4\n"
+      "              (docs/dem.md)\n"
+      "  square      2D square lattice, eq. 30-31: only nu = 0, kN = kT = E\n"
+      "  random2d    isotropic random disc packing, eq. 21 with psi = Z/(2 pi)\n"
+      "              (defaults: --density-ratio 0.84, --coordination 4)\n"
+      "  random3d    isotropic random sphere packing, uniform-strain (Voigt) estimate\n"
+      "              nu = (1 - kT/kN)/(4 + kT/kN); needs --radius (defaults: 0.64, Z = 6)\n"
+      "Poisson's ratios above the packing's limit need kT < 0 (unstable in dynamic DEM) and are refused\n"
+      "with exit code 2. Details, derivations and verification: docs/dem.md.");
+  command->add_option("--E", options->young, "Young's modulus E in Pa (give this or --G)");
+  command->add_option("--G", options->shear, "shear modulus G in Pa (give this or --E)")
+      ->excludes("--E");
+  command->add_option("--nu", options->poisson, "Poisson's ratio of the material")->required();
+  command->add_option("--packing", options->packing, "hex | hex-locked | square | random2d | random3d")
+      ->required();
+  command->add_flag("--plane-stress", options->plane_stress,
+                    "2D only: represent a plane-stress continuum (nu is read as nu/(1+nu); nu <= 1/3)");
+  command->add_option("--density-ratio", options->parameters.density_ratio,
+                      "random packings: solid fraction gamma/rho (bulk over particle density), 0 < value < 1");
+  command->add_option("--coordination", options->parameters.coordination,
+                      "random packings: mean number of contacts per particle Z");
+  command->add_option("--radius", options->parameters.radius,
+                      "random3d: particle radius a in m (3D springs scale with a)");
+  command->callback([options] { fmt::print("{}\n", compute_dem_springs(*options).dump(2)); });
+}
+
+}  // namespace talus::app
