@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <initializer_list>
 #include <memory>
 #include <string>
 
@@ -24,6 +25,7 @@ struct BenchOptions {
   std::string scene = "block";
   long long particles = 1000000;
   std::string shape = "linear";
+  std::string scheme = "musl";
   std::string material = "elastic";
   std::string mls = "off";
   int threads = 0;
@@ -49,7 +51,7 @@ std::string cpu_model() {
 /// The block scene: an elastic cube of about N particles (2x2x2 per cell) resting on a frictional
 /// floor under gravity, in a grid with room around it. Shear waves from the settling keep every
 /// particle's stress changing, so no phase can take a shortcut.
-Scene block_scene(long long particles) {
+Scene block_scene(long long particles, const std::string& shape, const std::string& scheme) {
   const int side = std::max(2, static_cast<int>(std::lround(std::cbrt(particles / 8.0))));  // cells per edge
   const double h = 0.01;
   const double edge = side * h;
@@ -57,18 +59,27 @@ Scene block_scene(long long particles) {
     "name": "bench_block",
     "grid": {{ "origin": [0, 0, 0], "size": [{0}, {0}, {1}], "cell_size": {2} }},
     "time": {{ "end": 1.0e9, "courant": 0.3 }},
+    "solver": {{ "shape": "{6}", "scheme": "{7}" }},
     "materials": {{ "m": {{ "density": 2000.0, "young": 1.0e7, "poisson": 0.3 }} }},
     "bodies": [ {{ "name": "block", "material": "m", "box": {{ "min": [{3}, {3}, 0], "max": [{4}, {4}, {5}] }},
                   "particles_per_cell": 2, "velocity": [0.5, 0.2, 0] }} ],
     "boundaries": {{ "z-": {{ "type": "friction", "friction_coefficient": 0.3 }}, "z+": "open" }}
-  }})", edge + 8 * h, edge + 4 * h, h, 4 * h, 4 * h + edge, edge);
+  }})", edge + 8 * h, edge + 4 * h, h, 4 * h, 4 * h + edge, edge, shape, scheme);
   return parse_scene(json, "bench block scene");
 }
 
 void refuse_unavailable(const BenchOptions& o) {
   if (o.scene != "block")
     throw input_error(fmt::format("--scene {}: the granular column needs Drucker-Prager in the MPM core, not built yet; available: block", o.scene));
-  if (o.shape != "linear") throw input_error(fmt::format("--shape {}: not built yet; available: linear", o.shape));
+  auto one_of = [](const std::string& v, std::initializer_list<const char*> allowed) {
+    for (const char* a : allowed)
+      if (v == a) return true;
+    return false;
+  };
+  if (!one_of(o.shape, {"linear", "ugimp", "cpgimp", "bspline2"}))
+    throw input_error(fmt::format("--shape {}: unknown; available: linear, ugimp, cpgimp, bspline2", o.shape));
+  if (!one_of(o.scheme, {"musl", "usl", "usf", "usavg"}))
+    throw input_error(fmt::format("--scheme {}: unknown; available: musl, usl, usf, usavg", o.scheme));
   if (o.material != "elastic") throw input_error(fmt::format("--material {}: not in the MPM core yet; available: elastic", o.material));
   if (o.mls != "off") throw input_error(fmt::format("--mls {}: the MLS smoother is not built yet; available: off", o.mls));
 }
@@ -76,7 +87,7 @@ void refuse_unavailable(const BenchOptions& o) {
 void run_bench(const BenchOptions& o) {
   refuse_unavailable(o);
   if (o.threads > 0) omp_set_num_threads(o.threads);
-  Solver solver(block_scene(o.particles));
+  Solver solver(block_scene(o.particles, o.shape, o.scheme));  // the scene reader checks shape and scheme
   const std::size_t n = solver.particles().size();
   solver.step();  // first step: first touch of the grid pages; not timed
   solver.phase_times() = PhaseTimes{};
@@ -108,8 +119,8 @@ void run_bench(const BenchOptions& o) {
   j["grid_active_bytes"] = solver.grid().active_bytes();
   j["peak_rss_bytes"] = rss;
 
-  fmt::print("talus bench: {} scene, {} particles, {} shape, {} material, MLS {}, {} threads, {} steps\n", o.scene, n, o.shape,
-             o.material, o.mls, omp_get_max_threads(), o.steps);
+  fmt::print("talus bench: {} scene, {} particles, {} shape, {} scheme, {} material, MLS {}, {} threads, {} steps\n", o.scene, n,
+             o.shape, o.scheme, o.material, o.mls, omp_get_max_threads(), o.steps);
   fmt::print("  {:.3f} M particle-updates/s ({:.3f} s)\n", rate / 1e6, wall);
   const double total = solver.phase_times().total();
   for (int p = 0; p < static_cast<int>(Phase::Count); ++p)
@@ -131,7 +142,10 @@ void add_bench_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("bench", "Measure speed: particle-updates per second, time per phase, memory per particle");
   cmd->add_option("--scene", o->scene, "block (elastic cube on a frictional floor) | column (granular collapse)")->capture_default_str();
   cmd->add_option("--particles", o->particles, "Approximate particle count")->check(CLI::Range(1000LL, 100000000LL))->capture_default_str();
-  cmd->add_option("--shape", o->shape, "linear | ugimp | cpgimp | bspline2")->capture_default_str();
+  cmd->add_option("--shape", o->shape, "linear | ugimp | cpgimp | bspline2")
+      ->capture_default_str();
+  cmd->add_option("--scheme", o->scheme, "musl | usl | usf | usavg")
+      ->capture_default_str();
   cmd->add_option("--material", o->material, "elastic | dp")->capture_default_str();
   cmd->add_option("--mls", o->mls, "off | linear | quadratic | cubic")->capture_default_str();
   cmd->add_option("--threads", o->threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)")->check(CLI::Range(1, 4096));

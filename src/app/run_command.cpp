@@ -2,6 +2,7 @@
 // what a run would do, writing nothing.
 #include "commands.hpp"
 #include "talus/core/error.hpp"
+#include "talus/io/checkpoint.hpp"
 #include "talus/io/run_driver.hpp"
 #include "talus/scene/scene_json.hpp"
 #include "talus/solver/solver.hpp"
@@ -9,6 +10,8 @@
 #include <fmt/core.h>
 #include <omp.h>
 
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 
@@ -46,16 +49,36 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--out", *out_dir, "Output folder (default: runs/<scene name>)");
   cmd->add_option("--threads", *threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)")->check(CLI::Range(1, 4096));
   cmd->add_flag("--quiet", *quiet, "No progress line");
+  auto restart = std::make_shared<std::string>();
+  cmd->add_option("--restart", *restart,
+                  "Continue from a checkpoint (e.g. runs/<name>/checkpoint.h5) of this same scene; output goes to the "
+                  "checkpoint's folder unless --out is given");
   cmd->callback([=]() {
     set_threads(*threads);
     Scene scene = read_scene_file(*scene_path);  // validated before anything is written
-    const std::string dir = out_dir->empty() ? "runs/" + scene.name : *out_dir;
+    std::string dir = out_dir->empty() ? "runs/" + scene.name : *out_dir;
     Solver solver(std::move(scene));
+    std::unique_ptr<Checkpoint> checkpoint;
+    if (!restart->empty()) {  // checked against the scene before anything is written
+      checkpoint = std::make_unique<Checkpoint>(read_checkpoint(*restart));
+      restore_checkpoint(solver, *checkpoint, *restart);
+      if (out_dir->empty()) dir = std::filesystem::path(*restart).parent_path().string();
+      if (dir.empty()) dir = ".";
+      fmt::print("talus: restart from {} at step {}, t = {:.6g} s\n", *restart, solver.step_count(), solver.time());
+    }
     fmt::print("talus: {} particles, {} threads, output in {}\n", solver.particles().size(), omp_get_max_threads(), dir);
     RunOptions options;
     options.out_dir = dir;
     options.progress = !*quiet;
+    if (checkpoint) options.resume = &checkpoint->run;
     const RunSummary summary = run_scene(solver, options);
+    if (summary.interrupted_signal) {
+      fmt::print("talus: stopped by signal {} at step {}, t = {:.6g} s; checkpoint {}\n", summary.interrupted_signal,
+                 summary.steps, summary.time, summary.checkpoint_path);
+      fmt::print("talus: resume with: talus run {} --restart {}\n", *scene_path, summary.checkpoint_path);
+      std::fflush(stdout);
+      std::exit(128 + summary.interrupted_signal);
+    }
     const double e0 = summary.initial.total();
     const double scale = std::max({std::abs(e0), summary.initial.kinetic + summary.initial.strain + std::abs(summary.initial.gravity), 1e-300});
     fmt::print("talus: done: {} steps to t = {:.6g} s in {:.2f} s ({:.2f} M particle-updates/s)\n", summary.steps, summary.time,

@@ -126,6 +126,15 @@ void write_file_atomically(const std::string& path, const std::string& text) {
 
 void PvdIndex::add(double time, const std::string& relative_file) {
   entries_.emplace_back(time, relative_file);
+  write();
+}
+
+void PvdIndex::assign(std::vector<std::pair<double, std::string>> entries) {
+  entries_ = std::move(entries);
+  write();
+}
+
+void PvdIndex::write() const {
   std::string xml =
       "<?xml version=\"1.0\"?>\n"
       "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"

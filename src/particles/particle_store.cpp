@@ -2,6 +2,8 @@
 
 #include <omp.h>
 
+#include <cmath>
+
 namespace talus {
 
 std::size_t ParticleStore::add(std::int64_t particle_id, const Vec3& position, const Vec3& velocity,
@@ -24,6 +26,8 @@ std::size_t ParticleStore::add(std::int64_t particle_id, const Vec3& position, c
     plastic_strain.push_back(0.0);
     for (auto& b : back_stress) b.push_back(0.0);
   }
+  if (domain_enabled_)
+    for (auto& l : domain) l.push_back(0.5 * std::cbrt(particle_volume));
   return id.size() - 1;
 }
 
@@ -31,6 +35,14 @@ void ParticleStore::enable_plastic_state() {
   plastic_enabled_ = true;
   plastic_strain.assign(size(), 0.0);
   for (auto& b : back_stress) b.assign(size(), 0.0);
+}
+
+void ParticleStore::enable_domain_state() {
+  domain_enabled_ = true;
+  for (auto& l : domain) {
+    l.resize(size());
+    for (std::size_t p = 0; p < size(); ++p) l[p] = 0.5 * std::cbrt(volume0[p]);  // l_p0 (seed 000 sec. 3)
+  }
 }
 
 namespace {
@@ -63,6 +75,7 @@ void ParticleStore::permute(const std::vector<std::uint32_t>& order) {
   for (auto& f : strain) each(f);
   each(plastic_strain);
   for (auto& f : back_stress) each(f);
+  for (auto& f : domain) each(f);
 }
 
 std::size_t ParticleStore::bytes() const {
@@ -77,6 +90,7 @@ std::size_t ParticleStore::bytes() const {
   for (auto& f : strain) add(f);
   add(plastic_strain);
   for (auto& f : back_stress) add(f);
+  for (auto& f : domain) add(f);
   return b;
 }
 

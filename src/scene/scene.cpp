@@ -12,6 +12,8 @@ const char* to_string(SchemeKind scheme) {
   switch (scheme) {
     case SchemeKind::Musl: return "musl";
     case SchemeKind::Usl: return "usl";
+    case SchemeKind::Usf: return "usf";
+    case SchemeKind::Usavg: return "usavg";
   }
   return "?";
 }
@@ -19,6 +21,27 @@ const char* to_string(SchemeKind scheme) {
 const char* to_string(ShapeKind shape) {
   switch (shape) {
     case ShapeKind::Linear: return "linear";
+    case ShapeKind::UGimp: return "ugimp";
+    case ShapeKind::CpGimp: return "cpgimp";
+    case ShapeKind::BSpline2: return "bspline2";
+  }
+  return "?";
+}
+
+const char* to_string(MaterialModel model) {
+  switch (model) {
+    case MaterialModel::LinearElastic: return "linear_elastic";
+    case MaterialModel::DruckerPrager: return "drucker_prager";
+  }
+  return "?";
+}
+
+const char* to_string(ConeFit cone) {
+  switch (cone) {
+    case ConeFit::PlaneStrain: return "plane_strain";
+    case ConeFit::Compression: return "compression";
+    case ConeFit::Extension: return "extension";
+    case ConeFit::Inscribed: return "inscribed";
   }
   return "?";
 }

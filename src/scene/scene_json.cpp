@@ -43,21 +43,70 @@ void read_time(ObjectReader r, Scene& s) {
 }
 
 void read_solver(ObjectReader r, Scene& s) {
-  const std::string scheme = r.choice("scheme", "musl", {"musl", "usl"});
-  s.scheme = scheme == "musl" ? SchemeKind::Musl : SchemeKind::Usl;
-  r.choice("shape", "linear", {"linear"});
-  s.shape = ShapeKind::Linear;
+  const std::string scheme = r.choice("scheme", "musl", {"musl", "usl", "usf", "usavg"});
+  s.scheme = scheme == "usl"     ? SchemeKind::Usl
+             : scheme == "usf"   ? SchemeKind::Usf
+             : scheme == "usavg" ? SchemeKind::Usavg
+                                 : SchemeKind::Musl;
+  const std::string shape = r.choice("shape", "linear", {"linear", "ugimp", "cpgimp", "bspline2"});
+  s.shape = shape == "ugimp"      ? ShapeKind::UGimp
+            : shape == "cpgimp"   ? ShapeKind::CpGimp
+            : shape == "bspline2" ? ShapeKind::BSpline2
+                                  : ShapeKind::Linear;
   s.sort_interval = r.integer_or("sort_interval", s.sort_interval, 1, 1000000);
+  s.gravity_ramp_time = r.number_or("gravity_ramp_time", s.gravity_ramp_time, 0.0, kHuge);
   r.finish();
+}
+
+ConeFit read_cone(ObjectReader& r) {
+  const std::string cone = r.choice("cone", "plane_strain", {"plane_strain", "compression", "extension", "inscribed"});
+  if (cone == "compression") return ConeFit::Compression;
+  if (cone == "extension") return ConeFit::Extension;
+  if (cone == "inscribed") return ConeFit::Inscribed;
+  return ConeFit::PlaneStrain;
+}
+
+// Drucker-Prager keys next to density/young/poisson (seed 001 eq. 23-25, Table 2); the ranges are
+// checked by the DruckerPrager constructor, which names the key path.
+void read_drucker_prager(ObjectReader& r, MaterialSpec& m) {
+  DruckerPragerParameters& p = m.drucker_prager;
+  p.young = m.elastic.young;
+  p.poisson = m.elastic.poisson;
+  auto any_number = [&](const char* key, double fallback) {
+    return r.number_or(key, fallback, -kHuge, kHuge);  // range checked below, with the allowed interval
+  };
+  p.friction_angle_deg = r.number("friction_angle", -kHuge, kHuge);  // required
+  p.dilatancy_angle_deg = any_number("dilatancy_angle", 0.0);
+  p.cohesion = any_number("cohesion", 0.0);
+  p.hardening_modulus = any_number("hardening_modulus", 0.0);
+  p.kinematic_fraction = any_number("kinematic_fraction", 0.0);
+  if (r.has("tension_cutoff")) p.tension_cutoff = any_number("tension_cutoff", 0.0);
+  p.cone = read_cone(r);
+  const std::string prefix = r.path() + ".";
+  (void)DruckerPrager(p, prefix);  // validates, throws with the key path and the allowed range
+  GranularOptions& g = m.granular;
+  g.flowing_plastic_strain = r.number_or("flowing_plastic_strain", g.flowing_plastic_strain, 0.0, kHuge);
+  g.flowing_dilatancy_angle_deg =
+      r.number_or("flowing_dilatancy_angle", g.flowing_dilatancy_angle_deg, 0.0, p.friction_angle_deg);
+  g.separation_volume_ratio = r.number_or("separation_volume_ratio", g.separation_volume_ratio, 0.0, kHuge);
+  if (g.separation_volume_ratio != 0.0 && g.separation_volume_ratio <= 1.0)
+    throw input_error(fmt::format("{} = {} is outside the allowed range (1, inf), or 0 to disable",
+                                  r.key_path("separation_volume_ratio"), g.separation_volume_ratio));
 }
 
 MaterialSpec read_material(ObjectReader r, const std::string& name) {
   MaterialSpec m;
   m.name = name;
-  r.choice("model", "linear_elastic", {"linear_elastic"});
+  const std::string model = r.choice("model", "linear_elastic", {"linear_elastic", "drucker_prager"});
+  m.model = model == "drucker_prager" ? MaterialModel::DruckerPrager : MaterialModel::LinearElastic;
   m.density = r.number("density", 0.0, kHuge, true);
   m.elastic.young = r.number("young", 0.0, kHuge, true);
-  m.elastic.poisson = r.number("poisson", -1.0, 0.5, true, true);
+  if (m.model == MaterialModel::DruckerPrager) {
+    m.elastic.poisson = r.number("poisson", 0.0, 0.5, false, true);
+    read_drucker_prager(r, m);
+  } else {
+    m.elastic.poisson = r.number("poisson", -1.0, 0.5, true, true);
+  }
   r.finish();
   return m;
 }
@@ -125,6 +174,28 @@ void read_output(ObjectReader r, Scene& s) {
   s.output.frame_interval = r.number_or("frame_interval", 0.0, 0.0, kHuge);
   s.output.history_interval = r.number_or("history_interval", 0.0, 0.0, kHuge);
   s.output.compress = r.choice("compression", "lz4", {"lz4", "none"}) == "lz4";
+  s.output.checkpoint_interval = r.number_or("checkpoint_interval", 0.0, 0.0, kHuge);
+  r.finish();
+}
+
+// What cannot be allocated is bad input too (docs/reliability.md): a one-line refusal, not a crash.
+void check_problem_size(const Scene& s) {
+  const double cells = double(s.grid.cells[0]) * s.grid.cells[1] * s.grid.cells[2];
+  if (cells > 1e9)
+    throw input_error(fmt::format("grid.size / grid.cell_size = {} x {} x {} = {:.3g} cells; at most 1e9", s.grid.cells[0],
+                                  s.grid.cells[1], s.grid.cells[2], cells));
+  const double particles = particle_count_bound(s);
+  if (particles > 2147483647.0)
+    throw input_error(fmt::format("bodies seed about {:.3g} particles; at most 2^31 (fewer bodies, larger cell_size or "
+                                  "fewer particles_per_cell)", particles));
+}
+
+// Instability guards (docs/reliability.md).
+void read_guards(ObjectReader r, Scene& s) {
+  GuardSpec& g = s.guards;
+  g.max_step_displacement = r.number_or("max_step_displacement", g.max_step_displacement, 0.0, 2.0, true);
+  g.energy_growth_factor = r.number_or("energy_growth_factor", g.energy_growth_factor, 0.0, kHuge, true);
+  g.snapshot_interval = r.integer_or("snapshot_interval", g.snapshot_interval, 0, 1000000);
   r.finish();
 }
 
@@ -134,10 +205,12 @@ Scene parse_scene(const std::string& text, const std::string& source) {
   Json root;
   try {
     root = Json::parse(text);
-  } catch (const Json::parse_error& e) {
-    // nlohmann's message already names the line and column.
+  } catch (const Json::exception& e) {
+    // nlohmann's message already names the line and column. Not only parse_error: a number that
+    // overflows a double (1e999) is an out_of_range error.
     std::string what = e.what();
-    throw input_error(fmt::format("{}: malformed JSON: {}", source, what.substr(what.find(']') + 2)));
+    const auto bracket = what.find(']');
+    throw input_error(fmt::format("{}: malformed JSON: {}", source, bracket == std::string::npos ? what : what.substr(bracket + 2)));
   }
   Scene s;
   ObjectReader r(root, "");
@@ -169,8 +242,20 @@ Scene parse_scene(const std::string& text, const std::string& source) {
   }
   if (r.has("boundaries")) read_boundaries(r.object("boundaries"), s);
   if (r.has("output")) read_output(r.object("output"), s);
+  if (r.has("guards")) read_guards(r.object("guards"), s);
   r.finish();
+  check_problem_size(s);
   return s;
+}
+
+double particle_count_bound(const Scene& s) {
+  double total = 0.0;
+  for (const BodySpec& b : s.bodies) {
+    double count = 1.0;
+    for (int d = 0; d < 3; ++d) count *= std::floor((b.box_max[d] - b.box_min[d]) * b.particles_per_cell / s.grid.h) + 1.0;
+    total += count;
+  }
+  return total;
 }
 
 Scene read_scene_file(const std::string& path) {
@@ -191,10 +276,28 @@ nlohmann::json scene_to_json(const Scene& s) {
                {"size", Json::array({s.grid.cells[0] * s.grid.h, s.grid.cells[1] * s.grid.h, s.grid.cells[2] * s.grid.h})}};
   j["gravity"] = vec(s.gravity);
   j["time"] = {{"end", s.end_time}, {"courant", s.courant}, {"max_steps", s.max_steps}};
-  j["solver"] = {{"scheme", to_string(s.scheme)}, {"shape", to_string(s.shape)}, {"sort_interval", s.sort_interval}};
+  j["solver"] = {{"scheme", to_string(s.scheme)},
+                 {"shape", to_string(s.shape)},
+                 {"sort_interval", s.sort_interval},
+                 {"gravity_ramp_time", s.gravity_ramp_time}};
   Json mats = Json::object();
-  for (const auto& m : s.materials)
-    mats[m.name] = {{"model", "linear_elastic"}, {"density", m.density}, {"young", m.elastic.young}, {"poisson", m.elastic.poisson}};
+  for (const auto& m : s.materials) {
+    Json mj = {{"model", to_string(m.model)}, {"density", m.density}, {"young", m.elastic.young}, {"poisson", m.elastic.poisson}};
+    if (m.model == MaterialModel::DruckerPrager) {
+      const DruckerPragerParameters& p = m.drucker_prager;
+      mj["friction_angle"] = p.friction_angle_deg;
+      mj["dilatancy_angle"] = p.dilatancy_angle_deg;
+      mj["cohesion"] = p.cohesion;
+      mj["hardening_modulus"] = p.hardening_modulus;
+      mj["kinematic_fraction"] = p.kinematic_fraction;
+      if (std::isfinite(p.tension_cutoff)) mj["tension_cutoff"] = p.tension_cutoff;
+      mj["cone"] = to_string(p.cone);
+      mj["flowing_plastic_strain"] = m.granular.flowing_plastic_strain;
+      mj["flowing_dilatancy_angle"] = m.granular.flowing_dilatancy_angle_deg;
+      mj["separation_volume_ratio"] = m.granular.separation_volume_ratio;
+    }
+    mats[m.name] = mj;
+  }
   j["materials"] = mats;
   Json bodies = Json::array();
   for (const auto& b : s.bodies)
@@ -216,7 +319,11 @@ nlohmann::json scene_to_json(const Scene& s) {
   j["boundaries"] = walls;
   j["output"] = {{"frame_interval", s.output.frame_interval},
                  {"history_interval", s.output.history_interval},
-                 {"compression", s.output.compress ? "lz4" : "none"}};
+                 {"compression", s.output.compress ? "lz4" : "none"},
+                 {"checkpoint_interval", s.output.checkpoint_interval}};
+  j["guards"] = {{"max_step_displacement", s.guards.max_step_displacement},
+                 {"energy_growth_factor", s.guards.energy_growth_factor},
+                 {"snapshot_interval", s.guards.snapshot_interval}};
   return j;
 }
 

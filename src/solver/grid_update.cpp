@@ -1,5 +1,6 @@
 #include "talus/solver/grid_update.hpp"
 
+#include <array>
 #include <vector>
 
 namespace talus {
@@ -51,19 +52,32 @@ double update_grid(Grid& grid, const Walls& walls, const Vec3& gravity, double d
   });
 }
 
-void velocities_from_momentum(Grid& grid, const Walls& walls, double mass_floor) {
+namespace {
+
+/// v = momentum / m with the walls' no-penetration part, written into `target` (zero on empty nodes).
+void wall_projected_velocities(Grid& grid, const Walls& walls, double mass_floor, std::array<LazyArray, 3>& target) {
   for_active_nodes(grid, [&](std::size_t n, std::uint32_t tile, int slot) {
     const double m = grid.mass[n];
     if (m <= mass_floor) {
-      for (int d = 0; d < 3; ++d) grid.momentum[d][n] = 0.0;
+      for (int d = 0; d < 3; ++d) target[d][n] = 0.0;
       return 0.0;
     }
     double v[3] = {grid.momentum[0][n] / m, grid.momentum[1][n] / m, grid.momentum[2][n] / m};
     const auto node = grid.node_of(tile, slot);
     if (walls.touches(node)) walls.apply(node, v, false);
-    for (int d = 0; d < 3; ++d) grid.momentum[d][n] = v[d];
+    for (int d = 0; d < 3; ++d) target[d][n] = v[d];
     return 0.0;
   });
+}
+
+}  // namespace
+
+void velocities_from_momentum(Grid& grid, const Walls& walls, double mass_floor) {
+  wall_projected_velocities(grid, walls, mass_floor, grid.momentum);
+}
+
+void start_velocities(Grid& grid, const Walls& walls, double mass_floor) {
+  wall_projected_velocities(grid, walls, mass_floor, grid.velocity_l);
 }
 
 }  // namespace talus

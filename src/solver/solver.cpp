@@ -4,8 +4,11 @@
 #include "talus/core/error.hpp"
 #include "talus/core/tensor.hpp"
 #include "talus/particles/seeding.hpp"
+#include "talus/shape/bspline.hpp"
+#include "talus/shape/gimp.hpp"
 #include "talus/shape/linear.hpp"
 #include "talus/solver/grid_update.hpp"
+#include "talus/solver/stability_guards.hpp"
 #include "talus/transfer/transfers.hpp"
 
 #include <fmt/core.h>
@@ -16,16 +19,28 @@
 
 namespace talus {
 
+namespace {
+
+// The colour blocks must hold the widest support of the scene's shape function (cell_sort.hpp).
+CellSort make_cell_sort(const Grid& grid, ShapeKind shape) {
+  switch (shape) {
+    case ShapeKind::Linear: return CellSort(grid, LinearShape::kReachLow, LinearShape::kReachHigh);
+    case ShapeKind::UGimp: return CellSort(grid, UGimpShape::kReachLow, UGimpShape::kReachHigh);
+    case ShapeKind::CpGimp: return CellSort(grid, CpGimpShape::kReachLow, CpGimpShape::kReachHigh);
+    case ShapeKind::BSpline2: return CellSort(grid, QuadraticBSplineShape::kReachLow, QuadraticBSplineShape::kReachHigh);
+  }
+  return CellSort(grid, LinearShape::kReachLow, LinearShape::kReachHigh);
+}
+
+}  // namespace
+
 Solver::Solver(Scene scene) : scene_(std::move(scene)) {
   particles_ = seed_particles(scene_);
   grid_ = Grid(scene_.grid);
-  sort_ = CellSort(grid_, LinearShape::kReachLow, LinearShape::kReachHigh);
+  sort_ = make_cell_sort(grid_, scene_.shape);
+  if (scene_.shape == ShapeKind::CpGimp) particles_.enable_domain_state();  // seed 000 eq. 57-58
   walls_ = Walls(scene_.walls, scene_.grid);
-  for (const BodySpec& b : scene_.bodies) {
-    const MaterialSpec& m = scene_.materials[b.material];
-    body_elastic_.push_back(LinearElastic::from_young_poisson(m.elastic.young, m.elastic.poisson));
-    body_p_wave_modulus_.push_back(m.p_wave_modulus());
-  }
+  materials_ = BodyMaterials(scene_, particles_);
   for (auto& d : displacement_) d.assign(particles_.size(), 0.0);
   // Nodes lighter than this are empty: far below any real nodal mass, far above round-off.
   mass_floor_ = 1e-12 * *std::min_element(particles_.mass.begin(), particles_.mass.end());
@@ -52,7 +67,8 @@ double Solver::stable_time_step() const {
   double max_rate = 0.0;  // max (c_p + |v_p|)
 #pragma omp parallel for schedule(static) reduction(max : max_rate)
   for (std::size_t p = 0; p < n; ++p) {
-    const double c = std::sqrt(body_p_wave_modulus_[P.body[p]] * P.volume[p] / P.mass[p]);
+    const double volume = materials_.wave_speed_volume(P.body[p], P.volume[p], P.volume0[p]);
+    const double c = std::sqrt(materials_.p_wave_modulus(P.body[p]) * volume / P.mass[p]);
     const double speed = std::sqrt(P.v[0][p] * P.v[0][p] + P.v[1][p] * P.v[1][p] + P.v[2][p] * P.v[2][p]);
     max_rate = std::max(max_rate, c + speed);
   }
@@ -67,31 +83,61 @@ void Solver::step() {
   if (dt > remaining) dt = remaining;
   switch (scene_.shape) {
     case ShapeKind::Linear: step_with<LinearShape, FlatTerrain>(dt); break;
+    case ShapeKind::UGimp: step_with<UGimpShape, FlatTerrain>(dt); break;
+    case ShapeKind::CpGimp: step_with<CpGimpShape, FlatTerrain>(dt); break;
+    case ShapeKind::BSpline2: step_with<QuadraticBSplineShape, FlatTerrain>(dt); break;
   }
+  check_particles_after_step(particles_, displacement_, scene_, step_, time_);  // stability_guards.hpp
   time_ += dt;
   ++step_;
   last_dt_ = dt;
 }
 
 // One explicit step. MUSL (seed 000 eq. 47-56): P2G, grid update, G2P, momentum remap, strain and
-// stress from the remapped velocities. USL differs only in skipping the remap (strain from v^L).
+// stress from the remapped velocities. The other schemes (seed 001 sec. 4(1)) differ from it in:
+//   USL    no remap: strain from v^L (Sulsky's original).
+//   USF    stress first (Bardenhagen 2002): strain from the start-of-step nodal velocities
+//          p_i / m_i, stress update, then the force of the updated stress; no remap, no stress
+//          update at the end.
+//   USAVG  half of each (Nairn 2003): the USF update with dt/2 at the start, the MUSL update with
+//          dt/2 at the end.
 template <class Shape, class Terrain>
 void Solver::step_with(double dt) {
+  const SchemeKind scheme = scene_.scheme;
+  const bool stress_first = scheme == SchemeKind::Usf || scheme == SchemeKind::Usavg;
+  const bool stress_last = scheme != SchemeKind::Usf;
+  const double first_dt = scheme == SchemeKind::Usavg ? 0.5 * dt : dt;  // USAVG: half the step each side
+  const double last_dt = first_dt;
   // 1. sort: when a particle has drifted beyond its block's slack, and every sort_interval steps
   //    to keep the memory order close to the cell order.
   if (needs_sort_ || steps_since_sort_ >= scene_.sort_interval) sort_particles();
   ++steps_since_sort_;
 
-  // 2. P2G: nodal mass, momentum and internal force.
-  {
+  // 2. P2G: nodal mass, momentum and internal force. USF / USAVG update the stress in between,
+  //    from the start-of-step nodal velocities (walls applied), before scattering the force.
+  if (!stress_first) {
     ScopedPhase timer(times_, Phase::P2G);
     grid_.clear_active();
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentumForce);
+  } else {
+    {
+      ScopedPhase timer(times_, Phase::P2G);
+      grid_.clear_active();
+      scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentum);
+      start_velocities(grid_, walls_, mass_floor_);
+    }
+    {
+      ScopedPhase timer(times_, Phase::Stress);
+      update_stress<Shape, Terrain>({grid_.velocity_l[0].data(), grid_.velocity_l[1].data(), grid_.velocity_l[2].data()},
+                                    first_dt, false);
+    }
+    ScopedPhase timer(times_, Phase::P2G);
+    scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Force);
   }
   // 3. grid: velocities, accelerations with gravity, walls.
   {
     ScopedPhase timer(times_, Phase::Grid);
-    friction_work_ += update_grid(grid_, walls_, scene_.gravity, dt, mass_floor_);
+    friction_work_ += update_grid(grid_, walls_, gravity_at(time_ + 0.5 * dt), dt, mass_floor_);
   }
   // 4. G2P: particle velocities and this step's displacement.
   {
@@ -104,53 +150,72 @@ void Solver::step_with(double dt) {
   // 5. remap (MUSL): v_i^{k+1} = sum m_p v_p N_i / m_i, with the walls (seed 000 eq. 52).
   std::array<const double*, 3> node_velocity = {grid_.velocity_l[0].data(), grid_.velocity_l[1].data(),
                                                 grid_.velocity_l[2].data()};
-  if (scene_.scheme == SchemeKind::Musl) {
+  if (scheme == SchemeKind::Musl || scheme == SchemeKind::Usavg) {
     ScopedPhase timer(times_, Phase::Remap);
     grid_.clear_momentum();
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Momentum);
     velocities_from_momentum(grid_, walls_, mass_floor_);
     node_velocity = {grid_.momentum[0].data(), grid_.momentum[1].data(), grid_.momentum[2].data()};
   }
-  // 6. strain and stress, then move the particles.
+  // 6. strain and stress, then move the particles (USF: only move them).
   {
     ScopedPhase timer(times_, Phase::Stress);
-    update_stress<Shape, Terrain>(node_velocity, dt);
+    if (stress_last)
+      update_stress<Shape, Terrain>(node_velocity, last_dt, true);
+    else
+      move_particles();
   }
+}
+
+Vec3 Solver::gravity_at(double t) const {
+  if (scene_.gravity_ramp_time <= 0.0 || t >= scene_.gravity_ramp_time) return scene_.gravity;
+  return scene_.gravity * (t / scene_.gravity_ramp_time);
+}
+
+void Solver::move_particles() {
+  ParticleStore& P = particles_;
+  const std::size_t n = P.size();
+#pragma omp parallel for schedule(static)
+  for (std::size_t p = 0; p < n; ++p)
+    for (int d = 0; d < 3; ++d) P.x[d][p] += displacement_[d][p];
 }
 
 // Strain increments are gathered for a chunk of particles into a small buffer, then the material
 // update runs over the chunk: the gather stays cache-friendly and the update loop is simple.
+// The dissipated energy is summed per block, then over blocks in block order, so the total does
+// not depend on the thread count.
+// cpGIMP domains follow the deformation here too (seed 000 eq. 57-58). `move` applies the step's
+// displacement afterwards (the particles' last use of their start-of-step position).
 template <class Shape, class Terrain>
-void Solver::update_stress(const std::array<const double*, 3>& node_velocity, double dt) {
+void Solver::update_stress(const std::array<const double*, 3>& node_velocity, double dt, bool move) {
   ParticleStore& P = particles_;
   const std::size_t blocks = sort_.block_count();
+  block_dissipation_.assign(blocks, 0.0);
 #pragma omp parallel
   {
     StrainIncrements inc;
 #pragma omp for schedule(dynamic, 1)
     for (std::size_t b = 0; b < blocks; ++b) {
+      double dissipated = 0.0;
       for (std::size_t begin = sort_.block_begin(b); begin < sort_.block_end(b); begin += StrainIncrements::kCapacity) {
         const std::size_t end = std::min<std::size_t>(begin + StrainIncrements::kCapacity, sort_.block_end(b));
         strain_increments<Shape, Terrain>(P, grid_, node_velocity, dt, begin, end, inc);
-        for (std::size_t p = begin; p < end; ++p) {
-          const std::size_t k = p - begin;
-          Sym6 s, de;
-          for (int c = 0; c < 6; ++c) {
-            s[c] = P.stress[c][p];
-            de[c] = inc.strain[c][k];
-          }
-          rotate_objectively(s, inc.spin[0][k], inc.spin[1][k], inc.spin[2][k]);  // Jaumann rate, Hughes-Winget
-          body_elastic_[P.body[p]].add_increment(s, de);  // seed 000 eq. 34
-          for (int c = 0; c < 6; ++c) {
-            P.stress[c][p] = s[c];
-            P.strain[c][p] += de[c];
-          }
-          P.volume[p] *= 1.0 + trace(de);  // seed 000 eq. 35: rho_new = rho / (1 + tr d_eps)
-          for (int d = 0; d < 3; ++d) P.x[d][p] += displacement_[d][p];
+        dissipated += materials_.update(P, begin, end, inc);
+        if constexpr (Shape::kDomain == DomainSource::Current) {
+          // seed 000 eq. 57-58, l_p = G_p l_p0 with G_p <- (I + grad v dt) G_p, for a domain kept
+          // as an axis-aligned box: each half width stretches with the normal strain increment
+          // along its axis, l_d <- (1 + d_eps_dd) l_d (the shear part of G would tilt the box).
+          for (std::size_t p = begin; p < end; ++p)
+            for (int d = 0; d < 3; ++d) P.domain[d][p] *= 1.0 + inc.strain[d][p - begin];
         }
+        if (move)
+          for (std::size_t p = begin; p < end; ++p)
+            for (int d = 0; d < 3; ++d) P.x[d][p] += displacement_[d][p];
       }
+      block_dissipation_[b] = dissipated;
     }
   }
+  for (double d : block_dissipation_) plastic_work_ += d;
 }
 
 EnergyBudget Solver::energies() const {
@@ -161,7 +226,7 @@ EnergyBudget Solver::energies() const {
     acc[0] += 0.5 * P.mass[p] * v2;
     Sym6 s;
     for (int c = 0; c < 6; ++c) s[c] = P.stress[c][p];
-    acc[1] += P.volume[p] * body_elastic_[P.body[p]].energy_density(s);
+    acc[1] += P.volume[p] * materials_.stored_energy_density(P.body[p], s);
     acc[2] -= P.mass[p] * (g[0] * P.x[0][p] + g[1] * P.x[1][p] + g[2] * P.x[2][p]);
   });
   EnergyBudget e;
@@ -181,6 +246,68 @@ void Solver::report_bad_particle(long long index, const char* what) const {
       "{:.6g}, {:.6g}) m/s",
       step_, time_, P.id[p], scene_.bodies[P.body[p]].name, what, P.x[0][p], P.x[1][p], P.x[2][p], P.v[0][p],
       P.v[1][p], P.v[2][p]));
+}
+
+// ---- checkpoint/restart (docs/reliability.md) ----------------------------------------------------
+
+SolverState Solver::state() const {
+  SolverState s;
+  s.time = time_;
+  s.step = step_;
+  s.last_dt = last_dt_;
+  s.friction_work = friction_work_;
+  s.plastic_work = plastic_work_;
+  s.steps_since_sort = steps_since_sort_;
+  s.sorts = sorts_;
+  s.needs_sort = needs_sort_;
+  // The cell each particle was sorted into, read back from the sort's block and cell offsets.
+  const std::size_t n = particles_.size();
+  for (auto& c : s.sort_cell) c.assign(n, 0);
+  const int bc = sort_.block_cells();
+  const std::size_t cells_per_block = static_cast<std::size_t>(bc) * bc * bc;
+  const auto& cell_start = sort_.cell_start();
+  for (std::size_t b = 0; b < sort_.block_count(); ++b) {
+    const auto o = sort_.block_origin(b);
+    for (std::size_t l = 0; l < cells_per_block; ++l) {
+      const int li = static_cast<int>(l / (bc * bc)), lj = static_cast<int>((l / bc) % bc), lk = static_cast<int>(l % bc);
+      for (std::uint32_t p = cell_start[b * cells_per_block + l]; p < cell_start[b * cells_per_block + l + 1]; ++p) {
+        s.sort_cell[0][p] = o[0] + li;
+        s.sort_cell[1][p] = o[1] + lj;
+        s.sort_cell[2][p] = o[2] + lk;
+      }
+    }
+  }
+  return s;
+}
+
+void Solver::restore(ParticleStore particles, const SolverState& s) {
+  const std::size_t n = particles.size();
+  if (n != particles_.size())
+    throw io_error(fmt::format("restart: {} particles saved, the scene seeds {}", n, particles_.size()));
+  for (const auto& c : s.sort_cell)
+    if (c.size() != n) throw io_error("restart: the saved sort state does not match the particles");
+  particles_ = std::move(particles);
+  for (auto& d : displacement_) d.assign(n, 0.0);
+  // Rebuild the cell sort exactly as the saved solver had it: sort with every particle placed at
+  // the centre of its saved cell. The particles are already in that key order, so the (stable)
+  // sort keeps their order and rebuilds the same blocks, colours and active tiles.
+  std::array<std::vector<double>, 3> x;
+  for (int d = 0; d < 3; ++d) {
+    x[d] = particles_.x[d];
+    for (std::size_t p = 0; p < n; ++p) particles_.x[d][p] = scene_.grid.node_position(d, s.sort_cell[d][p]) + 0.5 * scene_.grid.h;
+  }
+  const std::vector<std::int64_t> ids = particles_.id;
+  sort_.sort(particles_, grid_);
+  if (particles_.id != ids) throw io_error("restart: the saved particle order is not the saved sort's order");
+  particles_.x = std::move(x);
+  time_ = s.time;
+  step_ = s.step;
+  last_dt_ = s.last_dt;
+  friction_work_ = s.friction_work;
+  plastic_work_ = s.plastic_work;
+  steps_since_sort_ = s.steps_since_sort;
+  sorts_ = s.sorts;
+  needs_sort_ = s.needs_sort;
 }
 
 }  // namespace talus

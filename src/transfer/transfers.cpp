@@ -1,6 +1,8 @@
 #include "talus/transfer/transfers.hpp"
 
 #include "talus/grid/terrain.hpp"
+#include "talus/shape/bspline.hpp"
+#include "talus/shape/gimp.hpp"
 #include "talus/shape/linear.hpp"
 #include "talus/transfer/stencil.hpp"
 
@@ -8,11 +10,32 @@
 
 namespace talus {
 
+namespace {
+
+/// The particle domain's half widths in grid units, as the shape function wants them: none for a
+/// material point, l_p0 = V0^(1/3)/2 for uGIMP (seed 000 eq. 59), the current per-axis half widths
+/// for cpGIMP (eq. 57-58). The shape clamps them to what its support holds.
+template <class Shape>
+inline void half_widths(const ParticleStore& P, std::size_t p, double inv_h, double hw[3]) {
+  if constexpr (Shape::kDomain == DomainSource::Initial) {
+    hw[0] = hw[1] = hw[2] = 0.5 * std::cbrt(P.volume0[p]) * inv_h;
+  } else if constexpr (Shape::kDomain == DomainSource::Current) {
+    for (int d = 0; d < 3; ++d) hw[d] = P.domain[d][p] * inv_h;
+  } else {
+    hw[0] = hw[1] = hw[2] = 0.0;
+  }
+}
+
+}  // namespace
+
 template <class Shape, class Terrain>
 void scatter_to_grid(const ParticleStore& P, const CellSort& sort, Grid& grid, ScatterFields fields) {
   constexpr int N = Shape::kNodes;
   const Terrain& terrain = grid.terrain();
-  const bool with_force = fields == ScatterFields::MassMomentumForce;
+  const bool with_mass = fields != ScatterFields::Momentum && fields != ScatterFields::Force;
+  const bool with_momentum = fields != ScatterFields::Force;
+  const bool with_force = fields == ScatterFields::MassMomentumForce || fields == ScatterFields::Force;
+  const double inv_h = 1.0 / grid.geometry().h;
   double* mass = grid.mass.data();
   double* mom[3] = {grid.momentum[0].data(), grid.momentum[1].data(), grid.momentum[2].data()};
   double* force[3] = {grid.force[0].data(), grid.force[1].data(), grid.force[2].data()};
@@ -25,8 +48,9 @@ void scatter_to_grid(const ParticleStore& P, const CellSort& sort, Grid& grid, S
       const std::size_t b = blocks[bi];
       Stencil<Shape> s;
       for (std::size_t p = sort.block_begin(b); p < sort.block_end(b); ++p) {
-        const double half_width = Shape::kUsesDomain ? 0.5 * std::cbrt(P.volume0[p]) / grid.geometry().h : 0.0;
-        s.evaluate(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], half_width);
+        double hw[3];
+        half_widths<Shape>(P, p, inv_h, hw);
+        s.evaluate(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw);
         const double m = P.mass[p];
         const double mv[3] = {m * P.v[0][p], m * P.v[1][p], m * P.v[2][p]};
         // -V sigma, for f_int = -sum V_p sigma_p grad N (seed 000 eq. 22)
@@ -40,17 +64,19 @@ void scatter_to_grid(const ParticleStore& P, const CellSort& sort, Grid& grid, S
             for (int c = 0; c < N; ++c) {
               const std::size_t n = row + s.iz[c];
               const double w = wxy * s.wz[c];
+              if (with_mass) mass[n] += m * w;
               if (with_force) {
-                mass[n] += m * w;
                 double dx, dy, dz;
                 s.gradient(a, bb, c, dx, dy, dz);
                 force[0][n] += sxx * dx + sxy * dy + sxz * dz;
                 force[1][n] += sxy * dx + syy * dy + syz * dz;
                 force[2][n] += sxz * dx + syz * dy + szz * dz;
               }
-              mom[0][n] += mv[0] * w;
-              mom[1][n] += mv[1] * w;
-              mom[2][n] += mv[2] * w;
+              if (with_momentum) {
+                mom[0][n] += mv[0] * w;
+                mom[1][n] += mv[1] * w;
+                mom[2][n] += mv[2] * w;
+              }
             }
           }
       }
@@ -75,8 +101,9 @@ GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, const Grid
   for (std::size_t b = 0; b < blocks; ++b) {
     Stencil<Shape> s;
     for (std::size_t p = sort.block_begin(b); p < sort.block_end(b); ++p) {
-      const double half_width = Shape::kUsesDomain ? 0.5 * std::cbrt(P.volume0[p]) / g.h : 0.0;
-      s.evaluate(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], half_width);
+      double hw[3];
+      half_widths<Shape>(P, p, 1.0 / g.h, hw);
+      s.evaluate(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw);
       double dvp[3] = {0, 0, 0}, vlp[3] = {0, 0, 0};
       for (int a = 0; a < N; ++a)
         for (int bb = 0; bb < N; ++bb) {
@@ -118,8 +145,9 @@ void strain_increments(const ParticleStore& P, const Grid& grid, const std::arra
   const double h = grid.geometry().h;
   Stencil<Shape> s;
   for (std::size_t p = begin; p < end; ++p) {
-    const double half_width = Shape::kUsesDomain ? 0.5 * std::cbrt(P.volume0[p]) / h : 0.0;
-    s.evaluate(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], half_width);
+    double hw[3];
+    half_widths<Shape>(P, p, 1.0 / h, hw);
+    s.evaluate(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw);
     double L[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  // L_ij = dv_i / dx_j
     for (int a = 0; a < N; ++a)
       for (int bb = 0; bb < N; ++bb) {
@@ -157,5 +185,8 @@ void strain_increments(const ParticleStore& P, const Grid& grid, const std::arra
                                                   std::size_t, StrainIncrements&);
 
 TALUS_INSTANTIATE_TRANSFERS(LinearShape, FlatTerrain)
+TALUS_INSTANTIATE_TRANSFERS(UGimpShape, FlatTerrain)
+TALUS_INSTANTIATE_TRANSFERS(CpGimpShape, FlatTerrain)
+TALUS_INSTANTIATE_TRANSFERS(QuadraticBSplineShape, FlatTerrain)
 
 }  // namespace talus

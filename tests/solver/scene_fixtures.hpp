@@ -58,4 +58,21 @@ inline Scene tumbling_block_scene(double end_time = 0.05) {
   return parse_scene(json, "tumbling_block_scene");
 }
 
+/// Plane-strain collapse of a Drucker-Prager sand column (the half right of the symmetry wall
+/// x = 0) onto a frictional floor: inputs/column_collapse_2d.json at a coarser cell.
+inline Scene column_collapse_scene(double cell, double end_time, const char* extra_material_keys = "") {
+  const std::string json = fmt::format(R"({{
+    "name": "column_collapse",
+    "grid": {{ "origin": [0, 0, 0], "size": [0.6, {}, 0.3], "cell_size": {} }},
+    "time": {{ "end": {}, "courant": 0.3 }},
+    "materials": {{ "sand": {{ "model": "drucker_prager", "density": 1600.0, "young": 2.0e6, "poisson": 0.3,
+                               "friction_angle": 30.0, "dilatancy_angle": 0.0, "cohesion": 10.0{} }} }},
+    "bodies": [ {{ "name": "column", "material": "sand", "box": {{ "min": [0, 0, 0], "max": [0.1, {}, 0.2] }},
+                  "particles_per_cell": 2 }} ],
+    "boundaries": {{ "x-": "slip", "x+": "slip", "y-": "slip", "y+": "slip",
+                     "z-": {{ "type": "friction", "friction_coefficient": 0.5 }}, "z+": "open" }}
+  }})", cell, cell, end_time, extra_material_keys, cell);
+  return parse_scene(json, "column_collapse_scene");
+}
+
 }  // namespace talus::test

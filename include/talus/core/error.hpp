@@ -9,9 +9,22 @@ namespace talus {
 class Error : public std::runtime_error {
  public:
   enum class Kind { Input, Instability, Io };
-  Error(Kind kind, const std::string& message) : std::runtime_error(message), kind_(kind) {}
+  Error(Kind kind, const std::string& message) : std::runtime_error(one_line(message)), kind_(kind) {}
   Kind kind() const { return kind_; }
   int exit_code() const { return kind_ == Kind::Instability ? 3 : 2; }
+
+  /// Control characters (from keys or names in a scene) escaped, so a message is always one line.
+  static std::string one_line(const std::string& text) {
+    std::string out;
+    out.reserve(text.size());
+    for (const char c : text) {
+      const auto u = static_cast<unsigned char>(c);
+      if (c == '\n') out += "\\n";
+      else if (u < 0x20 || u == 0x7f) out += "\\x" + std::string(1, "0123456789abcdef"[u >> 4]) + "0123456789abcdef"[u & 15];
+      else out += c;
+    }
+    return out;
+  }
 
  private:
   Kind kind_;

@@ -7,6 +7,12 @@
 //   particles.pvd        ParaView time series of the frames
 //   frames/particles_NNNNNN.vtu
 //   energy.csv           time, step, dt, kinetic, strain, gravity, boundary_work, plastic_work, total
+//   checkpoint.h5        the last checkpoint (output.checkpoint_interval, SIGINT/SIGTERM, instability)
+//
+// Crash safety (docs/reliability.md): frames, the .pvd index, scene.json and checkpoints are written
+// to a temporary name and renamed; energy rows are flushed one by one, and a restart rewrites the
+// history up to the checkpoint's step (atomically) before it appends.
+#include "talus/io/checkpoint.hpp"
 #include "talus/solver/solver.hpp"
 
 #include <string>
@@ -17,6 +23,11 @@ struct RunOptions {
   std::string out_dir;
   bool progress = true;       // print a progress line to stderr
   double progress_seconds = 2.0;
+  /// Continue a run from a checkpoint already restored into the solver (restore_checkpoint): keep
+  /// its frames and history up to the checkpoint, drop what came later.
+  const RunProgress* resume = nullptr;
+  /// Catch SIGINT/SIGTERM: finish the step, write a checkpoint and return (interrupted_signal).
+  bool handle_signals = true;
 };
 
 struct RunSummary {
@@ -26,9 +37,14 @@ struct RunSummary {
   std::size_t frames = 0;
   EnergyBudget initial, final;
   std::string pvd_path;
+  std::string checkpoint_path;  // <out_dir>/checkpoint.h5
+  std::size_t checkpoints = 0;  // checkpoints written by this call
+  int interrupted_signal = 0;   // SIGINT/SIGTERM caught: the run stopped after writing a checkpoint
 };
 
-/// Prepare `out_dir` (creating it; earlier talus outputs there are replaced) and run to the end.
+/// Prepare `out_dir` (creating it; earlier talus outputs there are replaced, unless resuming) and run
+/// to the end. An instability (Error of kind Instability) is rethrown after the last good state has
+/// been written as a frame and a checkpoint; its message then says where.
 RunSummary run_scene(Solver& solver, const RunOptions& options);
 
 }  // namespace talus

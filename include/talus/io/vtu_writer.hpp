@@ -19,10 +19,13 @@ class PvdIndex {
  public:
   explicit PvdIndex(std::string path) : path_(std::move(path)) {}
   void add(double time, const std::string& relative_file);
+  /// Replace all entries (a restart: the frames written before the checkpoint) and rewrite.
+  void assign(std::vector<std::pair<double, std::string>> entries);
   const std::string& path() const { return path_; }
   std::size_t size() const { return entries_.size(); }
 
  private:
+  void write() const;
   std::string path_;
   std::vector<std::pair<double, std::string>> entries_;
 };

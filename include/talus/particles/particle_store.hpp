@@ -27,8 +27,13 @@ struct ParticleStore {
   std::vector<double> plastic_strain;            // equivalent plastic strain
   std::array<std::vector<double>, 6> back_stress;  // kinematic hardening centre [Pa]
 
+  // cpGIMP particle domain: current half widths per axis [m] (seed 000 eq. 57-58); allocated only
+  // when the scene uses cpGIMP.
+  std::array<std::vector<double>, 3> domain;
+
   std::size_t size() const { return id.size(); }
   bool has_plastic_state() const { return plastic_enabled_; }
+  bool has_domain_state() const { return domain_enabled_; }
 
   /// Append one particle with zero stress and strain; returns its index.
   std::size_t add(std::int64_t particle_id, const Vec3& position, const Vec3& velocity,
@@ -37,6 +42,9 @@ struct ParticleStore {
   /// Allocate (zeroed) the plastic state arrays for all particles.
   void enable_plastic_state();
 
+  /// Allocate the cpGIMP domain half widths, each set to its initial value V0^(1/3)/2.
+  void enable_domain_state();
+
   /// Apply a gather permutation to every allocated field: new[i] = old[order[i]].
   /// Reuses internal scratch arrays, so repeated sorts allocate nothing.
   void permute(const std::vector<std::uint32_t>& order);
@@ -44,8 +52,56 @@ struct ParticleStore {
   /// Bytes held by particle fields (capacity, all allocated groups), for the memory report.
   std::size_t bytes() const;
 
+  /// Visit every per-particle double array under a stable name: f(const char* name, vector<double>&).
+  /// Components are numbered: "x0" "x1" "x2", "v0".., "stress0".."stress5" (Voigt order above).
+  /// Arrays a scene does not use are visited too, empty; callers skip those.
+  /// The checkpoint (io/checkpoint.cpp) and the finite-value guard (solver/stability_guards.cpp)
+  /// walk the particles through this visitor only: A NEW PER-PARTICLE ARRAY IS CHECKPOINTED AND
+  /// GUARDED BY ADDING ONE LINE HERE (and to permute() and bytes()).
+  template <class F>
+  void for_each_double_array(F&& f) {
+    visit_double_arrays(*this, f);
+  }
+  template <class F>
+  void for_each_double_array(F&& f) const {
+    visit_double_arrays(*this, f);
+  }
+  /// The integer arrays: f("id", id) and f("body", body) (element types int64 and uint16).
+  template <class F>
+  void for_each_integer_array(F&& f) {
+    f("id", id);
+    f("body", body);
+  }
+  template <class F>
+  void for_each_integer_array(F&& f) const {
+    f("id", id);
+    f("body", body);
+  }
+
  private:
+  template <class Store, class F>
+  static void visit_double_arrays(Store& s, F& f) {
+    static const char* const kVec[3][3] = {{"x0", "x1", "x2"}, {"v0", "v1", "v2"}, {"", "", ""}};
+    static const char* const kSym[3][6] = {{"stress0", "stress1", "stress2", "stress3", "stress4", "stress5"},
+                                           {"strain0", "strain1", "strain2", "strain3", "strain4", "strain5"},
+                                           {"back_stress0", "back_stress1", "back_stress2", "back_stress3",
+                                            "back_stress4", "back_stress5"}};
+    for (int d = 0; d < 3; ++d) f(kVec[0][d], s.x[d]);
+    for (int d = 0; d < 3; ++d) f(kVec[1][d], s.v[d]);
+    f("mass", s.mass);
+    f("volume", s.volume);
+    f("volume0", s.volume0);
+    for (int c = 0; c < 6; ++c) f(kSym[0][c], s.stress[c]);
+    for (int c = 0; c < 6; ++c) f(kSym[1][c], s.strain[c]);
+    f("plastic_strain", s.plastic_strain);
+    for (int c = 0; c < 6; ++c) f(kSym[2][c], s.back_stress[c]);
+    f("domain0", s.domain[0]);
+    f("domain1", s.domain[1]);
+    f("domain2", s.domain[2]);
+  }
+
   bool plastic_enabled_ = false;
+  bool domain_enabled_ = false;
   std::vector<double> scratch_;
   std::vector<std::int64_t> id_scratch_;
   std::vector<std::uint16_t> body_scratch_;

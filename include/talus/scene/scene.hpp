@@ -3,6 +3,7 @@
 // Nothing below the solver reads JSON; everything it needs is here, with defaults resolved.
 #include "talus/core/types.hpp"
 #include "talus/grid/grid.hpp"
+#include "talus/material/drucker_prager.hpp"
 
 #include <array>
 #include <string>
@@ -10,18 +11,39 @@
 
 namespace talus {
 
-enum class ShapeKind { Linear };
-enum class SchemeKind { Musl, Usl };
+/// Shape functions (docs/theory.md): linear MPM, uGIMP, cpGIMP (seed 000 eq. 30-31, 57-59),
+/// quadratic B-spline.
+enum class ShapeKind { Linear, UGimp, CpGimp, BSpline2 };
+/// Update schemes (seed 001 sec. 4(1)): MUSL, USL, USF (Bardenhagen 2002), USAVG (Nairn 2003).
+enum class SchemeKind { Musl, Usl, Usf, Usavg };
 
 struct LinearElasticParameters {
   double young = 0.0;    // E [Pa]
   double poisson = 0.0;  // nu [-]
 };
 
+enum class MaterialModel { LinearElastic, DruckerPrager };
+
+/// What a runout scene does with Drucker-Prager particles beyond the constitutive law itself
+/// (seed 001 sec. 7; docs/drucker-prager.md "In the MPM solver").
+struct GranularOptions {
+  /// A particle counts as flowing once its equivalent plastic strain exceeds this; from then on
+  /// it uses `flowing_dilatancy_angle` (seed 001: "dilatancy is set to 0 once flow starts").
+  double flowing_plastic_strain = 0.05;
+  double flowing_dilatancy_angle_deg = 0.0;
+  /// A particle whose volume exceeds this multiple of its initial volume has lost contact with
+  /// its neighbours: its stress is set to zero and its plastic state reset (the stored elastic
+  /// energy it held is counted as dissipated). 0 disables the rule.
+  double separation_volume_ratio = 1.5;
+};
+
 struct MaterialSpec {
   std::string name;
+  MaterialModel model = MaterialModel::LinearElastic;
   double density = 0.0;  // initial density [kg/m^3]
-  LinearElasticParameters elastic;
+  LinearElasticParameters elastic;  // for Drucker-Prager: the elastic part (same E, nu)
+  DruckerPragerParameters drucker_prager;  // MaterialModel::DruckerPrager only (E, nu copied in)
+  GranularOptions granular;                // MaterialModel::DruckerPrager only
   /// P-wave (constrained) modulus M = K + 4G/3, which sets the wave speed c = sqrt(M / rho).
   double p_wave_modulus() const;
   double bulk_modulus() const;
@@ -48,6 +70,15 @@ struct OutputSpec {
   double frame_interval = 0.0;         // [s] between particle frames; 0 = first and last only
   double history_interval = 0.0;       // [s] between energy-history rows; 0 = every step
   bool compress = true;                // LZ4 inside the .vtu files
+  double checkpoint_interval = 0.0;    // [s] between checkpoints (checkpoint.h5); 0 = none (still on signals)
+};
+
+/// Instability guards (docs/reliability.md): a run that trips one stops with a one-line diagnosis,
+/// writes its last good state as a frame and a checkpoint, and exits with code 3.
+struct GuardSpec {
+  double max_step_displacement = 1.0;  // [cells] a particle may move in one step (more: CFL breach)
+  double energy_growth_factor = 1.0;   // stop when the total energy grew by more than this times the energy available
+  int snapshot_interval = 10;          // [steps] between in-memory copies of the last good state; 0 = none
 };
 
 struct Scene {
@@ -61,15 +92,21 @@ struct Scene {
   SchemeKind scheme = SchemeKind::Musl;
   ShapeKind shape = ShapeKind::Linear;
   int sort_interval = 20;              // re-sort at least this often (also when a particle drifts)
+  /// Gravity (the body force) grows linearly from 0 to its full value over this time [s]; 0 = applied
+  /// at once. A quasi-static load (the Bardenhagen-Kober column, seed 000 sec. 4(1)) needs it.
+  double gravity_ramp_time = 0.0;
   std::vector<MaterialSpec> materials;
   std::vector<BodySpec> bodies;
   // walls[axis][side]: side 0 = lower face (x-, y-, z-), side 1 = upper face.
   std::array<std::array<WallSpec, 2>, 3> walls{};
   OutputSpec output;
+  GuardSpec guards;
 };
 
 const char* to_string(SchemeKind scheme);
 const char* to_string(ShapeKind shape);
 const char* to_string(WallType type);
+const char* to_string(MaterialModel model);
+const char* to_string(ConeFit cone);
 
 }  // namespace talus

@@ -14,6 +14,10 @@ namespace talus {
 Scene parse_scene(const std::string& text, const std::string& source);
 Scene read_scene_file(const std::string& path);
 
+/// An upper bound of the particles the bodies seed (per axis: extent / spacing + 1), summed.
+/// parse_scene refuses scenes above 2^31 particles or 1e9 grid cells (they cannot be allocated).
+double particle_count_bound(const Scene& scene);
+
 /// The fully resolved scene; parse_scene(scene_to_json(s).dump()) reproduces s.
 nlohmann::json scene_to_json(const Scene& scene);
 

@@ -7,6 +7,7 @@
 //   kReachLow/High    the support spans cells [c - kReachLow, c + kReachHigh] in node indices,
 //                     c = floor(xi) the particle's cell; sets the colour-block size (cell_sort.hpp)
 //   kUsesDomain       whether the weights depend on the particle's half-width (GIMP)
+//   kDomain           where that half-width comes from (DomainSource below)
 //   weights(xi, half_width, base, w, dw)
 //                     xi in grid units (node spacing 1); fills the kNodes weights and their
 //                     derivatives d/dxi, starting at node index `base`.
@@ -14,11 +15,19 @@
 
 namespace talus {
 
+/// Which half-width the transfers pass to a shape function's weights().
+enum class DomainSource {
+  None,     // material point (linear, B-spline): half width unused
+  Initial,  // uGIMP: l_p0 = V0^(1/3)/2, fixed (seed 000 eq. 59)
+  Current,  // cpGIMP: the particle's current half widths (ParticleStore::domain, eq. 57-58)
+};
+
 struct LinearShape {
   static constexpr int kNodes = 2;
   static constexpr int kReachLow = 0;
   static constexpr int kReachHigh = 1;
   static constexpr bool kUsesDomain = false;
+  static constexpr DomainSource kDomain = DomainSource::None;
   static constexpr const char* kName = "linear";
 
   static inline void weights(double xi, double /*half_width*/, int& base, double* w, double* dw) {

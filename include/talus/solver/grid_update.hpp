@@ -14,4 +14,8 @@ double update_grid(Grid& grid, const Walls& walls, const Vec3& gravity, double d
 /// After the MUSL remap: v_i^{k+1} = p_i / m_i with no-penetration at the walls (seed 000 eq. 52).
 void velocities_from_momentum(Grid& grid, const Walls& walls, double mass_floor);
 
+/// USF / USAVG, before the stress update: the start-of-step nodal velocities v_i = p_i / m_i with
+/// no-penetration at the walls, written to `velocity_l` (momentum is left as it is for update_grid).
+void start_velocities(Grid& grid, const Walls& walls, double mass_floor);
+
 }  // namespace talus

@@ -3,7 +3,7 @@
 // step() is the one place where the order of the phases is written down (solver.cpp).
 #include "talus/boundary/walls.hpp"
 #include "talus/grid/grid.hpp"
-#include "talus/material/linear_elastic.hpp"
+#include "talus/solver/body_materials.hpp"
 #include "talus/particles/cell_sort.hpp"
 #include "talus/particles/particle_store.hpp"
 #include "talus/scene/scene.hpp"
@@ -26,6 +26,22 @@ struct EnergyBudget {
   double friction_work = 0.0;   // work dissipated by wall friction, accumulated
   double plastic_work = 0.0;    // accumulated plastic dissipation
   double total() const { return kinetic + strain + gravity + friction_work + plastic_work; }
+};
+
+/// Everything besides the particle arrays that the next step depends on: what a checkpoint saves
+/// with the particles so that a restored solver continues bit for bit (docs/reliability.md).
+struct SolverState {
+  double time = 0.0;
+  std::int64_t step = 0;
+  double last_dt = 0.0;
+  double friction_work = 0.0;
+  double plastic_work = 0.0;
+  int steps_since_sort = 0;
+  std::int64_t sorts = 0;
+  bool needs_sort = false;
+  /// Per particle (in the store's order): the padded grid cell it was sorted into at the last sort.
+  /// restore() rebuilds the cell sort from these, so the blocks and the summation order match.
+  std::array<std::vector<std::int32_t>, 3> sort_cell;
 };
 
 class Solver {
@@ -55,11 +71,19 @@ class Solver {
   const PhaseTimes& phase_times() const { return times_; }
   std::int64_t sort_count() const { return sorts_; }
 
+  /// Checkpoint/restart: the state besides the particles, and continuing from a saved one. The
+  /// particles must be those of the saved solver, in its order (restore() keeps that order).
+  SolverState state() const;
+  void restore(ParticleStore particles, const SolverState& state);
+
  private:
   template <class Shape, class Terrain>
   void step_with(double dt);
   template <class Shape, class Terrain>
-  void update_stress(const std::array<const double*, 3>& node_velocity, double dt);
+  void update_stress(const std::array<const double*, 3>& node_velocity, double dt, bool move);
+  void move_particles();
+  /// The body force at time t: scene gravity, ramped over scene.gravity_ramp_time.
+  Vec3 gravity_at(double t) const;
   void sort_particles();
   [[noreturn]] void report_bad_particle(long long index, const char* what) const;
 
@@ -68,8 +92,8 @@ class Solver {
   Grid grid_;
   CellSort sort_;
   Walls walls_;
-  std::vector<LinearElastic> body_elastic_;   // per body
-  std::vector<double> body_p_wave_modulus_;   // per body
+  BodyMaterials materials_;                   // the constitutive model of each body
+  std::vector<double> block_dissipation_;     // per sort block, this step's material dissipation
   std::array<std::vector<double>, 3> displacement_;  // this step's dt sum N v^L, applied after the strain pass
   double mass_floor_ = 0.0;
   double time_ = 0.0;

@@ -17,8 +17,16 @@ struct Stencil {
   double gx[N], gy[N], gz[N];  // d w / d x in 1/m
   double terrain_slope = 0.0;  // z_b'(x) at the particle (0 on a flat grid)
 
+  /// One half width (grid units) for all three axes.
   template <class Terrain>
   void evaluate(const Grid& grid, const Terrain& terrain, double x, double y, double z, double half_width) {
+    const double hw[3] = {half_width, half_width, half_width};
+    evaluate(grid, terrain, x, y, z, hw);
+  }
+
+  /// Per-axis half widths of the particle domain in grid units (GIMP; ignored by point shapes).
+  template <class Terrain>
+  void evaluate(const Grid& grid, const Terrain& terrain, double x, double y, double z, const double half_width[3]) {
     const GridGeometry& g = grid.geometry();
     const double inv_h = 1.0 / g.h;
     double w_coord = z;
@@ -27,9 +35,9 @@ struct Stencil {
       terrain_slope = terrain.slope(x);
     }
     int bx, by, bz;
-    Shape::weights((x - g.origin[0]) * inv_h + kPad, half_width, bx, wx, gx);
-    Shape::weights((y - g.origin[1]) * inv_h + kPad, half_width, by, wy, gy);
-    Shape::weights((w_coord - g.origin[2]) * inv_h + kPad, half_width, bz, wz, gz);
+    Shape::weights((x - g.origin[0]) * inv_h + kPad, half_width[0], bx, wx, gx);
+    Shape::weights((y - g.origin[1]) * inv_h + kPad, half_width[1], by, wy, gy);
+    Shape::weights((w_coord - g.origin[2]) * inv_h + kPad, half_width[2], bz, wz, gz);
     for (int a = 0; a < N; ++a) {
       ix[a] = grid.x_part(bx + a);
       iy[a] = grid.y_part(by + a);

@@ -21,6 +21,8 @@ namespace talus {
 enum class ScatterFields {
   MassMomentumForce,  // the full P2G of a step
   Momentum,           // the MUSL remap: momentum only (nodal mass is unchanged)
+  MassMomentum,       // USF / USAVG: the start-of-step nodal velocities, before the stress update
+  Force,              // USF / USAVG: the internal force of the updated stress
 };
 
 template <class Shape, class Terrain>

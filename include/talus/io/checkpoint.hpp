@@ -1,0 +1,66 @@
+#pragma once
+// Checkpoint/restart (docs/reliability.md): the full state of a run in one HDF5 file, written to a
+// temporary name and renamed, so a reader only ever sees a complete checkpoint.
+//
+// Layout of checkpoint.h5:
+//   /                      attributes format = "talus-checkpoint", format_version, talus_version,
+//                          scene_hash (FNV-1a 64 of the resolved scene JSON, hex), scene_name
+//   /scene_json            the resolved scene (scene_to_json), as bytes
+//   /solver                attributes time, step, last_dt, friction_work, plastic_work,
+//                          steps_since_sort, sorts, needs_sort
+//   /solver/sort_cell0..2  int32 per particle: the cell each particle was sorted into
+//   /particles/<name>      one dataset per allocated particle array, named by
+//                          ParticleStore::for_each_double_array / for_each_integer_array
+//                          (x0.., v0.., mass, volume, volume0, stress0..5, strain0..5, ..., id, body)
+//   /run                   attributes next_frame, next_history, next_checkpoint, the initial energy
+//                          budget (initial_kinetic, ...), energy_max_released; datasets
+//                          frame_times, frame_steps (the frames written so far)
+// The solver uses no random numbers, so there is no RNG state to save.
+#include "talus/particles/particle_store.hpp"
+#include "talus/scene/scene.hpp"
+#include "talus/solver/solver.hpp"
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace talus {
+
+/// What the run driver needs to continue its output schedule.
+struct RunProgress {
+  std::vector<double> frame_times;         // frame i is frames/particles_<i:06>.vtu
+  std::vector<std::int64_t> frame_steps;
+  double next_frame = 0.0;
+  double next_history = 0.0;
+  double next_checkpoint = 0.0;
+  EnergyBudget initial;                    // the energy budget at t = 0
+  double energy_max_released = 0.0;        // EnergyGuard state
+};
+
+struct Checkpoint {
+  std::string talus_version;
+  std::string scene_hash;
+  std::string scene_name;
+  std::string scene_json;
+  SolverState solver;
+  std::map<std::string, std::vector<double>> double_arrays;
+  std::vector<std::int64_t> id;
+  std::vector<std::uint16_t> body;
+  RunProgress run;
+};
+
+/// FNV-1a 64 of scene_to_json(scene).dump(), as 16 hex digits.
+std::string scene_hash(const Scene& scene);
+
+/// Write the solver's state and the run progress to `path` (through path + ".tmp" and a rename).
+void write_checkpoint(const std::string& path, const Solver& solver, const RunProgress& run);
+
+/// Read a checkpoint; throws an input Error naming the file if it is missing or unreadable.
+Checkpoint read_checkpoint(const std::string& path);
+
+/// Refuse a checkpoint of another talus version or another scene (input Error, one line, naming
+/// the first key that differs), then put its state into `solver` (built from the same scene).
+void restore_checkpoint(Solver& solver, const Checkpoint& checkpoint, const std::string& path);
+
+}  // namespace talus

@@ -1,0 +1,71 @@
+#pragma once
+// BodyMaterials: the constitutive update of every body, chosen per body from the scene
+// (linear elastic or Drucker-Prager), applied to a chunk of particles after their strain
+// increments are known. The solver calls it between the strain pass and the particle motion;
+// it knows nothing of grids or shape functions.
+//
+// Per particle and step (objective update, docs/theory.md):
+//   sigma <- R sigma R^T (Hughes-Winget rotation by the spin increment; also the back stress)
+//   sigma <- material(sigma, d_eps)                 (seed 000 eq. 34 / seed 001 eq. 23-25)
+//   strain += d_eps, V <- V (1 + tr d_eps)         (seed 000 eq. 35)
+// Drucker-Prager bodies add the granular rules of a runout scene (scene.hpp GranularOptions):
+// psi -> flowing_dilatancy_angle once eps_p > flowing_plastic_strain, and stress-free, virgin
+// particles once V / V0 > separation_volume_ratio.
+#include "talus/material/drucker_prager.hpp"
+#include "talus/material/linear_elastic.hpp"
+#include "talus/particles/particle_store.hpp"
+#include "talus/scene/scene.hpp"
+#include "talus/transfer/transfers.hpp"
+
+#include <cstddef>
+#include <vector>
+
+namespace talus {
+
+class BodyMaterials {
+ public:
+  /// Builds one model per body; allocates the particles' plastic state when any body is
+  /// Drucker-Prager (and only then).
+  BodyMaterials() = default;
+  BodyMaterials(const Scene& scene, ParticleStore& particles);
+
+  /// Update the stress, material state, strain and volume of particles [begin, end) from the
+  /// increments `inc` (entry k belongs to particle begin + k). Returns the energy the material
+  /// dissipated in this chunk [J]: plastic work V sigma : d_eps^p plus the elastic energy dropped
+  /// by separated particles. Deterministic: the sum runs in particle order.
+  double update(ParticleStore& particles, std::size_t begin, std::size_t end, const StrainIncrements& inc) const;
+
+  /// P-wave modulus K + 4G/3 of a body (sets the wave speed and the time step).
+  double p_wave_modulus(std::size_t body) const { return bodies_[body].p_wave_modulus; }
+  /// Stored elastic energy per unit volume of a stress in a body: p^2/(2K) + s:s/(4G).
+  double stored_energy_density(std::size_t body, const Sym6& stress) const {
+    return bodies_[body].elastic.energy_density(stress);
+  }
+  /// The volume that sets a particle's wave speed c = sqrt(M V / m). A separated Drucker-Prager
+  /// particle carries no stress, so its further dilation must not shrink the time step: its
+  /// volume counts at most as separation_volume_ratio V0.
+  double wave_speed_volume(std::size_t body, double volume, double volume0) const {
+    const double ratio = bodies_[body].granular.separation_volume_ratio;
+    return bodies_[body].model == MaterialModel::DruckerPrager && ratio > 0.0 && volume > ratio * volume0
+               ? ratio * volume0
+               : volume;
+  }
+  bool any_plastic() const { return any_plastic_; }
+
+ private:
+  struct Body {
+    MaterialModel model = MaterialModel::LinearElastic;
+    LinearElastic elastic;
+    double p_wave_modulus = 0.0;
+    // Drucker-Prager only:
+    std::vector<DruckerPrager> plastic;  // [0] as given, [1] with the flowing dilatancy angle
+    GranularOptions granular;
+  };
+  double update_drucker_prager(const Body& body, ParticleStore& P, std::size_t p, Sym6& stress, const Sym6& d_eps,
+                               double w_yz, double w_xz, double w_xy) const;
+
+  std::vector<Body> bodies_;
+  bool any_plastic_ = false;
+};
+
+}  // namespace talus

@@ -1,0 +1,54 @@
+#pragma once
+// Instability guards (docs/reliability.md). Each throws an instability Error (exit code 3) whose
+// message is one line: step, time, particle id and body, the field and its value.
+//
+//  - check_particles_after_step (called by Solver::step after every step): every per-particle
+//    double array finite (ParticleStore::for_each_double_array, so new arrays are covered),
+//    volumes positive, and no particle moved more than guards.max_step_displacement cells in the
+//    step (a CFL breach: the Courant condition c dt / h < 1 no longer holds for that particle).
+//    Non-finite grid values reach the particles through G2P in the same step (every active node
+//    has a particle with a non-zero weight), so checking the particles checks the grid too.
+//  - EnergyGuard (called by the run driver whenever it computes the energy budget): the total
+//    energy may not grow by more than guards.energy_growth_factor times the energy available.
+#include "talus/particles/particle_store.hpp"
+#include "talus/scene/scene.hpp"
+#include "talus/solver/solver.hpp"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace talus {
+
+/// `step` and `time` are those at the start of the step just taken (as in the solver's messages).
+void check_particles_after_step(const ParticleStore& particles,
+                                const std::array<std::vector<double>, 3>& displacement, const Scene& scene,
+                                std::int64_t step, double time);
+
+/// Energy growth: with E the total of EnergyBudget (kinetic + strain + gravity + friction work +
+/// plastic work, conserved by the continuum), the run stops when
+///     E(t) - E(0) > energy_growth_factor * A(t),
+///     A(t) = kinetic(0) + strain(0) + max(0, max over s <= t of gravity(0) - gravity(s)) + M |g| h / 1000,
+/// i.e. when the scheme created more energy than the factor times all the energy the system ever
+/// had to spend (the initial kinetic and strain energy plus the potential energy released so far;
+/// the last term, the work of lifting the whole mass a thousandth of a cell, keeps A positive for
+/// a body that starts at rest).
+class EnergyGuard {
+ public:
+  EnergyGuard() = default;
+  EnergyGuard(const Scene& scene, const ParticleStore& particles, const EnergyBudget& initial);
+  /// Throws when the budget `e` breaks the bound; otherwise records the released potential energy.
+  void check(const EnergyBudget& e, const ParticleStore& particles, const Scene& scene, std::int64_t step, double time);
+  double available() const;
+  /// Guard state to checkpoint: the most potential energy released so far.
+  double max_released() const { return max_released_; }
+  void set_max_released(double r) { max_released_ = r; }
+
+ private:
+  EnergyBudget initial_;
+  double floor_ = 0.0;
+  double max_released_ = 0.0;
+  double factor_ = 1.0;
+};
+
+}  // namespace talus

@@ -1,0 +1,253 @@
+#include "talus/io/checkpoint.hpp"
+
+#include "talus/core/error.hpp"
+#include "talus/core/version.hpp"
+#include "talus/scene/scene_json.hpp"
+
+#include <H5Cpp.h>
+#include <fmt/core.h>
+
+#include <filesystem>
+#include <set>
+
+namespace talus {
+
+namespace {
+
+constexpr const char* kFormat = "talus-checkpoint";
+constexpr int kFormatVersion = 1;
+
+template <class T>
+const H5::PredType& h5_type();
+template <>
+const H5::PredType& h5_type<double>() { return H5::PredType::NATIVE_DOUBLE; }
+template <>
+const H5::PredType& h5_type<std::int64_t>() { return H5::PredType::NATIVE_INT64; }
+template <>
+const H5::PredType& h5_type<std::int32_t>() { return H5::PredType::NATIVE_INT32; }
+template <>
+const H5::PredType& h5_type<std::uint16_t>() { return H5::PredType::NATIVE_UINT16; }
+template <>
+const H5::PredType& h5_type<char>() { return H5::PredType::NATIVE_CHAR; }
+
+template <class T>
+void write_attribute(H5::H5Object& where, const char* name, T value) {
+  H5::Attribute a = where.createAttribute(name, h5_type<T>(), H5::DataSpace(H5S_SCALAR));
+  a.write(h5_type<T>(), &value);
+}
+void write_attribute(H5::H5Object& where, const char* name, const std::string& value) {
+  H5::StrType type(H5::PredType::C_S1, std::max<std::size_t>(value.size(), 1));
+  H5::Attribute a = where.createAttribute(name, type, H5::DataSpace(H5S_SCALAR));
+  a.write(type, value.empty() ? std::string(" ").c_str() : value.c_str());
+}
+
+template <class T>
+T read_attribute(const H5::H5Object& where, const char* name) {
+  T value{};
+  where.openAttribute(name).read(h5_type<T>(), &value);
+  return value;
+}
+std::string read_string_attribute(const H5::H5Object& where, const char* name) {
+  H5::Attribute a = where.openAttribute(name);
+  std::string value;
+  a.read(a.getStrType(), value);
+  return value;
+}
+
+template <class T>
+void write_array(H5::Group& group, const std::string& name, const std::vector<T>& data) {
+  const hsize_t n = data.size();
+  H5::DataSpace space(1, &n);
+  H5::DataSet set = group.createDataSet(name, h5_type<T>(), space);
+  if (n) set.write(data.data(), h5_type<T>());
+}
+
+template <class T>
+std::vector<T> read_array(const H5::Group& group, const std::string& name) {
+  H5::DataSet set = group.openDataSet(name);
+  H5::DataSpace space = set.getSpace();
+  if (space.getSimpleExtentNdims() != 1) throw io_error(fmt::format("dataset {} is not one-dimensional", name));
+  hsize_t n = 0;
+  space.getSimpleExtentDims(&n);
+  std::vector<T> data(n);
+  if (n) set.read(data.data(), h5_type<T>());
+  return data;
+}
+
+std::string first_difference(const nlohmann::json& saved, const nlohmann::json& current) {
+  const nlohmann::json patch = nlohmann::json::diff(saved, current);
+  if (patch.empty()) return "";
+  const auto& op = patch.front();
+  std::string path = op.value("path", std::string("/"));
+  return fmt::format("{} ({} in the scene file)", path, op.value("op", std::string("changed")));
+}
+
+}  // namespace
+
+std::string scene_hash(const Scene& scene) {
+  const std::string text = scene_to_json(scene).dump();
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : text) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  return fmt::format("{:016x}", h);
+}
+
+void write_checkpoint(const std::string& path, const Solver& solver, const RunProgress& run) {
+  const std::string tmp = path + ".tmp";
+  const Scene& scene = solver.scene();
+  const SolverState state = solver.state();
+  try {
+    H5::Exception::dontPrint();
+    {
+      H5::H5File file(tmp, H5F_ACC_TRUNC);
+      write_attribute(file, "format", std::string(kFormat));
+      write_attribute(file, "format_version", kFormatVersion);
+      write_attribute(file, "talus_version", std::string(kVersion));
+      write_attribute(file, "scene_hash", scene_hash(scene));
+      write_attribute(file, "scene_name", scene.name);
+      const std::string json = scene_to_json(scene).dump(2);
+      {
+        H5::Group root = file.openGroup("/");
+        write_array(root, "scene_json", std::vector<char>(json.begin(), json.end()));
+      }
+      H5::Group s = file.createGroup("/solver");
+      write_attribute(s, "time", state.time);
+      write_attribute(s, "step", state.step);
+      write_attribute(s, "last_dt", state.last_dt);
+      write_attribute(s, "friction_work", state.friction_work);
+      write_attribute(s, "plastic_work", state.plastic_work);
+      write_attribute(s, "steps_since_sort", static_cast<std::int32_t>(state.steps_since_sort));
+      write_attribute(s, "sorts", state.sorts);
+      write_attribute(s, "needs_sort", static_cast<std::int32_t>(state.needs_sort));
+      for (int d = 0; d < 3; ++d) write_array(s, fmt::format("sort_cell{}", d), state.sort_cell[d]);
+
+      H5::Group p = file.createGroup("/particles");
+      const ParticleStore& P = solver.particles();
+      P.for_each_double_array([&](const char* name, const std::vector<double>& a) {
+        if (!a.empty()) write_array(p, name, a);
+      });
+      P.for_each_integer_array([&](const char* name, const auto& a) { write_array(p, name, a); });
+
+      H5::Group r = file.createGroup("/run");
+      write_attribute(r, "next_frame", run.next_frame);
+      write_attribute(r, "next_history", run.next_history);
+      write_attribute(r, "next_checkpoint", run.next_checkpoint);
+      write_attribute(r, "initial_kinetic", run.initial.kinetic);
+      write_attribute(r, "initial_strain", run.initial.strain);
+      write_attribute(r, "initial_gravity", run.initial.gravity);
+      write_attribute(r, "initial_friction_work", run.initial.friction_work);
+      write_attribute(r, "initial_plastic_work", run.initial.plastic_work);
+      write_attribute(r, "energy_max_released", run.energy_max_released);
+      write_array(r, "frame_times", run.frame_times);
+      write_array(r, "frame_steps", run.frame_steps);
+      file.close();
+    }
+  } catch (const H5::Exception& e) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw io_error(fmt::format("cannot write checkpoint {}: {} ({})", path, e.getDetailMsg(), e.getFuncName()));
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw io_error(fmt::format("cannot write checkpoint {}: {}", path, ec.message()));
+}
+
+Checkpoint read_checkpoint(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw input_error(fmt::format("cannot open checkpoint {}", path));
+  Checkpoint c;
+  try {
+    H5::Exception::dontPrint();
+    H5::H5File file(path, H5F_ACC_RDONLY);
+    H5::Group root = file.openGroup("/");
+    if (!root.attrExists("format") || read_string_attribute(root, "format") != kFormat)
+      throw input_error(fmt::format("{} is not a talus checkpoint", path));
+    const int format_version = read_attribute<int>(root, "format_version");
+    if (format_version != kFormatVersion)
+      throw input_error(fmt::format("checkpoint {} has format version {}; this talus reads version {}", path,
+                                    format_version, kFormatVersion));
+    c.talus_version = read_string_attribute(root, "talus_version");
+    c.scene_hash = read_string_attribute(root, "scene_hash");
+    c.scene_name = read_string_attribute(root, "scene_name");
+    const std::vector<char> json = read_array<char>(root, "scene_json");
+    c.scene_json.assign(json.begin(), json.end());
+
+    H5::Group s = file.openGroup("/solver");
+    c.solver.time = read_attribute<double>(s, "time");
+    c.solver.step = read_attribute<std::int64_t>(s, "step");
+    c.solver.last_dt = read_attribute<double>(s, "last_dt");
+    c.solver.friction_work = read_attribute<double>(s, "friction_work");
+    c.solver.plastic_work = read_attribute<double>(s, "plastic_work");
+    c.solver.steps_since_sort = read_attribute<std::int32_t>(s, "steps_since_sort");
+    c.solver.sorts = read_attribute<std::int64_t>(s, "sorts");
+    c.solver.needs_sort = read_attribute<std::int32_t>(s, "needs_sort") != 0;
+    for (int d = 0; d < 3; ++d) c.solver.sort_cell[d] = read_array<std::int32_t>(s, fmt::format("sort_cell{}", d));
+
+    H5::Group p = file.openGroup("/particles");
+    c.id = read_array<std::int64_t>(p, "id");
+    c.body = read_array<std::uint16_t>(p, "body");
+    for (hsize_t i = 0; i < p.getNumObjs(); ++i) {
+      const std::string name = p.getObjnameByIdx(i);
+      if (name == "id" || name == "body") continue;
+      c.double_arrays[name] = read_array<double>(p, name);
+    }
+
+    H5::Group r = file.openGroup("/run");
+    c.run.next_frame = read_attribute<double>(r, "next_frame");
+    c.run.next_history = read_attribute<double>(r, "next_history");
+    c.run.next_checkpoint = read_attribute<double>(r, "next_checkpoint");
+    c.run.initial.kinetic = read_attribute<double>(r, "initial_kinetic");
+    c.run.initial.strain = read_attribute<double>(r, "initial_strain");
+    c.run.initial.gravity = read_attribute<double>(r, "initial_gravity");
+    c.run.initial.friction_work = read_attribute<double>(r, "initial_friction_work");
+    c.run.initial.plastic_work = read_attribute<double>(r, "initial_plastic_work");
+    c.run.energy_max_released = read_attribute<double>(r, "energy_max_released");
+    c.run.frame_times = read_array<double>(r, "frame_times");
+    c.run.frame_steps = read_array<std::int64_t>(r, "frame_steps");
+  } catch (const H5::Exception& e) {
+    throw input_error(fmt::format("checkpoint {} is not readable: {}", path, e.getDetailMsg()));
+  }
+  return c;
+}
+
+void restore_checkpoint(Solver& solver, const Checkpoint& c, const std::string& path) {
+  if (c.talus_version != kVersion)
+    throw input_error(fmt::format("checkpoint {} was written by talus {}; this is talus {}: restart with that version",
+                                  path, c.talus_version, kVersion));
+  const std::string hash = scene_hash(solver.scene());
+  if (c.scene_hash != hash) {
+    std::string diff;
+    try {
+      diff = first_difference(nlohmann::json::parse(c.scene_json), scene_to_json(solver.scene()));
+    } catch (const std::exception&) {
+    }
+    throw input_error(fmt::format(
+        "checkpoint {} belongs to another scene (\"{}\", hash {}; this scene \"{}\" hashes to {}){}: a restart needs "
+        "the scene the checkpoint was written with",
+        path, c.scene_name, c.scene_hash, solver.scene().name, hash, diff.empty() ? "" : ", first difference at " + diff));
+  }
+  const std::size_t n = c.id.size();
+  auto bad = [&](const std::string& what) { return input_error(fmt::format("checkpoint {} is inconsistent: {}", path, what)); };
+  if (c.body.size() != n) throw bad("body has another length than id");
+  ParticleStore P = solver.particles();  // the scene's layout: which arrays are allocated
+  std::set<std::string> used;
+  P.for_each_double_array([&](const char* name, std::vector<double>& a) {
+    if (a.empty()) return;
+    auto it = c.double_arrays.find(name);
+    if (it == c.double_arrays.end()) throw bad(fmt::format("particle array {} is missing", name));
+    if (it->second.size() != n) throw bad(fmt::format("particle array {} has {} values for {} particles", name, it->second.size(), n));
+    a = it->second;
+    used.insert(name);
+  });
+  for (const auto& [name, a] : c.double_arrays)
+    if (!used.count(name)) throw bad(fmt::format("particle array {} is not used by this scene", name));
+  P.id = c.id;
+  P.body = c.body;
+  for (std::uint16_t b : P.body)
+    if (b >= solver.scene().bodies.size()) throw bad("a particle's body index is out of range");
+  solver.restore(std::move(P), c.solver);
+}
+
+}  // namespace talus

@@ -1,0 +1,78 @@
+#include "talus/solver/body_materials.hpp"
+
+#include "talus/core/tensor.hpp"
+
+namespace talus {
+
+BodyMaterials::BodyMaterials(const Scene& scene, ParticleStore& particles) {
+  for (const BodySpec& b : scene.bodies) {
+    const MaterialSpec& m = scene.materials[b.material];
+    Body body;
+    body.model = m.model;
+    body.elastic = LinearElastic::from_young_poisson(m.elastic.young, m.elastic.poisson);
+    body.p_wave_modulus = m.p_wave_modulus();
+    if (m.model == MaterialModel::DruckerPrager) {
+      const std::string prefix = "materials." + m.name + ".";
+      body.plastic.emplace_back(m.drucker_prager, prefix);
+      body.plastic.push_back(body.plastic[0].with_dilatancy(m.granular.flowing_dilatancy_angle_deg));
+      body.granular = m.granular;
+      any_plastic_ = true;
+    }
+    bodies_.push_back(std::move(body));
+  }
+  if (any_plastic_ && !particles.has_plastic_state()) particles.enable_plastic_state();
+}
+
+double BodyMaterials::update(ParticleStore& P, std::size_t begin, std::size_t end, const StrainIncrements& inc) const {
+  double dissipated = 0.0;
+  for (std::size_t p = begin; p < end; ++p) {
+    const std::size_t k = p - begin;
+    Sym6 s, de;
+    for (int c = 0; c < 6; ++c) {
+      s[c] = P.stress[c][p];
+      de[c] = inc.strain[c][k];
+    }
+    const double w_yz = inc.spin[0][k], w_xz = inc.spin[1][k], w_xy = inc.spin[2][k];
+    const Body& body = bodies_[P.body[p]];
+    P.volume[p] *= 1.0 + trace(de);  // seed 000 eq. 35: rho_new = rho / (1 + tr d_eps)
+    if (body.model == MaterialModel::LinearElastic) {
+      rotate_objectively(s, w_yz, w_xz, w_xy);  // Jaumann rate, Hughes-Winget
+      body.elastic.add_increment(s, de);        // seed 000 eq. 34
+    } else {
+      dissipated += update_drucker_prager(body, P, p, s, de, w_yz, w_xz, w_xy);
+    }
+    for (int c = 0; c < 6; ++c) {
+      P.stress[c][p] = s[c];
+      P.strain[c][p] += de[c];
+    }
+  }
+  return dissipated;
+}
+
+double BodyMaterials::update_drucker_prager(const Body& body, ParticleStore& P, std::size_t p, Sym6& s,
+                                            const Sym6& de, double w_yz, double w_xz, double w_xy) const {
+  const double ratio = body.granular.separation_volume_ratio;
+  if (ratio > 0.0 && P.volume[p] > ratio * P.volume0[p]) {
+    // Separated: no contact with neighbours, hence no stress. The elastic energy it still held is
+    // released without doing work on the continuum; count it as dissipated so the budget closes.
+    const double released = P.volume[p] * body.elastic.energy_density(s);
+    P.plastic_strain[p] = 0.0;
+    for (int c = 0; c < 6; ++c) P.back_stress[c][p] = 0.0;
+    s.setZero();
+    return released;
+  }
+  DruckerPragerState state;
+  state.equivalent_plastic_strain = P.plastic_strain[p];
+  for (int c = 0; c < 6; ++c) state.back_stress[c] = P.back_stress[c][p];
+  // seed 001 sec. 7: dilatancy set to its flowing value once the particle flows.
+  const bool flowing = state.equivalent_plastic_strain > body.granular.flowing_plastic_strain;
+  const DruckerPrager& model = body.plastic[flowing ? 1 : 0];
+  rotate_objectively(s, w_yz, w_xz, w_xy);
+  model.rotate_state(state, w_yz, w_xz, w_xy);
+  const DruckerPragerResult r = model.update(s, state, de);  // seed 001 eq. 23-25, closed-form return
+  P.plastic_strain[p] = state.equivalent_plastic_strain;
+  for (int c = 0; c < 6; ++c) P.back_stress[c][p] = state.back_stress[c];
+  return r.plastic_work * P.volume[p];
+}
+
+}  // namespace talus

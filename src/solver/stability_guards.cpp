@@ -1,0 +1,115 @@
+#include "talus/solver/stability_guards.hpp"
+
+#include "talus/core/error.hpp"
+
+#include <fmt/core.h>
+
+#include <cmath>
+#include <string>
+
+namespace talus {
+
+namespace {
+
+std::string particle_label(const ParticleStore& P, const Scene& scene, std::size_t p) {
+  const std::size_t body = P.body[p];
+  return fmt::format("particle {} (body \"{}\")", P.id[p], body < scene.bodies.size() ? scene.bodies[body].name : "?");
+}
+
+std::string where(const ParticleStore& P, std::size_t p) {
+  return fmt::format("position ({:.6g}, {:.6g}, {:.6g}) m, velocity ({:.6g}, {:.6g}, {:.6g}) m/s", P.x[0][p], P.x[1][p],
+                     P.x[2][p], P.v[0][p], P.v[1][p], P.v[2][p]);
+}
+
+}  // namespace
+
+void check_particles_after_step(const ParticleStore& P, const std::array<std::vector<double>, 3>& displacement,
+                                const Scene& scene, std::int64_t step, double time) {
+  const std::size_t n = P.size();
+  // 1. Finite values: one fused pass per array (x * 0 is NaN exactly when x is NaN or Inf); the
+  //    slow search for the first bad particle runs only when a pass fails.
+  P.for_each_double_array([&](const char* name, const std::vector<double>& a) {
+    if (a.size() != n) return;  // arrays the scene does not use are empty
+    double probe = 0.0;
+    const double* data = a.data();
+#pragma omp parallel for schedule(static) reduction(+ : probe)
+    for (std::size_t p = 0; p < n; ++p) probe += data[p] * 0.0;
+    if (probe == 0.0) return;
+    for (std::size_t p = 0; p < n; ++p)
+      if (!std::isfinite(data[p]))
+        throw instability_error(fmt::format("step {}, t = {:.6g} s: {} field {} = {} is not finite; {}", step, time,
+                                            particle_label(P, scene, p), name, data[p], where(P, p)));
+  });
+  // 2. Positive volume (an inverted or collapsed particle) and 3. the per-step displacement.
+  const double h = scene.grid.h;
+  const double limit = scene.guards.max_step_displacement * h;
+  const double limit2 = limit * limit;
+  const bool have_displacement = displacement[0].size() == n;
+  int bad = 0;
+#pragma omp parallel for schedule(static) reduction(| : bad)
+  for (std::size_t p = 0; p < n; ++p) {
+    bad |= P.volume[p] > 0.0 ? 0 : 1;
+    if (have_displacement) {
+      const double d2 = displacement[0][p] * displacement[0][p] + displacement[1][p] * displacement[1][p] +
+                        displacement[2][p] * displacement[2][p];
+      bad |= d2 > limit2 ? 2 : 0;
+    }
+  }
+  if (!bad) return;
+  for (std::size_t p = 0; p < n; ++p) {
+    if (!(P.volume[p] > 0.0))
+      throw instability_error(fmt::format("step {}, t = {:.6g} s: {} field volume = {:.6g} m^3 is not positive "
+                                          "(particle inverted); {}",
+                                          step, time, particle_label(P, scene, p), P.volume[p], where(P, p)));
+    if (have_displacement) {
+      const double d = std::sqrt(displacement[0][p] * displacement[0][p] + displacement[1][p] * displacement[1][p] +
+                                 displacement[2][p] * displacement[2][p]);
+      if (d > limit)
+        throw instability_error(fmt::format(
+            "step {}, t = {:.6g} s: {} field displacement = {:.6g} m in one step, {:.3g} cells > "
+            "guards.max_step_displacement = {} (CFL breach); {}",
+            step, time, particle_label(P, scene, p), d, d / h, scene.guards.max_step_displacement, where(P, p)));
+    }
+  }
+}
+
+EnergyGuard::EnergyGuard(const Scene& scene, const ParticleStore& P, const EnergyBudget& initial)
+    : initial_(initial), factor_(scene.guards.energy_growth_factor) {
+  double mass = 0.0;
+  for (double m : P.mass) mass += m;
+  floor_ = 1e-3 * mass * scene.gravity.norm() * scene.grid.h;
+}
+
+double EnergyGuard::available() const {
+  const double a = initial_.kinetic + initial_.strain + max_released_ + floor_;
+  // Round-off of the total itself (gravity is measured from the grid origin, so it can be large).
+  const double roundoff = 1e-12 * (std::abs(initial_.gravity) + std::abs(initial_.total()));
+  return std::max(a, roundoff) + 1e-300;
+}
+
+void EnergyGuard::check(const EnergyBudget& e, const ParticleStore& P, const Scene& scene, std::int64_t step,
+                        double time) {
+  const double released = initial_.gravity - e.gravity;
+  if (std::isfinite(released) && released > max_released_) max_released_ = released;
+  const double growth = e.total() - initial_.total();
+  const double a = available();
+  if (std::isfinite(growth) && growth <= factor_ * a) return;
+  // The fastest particle is the likeliest seat of the instability: name it.
+  std::size_t fastest = 0;
+  double v2max = -1.0;
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    const double v2 = P.v[0][p] * P.v[0][p] + P.v[1][p] * P.v[1][p] + P.v[2][p] * P.v[2][p];
+    if (v2 > v2max || std::isnan(v2)) {
+      v2max = v2;
+      fastest = p;
+      if (std::isnan(v2)) break;
+    }
+  }
+  throw instability_error(fmt::format(
+      "step {}, t = {:.6g} s: total energy = {:.6g} J grew by {:.6g} J, more than guards.energy_growth_factor = {} times "
+      "the energy available ({:.6g} J); fastest: {} field speed = {:.6g} m/s; {}",
+      step, time, e.total(), growth, factor_, a, particle_label(P, scene, fastest), std::sqrt(std::max(v2max, 0.0)),
+      where(P, fastest)));
+}
+
+}  // namespace talus

@@ -1,0 +1,82 @@
+// Bad input (issue 9, item 3): each mistake gives one input Error naming the key path (and the
+// allowed range where there is one); nothing is half-accepted.
+#include "talus/core/error.hpp"
+#include "talus/scene/scene_json.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+namespace talus {
+namespace {
+
+const std::string kValid = R"({
+  "name": "valid",
+  "grid": { "origin": [0, 0, 0], "size": [1.0, 0.4, 0.4], "cell_size": 0.05 },
+  "time": { "end": 0.1, "courant": 0.3 },
+  "materials": { "rubber": { "density": 1000.0, "young": 1.0e6, "poisson": 0.3 },
+                 "sand": { "model": "drucker_prager", "density": 1600.0, "young": 2.0e6, "poisson": 0.3,
+                           "friction_angle": 30.0, "dilatancy_angle": 5.0 } },
+  "bodies": [ { "name": "block", "material": "rubber", "box": { "min": [0.1, 0.1, 0.0], "max": [0.3, 0.3, 0.2] } },
+              { "name": "heap", "material": "sand", "box": { "min": [0.5, 0.1, 0.0], "max": [0.7, 0.3, 0.2] } } ],
+  "output": { "checkpoint_interval": 0.05 },
+  "guards": { "energy_growth_factor": 2.0 }
+})";
+
+struct Case {
+  const char* what;
+  const char* from;  // replaced text (first occurrence) ...
+  const char* to;    // ... by this
+  const char* expect;  // the message must contain this (the key path, the range)
+};
+
+TEST(BadInput, EveryMistakeNamesTheKeyPathInOneLine) {
+  ASSERT_NO_THROW(parse_scene(kValid, "valid"));
+  const std::vector<Case> cases = {
+      {"malformed JSON", "\"time\": {", "\"time\": {,", "malformed JSON"},
+      {"truncated", "\"guards\"", "\"gua", "malformed JSON"},
+      {"number overflowing to Inf", "\"end\": 0.1", "\"end\": 1e999", "malformed JSON"},
+      {"unknown key", "\"courant\": 0.3", "\"courant\": 0.3, \"courrant\": 0.3", "unknown key time.courrant"},
+      {"wrong type", "\"young\": 1.0e6", "\"young\": \"1e6\"", "materials.rubber.young must be a number in (0, 1e+30]"},
+      {"negative", "\"density\": 1000.0", "\"density\": -1000.0", "materials.rubber.density = -1000 is outside the allowed range (0"},
+      {"zero", "\"cell_size\": 0.05", "\"cell_size\": 0", "grid.cell_size = 0 is outside the allowed range (0"},
+      {"nu = 0.5", "\"poisson\": 0.3", "\"poisson\": 0.5", "materials.rubber.poisson = 0.5 is outside the allowed range (-1, 0.5)"},
+      {"phi = 0", "\"friction_angle\": 30.0", "\"friction_angle\": 0", "materials.sand.friction_angle"},
+      {"phi = 90", "\"friction_angle\": 30.0", "\"friction_angle\": 90", "materials.sand.friction_angle"},
+      {"psi > phi", "\"dilatancy_angle\": 5.0", "\"dilatancy_angle\": 35.0", "materials.sand.dilatancy_angle"},
+      {"body outside the grid", "\"max\": [0.3, 0.3, 0.2]", "\"max\": [0.3, 0.3, 0.6]", "bodies[0].box"},
+      {"empty body", "\"max\": [0.3, 0.3, 0.2]", "\"max\": [0.3, 0.3, 0.0]", "bodies[0].box.min[2] = 0 must be below max[2] = 0"},
+      {"Courant = 1", "\"courant\": 0.3", "\"courant\": 1.0", "time.courant = 1 is outside the allowed range (0, 1)"},
+      {"checkpoint interval negative", "\"checkpoint_interval\": 0.05", "\"checkpoint_interval\": -1", "output.checkpoint_interval"},
+      {"guard factor zero", "\"energy_growth_factor\": 2.0", "\"energy_growth_factor\": 0", "guards.energy_growth_factor = 0"},
+      {"grid too large", "\"size\": [1.0, 0.4, 0.4], \"cell_size\": 0.05", "\"size\": [1000, 1000, 1000], \"cell_size\": 0.05",
+       "at most 1e9"},
+      {"key with a newline", "\"courant\": 0.3", "\"courant\": 0.3, \"a\\nb\": 1", "unknown key time.a\\nb"},
+  };
+  for (const Case& c : cases) {
+    std::string text = kValid;
+    const auto at = text.find(c.from);
+    ASSERT_NE(at, std::string::npos) << c.what;
+    text.replace(at, std::string(c.from).size(), c.to);
+    try {
+      parse_scene(text, "scene.json");
+      ADD_FAILURE() << c.what << ": accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), Error::Kind::Input) << c.what;
+      const std::string m = e.what();
+      EXPECT_NE(m.find(c.expect), std::string::npos) << c.what << ": " << m;
+      EXPECT_EQ(m.find('\n'), std::string::npos) << c.what << ": " << m;
+    }
+  }
+  try {
+    read_scene_file("/nonexistent/scene.json");
+    ADD_FAILURE() << "missing file accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), Error::Kind::Input);
+    EXPECT_NE(std::string(e.what()).find("cannot open scene file /nonexistent/scene.json"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace talus

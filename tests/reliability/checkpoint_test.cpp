@@ -1,0 +1,197 @@
+// Checkpoint/restart: a restored solver continues bit for bit; a checkpoint of another scene or
+// another talus version, a missing or a corrupt file are refused with one line.
+#include "../solver/scene_fixtures.hpp"
+#include "reliability_fixtures.hpp"
+#include "talus/core/error.hpp"
+#include "talus/core/version.hpp"
+#include "talus/io/checkpoint.hpp"
+#include "talus/solver/solver.hpp"
+
+#include <H5Cpp.h>
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstring>
+
+namespace talus {
+namespace {
+
+/// Every array, bit for bit, and the solver's scalars.
+void expect_identical(const Solver& a, const Solver& b) {
+  ASSERT_EQ(a.particles().size(), b.particles().size());
+  EXPECT_EQ(a.step_count(), b.step_count());
+  const double ta = a.time(), tb = b.time();
+  EXPECT_EQ(std::memcmp(&ta, &tb, sizeof(double)), 0);
+  EXPECT_EQ(a.particles().id, b.particles().id);
+  EXPECT_EQ(a.particles().body, b.particles().body);
+  std::vector<const std::vector<double>*> arrays_b;
+  b.particles().for_each_double_array([&](const char*, const std::vector<double>& v) { arrays_b.push_back(&v); });
+  std::size_t i = 0, compared = 0;
+  a.particles().for_each_double_array([&](const char* name, const std::vector<double>& v) {
+    const std::vector<double>& w = *arrays_b[i++];
+    ASSERT_EQ(v.size(), w.size()) << name;
+    if (!v.empty()) ++compared;
+    EXPECT_TRUE(v.empty() || std::memcmp(v.data(), w.data(), v.size() * sizeof(double)) == 0) << "array " << name << " differs";
+  });
+  EXPECT_GE(compared, 20u);
+  const EnergyBudget ea = a.energies(), eb = b.energies();
+  EXPECT_EQ(std::memcmp(&ea, &eb, sizeof(EnergyBudget)), 0);
+}
+
+Scene drucker_prager_scene() {
+  return parse_scene(R"({
+    "name": "dp_drop",
+    "grid": { "origin": [0, 0, 0], "size": [0.6, 0.3, 0.4], "cell_size": 0.025 },
+    "time": { "end": 0.2, "courant": 0.4 },
+    "materials": { "sand": { "model": "drucker_prager", "density": 1600.0, "young": 2.0e6, "poisson": 0.3,
+                             "friction_angle": 30.0, "cohesion": 5.0, "kinematic_fraction": 0.2 } },
+    "bodies": [ { "name": "heap", "material": "sand", "box": { "min": [0.1, 0.05, 0.0], "max": [0.3, 0.25, 0.25] },
+                  "particles_per_cell": 2, "velocity": [1.5, 0.0, 0.0] } ],
+    "boundaries": { "z-": { "type": "friction", "friction_coefficient": 0.5 }, "z+": "open" }
+  })", "dp_drop");
+}
+
+void check_restart_is_bit_identical(const Scene& scene, int total, const std::vector<int>& splits) {
+  const auto dir = test::temp_dir("bitident");
+  Solver reference(scene);
+  for (int i = 0; i < total; ++i) reference.step();
+  for (int k : splits) {
+    SCOPED_TRACE("checkpoint after step " + std::to_string(k));
+    Solver first(scene);
+    for (int i = 0; i < k; ++i) first.step();
+    const std::string path = (dir / "checkpoint.h5").string();
+    write_checkpoint(path, first, RunProgress{});
+    Solver resumed(scene);
+    restore_checkpoint(resumed, read_checkpoint(path), path);
+    EXPECT_EQ(resumed.step_count(), k);
+    for (int i = k; i < total; ++i) resumed.step();
+    expect_identical(reference, resumed);
+    // Writing a checkpoint does not disturb the run that wrote it.
+    for (int i = k; i < total; ++i) first.step();
+    expect_identical(reference, first);
+  }
+  test::fs::remove_all(dir);
+}
+
+// Two bodies tumbling onto a frictional floor: particles cross cells and blocks, so the runs sort
+// both on drift and on the interval; the splits fall just after, between and just before sorts.
+TEST(Checkpoint, RestartIsBitIdenticalToAnUninterruptedRun) {
+  Scene scene = test::tumbling_block_scene(1.0);
+  scene.sort_interval = 7;
+  Solver probe(scene);
+  for (int i = 0; i < 60; ++i) probe.step();
+  EXPECT_GT(probe.sort_count(), 8);  // the split points really fall between sorts
+  check_restart_is_bit_identical(scene, 60, {1, 7, 8, 19, 33, 59});
+}
+
+TEST(Checkpoint, RestartIsBitIdenticalWithDruckerPragerState) {
+  const Scene scene = drucker_prager_scene();
+  Solver probe(scene);
+  ASSERT_TRUE(probe.particles().has_plastic_state());
+  for (int i = 0; i < 80; ++i) probe.step();
+  double max_plastic = 0.0;
+  for (double e : probe.particles().plastic_strain) max_plastic = std::max(max_plastic, e);
+  EXPECT_GT(max_plastic, 0.0) << "the test should exercise the plastic state";
+  check_restart_is_bit_identical(scene, 80, {13, 50});
+}
+
+TEST(Checkpoint, RecordsVersionSceneHashAndEveryParticleArray) {
+  const auto dir = test::temp_dir("layout");
+  Solver solver(drucker_prager_scene());
+  for (int i = 0; i < 3; ++i) solver.step();
+  const std::string path = (dir / "c.h5").string();
+  RunProgress run;
+  run.frame_times = {0.0, 0.01};
+  run.frame_steps = {0, 2};
+  run.next_frame = 0.02;
+  write_checkpoint(path, solver, run);
+  EXPECT_FALSE(test::fs::exists(path + ".tmp"));
+  const Checkpoint c = read_checkpoint(path);
+  EXPECT_EQ(c.talus_version, std::string(kVersion));
+  EXPECT_EQ(c.scene_hash, scene_hash(solver.scene()));
+  EXPECT_EQ(c.scene_hash.size(), 16u);
+  EXPECT_EQ(c.solver.step, 3);
+  EXPECT_EQ(c.run.frame_steps, run.frame_steps);
+  EXPECT_EQ(c.run.next_frame, 0.02);
+  std::size_t allocated = 0;
+  solver.particles().for_each_double_array([&](const char* name, const std::vector<double>& v) {
+    if (v.empty()) return;
+    ++allocated;
+    ASSERT_TRUE(c.double_arrays.count(name)) << name;
+    EXPECT_EQ(c.double_arrays.at(name), v) << name;
+  });
+  EXPECT_EQ(c.double_arrays.size(), allocated);
+  EXPECT_TRUE(c.double_arrays.count("plastic_strain"));
+  EXPECT_EQ(c.id, solver.particles().id);
+  test::fs::remove_all(dir);
+}
+
+// The cost of a checkpoint of the shipped default scene (reported in docs/reliability.md).
+TEST(Checkpoint, DefaultSceneSizeAndWriteTime) {
+  const auto dir = test::temp_dir("size");
+  Solver solver(read_scene_file(std::string(TALUS_SOURCE_DIR) + "/inputs/elastic_block_slide.json"));
+  solver.step();
+  const std::string path = (dir / "checkpoint.h5").string();
+  const auto t0 = std::chrono::steady_clock::now();
+  write_checkpoint(path, solver, RunProgress{});
+  const double write_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  const auto t1 = std::chrono::steady_clock::now();
+  const Checkpoint c = read_checkpoint(path);
+  const double read_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
+  const auto bytes = test::fs::file_size(path);
+  std::printf("checkpoint of the default scene: %zu particles, %.2f MB, write %.1f ms, read %.1f ms\n",
+              solver.particles().size(), bytes / 1e6, write_ms, read_ms);
+  // The arrays dominate: no more than 10% overhead over the raw data.
+  const double raw = solver.particles().size() * (8.0 * (c.double_arrays.size() + 1) + 2 + 12);
+  EXPECT_LT(bytes, 1.1 * raw + 64 * 1024);
+  test::fs::remove_all(dir);
+}
+
+Error::Kind restore_error(const Scene& scene, const std::string& path, std::string* message) {
+  try {
+    Solver s(scene);
+    restore_checkpoint(s, read_checkpoint(path), path);
+  } catch (const Error& e) {
+    *message = e.what();
+    return e.kind();
+  }
+  *message = "no error";
+  return Error::Kind::Io;
+}
+
+TEST(Checkpoint, RefusesAnotherSceneAnotherVersionAndBadFiles) {
+  const auto dir = test::temp_dir("refuse");
+  const Scene scene = test::tumbling_block_scene(0.05);
+  Solver solver(scene);
+  solver.step();
+  const std::string path = (dir / "c.h5").string();
+  write_checkpoint(path, solver, RunProgress{});
+  std::string msg;
+
+  Scene other = scene;
+  other.end_time = 0.06;
+  EXPECT_EQ(restore_error(other, path, &msg), Error::Kind::Input);
+  EXPECT_NE(msg.find("belongs to another scene"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("/time/end"), std::string::npos) << msg;
+  EXPECT_EQ(msg.find('\n'), std::string::npos);
+
+  EXPECT_EQ(restore_error(scene, (dir / "missing.h5").string(), &msg), Error::Kind::Input);
+  EXPECT_NE(msg.find("cannot open checkpoint"), std::string::npos) << msg;
+
+  std::ofstream((dir / "junk.h5").string()) << "not hdf5 at all";
+  EXPECT_EQ(restore_error(scene, (dir / "junk.h5").string(), &msg), Error::Kind::Input);
+  EXPECT_NE(msg.find("not readable"), std::string::npos) << msg;
+
+  {  // the same file, claiming another talus version
+    H5::H5File file(path, H5F_ACC_RDWR);
+    file.removeAttr("talus_version");
+    H5::StrType type(H5::PredType::C_S1, 5);
+    file.createAttribute("talus_version", type, H5::DataSpace(H5S_SCALAR)).write(type, "0.0.0");
+  }
+  EXPECT_EQ(restore_error(scene, path, &msg), Error::Kind::Input);
+  EXPECT_NE(msg.find("written by talus 0.0.0"), std::string::npos) << msg;
+  test::fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace talus

@@ -1,0 +1,220 @@
+// The talus program under interruption: SIGTERM writes a checkpoint and `--restart` finishes the
+// run with output identical to an uninterrupted run; SIGKILL at random moments leaves every listed
+// frame, the energy history and the last checkpoint readable, and the restart continues from it.
+#include "reliability_fixtures.hpp"
+#include "talus/core/error.hpp"
+#include "talus/io/checkpoint.hpp"
+
+#include <gtest/gtest.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <random>
+#include <thread>
+
+namespace talus {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+pid_t spawn(const std::vector<std::string>& args) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int null = open("/dev/null", O_WRONLY);
+    dup2(null, 1);
+    dup2(null, 2);
+    std::vector<char*> argv;
+    argv.push_back(const_cast<char*>(TALUS_BINARY));
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execv(TALUS_BINARY, argv.data());
+    _exit(127);
+  }
+  return pid;
+}
+
+/// Exit code, or 128 + signal.
+int wait_for(pid_t pid) {
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+int run_talus(const std::vector<std::string>& args) { return wait_for(spawn(args)); }
+
+/// Runs the scene uninterrupted once per test binary: the reference output.
+struct Reference {
+  fs::path root, scene, out;
+  double seconds = 0.0;
+};
+const Reference& reference() {
+  static Reference r = [] {
+    Reference ref;
+    ref.root = test::temp_dir("crash_ref");
+    ref.scene = ref.root / "scene.json";
+    std::ofstream(ref.scene) << test::small_slide_json(0.4, 0.02);
+    ref.out = ref.root / "out";
+    const auto t0 = Clock::now();
+    EXPECT_EQ(run_talus({"run", ref.scene.string(), "--out", ref.out.string(), "--quiet", "--threads", "1"}), 0);
+    ref.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    return ref;
+  }();
+  return r;
+}
+
+/// The output of a restarted run equals the uninterrupted one: every frame, the index and the
+/// energy history, byte for byte.
+void expect_same_output(const fs::path& out, const fs::path& ref) {
+  EXPECT_EQ(test::read_text(out / "particles.pvd"), test::read_text(ref / "particles.pvd"));
+  EXPECT_EQ(test::read_text(out / "energy.csv"), test::read_text(ref / "energy.csv"));
+  const auto frames = test::pvd_frames(ref / "particles.pvd");
+  for (const auto& f : frames)
+    EXPECT_TRUE(test::read_text(f) == test::read_text(out / "frames" / f.filename())) << f.filename() << " differs";
+}
+
+bool wait_for_file(const fs::path& path, pid_t pid, double timeout) {
+  const auto t0 = Clock::now();
+  while (!fs::exists(path)) {
+    int status;
+    if (waitpid(pid, &status, WNOHANG) == pid) return false;  // finished (reaped)
+    if (std::chrono::duration<double>(Clock::now() - t0).count() > timeout) return false;
+    std::this_thread::sleep_for(std::chrono::microseconds(500));
+  }
+  return true;
+}
+
+TEST(Crash, SigtermWritesACheckpointAndRestartMatchesAnUninterruptedRun) {
+  const Reference& ref = reference();
+  test::expect_readable_run_folder(ref.out);
+  const fs::path out = ref.root / "term";
+  fs::remove_all(out);
+  const pid_t pid = spawn({"run", ref.scene.string(), "--out", out.string(), "--quiet", "--threads", "1"});
+  ASSERT_TRUE(wait_for_file(out / "checkpoint.h5", pid, 60.0));
+  std::this_thread::sleep_for(std::chrono::duration<double>(0.3 * ref.seconds));
+  kill(pid, SIGTERM);
+  const int code = wait_for(pid);
+  ASSERT_TRUE(code == 128 + SIGTERM || code == 0) << code;
+  if (code == 0) GTEST_SKIP() << "the run finished before the signal arrived";
+  const Checkpoint c = read_checkpoint((out / "checkpoint.h5").string());
+  EXPECT_GT(c.solver.step, 0);
+  test::expect_readable_run_folder(out);
+  ASSERT_EQ(run_talus({"run", ref.scene.string(), "--restart", (out / "checkpoint.h5").string(), "--quiet", "--threads", "1"}), 0);
+  expect_same_output(out, ref.out);
+}
+
+TEST(Crash, SigkillAtRandomMomentsLeavesReadableOutputAndTheRestartFinishes) {
+  const Reference& ref = reference();
+  std::mt19937 rng(20240611);
+  std::uniform_real_distribution<double> when(0.0, 0.8 * ref.seconds);
+  int restarted = 0;
+  for (int trial = 0; trial < 5; ++trial) {
+    SCOPED_TRACE("trial " + std::to_string(trial));
+    const fs::path out = ref.root / ("kill" + std::to_string(trial));
+    fs::remove_all(out);
+    const pid_t pid = spawn({"run", ref.scene.string(), "--out", out.string(), "--quiet", "--threads", "1"});
+    if (!wait_for_file(out / "checkpoint.h5", pid, 60.0)) continue;  // finished first: nothing to test
+    std::this_thread::sleep_for(std::chrono::duration<double>(when(rng)));
+    kill(pid, SIGKILL);
+    wait_for(pid);
+    // Everything the killed run left behind is complete.
+    test::expect_readable_run_folder(out);
+    Checkpoint c;
+    ASSERT_NO_THROW(c = read_checkpoint((out / "checkpoint.h5").string()));
+    EXPECT_LE(c.run.frame_times.size(), test::pvd_frames(out / "particles.pvd").size());
+    // The restart continues from the last checkpoint to the end, and ends where the reference ends.
+    ASSERT_EQ(run_talus({"run", ref.scene.string(), "--restart", (out / "checkpoint.h5").string(), "--quiet", "--threads", "1"}), 0);
+    expect_same_output(out, ref.out);
+    ++restarted;
+    fs::remove_all(out);
+  }
+  EXPECT_GE(restarted, 3);
+}
+
+TEST(Crash, RestartRefusesAnotherSceneWithOneLineAndExitTwo) {
+  const Reference& ref = reference();
+  const fs::path other = ref.root / "other.json";
+  std::ofstream(other) << test::small_slide_json(0.5, 0.02);
+  const fs::path out = ref.root / "refuse";
+  fs::create_directories(out);
+  fs::copy_file(ref.out / "particles.pvd", out / "particles.pvd");
+  // Any checkpoint of the reference scene: take one with a short SIGTERM run.
+  const pid_t pid = spawn({"run", ref.scene.string(), "--out", (ref.root / "cp").string(), "--quiet"});
+  ASSERT_TRUE(wait_for_file(ref.root / "cp" / "checkpoint.h5", pid, 60.0));
+  kill(pid, SIGTERM);
+  wait_for(pid);
+  const std::string command = std::string(TALUS_BINARY) + " run " + other.string() + " --restart " +
+                              (ref.root / "cp" / "checkpoint.h5").string() + " --out " + out.string() + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string text;
+  char buffer[4096];
+  while (fgets(buffer, sizeof buffer, pipe)) text += buffer;
+  const int status = pclose(pipe);
+  EXPECT_EQ(WEXITSTATUS(status), 2) << text;
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
+  EXPECT_NE(text.find("belongs to another scene"), std::string::npos) << text;
+  EXPECT_NE(text.find("/time/end"), std::string::npos) << text;
+  // Nothing in the folder was touched.
+  EXPECT_EQ(test::read_text(out / "particles.pvd"), test::read_text(ref.out / "particles.pvd"));
+  EXPECT_FALSE(fs::exists(out / "energy.csv"));
+}
+
+std::string ref_scene_for_missing(const fs::path& dir) {
+  std::ofstream(dir / "ok.json") << test::small_slide_json();
+  return (dir / "ok.json").string();
+}
+
+std::pair<int, std::string> run_captured(const std::string& args) {
+  FILE* pipe = popen((std::string(TALUS_BINARY) + " " + args + " 2>&1").c_str(), "r");
+  std::string text;
+  char buffer[4096];
+  while (fgets(buffer, sizeof buffer, pipe)) text += buffer;
+  const int status = pclose(pipe);
+  return {WEXITSTATUS(status), text};
+}
+
+TEST(Crash, BadSceneExitsTwoWithOneLineAndWritesNothing) {
+  const fs::path dir = test::temp_dir("badscene");
+  std::string text = test::small_slide_json();
+  const std::string courant = "\"courant\": 0.3";
+  text.replace(text.find(courant), courant.size(), "\"courant\": 1e999");
+  std::ofstream(dir / "bad.json") << text;
+  const auto [code, out] = run_captured("run " + (dir / "bad.json").string() + " --out " + (dir / "out").string());
+  EXPECT_EQ(code, 2) << out;
+  EXPECT_EQ(out.rfind("talus: error: ", 0), 0u) << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  const auto [code2, out2] = run_captured("run " + ref_scene_for_missing(dir) + " --restart " + (dir / "none.h5").string() +
+                                          " --out " + (dir / "out").string());
+  EXPECT_EQ(code2, 2) << out2;
+  EXPECT_NE(out2.find("cannot open checkpoint"), std::string::npos) << out2;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  fs::remove_all(dir);
+}
+
+TEST(Crash, InstabilityExitsThreeWithOneLineAndTheLastGoodState) {
+  const fs::path dir = test::temp_dir("unstable");
+  // The block slides off the grid through an open x+ face.
+  std::string text = test::small_slide_json(0.5, 0.0);
+  const std::string top = "\"z+\": \"open\"";
+  text.replace(text.find(top), top.size(), top + ", \"x+\": \"open\"");
+  const std::string velocity = "\"velocity\": [2.0";
+  text.replace(text.find(velocity), velocity.size(), "\"velocity\": [8.0");
+  std::ofstream(dir / "s.json") << text;
+  const auto [code, out] = run_captured("run " + (dir / "s.json").string() + " --quiet --threads 1 --out " + (dir / "out").string());
+  EXPECT_EQ(code, 3) << out;
+  const auto line = out.find("talus: error: step ");
+  ASSERT_NE(line, std::string::npos) << out;
+  const std::string error = out.substr(line, out.find('\n', line) - line);  // one line holds it all
+  EXPECT_NE(error.find("left the grid"), std::string::npos) << error;
+  EXPECT_NE(error.find("last good state"), std::string::npos) << error;
+  test::expect_readable_run_folder(dir / "out");
+  EXPECT_NO_THROW(read_checkpoint((dir / "out" / "checkpoint.h5").string()));
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace talus

@@ -1,0 +1,82 @@
+#!/usr/bin/env python3
+"""Plane-strain sand column collapse (issue 5): energy budget and deposit profile.
+
+Runs inputs/column_collapse_2d.json with talus (or reads an existing run folder) and writes
+  docs/verification/column_collapse_energy.png   energy terms / released potential energy vs time
+  docs/verification/column_collapse_deposit.png  initial column and final deposit (x, z)
+Usage: /usr/bin/python3 tools/plot_column_collapse.py --talus build/talus [--run-dir DIR]
+"""
+import argparse
+import os
+import subprocess
+import sys
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def read_frame_xz(path):
+    import vtk  # python3-vtk9 (tools/setup.sh)
+    reader = vtk.vtkXMLUnstructuredGridReader()
+    reader.SetFileName(path)
+    reader.Update()
+    points = reader.GetOutput().GetPoints()
+    xyz = np.array([points.GetPoint(i) for i in range(points.GetNumberOfPoints())])
+    return xyz[:, 0], xyz[:, 2]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--talus", default=os.path.join(ROOT, "build", "talus"))
+    ap.add_argument("--run-dir", help="use this finished run instead of running the scene")
+    ap.add_argument("--out", default=os.path.join(ROOT, "docs", "verification"))
+    args = ap.parse_args()
+    run = args.run_dir or os.path.join(ROOT, "runs", "column_collapse_2d")
+    if not args.run_dir:
+        subprocess.run([args.talus, "run", os.path.join(ROOT, "inputs", "column_collapse_2d.json"), "--out", run],
+                       check=True)
+    d = np.genfromtxt(os.path.join(run, "energy.csv"), delimiter=",", names=True)
+    released = d["gravity"][0] - d["gravity"][-1]
+    t = d["time"]
+    e0 = d["total"][0]
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    ax.plot(t, (d["gravity"][0] - d["gravity"]) / released, label="potential energy released")
+    ax.plot(t, d["kinetic"] / released, label="kinetic")
+    ax.plot(t, d["plastic_work"] / released, label="plastic dissipation")
+    ax.plot(t, d["friction_work"] / released, label="floor friction work")
+    ax.plot(t, d["strain"] / released, label="stored elastic")
+    ax.plot(t, (d["total"] - e0) / released * 100, "k--", label="budget error x 100")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("energy / released potential energy")
+    ax.set_title("Column collapse, Drucker-Prager phi = 30 deg: energy budget")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    os.makedirs(args.out, exist_ok=True)
+    fig.tight_layout()
+    fig.savefig(os.path.join(args.out, "column_collapse_energy.png"), dpi=120)
+    print(f"budget error at end: {(d['total'][-1] - e0) / released:.3e} of the released energy; "
+          f"max {np.max(np.abs(d['total'] - e0)) / released:.3e}")
+    print(f"plastic {d['plastic_work'][-1] / released:.3f}, friction {d['friction_work'][-1] / released:.3f}")
+
+    frames = sorted(os.listdir(os.path.join(run, "frames")))
+    x0, z0 = read_frame_xz(os.path.join(run, "frames", frames[0]))
+    x1, z1 = read_frame_xz(os.path.join(run, "frames", frames[-1]))
+    fig, ax = plt.subplots(figsize=(7, 3.2))
+    ax.scatter(x0, z0, s=1, c="0.7", label="initial column")
+    ax.scatter(x1, z1, s=1, c="tab:brown", label="deposit")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("z [m]")
+    ax.set_title(f"Column collapse: runout {x1.max():.3f} m (initial half-width {x0.max():.3f} m)")
+    ax.legend(fontsize=8, markerscale=6)
+    fig.tight_layout()
+    fig.savefig(os.path.join(args.out, "column_collapse_deposit.png"), dpi=120)
+    print(f"runout {x1.max():.4f} m, final height {z1.max():.4f} m")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Build the unit tests with AddressSanitizer + UndefinedBehaviorSanitizer (build-asan) and run them.
+# Left out, because the Release run of tools/test.sh covers them and they would take minutes under
+# the sanitizers: the app group (it runs the talus program), the verification benchmarks (whole
+# physics runs), and the reliability tests that spawn the program or run whole scenes (Crash.*,
+# HardCases.*), and the long whole-run tests (the column collapse, the bit-identical restarts at
+# six steps); -O1 keeps the build short. The scene fuzzer (100 000 inputs) does run here.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+jobs="${TALUS_JOBS:-$(nproc)}"
+cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-O1 -DTALUS_SANITIZE=ON > build-asan.log 2>&1 || { cat build-asan.log; exit 1; }
+known=$(cmake --build build-asan --target help 2>/dev/null | sed -n 's/^\.\.\. \([^ ]*\).*/\1/p')
+targets=()
+for t in talus_core_tests talus_material_tests talus_dem_tests talus_solver_tests talus_reliability_tests; do
+  if grep -qx "$t" <<<"$known"; then targets+=("$t"); fi  # a group without sources has no target
+done
+cmake --build build-asan -j "$jobs" --target "${targets[@]}" >> build-asan.log 2>&1 || { tail -50 build-asan.log; exit 1; }
+echo "sanitize build: ok (log in build-asan.log)"
+# Any sanitizer report fails the test; leak checking stays on.
+export ASAN_OPTIONS="halt_on_error=1:abort_on_error=1:detect_leaks=1"
+export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
+OMP_WAIT_POLICY=PASSIVE ctest --test-dir build-asan --output-on-failure -j "$jobs" \
+  -E '^(Cli|DemSpringsCli|ElementTestCli|ElasticBenchmarks|Crash|HardCases)\.|^GranularCollapse\.Column|^Checkpoint\.Restart|_NOT_BUILT'

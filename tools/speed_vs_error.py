@@ -1,0 +1,262 @@
+#!/usr/bin/env python3
+"""Speed against error for the papers' elastic benchmarks (docs/verification.md).
+
+Runs `talus run` on variants of the scenes in inputs/benchmarks/ (shape function, update scheme,
+cell size, particles per cell), measures the error of each run and its wall time, and writes
+    docs/verification/speed_vs_error.csv       one row per run
+    docs/verification/column_convergence.csv   column error against cell size
+    docs/verification/*.png                    error vs time, convergence, energy histories
+Usage:  /usr/bin/python3 tools/speed_vs_error.py [--talus build/talus] [--threads 1] [--quick]
+Needs numpy, matplotlib and VTK's Python module (Debian: python3-numpy python3-matplotlib python3-vtk9).
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+from vtk.util.numpy_support import vtk_to_numpy
+import vtk
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+OUT = os.path.join(ROOT, "docs", "verification")
+SHAPES = ["linear", "ugimp", "cpgimp", "bspline2"]
+SCHEMES = ["musl", "usl", "usf", "usavg"]
+E, RHO0, L0 = 1.0e6, 1.0, 50.0
+
+
+def find_talus(given):
+    for p in ([given] if given else []) + ["build/talus", "build-shape/talus", "build-release/talus"]:
+        path = os.path.join(ROOT, p) if not os.path.isabs(p) else p
+        if os.path.exists(path):
+            return path
+    sys.exit("talus not found: build it (cmake --build build) or pass --talus")
+
+
+def load(name):
+    with open(os.path.join(ROOT, "inputs", "benchmarks", name + ".json")) as f:
+        return json.load(f)
+
+
+def variant(scene, shape, scheme, h=None, ppc=None):
+    s = json.loads(json.dumps(scene))
+    s["solver"]["shape"] = shape
+    s["solver"]["scheme"] = scheme
+    s["output"]["frame_interval"] = 0.0  # first and last frame only
+    if h is not None:  # refine along the bar, keep a one-cell cross-section
+        old = s["grid"]["cell_size"]
+        s["grid"]["cell_size"] = h
+        axis = 2 if s["name"] == "elastic_free_fall" else 0
+        for d in range(3):
+            if d != axis:
+                s["grid"]["size"][d] = h
+                for b in s["bodies"]:
+                    b["box"]["max"][d] = b["box"]["min"][d] + h
+        n = round(s["grid"]["size"][axis] / h)
+        s["grid"]["size"][axis] = n * h
+    if ppc is not None:
+        for b in s["bodies"]:
+            b["particles_per_cell"] = ppc
+    return s
+
+
+def run(talus, scene, threads):
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "scene.json")
+        with open(path, "w") as f:
+            json.dump(scene, f)
+        out = os.path.join(tmp, "out")
+        t0 = time.perf_counter()
+        r = subprocess.run([talus, "run", path, "--out", out, "--threads", str(threads), "--quiet"],
+                           capture_output=True, text=True)
+        wall = time.perf_counter() - t0
+        if r.returncode != 0:
+            return None
+        energy = np.genfromtxt(os.path.join(out, "energy.csv"), delimiter=",", names=True)
+        frames = sorted(os.listdir(os.path.join(out, "frames")))
+        reader = vtk.vtkXMLUnstructuredGridReader()
+        reader.SetFileName(os.path.join(out, "frames", frames[-1]))
+        reader.Update()
+        grid = reader.GetOutput()
+        x = vtk_to_numpy(grid.GetPoints().GetData())
+        stress = vtk_to_numpy(grid.GetPointData().GetArray("stress"))
+        steps = int(energy["step"][-1])
+        return {"wall": wall, "energy": energy, "x": x, "stress": stress, "steps": steps, "particles": len(x)}
+
+
+def profile(x, sxx, axis=0):
+    """Stress averaged over each cross-section layer (a thin bar is 1D), ordered along the bar."""
+    order = np.argsort(x[:, axis], kind="stable")
+    xs, ss = x[order, axis], sxx[order]
+    groups = np.split(np.arange(len(xs)), np.nonzero(np.diff(xs) > 1e-6)[0] + 1)
+    return np.array([xs[g].mean() for g in groups]), np.array([ss[g].mean() for g in groups])
+
+
+def column_metrics(res, b):
+    delta = L0 + RHO0 * b * L0 ** 2 / (2 * E)
+    xp, sp = profile(res["x"], res["stress"][:, 0])
+    exact = E * (np.sqrt(2 * RHO0 * b * (delta - np.minimum(xp, delta)) / E + 1) - 1)  # seed 000 eq. 61
+    l2 = math.sqrt(np.sum((sp - exact) ** 2) / np.sum(exact ** 2))
+    rough = math.sqrt(np.mean((sp[2:] - 2 * sp[1:-1] + sp[:-2]) ** 2)) / (RHO0 * b * L0)
+    return l2, rough
+
+
+def bar_metrics(res, v0):
+    c = math.sqrt(E / RHO0)
+    t = res["energy"]["time"][-1]
+    exact = -E * abs(v0) / c  # seed 000 eq. 63
+    x, s = res["x"][:, 0], res["stress"][:, 0]
+    sel = (x > 3.0) & (x < c * t - 6.0)
+    return abs(s[sel].mean() / exact - 1.0)
+
+
+def energy_drift(res):
+    tot = res["energy"]["total"]
+    return float(np.max(np.abs(tot - tot[0])) / abs(tot[0])), float((tot[-1] - tot[0]) / abs(tot[0]))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--talus")
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--quick", action="store_true", help="fewer variants (a smoke test of the driver)")
+    a = ap.parse_args()
+    talus = find_talus(a.talus)
+    os.makedirs(OUT, exist_ok=True)
+    rows = []
+    histories = {}
+
+    def record(bench, shape, scheme, h, ppc, res, error, metric, extra=""):
+        ups = res["particles"] * res["steps"] / res["wall"]
+        rows.append({"benchmark": bench, "shape": shape, "scheme": scheme, "cell_size": h, "ppc": ppc,
+                     "particles": res["particles"], "steps": res["steps"], "wall_s": round(res["wall"], 4),
+                     "particle_updates_per_s": round(ups), "error": error, "metric": metric, "note": extra})
+        print(f"{bench:20s} {shape:8s} {scheme:6s} h={h:<6g} ppc={ppc} err={error:.4g} ({metric}) "
+              f"{res['wall']:.2f} s {ups / 1e6:.2f} M/s {extra}", flush=True)
+
+    shapes = SHAPES if not a.quick else ["linear", "cpgimp"]
+    # 1. Column, W = 10000 and 12500: shape x cell size x ppc (MUSL).
+    cells = [2.0, 1.0, 0.5] if a.quick else [2.0, 1.0, 0.5, 0.25]
+    for name in ["column_w10000", "column_w12500"]:
+        base = load(name)
+        b = base["gravity"][0]
+        for shape in shapes:
+            for h in cells:
+                for ppc in ([2] if (a.quick or h != 1.0) else [1, 2, 3]):
+                    res = run(talus, variant(base, shape, "musl", h, ppc), a.threads)
+                    if res is None:
+                        print(f"{name} {shape} h={h} ppc={ppc}: run failed", flush=True)
+                        continue
+                    l2, rough = column_metrics(res, b)
+                    record(name, shape, "musl", h, ppc, res, l2, "L2 stress", f"roughness={rough:.4g}")
+    # 2. Dynamic bar: shape x ppc.
+    base = load("dynamic_bar")
+    for shape in shapes:
+        for ppc in ([2] if a.quick else [1, 2, 3]):
+            res = run(talus, variant(base, shape, "musl", None, ppc), a.threads)
+            if res:
+                record("dynamic_bar", shape, "musl", base["grid"]["cell_size"], ppc, res,
+                       bar_metrics(res, base["bodies"][0]["velocity"][0]), "|mean/exact - 1|")
+    # 3. Block between walls and 4. free fall: energy histories, shape x scheme.
+    for name, combos in [("block_between_walls", [(s, "musl") for s in shapes] + [("cpgimp", "usavg"), ("cpgimp", "usf")]),
+                         ("elastic_free_fall", [("linear", s) for s in ["musl", "usf", "usavg"]] +
+                          ([] if a.quick else [("cpgimp", s) for s in ["musl", "usf", "usavg"]]))]:
+        base = load(name)
+        for shape, scheme in combos:
+            res = run(talus, variant(base, shape, scheme), a.threads)
+            if res is None:
+                print(f"{name} {shape} {scheme}: run failed", flush=True)
+                continue
+            worst, final = energy_drift(res)
+            histories[(name, shape, scheme)] = res["energy"]
+            record(name, shape, scheme, base["grid"]["cell_size"], 2, res, worst, "max |E - E0| / E0",
+                   f"final={final:+.4g}")
+
+    with open(os.path.join(OUT, "speed_vs_error.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        w.writeheader()
+        w.writerows(rows)
+
+    # Plots: error vs wall time per benchmark.
+    markers = {"linear": "o", "ugimp": "s", "cpgimp": "^", "bspline2": "D"}
+    for bench in ["column_w10000", "column_w12500", "dynamic_bar", "block_between_walls", "elastic_free_fall"]:
+        sel = [r for r in rows if r["benchmark"] == bench]
+        if not sel:
+            continue
+        fig, ax = plt.subplots(figsize=(6, 4.2))
+        for shape in SHAPES:
+            for scheme in SCHEMES:
+                pts = [r for r in sel if r["shape"] == shape and r["scheme"] == scheme]
+                if pts:
+                    ax.scatter([r["wall_s"] for r in pts], [max(r["error"], 1e-5) for r in pts],
+                               marker=markers[shape], label=f"{shape} {scheme}")
+                    for r in pts:
+                        if bench.startswith("column"):
+                            ax.annotate(f"h={r['cell_size']:g},{r['ppc']}", (r["wall_s"], max(r["error"], 1e-5)),
+                                        fontsize=6)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel(f"wall time [s] ({a.threads} thread{'s' if a.threads > 1 else ''})")
+        ax.set_ylabel(sel[0]["metric"])
+        ax.set_title(f"{bench}: error vs time")
+        ax.legend(fontsize=7)
+        ax.grid(True, which="both", alpha=0.3)
+        fig.tight_layout()
+        fig.savefig(os.path.join(OUT, f"{bench}_error_vs_time.png"), dpi=110)
+        plt.close(fig)
+
+    # Convergence of the column error with cell size (ppc 2).
+    conv = []
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    for shape in shapes:
+        pts = sorted([(r["cell_size"], r["error"]) for r in rows
+                      if r["benchmark"] == "column_w10000" and r["shape"] == shape and r["ppc"] == 2])
+        if len(pts) >= 2:
+            hs, es = np.array([p[0] for p in pts]), np.array([p[1] for p in pts])
+            rate = np.polyfit(np.log(hs), np.log(es), 1)[0]
+            conv.append({"shape": shape, "rate": round(float(rate), 3),
+                         **{f"L2_h{h:g}": round(float(e), 6) for h, e in zip(hs, es)}})
+            ax.loglog(hs, es, marker=markers[shape], label=f"{shape} (rate {rate:.2f})")
+    ax.set_xlabel("cell size h")
+    ax.set_ylabel("relative L2 stress error")
+    ax.set_title("column W = 10000: convergence")
+    ax.legend(fontsize=8)
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(os.path.join(OUT, "column_convergence.png"), dpi=110)
+    plt.close(fig)
+    if conv:
+        keys = sorted({k for c in conv for k in c}, key=lambda k: (k != "shape", k != "rate", k))
+        with open(os.path.join(OUT, "column_convergence.csv"), "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=keys)
+            w.writeheader()
+            w.writerows(conv)
+        for c in conv:
+            print("convergence", c)
+
+    # Energy histories.
+    for name in ["block_between_walls", "elastic_free_fall"]:
+        fig, ax = plt.subplots(figsize=(6.5, 4))
+        for (n, shape, scheme), e in histories.items():
+            if n == name:
+                ax.plot(e["time"], e["total"] / e["total"][0], label=f"{shape} {scheme}", lw=1)
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("total energy / initial")
+        ax.set_title(f"{name}: energy history")
+        ax.legend(fontsize=7)
+        ax.grid(True, alpha=0.3)
+        fig.tight_layout()
+        fig.savefig(os.path.join(OUT, f"{name}_energy.png"), dpi=110)
+        plt.close(fig)
+
+
+if __name__ == "__main__":
+    main()
