@@ -13,6 +13,12 @@
 namespace talus {
 namespace {
 
+/// Bit-for-bit equality of two arrays. memcmp on an empty vector's null data() is undefined
+/// behaviour (UBSan), so sizes are compared first.
+bool same(const std::vector<double>& x, const std::vector<double>& y) {
+  return x.size() == y.size() && (x.empty() || std::memcmp(x.data(), y.data(), x.size() * sizeof(double)) == 0);
+}
+
 Vec3 total_momentum(const ParticleStore& P) {
   Vec3 m = Vec3::Zero();
   for (std::size_t p = 0; p < P.size(); ++p)
@@ -133,9 +139,6 @@ TEST(Solver, BitIdenticalForOneAndTwoThreads) {
   const auto& b = two.particles();
   ASSERT_EQ(a.size(), b.size());
   EXPECT_GT(a.size(), 2000u);
-  auto same = [](const std::vector<double>& x, const std::vector<double>& y) {
-    return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size() * sizeof(double)) == 0;
-  };
   EXPECT_EQ(a.id, b.id);
   for (int d = 0; d < 3; ++d) {
     EXPECT_TRUE(same(a.x[d], b.x[d])) << "position " << d;
@@ -170,10 +173,6 @@ TEST(Solver, BitIdenticalForOneAndTwoThreadsForEveryShapeAndScheme) {
     const auto& a = one.particles();
     const auto& b = two.particles();
     ASSERT_EQ(a.size(), b.size());
-    auto same = [](const std::vector<double>& x, const std::vector<double>& y) {
-      // memcmp on an empty vector's null data() is undefined behaviour (UBSan): test sizes first.
-      return x.size() == y.size() && (x.empty() || std::memcmp(x.data(), y.data(), x.size() * sizeof(double)) == 0);
-    };
     EXPECT_EQ(a.id, b.id) << to_string(shape);
     for (int d = 0; d < 3; ++d) {
       EXPECT_TRUE(same(a.x[d], b.x[d])) << to_string(shape) << " position " << d;
