@@ -42,7 +42,7 @@ double update_grid(Grid& grid, const Walls& walls, const Vec3& gravity, double d
     }
     double removed = 0.0;
     const auto node = grid.node_of(tile, slot);
-    if (walls.touches(node)) removed = walls.apply(node, vl, true, m, v);
+    if (walls.touches(node)) removed = walls.apply(node, vl, Walls::Stage::GridUpdate, m, v);
     for (int d = 0; d < 3; ++d) {
       grid.momentum[d][n] = v[d];
       grid.force[d][n] = vl[d] - v[d];
@@ -54,8 +54,10 @@ double update_grid(Grid& grid, const Walls& walls, const Vec3& gravity, double d
 
 namespace {
 
-/// v = momentum / m with the walls' no-penetration part, written into `target` (zero on empty nodes).
-void wall_projected_velocities(Grid& grid, const Walls& walls, double mass_floor, std::array<LazyArray, 3>& target) {
+/// v = momentum / m with the walls at `stage`, written into `target` (zero on empty nodes). For the
+/// remap, `velocity_l` still holds this step's v^L: the contact state of the grid update.
+void wall_projected_velocities(Grid& grid, const Walls& walls, double mass_floor, Walls::Stage stage,
+                               std::array<LazyArray, 3>& target) {
   for_active_nodes(grid, [&](std::size_t n, std::uint32_t tile, int slot) {
     const double m = grid.mass[n];
     if (m <= mass_floor) {
@@ -64,7 +66,10 @@ void wall_projected_velocities(Grid& grid, const Walls& walls, double mass_floor
     }
     double v[3] = {grid.momentum[0][n] / m, grid.momentum[1][n] / m, grid.momentum[2][n] / m};
     const auto node = grid.node_of(tile, slot);
-    if (walls.touches(node)) walls.apply(node, v, false);
+    if (walls.touches(node)) {
+      const double vl[3] = {grid.velocity_l[0][n], grid.velocity_l[1][n], grid.velocity_l[2][n]};
+      walls.apply(node, v, stage, 0.0, nullptr, vl);
+    }
     for (int d = 0; d < 3; ++d) target[d][n] = v[d];
     return 0.0;
   });
@@ -73,11 +78,46 @@ void wall_projected_velocities(Grid& grid, const Walls& walls, double mass_floor
 }  // namespace
 
 void velocities_from_momentum(Grid& grid, const Walls& walls, double mass_floor) {
-  wall_projected_velocities(grid, walls, mass_floor, grid.momentum);
+  wall_projected_velocities(grid, walls, mass_floor, Walls::Stage::Remap, grid.momentum);
+}
+
+void fold_ghost_nodes(Grid& grid, const Walls& walls, bool mass, bool momentum, bool force) {
+  if (!walls.has_mirrored_walls()) return;
+  for_active_nodes(grid, [&](std::size_t n, std::uint32_t tile, int slot) {
+    std::array<std::array<int, 3>, 7> ghosts;
+    std::array<std::array<double, 3>, 7> signs;
+    const int count = walls.ghosts_of(grid.node_of(tile, slot), ghosts, signs);
+    for (int g = 0; g < count; ++g) {
+      const std::size_t m = grid.node(ghosts[g][0], ghosts[g][1], ghosts[g][2]);
+      if (mass) grid.mass[n] += grid.mass[m];
+      for (int d = 0; d < 3; ++d) {
+        if (momentum) grid.momentum[d][n] += signs[g][d] * grid.momentum[d][m];
+        if (force) grid.force[d][n] += signs[g][d] * grid.force[d][m];
+      }
+    }
+    return 0.0;
+  });
+}
+
+void mirror_ghost_nodes(Grid& grid, const Walls& walls, GhostFields fields) {
+  if (!walls.has_mirrored_walls()) return;
+  std::vector<std::array<LazyArray, 3>*> targets;
+  if (fields == GhostFields::AfterGridUpdate) targets = {&grid.momentum, &grid.force, &grid.velocity_l};
+  if (fields == GhostFields::Remapped) targets = {&grid.momentum};
+  if (fields == GhostFields::Start) targets = {&grid.velocity_l};
+  for_active_nodes(grid, [&](std::size_t n, std::uint32_t tile, int slot) {
+    std::array<int, 3> image;
+    std::array<double, 3> sign;
+    if (!walls.mirror(grid.node_of(tile, slot), image, sign)) return 0.0;
+    const std::size_t m = grid.node(image[0], image[1], image[2]);
+    for (auto* field : targets)
+      for (int d = 0; d < 3; ++d) (*field)[d][n] = sign[d] * (*field)[d][m];
+    return 0.0;
+  });
 }
 
 void start_velocities(Grid& grid, const Walls& walls, double mass_floor) {
-  wall_projected_velocities(grid, walls, mass_floor, grid.velocity_l);
+  wall_projected_velocities(grid, walls, mass_floor, Walls::Stage::Start, grid.velocity_l);
 }
 
 }  // namespace talus

@@ -119,12 +119,15 @@ void Solver::step_with(double dt) {
     ScopedPhase timer(times_, Phase::P2G);
     grid_.clear_active();
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentumForce);
+    fold_ghost_nodes(grid_, walls_, true, true, true);
   } else {
     {
       ScopedPhase timer(times_, Phase::P2G);
       grid_.clear_active();
       scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentum);
+      fold_ghost_nodes(grid_, walls_, true, true, false);
       start_velocities(grid_, walls_, mass_floor_);
+      mirror_ghost_nodes(grid_, walls_, GhostFields::Start);
     }
     {
       ScopedPhase timer(times_, Phase::Stress);
@@ -133,11 +136,13 @@ void Solver::step_with(double dt) {
     }
     ScopedPhase timer(times_, Phase::P2G);
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Force);
+    fold_ghost_nodes(grid_, walls_, false, false, true);
   }
   // 3. grid: velocities, accelerations with gravity, walls.
   {
     ScopedPhase timer(times_, Phase::Grid);
     friction_work_ += update_grid(grid_, walls_, gravity_at(time_ + 0.5 * dt), dt, mass_floor_);
+    mirror_ghost_nodes(grid_, walls_, GhostFields::AfterGridUpdate);
   }
   // 4. G2P: particle velocities and this step's displacement.
   {
@@ -154,7 +159,9 @@ void Solver::step_with(double dt) {
     ScopedPhase timer(times_, Phase::Remap);
     grid_.clear_momentum();
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Momentum);
+    fold_ghost_nodes(grid_, walls_, false, true, false);
     velocities_from_momentum(grid_, walls_, mass_floor_);
+    mirror_ghost_nodes(grid_, walls_, GhostFields::Remapped);
     node_velocity = {grid_.momentum[0].data(), grid_.momentum[1].data(), grid_.momentum[2].data()};
   }
   // 6. strain and stress, then move the particles (USF: only move them).

@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <functional>
 
 namespace talus {
 namespace {
@@ -27,9 +29,9 @@ TEST(ElasticBenchmarks, ColumnUnderBodyForceW10000) {
   EXPECT_LT(run_column("column_w10000", ShapeKind::CpGimp).l2, 0.02);  // measured 0.62%
   EXPECT_LT(run_column("column_w10000", ShapeKind::UGimp).l2, 0.02);   // measured 0.62%
   EXPECT_LT(run_column("column_w10000", ShapeKind::Linear).l2, 0.02);  // measured 1.2% (MPM and GIMP match, seed 000)
-  // Target 2%, missed: measured 5.4%. The B-spline's error sits in the first two cells at the fixed
-  // end, where the wall holds the ghost node as well as the boundary node (docs/verification.md).
-  EXPECT_LT(run_column("column_w10000", ShapeKind::BSpline2).l2, 0.06);
+  // Measured 0.23% with the mirrored ghost nodes at the fixed end (Walls::mirror); 5.4% when the
+  // wall held the ghost node like the wall node (the first two cells over-stiff).
+  EXPECT_LT(run_column("column_w10000", ShapeKind::BSpline2).l2, 0.02);
 }
 
 // W = 12500: linear MPM breaks up (cell-crossing jumps between neighbours, seed 000 Fig.), GIMP
@@ -65,8 +67,9 @@ double dynamic_bar_ratio(ShapeKind shape) {
 TEST(ElasticBenchmarks, DynamicBarStressBehindTheFront) {
   EXPECT_NEAR(dynamic_bar_ratio(ShapeKind::UGimp), 1.0, 0.02);   // measured 1.016
   EXPECT_NEAR(dynamic_bar_ratio(ShapeKind::CpGimp), 1.0, 0.02);  // measured 1.016
-  // Target 2%, missed: measured 1.024, the fixed-end boundary layer of the B-spline again
-  // (docs/verification.md).
+  // Target 2%, missed: measured 1.023. Not the fixed end any more (with the mirrored ghost nodes
+  // the first cells read 0.9996-1.005): the B-spline's dispersive ringing behind the front
+  // (+5..27% 6-10 cells behind it, docs/verification.md) does not average out in the window.
   EXPECT_NEAR(dynamic_bar_ratio(ShapeKind::BSpline2), 1.0, 0.03);
 }
 
@@ -74,11 +77,12 @@ struct EnergyHistory {
   double e0 = 0.0, max_gain = 0.0, max_loss = 0.0, final_drift = 0.0;
 };
 
-EnergyHistory energy_history(Solver& solver) {
+EnergyHistory energy_history(Solver& solver, const std::function<void()>& after_step = [] {}) {
   EnergyHistory h;
   h.e0 = solver.energies().total();
   while (!solver.finished()) {
     solver.step();
+    after_step();
     const double d = (solver.energies().total() - h.e0) / std::abs(h.e0);
     h.max_gain = std::max(h.max_gain, d);
     h.max_loss = std::max(h.max_loss, -d);
@@ -87,41 +91,52 @@ EnergyHistory energy_history(Solver& solver) {
   return h;
 }
 
-// Seed 001 sec. 4(2), Fig. 7: an elastic bar falls onto the floor and bounces. The paper reports
-// that MUSL and USF gain a little total energy while USAVG keeps it nearly constant.
+// Seed 001 sec. 4(2), Fig. 7: an elastic bar falls 0.5 m onto a rigid frictionless floor
+// (unilateral contact) and bounces. The paper: MUSL and USF gain a little total energy, USAVG keeps
+// it nearly constant. Measured over the benchmark's 1 s (two impacts): no scheme gains energy (max
+// gain < 1e-4 of E0); each loses energy at the impacts (the no-rebound contact removes the floor
+// node's normal momentum), USAVG least: USAVG -2.6%, USF -2.9%, MUSL -3.3% (after the first bounce
+// alone, at 0.5 s, USF is lowest: -1.32%, USAVG -1.47%, MUSL -1.59%). Until the wall fix (walls.hpp, Walls::Stage) the remap's
+// re-test of the contact made MUSL +41%, USF +81%, USAVG +38%.
 TEST(ElasticBenchmarks, ElasticFreeFallEnergyBySchemes) {
   double drift[3];
   int i = 0;
   for (auto scheme : {SchemeKind::Musl, SchemeKind::Usf, SchemeKind::Usavg}) {
     Solver solver(benchmark_scene("elastic_free_fall", ShapeKind::Linear, scheme));
-    const EnergyHistory h = energy_history(solver);
+    double momentum_z = 0.0;  // the largest upward momentum of the bar: it bounced
+    const EnergyHistory h = energy_history(solver, [&] {
+      double pz = 0.0;
+      for (std::size_t p = 0; p < solver.particles().size(); ++p)
+        pz += solver.particles().mass[p] * solver.particles().v[2][p];
+      momentum_z = std::max(momentum_z, pz);
+    });
     std::printf("free fall %s: final drift %.5f, max gain %.5f, max loss %.5f\n", to_string(scheme), h.final_drift,
                 h.max_gain, h.max_loss);
+    EXPECT_LT(h.max_gain, 1e-3) << to_string(scheme);   // a rigid wall must not create energy
+    EXPECT_LT(h.max_loss, 0.05) << to_string(scheme);   // one impact of a 10-cell bar
+    // it bounced: 10 kg hit the floor at sqrt(2 g 0.5) = 3.13 m/s and left it upwards at > 2.5 m/s
+    EXPECT_GT(momentum_z, 25.0) << to_string(scheme);
     drift[i++] = std::abs(h.final_drift);
   }
-  // Measured final drifts: MUSL +0.411, USF +0.806, USAVG +0.379 of the initial energy (all gain,
-  // most of it at the floor impact; docs/verification.md). The paper's ordering holds.
-  EXPECT_LT(drift[2], drift[0]);
+  EXPECT_LT(drift[2], drift[0]);  // USAVG conserves best (seed 001)
   EXPECT_LT(drift[2], drift[1]);
-  EXPECT_LT(drift[0], drift[1]);
 }
 
-// Seed 000 sec. 4(3): a block bouncing between two walls, 4 impacts.
+// Seed 000 sec. 4(3): a block bouncing between two walls, 4 impacts. Seed 000 Fig. 12: without MLS
+// the strain energy grows after the impacts. Measured (MUSL, unilateral frictionless walls): no gain
+// above the initial energy (max gain linear 2.5e-4, cpGIMP 0), a loss at each impact: linear -12%,
+// cpGIMP -21% after 4 impacts (docs/verification.md). Asserted: no spurious gain, the block still
+// moves, and the loss stays that of the no-rebound contact.
 TEST(ElasticBenchmarks, BlockBetweenWallsEnergyThroughFourImpacts) {
-  // Seed 000 Fig.: MPM's energy climbs after the impacts, GIMP less. Measured final drift: linear
-  // +0.85 (max +1.32), cpGIMP +0.67 (max +0.73) of the initial energy. Asserted: the run survives 4
-  // impacts, the block is still moving, and cpGIMP gains less than linear MPM.
-  double gain[2];
-  int i = 0;
   for (auto shape : {ShapeKind::Linear, ShapeKind::CpGimp}) {
     Solver solver(benchmark_scene("block_between_walls", shape, SchemeKind::Musl));
     const EnergyHistory h = energy_history(solver);
     std::printf("block between walls %s: final drift %.5f, max gain %.5f, max loss %.5f\n", to_string(shape),
                 h.final_drift, h.max_gain, h.max_loss);
-    EXPECT_GT(solver.energies().kinetic, 0.1 * h.e0);
-    gain[i++] = h.max_gain;
+    EXPECT_GT(solver.energies().kinetic, 0.5 * h.e0) << to_string(shape);
+    EXPECT_LT(h.max_gain, 0.005) << to_string(shape);
+    EXPECT_LT(h.max_loss, 0.30) << to_string(shape);
   }
-  EXPECT_LT(gain[1], gain[0]);
 }
 
 }  // namespace

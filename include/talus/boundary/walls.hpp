@@ -30,28 +30,136 @@ class Walls {
     return false;
   }
 
-  /// Apply the walls of every face node (i, j, k) lies on to velocity v. `with_friction` is false
-  /// for the MUSL remap, where only the no-penetration part is enforced (friction acted already).
-  /// Returns the work dissipated by friction on a node of mass `m` whose velocity at the start of
+  /// Mirrored ghost nodes (fixed and slip walls). The supports of the B-spline and of wide GIMP
+  /// domains next to a wall reach the ghost nodes beyond it. Holding those like the wall node makes
+  /// the velocity field flat across the first cell, which over-stiffens it (the B-spline column's
+  /// first particles read +8% and +29% stress). Instead a ghost node takes the reflection of the
+  /// interior node at the same distance from the wall: odd for the velocity components the wall
+  /// holds (all at a fixed wall, the normal one at a slip wall), even for the free ones, so the
+  /// interpolated field satisfies the wall condition at the wall with an undisturbed gradient.
+  /// `mirror(node, mirrored, sign)`: false when the node is no such ghost; else the interior node
+  /// and the factor per velocity component. Frictional (unilateral) walls are not mirrored.
+  /// The ghost is a slave of its image (u_ghost = sign u_image), so in the Galerkin sense its mass,
+  /// momentum and force belong to the image: fold_ghost_nodes adds them there (sign-weighted)
+  /// before the image's velocity is computed, and mirror_ghost_nodes copies the result back.
+  bool mirror(const std::array<int, 3>& node, std::array<int, 3>& mirrored, std::array<double, 3>& sign) const {
+    bool ghost = false;
+    mirrored = node;
+    sign = {1.0, 1.0, 1.0};
+    for (int d = 0; d < 3; ++d) {
+      for (int side = 0; side < 2; ++side) {
+        const WallType type = specs_[d][side].type;
+        if (type != WallType::Fixed && type != WallType::Slip) continue;
+        const int face = side == 0 ? lower_[d] : upper_[d];
+        const bool beyond = side == 0 ? node[d] < face : node[d] > face;
+        if (!beyond) continue;
+        const int image = 2 * face - node[d];
+        if (image < lower_[d] || image > upper_[d]) return false;  // deeper than the domain is wide
+        mirrored[d] = image;
+        if (type == WallType::Fixed) for (double& f : sign) f = -f;
+        else sign[d] = -sign[d];
+        ghost = true;
+      }
+    }
+    return ghost;
+  }
+  /// The inverse of mirror(): the ghost nodes whose image is `node` (up to 7: one per combination
+  /// of the axes along which a mirrored wall lies within reach), with their factors. Returns the
+  /// count written to `ghosts` / `signs`.
+  int ghosts_of(const std::array<int, 3>& node, std::array<std::array<int, 3>, 7>& ghosts,
+                std::array<std::array<double, 3>, 7>& signs) const {
+    // per axis: the ghost coordinate across each mirrored face (or none) and its factors
+    int options[3] = {0, 0, 0};
+    int coordinate[3][2];
+    std::array<double, 3> factor[3][2];
+    for (int d = 0; d < 3; ++d) {
+      if (node[d] < lower_[d] || node[d] > upper_[d]) return 0;  // a ghost itself
+      for (int side = 0; side < 2; ++side) {
+        const WallType type = specs_[d][side].type;
+        if (type != WallType::Fixed && type != WallType::Slip) continue;
+        const int face = side == 0 ? lower_[d] : upper_[d];
+        const int ghost = 2 * face - node[d];
+        const bool beyond = side == 0 ? ghost < face : ghost > face;
+        if (!beyond || ghost < lower_[d] - kPad || ghost > upper_[d] + kPad) continue;
+        coordinate[d][options[d]] = ghost;
+        factor[d][options[d]] = {1.0, 1.0, 1.0};
+        if (type == WallType::Fixed) factor[d][options[d]] = {-1.0, -1.0, -1.0};
+        else factor[d][options[d]][d] = -1.0;
+        ++options[d];
+      }
+    }
+    int count = 0;
+    // choice per axis: 0 = not mirrored, 1.. = across that option
+    for (int cx = 0; cx <= options[0]; ++cx)
+      for (int cy = 0; cy <= options[1]; ++cy)
+        for (int cz = 0; cz <= options[2]; ++cz) {
+          if (cx == 0 && cy == 0 && cz == 0) continue;
+          const int choice[3] = {cx, cy, cz};
+          std::array<int, 3> g = node;
+          std::array<double, 3> f = {1.0, 1.0, 1.0};
+          for (int d = 0; d < 3; ++d) {
+            if (choice[d] == 0) continue;
+            g[d] = coordinate[d][choice[d] - 1];
+            for (int c = 0; c < 3; ++c) f[c] *= factor[d][choice[d] - 1][c];
+          }
+          std::array<int, 3> image;
+          std::array<double, 3> unused;
+          if (count < 7 && mirror(g, image, unused) && image == node) {
+            ghosts[count] = g;
+            signs[count] = f;
+            ++count;
+          }
+        }
+    return count;
+  }
+
+  bool has_mirrored_walls() const {
+    for (const auto& axis : specs_)
+      for (const auto& w : axis)
+        if (w.type == WallType::Fixed || w.type == WallType::Slip) return true;
+    return false;
+  }
+
+  /// How a frictional (unilateral) wall treats a node's velocity.
+  ///  GridUpdate  the contact decision of the step (seed 001 eq. 14-18) on the trial velocity v^L:
+  ///              a node moving into the wall is in contact, loses its normal velocity, and friction
+  ///              acts on its tangential velocity.
+  ///  Remap       the MUSL remap v^{k+1} (the strain velocity): the node keeps the contact state the
+  ///              grid update gave it. `contact_velocity` is that node's v^L: a node in contact
+  ///              (v^L . n = 0) has no normal velocity in v^{k+1} either (eq. 18), whichever way the
+  ///              remapped momentum points; a node that separated is free unless v^{k+1} penetrates.
+  ///  Start       USF / USAVG, the start-of-step velocities used for the first strain update, before
+  ///              this step's contact is known: a wall node with mass is treated as touching (normal
+  ///              velocity removed); the grid update that follows decides separation.
+  /// Why Remap and Start must not re-test the contact: the particles move with v^L, so a wall node
+  /// held in the grid update does not move; a strain velocity in which the same node moves away from
+  /// (or into) the wall stretches (or squeezes) the first cell without any motion of the material.
+  /// That spurious strain energy was a +40..85% energy gain over a few impacts
+  /// (inputs/benchmarks/elastic_free_fall.json, block_between_walls.json; docs/verification.md).
+  enum class Stage { GridUpdate, Remap, Start };
+
+  /// Apply the walls of every face node (i, j, k) lies on to velocity v at the given stage.
+  /// GridUpdate returns the work dissipated by friction on a node of mass `m` whose velocity at the start of
   /// the step was `v_start`: -J_t . v_start,t with J_t = m dv_t the friction impulse. (The start
   /// velocity is a momentum average and stays bounded; the trial velocity of a nearly empty node
   /// does not, which would make a mean of the two meaningless.)
   /// (A rigid wall's normal impulse does no work; the energy a no-rebound impact removes shows up
   /// in the budget's gap, see docs/theory.md.)
-  double apply(const std::array<int, 3>& node, double v[3], bool with_friction, double m = 0.0,
-               const double* v_start = nullptr) const {
+  double apply(const std::array<int, 3>& node, double v[3], Stage stage, double m = 0.0,
+               const double* v_start = nullptr, const double* contact_velocity = nullptr) const {
     double friction_work = 0.0;
     for (int d = 0; d < 3; ++d)
       for (int side = 0; side < 2; ++side) {
         if (!active_[d][side]) continue;
         const bool on_face = side == 0 ? node[d] <= lower_[d] : node[d] >= upper_[d];
-        if (on_face) friction_work += apply_one(d, side, v, with_friction, m, v_start);
+        if (on_face) friction_work += apply_one(d, side, v, stage, m, v_start, contact_velocity);
       }
     return friction_work;
   }
 
  private:
-  double apply_one(int axis, int side, double v[3], bool with_friction, double m, const double* v_start) const {
+  double apply_one(int axis, int side, double v[3], Stage stage, double m, const double* v_start,
+                   const double* contact_velocity) const {
     const WallSpec& w = specs_[axis][side];
     const double inward = side == 0 ? 1.0 : -1.0;  // the wall's normal, pointing into the domain
     switch (w.type) {
@@ -60,9 +168,12 @@ class Walls {
       case WallType::Slip: v[axis] = 0.0; return 0.0;
       case WallType::Friction: {
         const double vn = v[axis] * inward;
-        if (vn >= 0.0) return 0.0;  // separating or resting: no contact (seed 001 eq. 14)
-        v[axis] = 0.0;              // no rebound (eq. 17-18)
-        if (!with_friction) return 0.0;
+        bool contact = vn < 0.0;  // moving into the wall (seed 001 eq. 14)
+        if (stage == Stage::Remap) contact = contact || contact_velocity[axis] * inward <= 0.0;
+        if (stage == Stage::Start) contact = true;
+        if (!contact) return 0.0;  // separating: free
+        v[axis] = 0.0;             // no rebound (eq. 17-18)
+        if (stage != Stage::GridUpdate || vn >= 0.0) return 0.0;  // friction acts once, in the grid update
         const int t1 = (axis + 1) % 3, t2 = (axis + 2) % 3;
         const double vt = std::sqrt(v[t1] * v[t1] + v[t2] * v[t2]);
         const double limit = w.friction_coefficient * (-vn);  // mu |dv_n|  (eq. 15-16)

@@ -11,11 +11,27 @@ namespace talus {
 /// Returns the work dissipated by wall friction (>= 0).
 double update_grid(Grid& grid, const Walls& walls, const Vec3& gravity, double dt, double mass_floor);
 
-/// After the MUSL remap: v_i^{k+1} = p_i / m_i with no-penetration at the walls (seed 000 eq. 52).
+/// After the MUSL remap: v_i^{k+1} = p_i / m_i with the walls in the contact state of this step's
+/// grid update (seed 000 eq. 52, seed 001 eq. 18; Walls::Stage::Remap).
 void velocities_from_momentum(Grid& grid, const Walls& walls, double mass_floor);
 
 /// USF / USAVG, before the stress update: the start-of-step nodal velocities v_i = p_i / m_i with
-/// no-penetration at the walls, written to `velocity_l` (momentum is left as it is for update_grid).
+/// the walls' normal velocity removed (Walls::Stage::Start), written to `velocity_l` (momentum is
+/// left as it is for update_grid).
 void start_velocities(Grid& grid, const Walls& walls, double mass_floor);
+
+/// Before the velocities are computed: add the mass, momentum and/or force of each mirrored ghost
+/// node to its interior image, weighted by the mirror's factors (Walls::ghosts_of). The ghost is a
+/// slave of the image, so this is the Galerkin equation of the image node in the constrained space.
+/// Writes interior nodes only, reads ghost nodes only: race-free.
+void fold_ghost_nodes(Grid& grid, const Walls& walls, bool mass, bool momentum, bool force);
+
+/// Which node velocity fields mirror_ghost_nodes reflects.
+enum class GhostFields { AfterGridUpdate, Remapped, Start };
+
+/// Overwrite the ghost nodes beyond fixed and slip walls with the reflection of the interior nodes
+/// (Walls::mirror): after update_grid (v, v^L - v, v^L), after the MUSL remap (v^{k+1}) or after
+/// start_velocities (v^k). Reads interior nodes only, writes ghost nodes only: race-free.
+void mirror_ghost_nodes(Grid& grid, const Walls& walls, GhostFields fields);
 
 }  // namespace talus
