@@ -242,7 +242,7 @@ RunSummary run_scene(Solver& solver, const RunOptions& options) {
   SignalCatcher signals(options.handle_signals);
 
   while (!solver.finished()) {
-    bool wrote = false;
+    bool wrote = false, snapshot_due = false;
     try {
       solver.step();
       const bool last = solver.finished();
@@ -254,13 +254,21 @@ RunSummary run_scene(Solver& solver, const RunOptions& options) {
           progress.next_history += scene.output.history_interval;
         energy_guard.check(e, solver.particles(), scene, solver.step_count(), solver.time());
       }
-      if ((scene.output.frame_interval > 0.0 && solver.time() >= progress.next_frame) || last) {
+      const bool frame_due = (scene.output.frame_interval > 0.0 && solver.time() >= progress.next_frame) || last;
+      const bool checkpoint_due =
+          scene.output.checkpoint_interval > 0.0 && solver.time() >= progress.next_checkpoint && !last;
+      snapshot_due = frame_due || checkpoint_due ||
+                     (snapshot_interval > 0 && solver.step_count() - last_snapshot_step >= snapshot_interval);
+      // What is written or kept as the last good state is checked in every field first (the solver
+      // scans them only every few steps, stability_guards.hpp).
+      if (snapshot_due) solver.check_particles();
+      if (frame_due) {
         write_frame();
         while (scene.output.frame_interval > 0.0 && progress.next_frame <= solver.time())
           progress.next_frame += scene.output.frame_interval;
         wrote = true;
       }
-      if (scene.output.checkpoint_interval > 0.0 && solver.time() >= progress.next_checkpoint && !last) {
+      if (checkpoint_due) {
         while (progress.next_checkpoint <= solver.time()) progress.next_checkpoint += scene.output.checkpoint_interval;
         write_checkpoint_now();
         wrote = true;
@@ -270,7 +278,7 @@ RunSummary run_scene(Solver& solver, const RunOptions& options) {
       fail(e);
     }
     // The snapshot never predates a frame or checkpoint, so the failure path writes in order.
-    if (wrote || (snapshot_interval > 0 && solver.step_count() - last_snapshot_step >= snapshot_interval)) take_snapshot();
+    if (wrote || snapshot_due) take_snapshot();
     if (const int sig = signals.caught(); sig != 0 && !solver.finished()) {
       write_checkpoint_now();
       summary.interrupted_signal = sig;

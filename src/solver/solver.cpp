@@ -87,7 +87,8 @@ void Solver::step() {
     case ShapeKind::CpGimp: step_with<CpGimpShape, FlatTerrain>(dt); break;
     case ShapeKind::BSpline2: step_with<QuadraticBSplineShape, FlatTerrain>(dt); break;
   }
-  check_particles_after_step(particles_, displacement_, scene_, step_, time_);  // stability_guards.hpp
+  check_step_displacement(particles_, displacement_, scene_, step_, time_);  // stability_guards.hpp
+  if ((step_ + 1) % kFieldCheckInterval == 0) check_particle_fields(particles_, scene_, step_, time_);
   time_ += dt;
   ++step_;
   last_dt_ = dt;
@@ -173,6 +174,8 @@ void Solver::step_with(double dt) {
       move_particles();
   }
 }
+
+void Solver::check_particles() const { check_particle_fields(particles_, scene_, step_ - 1, time_ - last_dt_); }
 
 Vec3 Solver::gravity_at(double t) const {
   if (scene_.gravity_ramp_time <= 0.0 || t >= scene_.gravity_ramp_time) return scene_.gravity;

@@ -23,11 +23,10 @@ std::string where(const ParticleStore& P, std::size_t p) {
 
 }  // namespace
 
-void check_particles_after_step(const ParticleStore& P, const std::array<std::vector<double>, 3>& displacement,
-                                const Scene& scene, std::int64_t step, double time) {
+void check_particle_fields(const ParticleStore& P, const Scene& scene, std::int64_t step, double time) {
   const std::size_t n = P.size();
-  // 1. Finite values: one fused pass per array (x * 0 is NaN exactly when x is NaN or Inf); the
-  //    slow search for the first bad particle runs only when a pass fails.
+  // Finite values: one fused pass per array (x * 0 is NaN exactly when x is NaN or Inf); the slow
+  // search for the first bad particle runs only when a pass fails.
   P.for_each_double_array([&](const char* name, const std::vector<double>& a) {
     if (a.size() != n) return;  // arrays the scene does not use are empty
     double probe = 0.0;
@@ -40,28 +39,35 @@ void check_particles_after_step(const ParticleStore& P, const std::array<std::ve
         throw instability_error(fmt::format("step {}, t = {:.6g} s: {} field {} = {} is not finite; {}", step, time,
                                             particle_label(P, scene, p), name, data[p], where(P, p)));
   });
-  // 2. Positive volume (an inverted or collapsed particle) and 3. the per-step displacement.
-  const double h = scene.grid.h;
-  const double limit = scene.guards.max_step_displacement * h;
-  const double limit2 = limit * limit;
-  const bool have_displacement = displacement[0].size() == n;
-  int bad = 0;
-#pragma omp parallel for schedule(static) reduction(| : bad)
-  for (std::size_t p = 0; p < n; ++p) {
-    bad |= P.volume[p] > 0.0 ? 0 : 1;
-    if (have_displacement) {
-      const double d2 = displacement[0][p] * displacement[0][p] + displacement[1][p] * displacement[1][p] +
-                        displacement[2][p] * displacement[2][p];
-      bad |= d2 > limit2 ? 2 : 0;
-    }
-  }
-  if (!bad) return;
-  for (std::size_t p = 0; p < n; ++p) {
+  // Positive volume (an inverted or collapsed particle).
+  int inverted = 0;
+#pragma omp parallel for schedule(static) reduction(| : inverted)
+  for (std::size_t p = 0; p < n; ++p) inverted |= P.volume[p] > 0.0 ? 0 : 1;
+  if (!inverted) return;
+  for (std::size_t p = 0; p < n; ++p)
     if (!(P.volume[p] > 0.0))
       throw instability_error(fmt::format("step {}, t = {:.6g} s: {} field volume = {:.6g} m^3 is not positive "
                                           "(particle inverted); {}",
                                           step, time, particle_label(P, scene, p), P.volume[p], where(P, p)));
-    if (have_displacement) {
+}
+
+void check_step_displacement(const ParticleStore& P, const std::array<std::vector<double>, 3>& displacement,
+                             const Scene& scene, std::int64_t step, double time) {
+  const std::size_t n = P.size();
+  const double h = scene.grid.h;
+  const double limit = scene.guards.max_step_displacement * h;
+  const double limit2 = limit * limit;
+  if (displacement[0].size() != n) return;
+  int bad = 0;
+#pragma omp parallel for schedule(static) reduction(| : bad)
+  for (std::size_t p = 0; p < n; ++p) {
+    const double d2 = displacement[0][p] * displacement[0][p] + displacement[1][p] * displacement[1][p] +
+                      displacement[2][p] * displacement[2][p];
+    bad |= d2 > limit2 ? 1 : 0;
+  }
+  if (!bad) return;
+  for (std::size_t p = 0; p < n; ++p) {
+    {
       const double d = std::sqrt(displacement[0][p] * displacement[0][p] + displacement[1][p] * displacement[1][p] +
                                  displacement[2][p] * displacement[2][p]);
       if (d > limit)

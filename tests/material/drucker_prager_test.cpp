@@ -701,6 +701,25 @@ TEST(DruckerPragerObjectivity, HughesWingetAgreesWithJaumannToFirstOrder) {
   }
 }
 
+TEST(DruckerPragerObjectivity, WrittenOutRotationEqualsTheMatrixProduct) {
+  // rotate_objectively is R S R^T written out; compare with the matrix product it replaces, for
+  // small and large spins (R = I + 2 (A + A^2) / (1 + |a|^2), A = dW / 2).
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (double w : {1e-6, 1e-2, 0.5, 3.0}) {
+    const Sym6 s0 = random_sym6(rng, 1.0e4);
+    const double wyz = w * u(rng), wxz = w * u(rng), wxy = w * u(rng);
+    Mat3 a;
+    a << 0.0, 0.5 * wxy, 0.5 * wxz, -0.5 * wxy, 0.0, 0.5 * wyz, -0.5 * wxz, -0.5 * wyz, 0.0;
+    const double n2 = 0.25 * (wxy * wxy + wxz * wxz + wyz * wyz);
+    const Mat3 r = Mat3::Identity() + (2.0 / (1.0 + n2)) * (a + a * a);
+    const Sym6 expected = from_matrix(r * to_matrix(s0) * r.transpose());
+    Sym6 got = s0;
+    rotate_objectively(got, wyz, wxz, wxy);
+    EXPECT_LT((got - expected).norm(), 1e-12 * s0.norm()) << w;
+  }
+}
+
 // ---- helpers for the MPM loop -------------------------------------------------------------------
 
 TEST(DruckerPragerHelpers, WithDilatancyAndReset) {

@@ -43,7 +43,7 @@ TEST(Guards, NonFiniteParticleFieldIsDiagnosedWithItsName) {
   auto& P = solver.particles();
   P.strain[2][17] = std::numeric_limits<double>::infinity();  // a field the step itself never reads
   const std::int64_t id = P.id[17];
-  const std::string m = instability_of(solver, 1);
+  const std::string m = instability_of(solver, Solver::kFieldCheckInterval);
   expect_diagnosis(m, "field strain2 = inf");
   EXPECT_NE(m.find("particle " + std::to_string(id) + " "), std::string::npos) << m;
 }

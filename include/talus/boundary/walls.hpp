@@ -113,6 +113,19 @@ class Walls {
     return count;
   }
 
+  /// Whether the cube of `edge` nodes starting at `first` comes within kPad nodes of a mirrored
+  /// face (so it may hold a ghost node or the image of one).
+  bool near_mirrored_face(const std::array<int, 3>& first, int edge) const {
+    for (int d = 0; d < 3; ++d)
+      for (int side = 0; side < 2; ++side) {
+        const WallType type = specs_[d][side].type;
+        if (type != WallType::Fixed && type != WallType::Slip) continue;
+        const int face = side == 0 ? lower_[d] : upper_[d];
+        if (first[d] <= face + kPad && first[d] + edge - 1 >= face - kPad) return true;
+      }
+    return false;
+  }
+
   bool has_mirrored_walls() const {
     for (const auto& axis : specs_)
       for (const auto& w : axis)

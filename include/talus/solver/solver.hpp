@@ -52,6 +52,11 @@ class Solver {
   /// Throws an instability Error (step, time, particle, quantity) if the state goes bad.
   void step();
   bool finished() const;
+  /// Steps between the scans of every particle field (stability_guards.hpp); a non-finite
+  /// velocity or displacement is caught in the step it appears.
+  static constexpr int kFieldCheckInterval = 8;
+  /// Scan every particle field now (finite values, positive volumes); throws an instability Error.
+  void check_particles() const;
 
   /// dt = courant * h / max_p (c_p + |v_p|) (seed 000 eq. 60), c_p the P-wave speed at the
   /// particle's current density.

@@ -2,12 +2,15 @@
 // Instability guards (docs/reliability.md). Each throws an instability Error (exit code 3) whose
 // message is one line: step, time, particle id and body, the field and its value.
 //
-//  - check_particles_after_step (called by Solver::step after every step): every per-particle
-//    double array finite (ParticleStore::for_each_double_array, so new arrays are covered),
-//    volumes positive, and no particle moved more than guards.max_step_displacement cells in the
-//    step (a CFL breach: the Courant condition c dt / h < 1 no longer holds for that particle).
-//    Non-finite grid values reach the particles through G2P in the same step (every active node
-//    has a particle with a non-zero weight), so checking the particles checks the grid too.
+//  - check_step_displacement (Solver::step, every step): no particle moved more than
+//    guards.max_step_displacement cells in the step (a CFL breach: the Courant condition
+//    c dt / h < 1 no longer holds for that particle). G2P itself stops at a non-finite velocity or
+//    displacement in the step it appears.
+//  - check_particle_fields (Solver::step every kFieldCheckInterval steps, and before the run driver
+//    keeps a last good state): every per-particle double array finite
+//    (ParticleStore::for_each_double_array, so new arrays are covered) and volumes positive.
+//    A non-finite stress or grid value reaches the velocities through P2G/G2P within a step and
+//    stops the run there; the scan catches the fields the step never reads (strain, plastic state).
 //  - EnergyGuard (called by the run driver whenever it computes the energy budget): the total
 //    energy may not grow by more than guards.energy_growth_factor times the energy available.
 #include "talus/particles/particle_store.hpp"
@@ -20,10 +23,16 @@
 
 namespace talus {
 
-/// `step` and `time` are those at the start of the step just taken (as in the solver's messages).
-void check_particles_after_step(const ParticleStore& particles,
-                                const std::array<std::vector<double>, 3>& displacement, const Scene& scene,
-                                std::int64_t step, double time);
+/// Every per-particle double array finite and every volume positive. `step` and `time` are those
+/// at the start of the step just taken (as in the solver's messages). It reads every particle
+/// field (about 200 B per particle), so Solver::step runs it every kFieldCheckInterval steps, and
+/// Solver::check_particles() runs it on demand (the run driver, before it keeps a last good state).
+void check_particle_fields(const ParticleStore& particles, const Scene& scene, std::int64_t step, double time);
+
+/// No particle moved more than guards.max_step_displacement cells in the step (CFL breach); every
+/// step, it reads only the displacement.
+void check_step_displacement(const ParticleStore& particles, const std::array<std::vector<double>, 3>& displacement,
+                             const Scene& scene, std::int64_t step, double time);
 
 /// Energy growth: with E the total of EnergyBudget (kinetic + strain + gravity + friction work +
 /// plastic work, conserved by the continuum), the run stops when
