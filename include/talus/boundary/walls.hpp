@@ -10,18 +10,28 @@
 //            rule to the step's velocity change is eq. 15-16 integrated over dt, with the cap that
 //            friction never reverses the tangential motion.
 //  open      nothing
+// On a terrain grid (grid.terrain) the z- face is the bed: its nodes (w = 0, and the ghosts below)
+// carry the bed normal of their column (ProfileTerrain::node_normal; at a kink the normalised
+// average of the two sides), and every wall type acts along that normal instead of z: friction is
+// the same Coulomb rule with a general normal (seed 001 eq. 14-18 as written, with n the bed normal),
+// slip removes the normal component, fixed all. The z+ face follows the terrain too (normal -n).
+// The x and y faces are vertical planes on any grid (cells keep vertical sides), so they stay
+// axis-aligned.
 #include "talus/grid/grid.hpp"
 #include "talus/scene/scene.hpp"
 
 #include <array>
 #include <cmath>
+#include <vector>
 
 namespace talus {
 
 class Walls {
  public:
   Walls() = default;
-  Walls(const std::array<std::array<WallSpec, 2>, 3>& specs, const GridGeometry& geometry);
+  /// `bed`: the grid's terrain (empty on a flat grid), whose node normals the z faces use.
+  Walls(const std::array<std::array<WallSpec, 2>, 3>& specs, const GridGeometry& geometry,
+        const ProfileTerrain& bed = ProfileTerrain());
 
   /// Whether any wall can touch node (i, j, k); cheap test for the common interior node.
   bool touches(const std::array<int, 3>& node) const {
@@ -45,14 +55,20 @@ class Walls {
       for (int side = 0; side < 2; ++side) {
         if (!active_[d][side]) continue;
         const bool on_face = side == 0 ? node[d] <= lower_[d] : node[d] >= upper_[d];
-        if (on_face) friction_work += apply_one(d, side, v, with_friction, m, v_start);
+        if (on_face) friction_work += apply_one(d, side, v, with_friction, m, v_start, node[0]);
       }
     return friction_work;
   }
 
  private:
-  double apply_one(int axis, int side, double v[3], bool with_friction, double m, const double* v_start) const {
+  double apply_one(int axis, int side, double v[3], bool with_friction, double m, const double* v_start,
+                   int column) const {
     const WallSpec& w = specs_[axis][side];
+    if (axis == 2 && !bed_normal_.empty()) {
+      const Vec3& up = bed_normal_[static_cast<std::size_t>(column)];
+      const double n[3] = {side == 0 ? up[0] : -up[0], side == 0 ? up[1] : -up[1], side == 0 ? up[2] : -up[2]};
+      return apply_along_normal(w, n, v, with_friction, m, v_start);
+    }
     const double inward = side == 0 ? 1.0 : -1.0;  // the wall's normal, pointing into the domain
     switch (w.type) {
       case WallType::Open: return 0.0;
@@ -79,7 +95,38 @@ class Walls {
     return 0.0;
   }
 
+  /// The same rules as apply_one for a wall of unit inward normal n (the bed of a terrain grid).
+  static double apply_along_normal(const WallSpec& w, const double n[3], double v[3], bool with_friction, double m,
+                                   const double* v_start) {
+    const double vn = v[0] * n[0] + v[1] * n[1] + v[2] * n[2];
+    switch (w.type) {
+      case WallType::Open: return 0.0;
+      case WallType::Fixed: v[0] = v[1] = v[2] = 0.0; return 0.0;
+      case WallType::Slip:
+        for (int d = 0; d < 3; ++d) v[d] -= vn * n[d];
+        return 0.0;
+      case WallType::Friction: {
+        if (vn >= 0.0) return 0.0;                      // separating or resting: no contact (seed 001 eq. 14)
+        for (int d = 0; d < 3; ++d) v[d] -= vn * n[d];  // no rebound: v.n = 0 (eq. 17-18)
+        if (!with_friction) return 0.0;
+        const double vt = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);  // v is tangential now
+        const double limit = w.friction_coefficient * (-vn);                   // mu |dv_n|  (eq. 15-16)
+        const double scale = vt <= limit ? 0.0 : 1.0 - limit / vt;              // stick, or slide slower
+        double work = 0.0;
+        for (int d = 0; d < 3; ++d) {
+          const double after = v[d] * scale;
+          // -J_t . v_start: J_t is tangential, so only v_start's tangential part contributes
+          if (v_start) work -= m * (after - v[d]) * v_start[d];
+          v[d] = after;
+        }
+        return work;
+      }
+    }
+    return 0.0;
+  }
+
   std::array<std::array<WallSpec, 2>, 3> specs_{};
+  std::vector<Vec3> bed_normal_;  // per node column (x index); empty on a flat grid
   std::array<std::array<bool, 2>, 3> active_{};
   std::array<int, 3> lower_{}, upper_{};  // node index of each face
 };
