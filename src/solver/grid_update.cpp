@@ -42,7 +42,7 @@ double update_grid(Grid& grid, const Walls& walls, const Vec3& gravity, double d
     }
     double removed = 0.0;
     const auto node = grid.node_of(tile, slot);
-    if (walls.touches(node)) removed = walls.apply(node, vl, true, m, v);
+    if (walls.touches(node)) removed = walls.apply(node, vl, Walls::Stage::GridUpdate, m, v);
     for (int d = 0; d < 3; ++d) {
       grid.momentum[d][n] = v[d];
       grid.force[d][n] = vl[d] - v[d];
@@ -54,8 +54,10 @@ double update_grid(Grid& grid, const Walls& walls, const Vec3& gravity, double d
 
 namespace {
 
-/// v = momentum / m with the walls' no-penetration part, written into `target` (zero on empty nodes).
-void wall_projected_velocities(Grid& grid, const Walls& walls, double mass_floor, std::array<LazyArray, 3>& target) {
+/// v = momentum / m with the walls at `stage`, written into `target` (zero on empty nodes). For the
+/// remap, `velocity_l` still holds this step's v^L: the contact state of the grid update.
+void wall_projected_velocities(Grid& grid, const Walls& walls, double mass_floor, Walls::Stage stage,
+                               std::array<LazyArray, 3>& target) {
   for_active_nodes(grid, [&](std::size_t n, std::uint32_t tile, int slot) {
     const double m = grid.mass[n];
     if (m <= mass_floor) {
@@ -64,7 +66,10 @@ void wall_projected_velocities(Grid& grid, const Walls& walls, double mass_floor
     }
     double v[3] = {grid.momentum[0][n] / m, grid.momentum[1][n] / m, grid.momentum[2][n] / m};
     const auto node = grid.node_of(tile, slot);
-    if (walls.touches(node)) walls.apply(node, v, false);
+    if (walls.touches(node)) {
+      const double vl[3] = {grid.velocity_l[0][n], grid.velocity_l[1][n], grid.velocity_l[2][n]};
+      walls.apply(node, v, stage, 0.0, nullptr, vl);
+    }
     for (int d = 0; d < 3; ++d) target[d][n] = v[d];
     return 0.0;
   });
@@ -73,11 +78,11 @@ void wall_projected_velocities(Grid& grid, const Walls& walls, double mass_floor
 }  // namespace
 
 void velocities_from_momentum(Grid& grid, const Walls& walls, double mass_floor) {
-  wall_projected_velocities(grid, walls, mass_floor, grid.momentum);
+  wall_projected_velocities(grid, walls, mass_floor, Walls::Stage::Remap, grid.momentum);
 }
 
 void start_velocities(Grid& grid, const Walls& walls, double mass_floor) {
-  wall_projected_velocities(grid, walls, mass_floor, grid.velocity_l);
+  wall_projected_velocities(grid, walls, mass_floor, Walls::Stage::Start, grid.velocity_l);
 }
 
 }  // namespace talus

@@ -11,11 +11,13 @@ namespace talus {
 /// Returns the work dissipated by wall friction (>= 0).
 double update_grid(Grid& grid, const Walls& walls, const Vec3& gravity, double dt, double mass_floor);
 
-/// After the MUSL remap: v_i^{k+1} = p_i / m_i with no-penetration at the walls (seed 000 eq. 52).
+/// After the MUSL remap: v_i^{k+1} = p_i / m_i with the walls in the contact state of this step's
+/// grid update (seed 000 eq. 52, seed 001 eq. 18; Walls::Stage::Remap).
 void velocities_from_momentum(Grid& grid, const Walls& walls, double mass_floor);
 
 /// USF / USAVG, before the stress update: the start-of-step nodal velocities v_i = p_i / m_i with
-/// no-penetration at the walls, written to `velocity_l` (momentum is left as it is for update_grid).
+/// the walls' normal velocity removed (Walls::Stage::Start), written to `velocity_l` (momentum is
+/// left as it is for update_grid).
 void start_velocities(Grid& grid, const Walls& walls, double mass_floor);
 
 }  // namespace talus
