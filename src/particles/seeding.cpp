@@ -39,29 +39,38 @@ void seed_on_terrain(const Scene& scene, std::size_t b, const ProfileTerrain& be
   const std::vector<double> xs = axis_points(g.origin[0], h, n, body.box_min[0], body.box_max[0]);
   const std::vector<double> ys = axis_points(g.origin[1], h, n, body.box_min[1], body.box_max[1]);
   // every point of the grid's w column; the box selects among them
-  const std::vector<double> ws = axis_points(g.origin[2], h, n, g.origin[2], w_top);
+  // every point of the grid's w column, and one cell of points above the top: a body that holds
+  // one of those reaches above the grid
+  const std::vector<double> ws = axis_points(g.origin[2], h, n, g.origin[2], w_top + h);
   const double volume = std::pow(h / n, 3);
   const double mass = scene.materials[body.material].density * volume;
   const bool terrain_frame = body.frame == BoxFrame::Terrain;
+  // Whether a candidate lies in the body (the box's x and y ranges are those of xs and ys). Other
+  // body shapes plug in here with their inside test at the physical point (x, y, z).
+  const auto inside = [&](double pw, double pz) {
+    const double c = terrain_frame ? pw : pz;
+    return c >= body.box_min[2] && c < body.box_max[2];
+  };
   const std::size_t first = store.size();
   bool above_top = false;
   for (double px : xs) {
     const double zb = bed.height(px);
-    // physical: the part of the box above the grid's top would be silently lost
-    if (!terrain_frame && body.box_max[2] > w_top + zb + 1e-12 * (1.0 + std::abs(w_top + zb))) above_top = true;
     for (double py : ys)
       for (double pw : ws) {
         const double pz = pw + zb;
-        const double c = terrain_frame ? pw : pz;
-        if (c >= body.box_min[2] && c < body.box_max[2])
-          store.add(next_id++, Vec3(px, py, pz), body.velocity, mass, volume, static_cast<std::uint16_t>(b));
+        if (!inside(pw, pz)) continue;
+        if (pw >= w_top) {
+          above_top = true;
+          continue;
+        }
+        store.add(next_id++, Vec3(px, py, pz), body.velocity, mass, volume, static_cast<std::uint16_t>(b));
       }
   }
   if (above_top)
     throw input_error(fmt::format(
-        "bodies[{}] (\"{}\"): box.max[2] = {} reaches above the grid's top (w = {} above the bed, grid.size[2] with "
+        "bodies[{}] (\"{}\") reaches above the grid's top (w = {} above the bed: grid.origin[2] + grid.size[2] with "
         "grid.terrain) over part of its x range",
-        b, body.name, body.box_max[2], w_top));
+        b, body.name, w_top));
   if (store.size() == first)
     throw input_error(fmt::format(
         "bodies[{}] (\"{}\") holds no particle: its box lies below the bed (grid.terrain) or is thinner than the "

@@ -222,6 +222,17 @@ TEST(TerrainGrid, BadTerrainInputNamesTheKey) {
             std::string::npos);
 }
 
+// The run echoes the resolved scene (scene.json); read back, it must describe the same terrain.
+TEST(TerrainGrid, ResolvedSceneRoundTripsTheTerrainAndTheBoxFrame) {
+  const Scene scene = slope_scene(R"({ "name": "layer", "material": "m",
+      "box": { "min": [0.5, 0, 0], "max": [1.5, 0.5, 0.5], "frame": "terrain" } })");
+  const Scene again = parse_scene(scene_to_json(scene).dump(), "echo");
+  EXPECT_EQ(again.grid.terrain.points, scene.grid.terrain.points);
+  EXPECT_EQ(again.grid.terrain.radii, scene.grid.terrain.radii);
+  EXPECT_EQ(again.bodies[0].frame, BoxFrame::Terrain);
+  EXPECT_EQ(seed_particles(again).x[2], seed_particles(scene).x[2]);
+}
+
 TEST(TerrainGrid, FrameKeyNeedsATerrain) {
   try {
     (void)parse_scene(R"({ "grid": { "size": [1, 1, 1], "cell_size": 0.25 }, "time": { "end": 0.1 },
