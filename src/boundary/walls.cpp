@@ -2,7 +2,11 @@
 
 namespace talus {
 
-Walls::Walls(const std::array<std::array<WallSpec, 2>, 3>& specs, const GridGeometry& geometry) : specs_(specs) {
+Walls::Walls(const std::array<std::array<WallSpec, 2>, 3>& specs, const GridGeometry& geometry,
+             const ProfileTerrain& bed)
+    : specs_(specs) {
+  if (geometry.has_terrain())
+    for (int i = 0; i < bed.columns(); ++i) bed_normal_.push_back(bed.node_normal(i));
   for (int d = 0; d < 3; ++d) {
     lower_[d] = kPad;
     upper_[d] = kPad + geometry.cells[d];

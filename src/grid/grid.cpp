@@ -2,7 +2,12 @@
 
 namespace talus {
 
-Grid::Grid(const GridGeometry& geometry) : geometry_(geometry) {
+ProfileTerrain grid_bed(const GridGeometry& g) {
+  if (!g.has_terrain()) return ProfileTerrain();
+  return ProfileTerrain(TerrainProfile(g.terrain), g.origin[0], g.h, kPad, g.nodes()[0]);
+}
+
+Grid::Grid(const GridGeometry& geometry) : geometry_(geometry), profile_(grid_bed(geometry)) {
   const auto n = geometry.nodes();
   for (int d = 0; d < 3; ++d) tiles_[d] = (n[d] + kTileEdge - 1) / kTileEdge;
   stride_y_ = static_cast<std::size_t>(tiles_[2]) * kTileNodes;

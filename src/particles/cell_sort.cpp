@@ -43,13 +43,18 @@ void CellSort::sort(ParticleStore& particles, Grid& grid) {
   order_.resize(n);
 
   // 1. Block and local cell of every particle (parallel: independent per particle).
+  //    On a terrain grid the third coordinate is w = z - z_b(x), the map of the transfer kernels.
   long long outside = -1;
+  const bool terrain = grid.has_terrain();
+  const ProfileTerrain& bed = grid.profile_terrain();
 #pragma omp parallel for schedule(static) reduction(max : outside)
   for (std::size_t p = 0; p < n; ++p) {
     int c[3];
     bool inside = true;
+    const double position[3] = {particles.x[0][p], particles.x[1][p],
+                                terrain ? particles.x[2][p] - bed.height(particles.x[0][p]) : particles.x[2][p]};
     for (int d = 0; d < 3; ++d) {
-      const double xi = g.to_grid(d, particles.x[d][p]);
+      const double xi = g.to_grid(d, position[d]);
       c[d] = static_cast<int>(std::floor(xi));
       inside = inside && xi >= 0.0 && c[d] < cells_[d];
     }

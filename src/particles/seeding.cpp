@@ -24,16 +24,75 @@ std::vector<double> axis_points(double origin, double h, int n, double lo, doubl
   return points;
 }
 
+/// A body on a terrain grid. Candidate points are the cell-local points of the (x, y, w) cells of the
+/// grid, mapped to z = w + z_b(x) (z_b: the grid's bed, terrain.hpp); the map has unit Jacobian, so
+/// each still carries the volume (h/n)^3. A physical box keeps the points inside it: the bed clips a
+/// box that reaches below it (candidates exist only above the bed), and a box with no point above
+/// the bed is an input error. A terrain-frame box reads its third coordinate as w directly.
+void seed_on_terrain(const Scene& scene, std::size_t b, const ProfileTerrain& bed, ParticleStore& store,
+                     std::int64_t& next_id) {
+  const BodySpec& body = scene.bodies[b];
+  const GridGeometry& g = scene.grid;
+  const double h = g.h;
+  const int n = body.particles_per_cell;
+  const double w_top = g.origin[2] + g.cells[2] * h;
+  const std::vector<double> xs = axis_points(g.origin[0], h, n, body.box_min[0], body.box_max[0]);
+  const std::vector<double> ys = axis_points(g.origin[1], h, n, body.box_min[1], body.box_max[1]);
+  // every point of the grid's w column; the box selects among them
+  // every point of the grid's w column, and one cell of points above the top: a body that holds
+  // one of those reaches above the grid
+  const std::vector<double> ws = axis_points(g.origin[2], h, n, g.origin[2], w_top + h);
+  const double volume = std::pow(h / n, 3);
+  const double mass = scene.materials[body.material].density * volume;
+  const bool terrain_frame = body.frame == BoxFrame::Terrain;
+  // Whether a candidate lies in the body (the box's x and y ranges are those of xs and ys). Other
+  // body shapes plug in here with their inside test at the physical point (x, y, z).
+  const auto inside = [&](double pw, double pz) {
+    const double c = terrain_frame ? pw : pz;
+    return c >= body.box_min[2] && c < body.box_max[2];
+  };
+  const std::size_t first = store.size();
+  bool above_top = false;
+  for (double px : xs) {
+    const double zb = bed.height(px);
+    for (double py : ys)
+      for (double pw : ws) {
+        const double pz = pw + zb;
+        if (!inside(pw, pz)) continue;
+        if (pw >= w_top) {
+          above_top = true;
+          continue;
+        }
+        store.add(next_id++, Vec3(px, py, pz), body.velocity, mass, volume, static_cast<std::uint16_t>(b));
+      }
+  }
+  if (above_top)
+    throw input_error(fmt::format(
+        "bodies[{}] (\"{}\") reaches above the grid's top (w = {} above the bed: grid.origin[2] + grid.size[2] with "
+        "grid.terrain) over part of its x range",
+        b, body.name, w_top));
+  if (store.size() == first)
+    throw input_error(fmt::format(
+        "bodies[{}] (\"{}\") holds no particle: its box lies below the bed (grid.terrain) or is thinner than the "
+        "particle spacing h/n = {}",
+        b, body.name, h / n));
+}
+
 }  // namespace
 
 ParticleStore seed_particles(const Scene& scene) {
   ParticleStore store;
   const double h = scene.grid.h;
   std::int64_t next_id = 0;
+  const ProfileTerrain bed = grid_bed(scene.grid);
   for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
     const BodySpec& body = scene.bodies[b];
     const MaterialSpec& material = scene.materials[body.material];
     const int n = body.particles_per_cell;
+    if (scene.grid.has_terrain()) {
+      seed_on_terrain(scene, b, bed, store, next_id);
+      continue;
+    }
     std::array<std::vector<double>, 3> axes;
     for (int d = 0; d < 3; ++d)
       axes[d] = axis_points(scene.grid.origin[d], h, n, body.box_min[d], body.box_max[d]);

@@ -17,6 +17,33 @@ namespace {
 constexpr double kHuge = 1e30;
 const char* const kFaceNames[3][2] = {{"x-", "x+"}, {"y-", "y+"}, {"z-", "z+"}};
 
+// grid.terrain: the bed z_b(x) (seed 001 eq. 19-20); TerrainProfile checks that it is a graph and
+// that the transitions fit, naming the key.
+void read_terrain(ObjectReader r, Scene& s) {
+  TerrainSpec& t = s.grid.terrain;
+  const Json& points = r.raw("points");
+  if (!points.is_array() || points.size() < 2)
+    throw input_error(fmt::format("{} must be an array of at least 2 [x, z] points, got {}", r.key_path("points"),
+                                  points.dump()));
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const std::string at = fmt::format("{}[{}]", r.key_path("points"), i);
+    if (!points[i].is_array() || points[i].size() != 2)
+      throw input_error(fmt::format("{} must be an [x, z] pair of numbers, got {}", at, points[i].dump()));
+    t.points.push_back({ObjectReader::check_number(points[i][0], at + "[0]", -kHuge, kHuge, false, false),
+                        ObjectReader::check_number(points[i][1], at + "[1]", -kHuge, kHuge, false, false)});
+  }
+  if (r.has("radii")) {
+    const Json& radii = r.raw("radii");
+    if (!radii.is_array())
+      throw input_error(fmt::format("{} must be an array of numbers >= 0, one per point", r.key_path("radii")));
+    for (std::size_t i = 0; i < radii.size(); ++i)
+      t.radii.push_back(
+          ObjectReader::check_number(radii[i], fmt::format("{}[{}]", r.key_path("radii"), i), 0.0, kHuge, false, false));
+  }
+  r.finish();
+  (void)TerrainProfile(t);  // validates: a graph z_b(x), transitions that fit
+}
+
 void read_grid(ObjectReader r, Scene& s) {
   s.grid.origin = r.vec3_or("origin", Vec3::Zero());
   const double h = r.number("cell_size", 0.0, kHuge, true);
@@ -32,6 +59,7 @@ void read_grid(ObjectReader r, Scene& s) {
       throw input_error(fmt::format("{}[{}] / cell_size = {} cells; at most 100000 per axis", r.key_path("size"), d, cells));
     s.grid.cells[d] = static_cast<int>(cells);
   }
+  if (r.has("terrain")) read_terrain(r.object("terrain"), s);
   r.finish();
 }
 
@@ -125,12 +153,22 @@ BodySpec read_body(ObjectReader r, const Scene& s, const std::map<std::string, i
   ObjectReader box = r.object("box");
   b.box_min = box.vec3("min");
   b.box_max = box.vec3("max");
+  if (box.has("frame")) {
+    if (!s.grid.has_terrain())
+      throw input_error(fmt::format("{} needs grid.terrain (on a flat grid z is the height above the floor)",
+                                    box.key_path("frame")));
+    b.frame = box.choice("frame", "physical", {"physical", "terrain"}) == "terrain" ? BoxFrame::Terrain
+                                                                                     : BoxFrame::Physical;
+  }
   box.finish();
   for (int d = 0; d < 3; ++d) {
     const double lo = s.grid.origin[d];
     const double hi = lo + s.grid.cells[d] * s.grid.h;
     if (!(b.box_min[d] < b.box_max[d]))
       throw input_error(fmt::format("{}.min[{}] = {} must be below max[{}] = {}", box.path(), d, b.box_min[d], d, b.box_max[d]));
+    // A physical box on a terrain grid is checked against the bed when seeding (seeding.cpp): the
+    // grid's z range depends on x there.
+    if (d == 2 && s.grid.has_terrain() && b.frame == BoxFrame::Physical) continue;
     if (b.box_min[d] < lo - 1e-12 * std::abs(lo) || b.box_max[d] > hi + 1e-12 * std::abs(hi))
       throw input_error(fmt::format("{} [{}, {}] along axis {} lies outside the grid [{}, {}]", box.path(), b.box_min[d],
                                     b.box_max[d], d, lo, hi));
@@ -274,6 +312,14 @@ nlohmann::json scene_to_json(const Scene& s) {
   j["grid"] = {{"origin", vec(s.grid.origin)},
                {"cell_size", s.grid.h},
                {"size", Json::array({s.grid.cells[0] * s.grid.h, s.grid.cells[1] * s.grid.h, s.grid.cells[2] * s.grid.h})}};
+  if (s.grid.has_terrain()) {
+    Json points = Json::array();
+    for (const auto& p : s.grid.terrain.points) points.push_back(Json::array({p[0], p[1]}));
+    Json radii = Json::array();
+    for (std::size_t i = 0; i < s.grid.terrain.points.size(); ++i)
+      radii.push_back(s.grid.terrain.radii.empty() ? 0.0 : s.grid.terrain.radii[i]);
+    j["grid"]["terrain"] = {{"points", points}, {"radii", radii}};
+  }
   j["gravity"] = vec(s.gravity);
   j["time"] = {{"end", s.end_time}, {"courant", s.courant}, {"max_steps", s.max_steps}};
   j["solver"] = {{"scheme", to_string(s.scheme)},
@@ -303,7 +349,9 @@ nlohmann::json scene_to_json(const Scene& s) {
   for (const auto& b : s.bodies)
     bodies.push_back({{"name", b.name},
                       {"material", s.materials[b.material].name},
-                      {"box", {{"min", vec(b.box_min)}, {"max", vec(b.box_max)}}},
+                      {"box", b.frame == BoxFrame::Terrain
+                                  ? Json{{"min", vec(b.box_min)}, {"max", vec(b.box_max)}, {"frame", "terrain"}}
+                                  : Json{{"min", vec(b.box_min)}, {"max", vec(b.box_max)}}},
                       {"particles_per_cell", b.particles_per_cell},
                       {"velocity", vec(b.velocity)}});
   j["bodies"] = bodies;

@@ -85,18 +85,33 @@ void velocities_from_momentum(Grid& grid, const Walls& walls, double mass_floor)
   wall_projected_velocities(grid, walls, mass_floor, Walls::Stage::Remap, grid.momentum);
 }
 
-void fold_ghost_nodes(Grid& grid, const Walls& walls, bool mass, bool momentum, bool force) {
+void fold_ghost_nodes(Grid& grid, const Walls& walls, bool mass, bool momentum, bool force, const Vec3& gravity) {
   if (!walls.has_mirrored_walls()) return;
   for_active_nodes(grid, [&](std::size_t n, std::uint32_t tile, int slot) {
     std::array<std::array<int, 3>, 7> ghosts;
     std::array<std::array<double, 3>, 7> signs;
     const int count = walls.ghosts_of(grid.node_of(tile, slot), ghosts, signs);
     for (int g = 0; g < count; ++g) {
+      // Each ghost has exactly one image, so this thread is the only one touching it: its values
+      // are moved (not copied) to the image, and the ghost is left empty until the mirror.
       const std::size_t m = grid.node(ghosts[g][0], ghosts[g][1], ghosts[g][2]);
-      if (mass) grid.mass[n] += grid.mass[m];
+      const auto& S = signs[g];
+      if (mass) {
+        grid.mass[n] += grid.mass[m];
+        // the body force on the ghost's share acts on the image with the factor S; update_grid
+        // adds g to the image as an acceleration of the whole folded mass, so add (S - 1) m_g g
+        for (int d = 0; d < 3; ++d) grid.force[d][n] += (S[d] - 1.0) * grid.mass[m] * gravity[d];
+        grid.mass[m] = 0.0;
+      }
       for (int d = 0; d < 3; ++d) {
-        if (momentum) grid.momentum[d][n] += signs[g][d] * grid.momentum[d][m];
-        if (force) grid.force[d][n] += signs[g][d] * grid.force[d][m];
+        if (momentum) {
+          grid.momentum[d][n] += S[d] * grid.momentum[d][m];
+          grid.momentum[d][m] = 0.0;
+        }
+        if (force) {
+          grid.force[d][n] += S[d] * grid.force[d][m];
+          grid.force[d][m] = 0.0;
+        }
       }
     }
     return 0.0;

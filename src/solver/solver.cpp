@@ -39,7 +39,7 @@ Solver::Solver(Scene scene) : scene_(std::move(scene)) {
   grid_ = Grid(scene_.grid);
   sort_ = make_cell_sort(grid_, scene_.shape);
   if (scene_.shape == ShapeKind::CpGimp) particles_.enable_domain_state();  // seed 000 eq. 57-58
-  walls_ = Walls(scene_.walls, scene_.grid);
+  walls_ = Walls(scene_.walls, scene_.grid, grid_.profile_terrain());
   materials_ = BodyMaterials(scene_, particles_);
   for (auto& d : displacement_) d.assign(particles_.size(), 0.0);
   // Nodes lighter than this are empty: far below any real nodal mass, far above round-off.
@@ -81,17 +81,27 @@ void Solver::step() {
     throw instability_error(fmt::format("step {}, t = {:.6g} s: time step {} is not positive and finite", step_, time_, dt));
   const double remaining = scene_.end_time - time_;
   if (dt > remaining) dt = remaining;
-  switch (scene_.shape) {
-    case ShapeKind::Linear: step_with<LinearShape, FlatTerrain>(dt); break;
-    case ShapeKind::UGimp: step_with<UGimpShape, FlatTerrain>(dt); break;
-    case ShapeKind::CpGimp: step_with<CpGimpShape, FlatTerrain>(dt); break;
-    case ShapeKind::BSpline2: step_with<QuadraticBSplineShape, FlatTerrain>(dt); break;
-  }
+  // The shape function and the terrain type are chosen here, once per step; the kernels below are
+  // compiled for each pair, so a flat grid runs the FlatTerrain code with nothing extra.
+  if (grid_.has_terrain())
+    step_with_shape<ProfileTerrain>(dt);
+  else
+    step_with_shape<FlatTerrain>(dt);
   check_step_displacement(particles_, displacement_, scene_, step_, time_);  // stability_guards.hpp
   if ((step_ + 1) % kFieldCheckInterval == 0) check_particle_fields(particles_, scene_, step_, time_);
   time_ += dt;
   ++step_;
   last_dt_ = dt;
+}
+
+template <class Terrain>
+void Solver::step_with_shape(double dt) {
+  switch (scene_.shape) {
+    case ShapeKind::Linear: step_with<LinearShape, Terrain>(dt); break;
+    case ShapeKind::UGimp: step_with<UGimpShape, Terrain>(dt); break;
+    case ShapeKind::CpGimp: step_with<CpGimpShape, Terrain>(dt); break;
+    case ShapeKind::BSpline2: step_with<QuadraticBSplineShape, Terrain>(dt); break;
+  }
 }
 
 // One explicit step. MUSL (seed 000 eq. 47-56): P2G, grid update, G2P, momentum remap, strain and
@@ -120,13 +130,13 @@ void Solver::step_with(double dt) {
     ScopedPhase timer(times_, Phase::P2G);
     grid_.clear_active();
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentumForce);
-    fold_ghost_nodes(grid_, walls_, true, true, true);
+    fold_ghost_nodes(grid_, walls_, true, true, true, gravity_at(time_ + 0.5 * dt));
   } else {
     {
       ScopedPhase timer(times_, Phase::P2G);
       grid_.clear_active();
       scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentum);
-      fold_ghost_nodes(grid_, walls_, true, true, false);
+      fold_ghost_nodes(grid_, walls_, true, true, false, gravity_at(time_ + 0.5 * dt));
       start_velocities(grid_, walls_, mass_floor_);
       mirror_ghost_nodes(grid_, walls_, GhostFields::Start);
     }
@@ -137,7 +147,7 @@ void Solver::step_with(double dt) {
     }
     ScopedPhase timer(times_, Phase::P2G);
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Force);
-    fold_ghost_nodes(grid_, walls_, false, false, true);
+    fold_ghost_nodes(grid_, walls_, false, false, true, gravity_at(time_ + 0.5 * dt));
   }
   // 3. grid: velocities, accelerations with gravity, walls.
   {
@@ -160,7 +170,7 @@ void Solver::step_with(double dt) {
     ScopedPhase timer(times_, Phase::Remap);
     grid_.clear_momentum();
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Momentum);
-    fold_ghost_nodes(grid_, walls_, false, true, false);
+    fold_ghost_nodes(grid_, walls_, false, true, false, gravity_at(time_ + 0.5 * dt));
     velocities_from_momentum(grid_, walls_, mass_floor_);
     mirror_ghost_nodes(grid_, walls_, GhostFields::Remapped);
     node_velocity = {grid_.momentum[0].data(), grid_.momentum[1].data(), grid_.momentum[2].data()};
@@ -306,6 +316,9 @@ void Solver::restore(ParticleStore particles, const SolverState& s) {
     x[d] = particles_.x[d];
     for (std::size_t p = 0; p < n; ++p) particles_.x[d][p] = scene_.grid.node_position(d, s.sort_cell[d][p]) + 0.5 * scene_.grid.h;
   }
+  // On a terrain grid the cell centre's w maps to z = w + z_b(x) (the sort maps it back).
+  if (grid_.has_terrain())
+    for (std::size_t p = 0; p < n; ++p) particles_.x[2][p] = grid_.z_of(particles_.x[0][p], particles_.x[2][p]);
   const std::vector<std::int64_t> ids = particles_.id;
   sort_.sort(particles_, grid_);
   if (particles_.id != ids) throw io_error("restart: the saved particle order is not the saved sort's order");

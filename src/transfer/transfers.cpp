@@ -31,7 +31,7 @@ inline void half_widths(const ParticleStore& P, std::size_t p, double inv_h, dou
 template <class Shape, class Terrain>
 void scatter_to_grid(const ParticleStore& P, const CellSort& sort, Grid& grid, ScatterFields fields) {
   constexpr int N = Shape::kNodes;
-  const Terrain& terrain = grid.terrain();
+  const Terrain& terrain = grid.template terrain<Terrain>();
   const bool with_mass = fields != ScatterFields::Momentum && fields != ScatterFields::Force;
   const bool with_momentum = fields != ScatterFields::Force;
   const bool with_force = fields == ScatterFields::MassMomentumForce || fields == ScatterFields::Force;
@@ -88,7 +88,7 @@ template <class Shape, class Terrain>
 GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, const Grid& grid, double dt,
                               std::array<std::vector<double>, 3>& displacement) {
   constexpr int N = Shape::kNodes;
-  const Terrain& terrain = grid.terrain();
+  const Terrain& terrain = grid.template terrain<Terrain>();
   const GridGeometry& g = grid.geometry();
   const auto nodes = g.nodes();
   const double* dv[3] = {grid.force[0].data(), grid.force[1].data(), grid.force[2].data()};
@@ -120,11 +120,17 @@ GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, const Grid
         }
       bool finite = true, inside = true;
       int cell[3];
+      double next[3];
       for (int d = 0; d < 3; ++d) {
         P.v[d][p] += dvp[d];                 // seed 000 eq. 50: v_p += dt sum a_i N_i
         disp[d][p] = dt * vlp[d];            // seed 000 eq. 51: x_p += dt sum v_i^L N_i (applied later)
         finite = finite && std::isfinite(P.v[d][p]) && std::isfinite(disp[d][p]);
-        const double xi = g.to_grid(d, P.x[d][p] + disp[d][p]);
+        next[d] = P.x[d][p] + disp[d][p];
+      }
+      // the next step's cell in (x, y, w): the same map as the stencil and the cell sort
+      if constexpr (!Terrain::kIsFlat) next[2] -= terrain.height(next[0]);
+      for (int d = 0; d < 3; ++d) {
+        const double xi = g.to_grid(d, next[d]);
         cell[d] = static_cast<int>(std::floor(xi));
         // The support of the next step must stay inside the padded arrays.
         inside = inside && cell[d] - Shape::kReachLow >= 0 && cell[d] + Shape::kReachHigh < nodes[d];
@@ -141,7 +147,7 @@ template <class Shape, class Terrain>
 void strain_increments(const ParticleStore& P, const Grid& grid, const std::array<const double*, 3>& nv,
                        double dt, std::size_t begin, std::size_t end, StrainIncrements& out) {
   constexpr int N = Shape::kNodes;
-  const Terrain& terrain = grid.terrain();
+  const Terrain& terrain = grid.template terrain<Terrain>();
   const double h = grid.geometry().h;
   Stencil<Shape> s;
   for (std::size_t p = begin; p < end; ++p) {
@@ -188,5 +194,9 @@ TALUS_INSTANTIATE_TRANSFERS(LinearShape, FlatTerrain)
 TALUS_INSTANTIATE_TRANSFERS(UGimpShape, FlatTerrain)
 TALUS_INSTANTIATE_TRANSFERS(CpGimpShape, FlatTerrain)
 TALUS_INSTANTIATE_TRANSFERS(QuadraticBSplineShape, FlatTerrain)
+TALUS_INSTANTIATE_TRANSFERS(LinearShape, ProfileTerrain)
+TALUS_INSTANTIATE_TRANSFERS(UGimpShape, ProfileTerrain)
+TALUS_INSTANTIATE_TRANSFERS(CpGimpShape, ProfileTerrain)
+TALUS_INSTANTIATE_TRANSFERS(QuadraticBSplineShape, ProfileTerrain)
 
 }  // namespace talus

@@ -107,6 +107,12 @@ TEST(Cli, BenchWritesTheJsonContract) {
   for (const char* key : {"\"particle_updates_per_second\"", "\"phases\"", "\"bytes_per_particle\"", "\"particles\"", "\"steps\": 2",
                           "\"threads\": 1", "\"p2g\"", "\"g2p\""})
     EXPECT_NE(text.find(key), std::string::npos) << key;
+  // the granular column with Drucker-Prager, every shape function
+  for (const char* shape : {"linear", "ugimp", "cpgimp", "bspline2"}) {
+    const Result column = run(std::string("bench --scene column --particles 2000 --material dp --threads 1 --steps 2 --shape ") + shape);
+    EXPECT_EQ(column.exit_code, 0) << column.output;
+    EXPECT_NE(column.output.find("column scene"), std::string::npos) << column.output;
+  }
   const Result refused = run("bench --shape quintic");
   EXPECT_EQ(refused.exit_code, 2);
   EXPECT_NE(refused.output.find("--shape quintic"), std::string::npos);

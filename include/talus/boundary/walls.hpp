@@ -10,18 +10,28 @@
 //            rule to the step's velocity change is eq. 15-16 integrated over dt, with the cap that
 //            friction never reverses the tangential motion.
 //  open      nothing
+// On a terrain grid (grid.terrain) the z- face is the bed: its nodes (w = 0, and the ghosts below)
+// carry the bed normal of their column (ProfileTerrain::node_normal; at a kink the normalised
+// average of the two sides), and every wall type acts along that normal instead of z: friction is
+// the same Coulomb rule with a general normal (seed 001 eq. 14-18 as written, with n the bed normal),
+// slip removes the normal component, fixed all. The z+ face follows the terrain too (normal -n).
+// The x and y faces are vertical planes on any grid (cells keep vertical sides), so they stay
+// axis-aligned.
 #include "talus/grid/grid.hpp"
 #include "talus/scene/scene.hpp"
 
 #include <array>
 #include <cmath>
+#include <vector>
 
 namespace talus {
 
 class Walls {
  public:
   Walls() = default;
-  Walls(const std::array<std::array<WallSpec, 2>, 3>& specs, const GridGeometry& geometry);
+  /// `bed`: the grid's terrain (empty on a flat grid), whose node normals the z faces use.
+  Walls(const std::array<std::array<WallSpec, 2>, 3>& specs, const GridGeometry& geometry,
+        const ProfileTerrain& bed = ProfileTerrain());
 
   /// Whether any wall can touch node (i, j, k); cheap test for the common interior node.
   bool touches(const std::array<int, 3>& node) const {
@@ -48,8 +58,8 @@ class Walls {
     sign = {1.0, 1.0, 1.0};
     for (int d = 0; d < 3; ++d) {
       for (int side = 0; side < 2; ++side) {
+        if (!mirrored_face(d, side)) continue;
         const WallType type = specs_[d][side].type;
-        if (type != WallType::Fixed && type != WallType::Slip) continue;
         const int face = side == 0 ? lower_[d] : upper_[d];
         const bool beyond = side == 0 ? node[d] < face : node[d] > face;
         if (!beyond) continue;
@@ -75,8 +85,8 @@ class Walls {
     for (int d = 0; d < 3; ++d) {
       if (node[d] < lower_[d] || node[d] > upper_[d]) return 0;  // a ghost itself
       for (int side = 0; side < 2; ++side) {
+        if (!mirrored_face(d, side)) continue;
         const WallType type = specs_[d][side].type;
-        if (type != WallType::Fixed && type != WallType::Slip) continue;
         const int face = side == 0 ? lower_[d] : upper_[d];
         const int ghost = 2 * face - node[d];
         const bool beyond = side == 0 ? ghost < face : ghost > face;
@@ -118,8 +128,7 @@ class Walls {
   bool near_mirrored_face(const std::array<int, 3>& first, int edge) const {
     for (int d = 0; d < 3; ++d)
       for (int side = 0; side < 2; ++side) {
-        const WallType type = specs_[d][side].type;
-        if (type != WallType::Fixed && type != WallType::Slip) continue;
+        if (!mirrored_face(d, side)) continue;
         const int face = side == 0 ? lower_[d] : upper_[d];
         if (first[d] <= face + kPad && first[d] + edge - 1 >= face - kPad) return true;
       }
@@ -127,10 +136,17 @@ class Walls {
   }
 
   bool has_mirrored_walls() const {
-    for (const auto& axis : specs_)
-      for (const auto& w : axis)
-        if (w.type == WallType::Fixed || w.type == WallType::Slip) return true;
+    for (int d = 0; d < 3; ++d)
+      for (int side = 0; side < 2; ++side)
+        if (mirrored_face(d, side)) return true;
     return false;
+  }
+  /// Fixed walls and slip walls are mirrored, except a slip bed on a terrain grid: its normal is
+  /// the bed normal, not the w axis the mirror reflects along (such a bed is held like the wall).
+  bool mirrored_face(int axis, int side) const {
+    const WallType type = specs_[axis][side].type;
+    if (type == WallType::Fixed) return true;
+    return type == WallType::Slip && !(axis == 2 && !bed_normal_.empty());
   }
 
   /// How a frictional (unilateral) wall treats a node's velocity.
@@ -165,15 +181,20 @@ class Walls {
       for (int side = 0; side < 2; ++side) {
         if (!active_[d][side]) continue;
         const bool on_face = side == 0 ? node[d] <= lower_[d] : node[d] >= upper_[d];
-        if (on_face) friction_work += apply_one(d, side, v, stage, m, v_start, contact_velocity);
+        if (on_face) friction_work += apply_one(d, side, v, stage, m, v_start, contact_velocity, node[0]);
       }
     return friction_work;
   }
 
  private:
   double apply_one(int axis, int side, double v[3], Stage stage, double m, const double* v_start,
-                   const double* contact_velocity) const {
+                   const double* contact_velocity, int column) const {
     const WallSpec& w = specs_[axis][side];
+    if (axis == 2 && !bed_normal_.empty()) {
+      const Vec3& up = bed_normal_[static_cast<std::size_t>(column)];
+      const double n[3] = {side == 0 ? up[0] : -up[0], side == 0 ? up[1] : -up[1], side == 0 ? up[2] : -up[2]};
+      return apply_along_normal(w, n, v, stage, m, v_start, contact_velocity);
+    }
     const double inward = side == 0 ? 1.0 : -1.0;  // the wall's normal, pointing into the domain
     switch (w.type) {
       case WallType::Open: return 0.0;
@@ -203,7 +224,48 @@ class Walls {
     return 0.0;
   }
 
+  /// The same rules as apply_one for a wall of unit inward normal n (the bed of a terrain grid).
+  /// The stages as in apply_one (Walls::Stage), with v.n in place of v[axis] * inward.
+  static double apply_along_normal(const WallSpec& w, const double n[3], double v[3], Stage stage, double m,
+                                   const double* v_start, const double* contact_velocity) {
+    const double vn = v[0] * n[0] + v[1] * n[1] + v[2] * n[2];
+    switch (w.type) {
+      case WallType::Open: return 0.0;
+      case WallType::Fixed: v[0] = v[1] = v[2] = 0.0; return 0.0;
+      case WallType::Slip:
+        for (int d = 0; d < 3; ++d) v[d] -= vn * n[d];
+        return 0.0;
+      case WallType::Friction: {
+        bool contact = vn < 0.0;  // moving into the bed (seed 001 eq. 14)
+        if (stage == Stage::Remap) {
+          // in contact in the grid update: v^L . n = 0 up to the round-off of removing v_n along a
+          // general normal (a separating node has v^L . n of the order of its speed)
+          const double* c = contact_velocity;
+          const double cn = c[0] * n[0] + c[1] * n[1] + c[2] * n[2];
+          contact = contact || cn <= 1e-12 * std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        }
+        if (stage == Stage::Start) contact = true;
+        if (!contact) return 0.0;                       // separating: free
+        for (int d = 0; d < 3; ++d) v[d] -= vn * n[d];  // no rebound: v.n = 0 (eq. 17-18)
+        if (stage != Stage::GridUpdate || vn >= 0.0) return 0.0;  // friction acts once, in the grid update
+        const double vt = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);  // v is tangential now
+        const double limit = w.friction_coefficient * (-vn);                   // mu |dv_n|  (eq. 15-16)
+        const double scale = vt <= limit ? 0.0 : 1.0 - limit / vt;              // stick, or slide slower
+        double work = 0.0;
+        for (int d = 0; d < 3; ++d) {
+          const double after = v[d] * scale;
+          // -J_t . v_start: J_t is tangential, so only v_start's tangential part contributes
+          if (v_start) work -= m * (after - v[d]) * v_start[d];
+          v[d] = after;
+        }
+        return work;
+      }
+    }
+    return 0.0;
+  }
+
   std::array<std::array<WallSpec, 2>, 3> specs_{};
+  std::vector<Vec3> bed_normal_;  // per node column (x index); empty on a flat grid
   std::array<std::array<bool, 2>, 3> active_{};
   std::array<int, 3> lower_{}, upper_{};  // node index of each face
 };

@@ -12,6 +12,7 @@
 #include "talus/core/lazy_array.hpp"
 #include "talus/core/types.hpp"
 #include "talus/grid/terrain.hpp"
+#include "talus/grid/terrain_profile.hpp"
 
 #include <array>
 #include <cstdint>
@@ -27,13 +28,22 @@ struct GridGeometry {
   Vec3 origin = Vec3::Zero();            // physical corner of the domain (a node)
   double h = 1.0;                        // cell size
   std::array<int, 3> cells{1, 1, 1};     // domain cells per axis
+  /// The bed z_b(x) (grid.terrain). Empty: a flat box, z = w. Otherwise origin[2] and the third
+  /// axis are in w = z - z_b(x), and the z- face (w = origin[2]) follows the bed.
+  TerrainSpec terrain;
+  bool has_terrain() const { return !terrain.empty(); }
   std::array<int, 3> nodes() const {     // nodes per axis including ghosts
     return {cells[0] + 2 * kPad + 1, cells[1] + 2 * kPad + 1, cells[2] + 2 * kPad + 1};
   }
-  /// Position in grid units (node spacing 1, ghost offset included).
+  /// Position in grid units (node spacing 1, ghost offset included). Axis 2 takes w, not z: with a
+  /// terrain, map z to w first (Grid::w_of, or the Terrain type of the transfers).
   double to_grid(int axis, double x) const { return (x - origin[axis]) / h + kPad; }
   double node_position(int axis, int index) const { return origin[axis] + (index - kPad) * h; }
 };
+
+/// The bed of a terrain grid: the profile sampled at the node columns (terrain.hpp). Throws
+/// input_error for an invalid profile; an empty ProfileTerrain for a flat grid.
+ProfileTerrain grid_bed(const GridGeometry& geometry);
 
 class Grid {
  public:
@@ -41,7 +51,20 @@ class Grid {
   explicit Grid(const GridGeometry& geometry);
 
   const GridGeometry& geometry() const { return geometry_; }
-  const FlatTerrain& terrain() const { return terrain_; }
+  bool has_terrain() const { return geometry_.has_terrain(); }
+  /// The terrain of the transfer templates: FlatTerrain or ProfileTerrain (the caller picks the
+  /// type once, from has_terrain()).
+  template <class Terrain>
+  const Terrain& terrain() const {
+    if constexpr (Terrain::kIsFlat) return flat_;
+    else return profile_;
+  }
+  const ProfileTerrain& profile_terrain() const { return profile_; }
+  /// w = z - z_b(x) of a physical point (z itself on a flat grid). For code outside the kernels
+  /// (sort, seeding, restart); the kernels use the Terrain type.
+  double w_of(double x, double z) const { return has_terrain() ? z - profile_.height(x) : z; }
+  /// The physical z of a point at (x, w).
+  double z_of(double x, double w) const { return has_terrain() ? w + profile_.height(x) : w; }
 
   // Node index = x_part(i) + y_part(j) + z_part(k): separable, so the transfer kernels compute
   // three small tables per particle instead of a full index per node.
@@ -81,7 +104,8 @@ class Grid {
 
  private:
   GridGeometry geometry_;
-  FlatTerrain terrain_;
+  FlatTerrain flat_;
+  ProfileTerrain profile_;
   std::array<int, 3> tiles_{0, 0, 0};
   std::size_t stride_x_ = 0, stride_y_ = 0;
   std::vector<std::uint32_t> active_tiles_;

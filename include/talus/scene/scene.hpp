@@ -50,11 +50,17 @@ struct MaterialSpec {
   double shear_modulus() const;
 };
 
+/// How a body's box is read on a terrain grid: in physical (x, y, z) (the bed clips what lies below
+/// it), or in the grid's (x, y, w), w = height above the bed (a layer of uniform vertical thickness
+/// that follows the terrain; its cells are the grid's isoparametric cells).
+enum class BoxFrame { Physical, Terrain };
+
 struct BodySpec {
   std::string name;
   int material = 0;                      // index into Scene::materials
   Vec3 box_min = Vec3::Zero();           // axis-aligned box filled with particles
   Vec3 box_max = Vec3::Zero();
+  BoxFrame frame = BoxFrame::Physical;   // grid.terrain only
   int particles_per_cell = 2;            // n: n x n x n particles per cell
   Vec3 velocity = Vec3::Zero();          // initial velocity
 };

@@ -20,11 +20,14 @@ void velocities_from_momentum(Grid& grid, const Walls& walls, double mass_floor)
 /// left as it is for update_grid).
 void start_velocities(Grid& grid, const Walls& walls, double mass_floor);
 
-/// Before the velocities are computed: add the mass, momentum and/or force of each mirrored ghost
-/// node to its interior image, weighted by the mirror's factors (Walls::ghosts_of). The ghost is a
-/// slave of the image, so this is the Galerkin equation of the image node in the constrained space.
-/// Writes interior nodes only, reads ghost nodes only: race-free.
-void fold_ghost_nodes(Grid& grid, const Walls& walls, bool mass, bool momentum, bool force);
+/// Before the velocities are computed: move the mass, momentum and/or force of each mirrored ghost
+/// node to its interior image, weighted by the mirror's factors S (Walls::ghosts_of); with the mass
+/// goes the ghost's share of the body force, (S - 1) m_ghost g on top of the g that update_grid
+/// applies to the whole folded mass. The ghost is a slave of the image, so this is the Galerkin
+/// equation of the image node in the constrained space. The ghost is left empty (no friction or
+/// wall work is counted on it; the node masses still sum to the particle mass); mirror_ghost_nodes
+/// fills its velocities afterwards. Each ghost has one image: race-free and deterministic.
+void fold_ghost_nodes(Grid& grid, const Walls& walls, bool mass, bool momentum, bool force, const Vec3& gravity);
 
 /// Which node velocity fields mirror_ghost_nodes reflects.
 enum class GhostFields { AfterGridUpdate, Remapped, Start };

@@ -82,6 +82,8 @@ class Solver {
   void restore(ParticleStore particles, const SolverState& state);
 
  private:
+  template <class Terrain>
+  void step_with_shape(double dt);
   template <class Shape, class Terrain>
   void step_with(double dt);
   template <class Shape, class Terrain>

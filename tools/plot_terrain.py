@@ -1,0 +1,154 @@
+#!/usr/bin/env python3
+"""Terrain-following grid and bed friction (issue 6, seed 001 eq. 14-22): the elastic-block checks.
+
+Runs the scenes of inputs/terrain/ with talus (or reuses finished runs under --runs) and writes
+  docs/verification/terrain_horizontal_plane.png  centre travel on a horizontal plane vs eq. 21
+  docs/verification/terrain_incline30.png         horizontal travel on a 30-degree plane vs eq. 22
+                                                  (terrain grid coarse/fine, flat grid with rotated
+                                                  gravity, mu = 0.7 sticking)
+  docs/verification/terrain_slope_to_runout.png   block through a slope-to-runout transition:
+                                                  snapshots over the bed and the energy budget
+and prints the measured numbers (docs/verification.md "Terrain").
+Usage: /usr/bin/python3 tools/plot_terrain.py --talus build/talus [--runs runs/terrain] [--reuse]
+"""
+import argparse
+import math
+import os
+import subprocess
+import xml.etree.ElementTree as ET
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+G = 9.81
+THETA = math.radians(30.0)
+
+
+def run(args, name):
+    out = os.path.join(args.runs, name)
+    if not (args.reuse and os.path.exists(os.path.join(out, "energy.csv"))):
+        subprocess.run([args.talus, "run", os.path.join(ROOT, "inputs", "terrain", name + ".json"), "--out", out],
+                       check=True, stdout=subprocess.DEVNULL)
+    return out
+
+
+def frames(run_dir):
+    """(time, xyz array, mass weights) of every particle frame of a run."""
+    import vtk  # python3-vtk9 (tools/setup.sh)
+    from vtk.util.numpy_support import vtk_to_numpy
+    result = []
+    for ds in ET.parse(os.path.join(run_dir, "particles.pvd")).getroot().iter("DataSet"):
+        reader = vtk.vtkXMLUnstructuredGridReader()
+        reader.SetFileName(os.path.join(run_dir, ds.get("file")))
+        reader.Update()
+        out = reader.GetOutput()
+        xyz = vtk_to_numpy(out.GetPoints().GetData())
+        pd = out.GetPointData()
+        mass = vtk_to_numpy(pd.GetArray("density")) * vtk_to_numpy(pd.GetArray("volume"))
+        result.append((float(ds.get("timestep")), xyz, mass))
+    return result
+
+
+def centre_track(run_dir):
+    f = frames(run_dir)
+    t = np.array([x[0] for x in f])
+    c = np.array([(x[1] * x[2][:, None]).sum(axis=0) / x[2].sum() for x in f])
+    return t, c - c[0], f
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--talus", default=os.path.join(ROOT, "build", "talus"))
+    ap.add_argument("--runs", default=os.path.join(ROOT, "runs", "terrain"))
+    ap.add_argument("--reuse", action="store_true", help="reuse finished runs under --runs")
+    ap.add_argument("--out", default=os.path.join(ROOT, "docs", "verification"))
+    args = ap.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+
+    # 1. horizontal plane, seed 001 eq. 21
+    mu, v0 = 0.3, 10.0
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    tr = np.linspace(0, 4.0, 400)
+    ts = v0 / (mu * G)
+    ax.plot(tr, np.where(tr < ts, v0 * tr - mu * G * tr ** 2 / 2, v0 ** 2 / (2 * mu * G)), "k-", lw=3, alpha=0.3,
+            label="rigid block (eq. 21)")
+    for tag, style in (("coarse", "o-"), ("fine", "s--")):
+        t, c, _ = centre_track(run(args, f"horizontal_plane_{tag}"))
+        ax.plot(t, c[:, 0], style, ms=3, label=f"MPM, {tag}")
+        print(f"horizontal plane {tag}: stopping distance {c[-1, 0]:.4f} m, rigid {v0 ** 2 / (2 * mu * G):.4f} m "
+              f"({100 * (c[-1, 0] / (v0 ** 2 / (2 * mu * G)) - 1):+.2f}%)")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("centre travel [m]")
+    ax.set_title("Block on a horizontal plane, mu = 0.3, v0 = 10 m/s")
+    ax.legend()
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(os.path.join(args.out, "terrain_horizontal_plane.png"), dpi=120)
+
+    # 2. 30-degree plane, seed 001 eq. 22
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    tr = np.linspace(0, 2.0, 200)
+    ax.plot(tr, G * (math.sin(THETA) - mu * math.cos(THETA)) * math.cos(THETA) * tr ** 2 / 2, "k-", lw=3, alpha=0.3,
+            label="rigid block (eq. 22)")
+    rigid = G * (math.sin(THETA) - mu * math.cos(THETA)) * math.cos(THETA) * 1.5 ** 2 / 2
+    for name, label, scale, style in (("incline30_coarse", "terrain grid, h = 0.25", 1.0, "o-"),
+                                      ("incline30_fine", "terrain grid, h = 0.125", 1.0, "s--"),
+                                      ("incline30_flat_rotated_gravity", "flat grid, rotated gravity", math.cos(THETA), "^:"),
+                                      ("incline30_stick", "terrain grid, mu = 0.7 (sticks)", 1.0, "x-")):
+        t, c, _ = centre_track(run(args, name))
+        ax.plot(t, c[:, 0] * scale, style, ms=3, label=label)
+        i = np.argmin(np.abs(t - 1.5))
+        print(f"{name}: horizontal travel at t = {t[i]:.2f} s {c[i, 0] * scale:.4f} m (rigid mu = 0.3: {rigid:.4f} m)")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("horizontal travel of the centre [m]")
+    ax.set_title("Block on a 30-degree plane from rest")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(os.path.join(args.out, "terrain_incline30.png"), dpi=120)
+
+    # 3. slope to runout through a circular transition
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 7))
+    xs = np.linspace(0, 12, 600)
+    # the profile: 30-degree slope to (6, 0), fillet of radius 2, flat runout
+    r, tan = 2.0, 2.0 * math.tan(THETA / 2)
+    xa, xb = 6 - tan * math.cos(THETA), 6 + tan
+    cx, cz = xb, r
+    zb = np.where(xs < xa, (6 - xs) * math.tan(THETA), np.where(xs < xb, cz - np.sqrt(np.maximum(r * r - (xs - cx) ** 2, 0)), 0))
+    a1.fill_between(xs, zb - 0.3, zb, color="0.8")
+    a1.plot(xs, zb, "k-", lw=1)
+    for shape, colour in (("linear", "C0"), ("ugimp", "C1"), ("bspline2", "C2")):
+        rd = run(args, f"slope_to_runout_{shape}")
+        d = np.genfromtxt(os.path.join(rd, "energy.csv"), delimiter=",", names=True)
+        released = np.max(d["gravity"][0] - d["gravity"])
+        gap = (d["total"] - d["total"][0]) / released
+        a2.plot(d["time"], 100 * gap, color=colour, label=f"{shape}: budget gap")
+        print(f"slope to runout {shape}: energy gap at the end {100 * gap[-1]:+.2f}%, largest {100 * np.max(np.abs(gap)):.2f}% "
+              f"of the {released:.0f} J released")
+        if shape == "linear":
+            a2b = a2.twinx()
+            for key, style in (("kinetic", "-"), ("friction_work", "--")):
+                a2b.plot(d["time"], d[key] / released, "k" + style, lw=0.8, alpha=0.6, label=f"linear: {key} / released")
+            a2b.set_ylabel("energy / released")
+            a2b.legend(loc="center right", fontsize=7)
+            _, _, f = centre_track(rd)
+            for k in range(0, len(f), 10):
+                a1.plot(f[k][1][:, 0], f[k][1][:, 2], ".", ms=1.5, color=colour)
+    a1.set_aspect("equal")
+    a1.set_xlim(0, 12)
+    a1.set_title("Slope to runout (transition r = 2 m), linear shapes, every 0.5 s")
+    a1.set_xlabel("x [m]")
+    a1.set_ylabel("z [m]")
+    a2.set_xlabel("time [s]")
+    a2.set_ylabel("(total - initial) / released [%]")
+    a2.legend(loc="lower left", fontsize=8)
+    a2.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(os.path.join(args.out, "terrain_slope_to_runout.png"), dpi=120)
+
+
+if __name__ == "__main__":
+    main()
