@@ -51,7 +51,9 @@ std::string cpu_model() {
 /// The block scene: an elastic cube of about N particles (2x2x2 per cell) resting on a frictional
 /// floor under gravity, in a grid with room around it. Shear waves from the settling keep every
 /// particle's stress changing, so no phase can take a shortcut.
-Scene block_scene(long long particles, const std::string& shape, const std::string& scheme) {
+/// --mls linear|quadratic|cubic adds MLS smoothing of the strain increments (seed 000 eq. 54) with
+/// the default radius (2 cells) over all three axes.
+Scene block_scene(long long particles, const std::string& shape, const std::string& scheme, const std::string& mls) {
   const int side = std::max(2, static_cast<int>(std::lround(std::cbrt(particles / 8.0))));  // cells per edge
   const double h = 0.01;
   const double edge = side * h;
@@ -59,12 +61,13 @@ Scene block_scene(long long particles, const std::string& shape, const std::stri
     "name": "bench_block",
     "grid": {{ "origin": [0, 0, 0], "size": [{0}, {0}, {1}], "cell_size": {2} }},
     "time": {{ "end": 1.0e9, "courant": 0.3 }},
-    "solver": {{ "shape": "{6}", "scheme": "{7}" }},
+    "solver": {{ "shape": "{6}", "scheme": "{7}"{8} }},
     "materials": {{ "m": {{ "density": 2000.0, "young": 1.0e7, "poisson": 0.3 }} }},
     "bodies": [ {{ "name": "block", "material": "m", "box": {{ "min": [{3}, {3}, 0], "max": [{4}, {4}, {5}] }},
                   "particles_per_cell": 2, "velocity": [0.5, 0.2, 0] }} ],
     "boundaries": {{ "z-": {{ "type": "friction", "friction_coefficient": 0.3 }}, "z+": "open" }}
-  }})", edge + 8 * h, edge + 4 * h, h, 4 * h, 4 * h + edge, edge, shape, scheme);
+  }})", edge + 8 * h, edge + 4 * h, h, 4 * h, 4 * h + edge, edge, shape, scheme,
+      mls == "off" ? std::string() : fmt::format(R"(, "smoothing": {{ "basis": "{}" }})", mls));
   return parse_scene(json, "bench block scene");
 }
 
@@ -81,13 +84,14 @@ void refuse_unavailable(const BenchOptions& o) {
   if (!one_of(o.scheme, {"musl", "usl", "usf", "usavg"}))
     throw input_error(fmt::format("--scheme {}: unknown; available: musl, usl, usf, usavg", o.scheme));
   if (o.material != "elastic") throw input_error(fmt::format("--material {}: not in the MPM core yet; available: elastic", o.material));
-  if (o.mls != "off") throw input_error(fmt::format("--mls {}: the MLS smoother is not built yet; available: off", o.mls));
+  if (!one_of(o.mls, {"off", "linear", "quadratic", "cubic"}))
+    throw input_error(fmt::format("--mls {}: unknown; available: off, linear, quadratic, cubic", o.mls));
 }
 
 void run_bench(const BenchOptions& o) {
   refuse_unavailable(o);
   if (o.threads > 0) omp_set_num_threads(o.threads);
-  Solver solver(block_scene(o.particles, o.shape, o.scheme));  // the scene reader checks shape and scheme
+  Solver solver(block_scene(o.particles, o.shape, o.scheme, o.mls));  // the scene reader checks shape and scheme
   const std::size_t n = solver.particles().size();
   solver.step();  // first step: first touch of the grid pages; not timed
   solver.phase_times() = PhaseTimes{};
@@ -114,6 +118,11 @@ void run_bench(const BenchOptions& o) {
   for (int p = 0; p < static_cast<int>(Phase::Count); ++p) phases[kPhaseNames[p]] = solver.phase_times().seconds[p];
   j["phases"] = phases;
   j["sorts"] = solver.sort_count();
+  if (const MlsStrainSmoother* mls = solver.smoother()) {
+    j["mls_radius"] = mls->radius();
+    j["mls_terms"] = mls->term_count();
+    j["mls_unsmoothed_last_step"] = solver.last_smoothing().unsmoothed;
+  }
   j["bytes_per_particle"] = double(rss) / n;
   j["particle_field_bytes_per_particle"] = double(solver.particles().bytes()) / n;
   j["grid_active_bytes"] = solver.grid().active_bytes();

@@ -21,6 +21,7 @@
 #include "talus/particles/cell_sort.hpp"
 #include "talus/particles/particle_store.hpp"
 #include "talus/smoothing/mls_basis.hpp"
+#include "talus/smoothing/mls_settings.hpp"
 
 #include <array>
 #include <cstddef>
@@ -28,16 +29,6 @@
 #include <vector>
 
 namespace talus {
-
-struct MlsSettings {
-  MlsBasis basis = MlsBasis::Linear;
-  double radius_factor = 2.0;              // h = radius_factor * cell size
-  /// The axes the basis spans. A body one or two particle layers thick along an axis cannot
-  /// resolve a quadratic along it (A is singular); leaving that axis out fits a 1D or 2D
-  /// polynomial and averages across it (seed 000's own tests are 1D).
-  std::array<bool, 3> axes{true, true, true};
-  double min_rcond = 1e-10;                // guard on A's reciprocal condition number (1-norm estimate)
-};
 
 struct MlsCounts {
   std::size_t smoothed = 0;    // particles whose increment was replaced by the fit
