@@ -28,6 +28,7 @@ struct BenchOptions {
   std::string scheme = "musl";
   std::string material = "elastic";
   std::string mls = "off";
+  double mls_radius = 2.0;
   int threads = 0;
   int steps = 20;
   std::string json_path;
@@ -52,8 +53,9 @@ std::string cpu_model() {
 /// floor under gravity, in a grid with room around it. Shear waves from the settling keep every
 /// particle's stress changing, so no phase can take a shortcut.
 /// --mls linear|quadratic|cubic adds MLS smoothing of the strain increments (seed 000 eq. 54) with
-/// the default radius (2 cells) over all three axes.
-Scene block_scene(long long particles, const std::string& shape, const std::string& scheme, const std::string& mls) {
+/// the radius --mls-radius (cells, default 2) over all three axes.
+Scene block_scene(long long particles, const std::string& shape, const std::string& scheme, const std::string& mls,
+                  double mls_radius) {
   const int side = std::max(2, static_cast<int>(std::lround(std::cbrt(particles / 8.0))));  // cells per edge
   const double h = 0.01;
   const double edge = side * h;
@@ -67,7 +69,7 @@ Scene block_scene(long long particles, const std::string& shape, const std::stri
                   "particles_per_cell": 2, "velocity": [0.5, 0.2, 0] }} ],
     "boundaries": {{ "z-": {{ "type": "friction", "friction_coefficient": 0.3 }}, "z+": "open" }}
   }})", edge + 8 * h, edge + 4 * h, h, 4 * h, 4 * h + edge, edge, shape, scheme,
-      mls == "off" ? std::string() : fmt::format(R"(, "smoothing": {{ "basis": "{}" }})", mls));
+      mls == "off" ? std::string() : fmt::format(R"(, "smoothing": {{ "basis": "{}", "radius_factor": {} }})", mls, mls_radius));
   return parse_scene(json, "bench block scene");
 }
 
@@ -91,7 +93,7 @@ void refuse_unavailable(const BenchOptions& o) {
 void run_bench(const BenchOptions& o) {
   refuse_unavailable(o);
   if (o.threads > 0) omp_set_num_threads(o.threads);
-  Solver solver(block_scene(o.particles, o.shape, o.scheme, o.mls));  // the scene reader checks shape and scheme
+  Solver solver(block_scene(o.particles, o.shape, o.scheme, o.mls, o.mls_radius));  // the scene reader checks shape and scheme
   const std::size_t n = solver.particles().size();
   solver.step();  // first step: first touch of the grid pages; not timed
   solver.phase_times() = PhaseTimes{};
@@ -107,6 +109,7 @@ void run_bench(const BenchOptions& o) {
   j["shape"] = o.shape;
   j["material"] = o.material;
   j["mls"] = o.mls;
+  if (o.mls != "off") j["mls_radius_factor"] = o.mls_radius;
   j["scheme"] = to_string(solver.scene().scheme);
   j["particles"] = n;
   j["steps"] = o.steps;
@@ -157,6 +160,9 @@ void add_bench_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--material", o->material, "elastic | dp")->capture_default_str();
   cmd->add_option("--mls", o->mls, "off | linear | quadratic | cubic")->capture_default_str();
+  cmd->add_option("--mls-radius", o->mls_radius, "MLS radius in cells (solver.smoothing.radius_factor)")
+      ->check(CLI::Range(0.5, 8.0))
+      ->capture_default_str();
   cmd->add_option("--threads", o->threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)")->check(CLI::Range(1, 4096));
   cmd->add_option("--steps", o->steps, "Timed steps (after one untimed step)")->check(CLI::Range(1, 1000000))->capture_default_str();
   cmd->add_option("--json", o->json_path, "Also write the results as JSON to this file");

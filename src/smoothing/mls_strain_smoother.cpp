@@ -52,6 +52,8 @@ MlsCounts MlsStrainSmoother::smooth(const ParticleStore& particles, const CellSo
 
 namespace {
 
+constexpr int kBatch = 128;  // neighbours buffered before their sums are added to A and M
+
 /// Distance (in cells) from grid coordinate x to the cell [i, i + 1).
 inline double gap_to_cell(int i, double x) { return std::max({0.0, i - x, x - (i + 1)}); }
 
@@ -94,7 +96,28 @@ MlsCounts MlsStrainSmoother::smooth_with(const ParticleStore& P, const CellSort&
     MatT A = MatT::Zero();                         // seed 000 eq. 42 (upper triangle accumulated)
     Eigen::Matrix<double, T, 6> M = Eigen::Matrix<double, T, 6>::Zero();  // sum_I W_I F_I d_eps_I^T = B d_eps
     int count = 0;
-    double F[T];
+    // Neighbours are buffered (weight, basis, increments) and added to A and M in batches: the
+    // sums over a batch are simple dot products the compiler vectorises.
+    alignas(64) double Fb[T][kBatch], WFb[T][kBatch], Eb[6][kBatch];
+    int nb = 0;
+    auto flush = [&]() {
+      for (int r = 0; r < T; ++r) {
+        for (int c = r; c < T; ++c) {
+          double sum = 0.0;
+#pragma omp simd reduction(+ : sum)
+          for (int I = 0; I < nb; ++I) sum += WFb[r][I] * Fb[c][I];
+          A(r, c) += sum;
+        }
+        for (int c = 0; c < 6; ++c) {
+          double sum = 0.0;
+#pragma omp simd reduction(+ : sum)
+          for (int I = 0; I < nb; ++I) sum += WFb[r][I] * Eb[c][I];
+          M(r, c) += sum;
+        }
+      }
+      count += nb;
+      nb = 0;
+    };
     // The cells that meet the ball of radius h around x_p; along k, the cells of one block are
     // contiguous in the store, so each (i, j) column is one particle range per block.
     for (int i = std::max(0, cell[0] - reach); i <= cell[0] + reach; ++i) {
@@ -122,21 +145,22 @@ MlsCounts MlsStrainSmoother::smooth_with(const ParticleStore& P, const CellSort&
               const double s2 = dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2];
               if (s2 >= 1.0) continue;
               const double w = mls_weight(std::sqrt(s2));  // seed 000 eq. 39
-              double u[Axes];
+              double u[Axes], F[T];
               for (int a = 0; a < Axes; ++a) u[a] = dx[axes[a]];
               mls_basis<Degree, Axes>(u, F);
               for (int r = 0; r < T; ++r) {
-                const double wf = w * F[r];
-                for (int c = r; c < T; ++c) A(r, c) += wf * F[c];
-                for (int c = 0; c < 6; ++c) M(r, c) += wf * in[c][q];
+                Fb[r][nb] = F[r];
+                WFb[r][nb] = w * F[r];
               }
-              ++count;
+              for (int c = 0; c < 6; ++c) Eb[c][nb] = in[c][q];
+              if (++nb == kBatch) flush();
             }
           }
           k = k_end + 1;
         }
       }
     }
+    flush();
     bool ok = count >= T;
     VecT a;
     if (ok) {
