@@ -41,18 +41,19 @@ TEST(MlsDynamicBar, EnergyOverTwelveTransitsMatchesTheUnsmoothedRun) {
 }
 
 // Block between unilateral walls (seed 000 Fig. 12-13), through its first impact (t = 11.25 s).
-// Target (issue 4): total energy within +-1% through 4 impacts with MLS. Missed: the unilateral
-// wall contact already gains energy without MLS (+73% max over 4 impacts with cpGIMP; the lead is
-// investigating it on main), and smoothing makes that gain larger, not smaller (full run, cubic x:
-// +83%; linear x: +357%; see docs/verification.md). What is asserted is what holds: the gain of one
-// impact with MLS stays within 2x of the gain without (measured through t = 15 s: max gain
-// +15.1% without, +17.0% with; the gain appears at the impact, with or without MLS).
-TEST(MlsBlockBetweenWalls, EnergyThroughTheFirstImpactWithAndWithoutSmoothing) {
+// Target (issue 4): total energy within +-1% through 4 impacts with MLS; measured values for the
+// full run are in docs/verification.md. Each impact changes the energy by several percent with or
+// without MLS (the wall contact's own error, not the smoother's), so what is asserted here is that
+// smoothing changes the energy of one impact by less than 2% of E0. Measured through t = 15 s:
+//   without main's wall fix (5260c4c): final +15.1% without MLS, +13.7% with (gain at the wall);
+//   with it:                           final  -9.4% without MLS, -10.6% with (loss at the wall).
+TEST(MlsBlockBetweenWalls, SmoothingChangesTheEnergyOfOneImpactByLessThanTwoPercent) {
   Scene s = benchmark_scene("block_between_walls", ShapeKind::CpGimp, SchemeKind::Musl);
   s.end_time = 15.0;
   const auto off = test::walls(s, "walls off");
   const auto on = test::walls(with_mls(s, MlsBasis::Cubic, 2.0, "x"), "walls cubic x");
-  EXPECT_LT(on.max_gain, 2.0 * off.max_gain + 0.01);
+  EXPECT_NEAR(on.final_drift, off.final_drift, 0.02);
+  EXPECT_GT(std::abs(off.final_drift), 0.02);  // the impact itself does change the energy
 }
 
 }  // namespace
