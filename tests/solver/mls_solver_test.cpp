@@ -83,7 +83,7 @@ bool same(const std::vector<double>& x, const std::vector<double>& y) {
 
 // "enabled": false must be the unsmoothed solver exactly: no smoother, no buffers, same bits.
 TEST(MlsSolver, DisabledSmoothingIsTheUnsmoothedSolverBitForBit) {
-  Scene plain = test::tumbling_block_scene(0.01);
+  Scene plain = test::tumbling_block_scene(0.005);
   Scene disabled = plain;
   disabled.smoothing.enabled = false;
   disabled.smoothing.mls.basis = MlsBasis::Cubic;
@@ -152,10 +152,10 @@ TEST(MlsSolver, BitIdenticalForOneAndTwoThreads) {
   for (MlsBasis basis : {MlsBasis::Linear, MlsBasis::Quadratic}) {
     auto run = [&](int threads) {
       omp_set_num_threads(threads);
-      Scene scene = test::tumbling_block_scene(0.004);
+      Scene scene = test::tumbling_block_scene(0.003);
       scene.smoothing.enabled = true;
       scene.smoothing.mls.basis = basis;
-      scene.smoothing.mls.radius_factor = 1.5;
+      scene.smoothing.mls.radius_factor = 1.2;
       scene.scheme = basis == MlsBasis::Linear ? SchemeKind::Musl : SchemeKind::Usavg;
       scene.shape = basis == MlsBasis::Linear ? ShapeKind::Linear : ShapeKind::CpGimp;
       Solver solver(scene);
