@@ -134,9 +134,10 @@ MlsCounts MlsStrainSmoother::smooth_with(const ParticleStore& P, const CellSort&
           const int k_end = std::min(k_last, (k / bc) * bc + bc - 1);  // last cell of this block along k
           const long long b = sort.active_block_of_cell(i, j, k);
           if (b >= 0) {
-            const auto o = sort.block_origin(static_cast<std::size_t>(b));
+            // Local cell within the block: the block's origin is the cell index rounded down to a
+            // multiple of bc (cheaper than CellSort::block_origin's divisions by the block counts).
             const std::size_t base = static_cast<std::size_t>(b) * cells_per_block;
-            const std::size_t l0 = static_cast<std::size_t>(((i - o[0]) * bc + (j - o[1])) * bc + (k - o[2]));
+            const std::size_t l0 = static_cast<std::size_t>(((i % bc) * bc + (j % bc)) * bc + (k % bc));
             const std::size_t l1 = l0 + static_cast<std::size_t>(k_end - k);
             for (std::uint32_t q = cell_start[base + l0]; q < cell_start[base + l1 + 1]; ++q) {
               if (P.body[q] != body) continue;  // strain is discontinuous across bodies
