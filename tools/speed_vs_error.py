@@ -7,6 +7,8 @@ cell size, particles per cell), measures the error of each run and its wall time
     docs/verification/column_convergence.csv   column error against cell size
     docs/verification/*.png                    error vs time, convergence, energy histories
 Usage:  /usr/bin/python3 tools/speed_vs_error.py [--talus build/talus] [--threads 1] [--quick]
+        [--mls off,cubic]   MLS axis: each column / bar run once per basis listed (seed 000 eq. 54;
+                            the bars are 2 particles across, so the fit spans x only, radius 2 cells)
 Needs numpy, matplotlib and VTK's Python module (Debian: python3-numpy python3-matplotlib python3-vtk9).
 """
 import argparse
@@ -46,8 +48,10 @@ def load(name):
         return json.load(f)
 
 
-def variant(scene, shape, scheme, h=None, ppc=None):
+def variant(scene, shape, scheme, h=None, ppc=None, mls="off"):
     s = json.loads(json.dumps(scene))
+    if mls != "off":
+        s["solver"]["smoothing"] = {"basis": mls, "radius_factor": 2.0, "axes": "x"}
     s["solver"]["shape"] = shape
     s["solver"]["scheme"] = scheme
     s["output"]["frame_interval"] = 0.0  # first and last frame only
@@ -128,18 +132,21 @@ def main():
     ap.add_argument("--talus")
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--quick", action="store_true", help="fewer variants (a smoke test of the driver)")
+    ap.add_argument("--mls", default="off", help="comma-separated MLS bases for the column and bar runs: off,linear,quadratic,cubic")
     a = ap.parse_args()
     talus = find_talus(a.talus)
     os.makedirs(OUT, exist_ok=True)
     rows = []
     histories = {}
 
-    def record(bench, shape, scheme, h, ppc, res, error, metric, extra=""):
+    mls_modes = a.mls.split(",")
+
+    def record(bench, shape, scheme, h, ppc, res, error, metric, extra="", mls="off"):
         ups = res["particles"] * res["steps"] / res["wall"]
-        rows.append({"benchmark": bench, "shape": shape, "scheme": scheme, "cell_size": h, "ppc": ppc,
+        rows.append({"benchmark": bench, "shape": shape, "scheme": scheme, "mls": mls, "cell_size": h, "ppc": ppc,
                      "particles": res["particles"], "steps": res["steps"], "wall_s": round(res["wall"], 4),
                      "particle_updates_per_s": round(ups), "error": error, "metric": metric, "note": extra})
-        print(f"{bench:20s} {shape:8s} {scheme:6s} h={h:<6g} ppc={ppc} err={error:.4g} ({metric}) "
+        print(f"{bench:20s} {shape:8s} {scheme:6s} mls={mls:9s} h={h:<6g} ppc={ppc} err={error:.4g} ({metric}) "
               f"{res['wall']:.2f} s {ups / 1e6:.2f} M/s {extra}", flush=True)
 
     shapes = SHAPES if not a.quick else ["linear", "cpgimp"]
@@ -151,20 +158,22 @@ def main():
         for shape in shapes:
             for h in cells:
                 for ppc in ([2] if (a.quick or h != 1.0) else [1, 2, 3]):
-                    res = run(talus, variant(base, shape, "musl", h, ppc), a.threads)
-                    if res is None:
-                        print(f"{name} {shape} h={h} ppc={ppc}: run failed", flush=True)
-                        continue
-                    l2, rough = column_metrics(res, b)
-                    record(name, shape, "musl", h, ppc, res, l2, "L2 stress", f"roughness={rough:.4g}")
+                    for mls in mls_modes:
+                        res = run(talus, variant(base, shape, "musl", h, ppc, mls), a.threads)
+                        if res is None:
+                            print(f"{name} {shape} h={h} ppc={ppc} mls={mls}: run failed", flush=True)
+                            continue
+                        l2, rough = column_metrics(res, b)
+                        record(name, shape, "musl", h, ppc, res, l2, "L2 stress", f"roughness={rough:.4g}", mls)
     # 2. Dynamic bar: shape x ppc.
     base = load("dynamic_bar")
     for shape in shapes:
         for ppc in ([2] if a.quick else [1, 2, 3]):
-            res = run(talus, variant(base, shape, "musl", None, ppc), a.threads)
-            if res:
-                record("dynamic_bar", shape, "musl", base["grid"]["cell_size"], ppc, res,
-                       bar_metrics(res, base["bodies"][0]["velocity"][0]), "|mean/exact - 1|")
+            for mls in mls_modes:
+                res = run(talus, variant(base, shape, "musl", None, ppc, mls), a.threads)
+                if res:
+                    record("dynamic_bar", shape, "musl", base["grid"]["cell_size"], ppc, res,
+                           bar_metrics(res, base["bodies"][0]["velocity"][0]), "|mean/exact - 1|", "", mls)
     # 3. Block between walls and 4. free fall: energy histories, shape x scheme.
     for name, combos in [("block_between_walls", [(s, "musl") for s in shapes] + [("cpgimp", "usavg"), ("cpgimp", "usf")]),
                          ("elastic_free_fall", [("linear", s) for s in ["musl", "usf", "usavg"]] +
@@ -194,10 +203,14 @@ def main():
         fig, ax = plt.subplots(figsize=(6, 4.2))
         for shape in SHAPES:
             for scheme in SCHEMES:
-                pts = [r for r in sel if r["shape"] == shape and r["scheme"] == scheme]
-                if pts:
+                for mls in mls_modes:
+                    pts = [r for r in sel if r["shape"] == shape and r["scheme"] == scheme and r["mls"] == mls]
+                    if not pts:
+                        continue
                     ax.scatter([r["wall_s"] for r in pts], [max(r["error"], 1e-5) for r in pts],
-                               marker=markers[shape], label=f"{shape} {scheme}")
+                               marker=markers[shape], facecolors="none" if mls != "off" else None,
+                               edgecolors="C3" if mls != "off" else None,
+                               label=f"{shape} {scheme}" + (f" MLS {mls}" if mls != "off" else ""))
                     for r in pts:
                         if bench.startswith("column"):
                             ax.annotate(f"h={r['cell_size']:g},{r['ppc']}", (r["wall_s"], max(r["error"], 1e-5)),
@@ -218,7 +231,8 @@ def main():
     fig, ax = plt.subplots(figsize=(5.5, 4))
     for shape in shapes:
         pts = sorted([(r["cell_size"], r["error"]) for r in rows
-                      if r["benchmark"] == "column_w10000" and r["shape"] == shape and r["ppc"] == 2])
+                      if r["benchmark"] == "column_w10000" and r["shape"] == shape and r["ppc"] == 2
+                      and r["mls"] == "off"])
         if len(pts) >= 2:
             hs, es = np.array([p[0] for p in pts]), np.array([p[1] for p in pts])
             rate = np.polyfit(np.log(hs), np.log(es), 1)[0]

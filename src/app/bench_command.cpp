@@ -28,6 +28,7 @@ struct BenchOptions {
   std::string scheme = "musl";
   std::string material = "elastic";
   std::string mls = "off";
+  double mls_radius = 2.0;
   int threads = 0;
   int steps = 20;
   std::string json_path;
@@ -59,7 +60,10 @@ const char* const kElastic = R"("model": "linear_elastic", "density": 2000.0, "y
 /// The block scene: an elastic cube of about N particles (2x2x2 per cell) resting on a frictional
 /// floor under gravity, in a grid with room around it. Shear waves from the settling keep every
 /// particle's stress changing, so no phase can take a shortcut.
-Scene block_scene(long long particles, const std::string& shape, const std::string& scheme, const std::string& material) {
+/// --mls linear|quadratic|cubic adds MLS smoothing of the strain increments (seed 000 eq. 54) with
+/// the radius --mls-radius (cells, default 2) over all three axes.
+Scene block_scene(long long particles, const std::string& shape, const std::string& scheme, const std::string& material,
+                  const std::string& mls_json) {
   const int side = std::max(2, static_cast<int>(std::lround(std::cbrt(particles / 8.0))));  // cells per edge
   const double h = 0.01;
   const double edge = side * h;
@@ -67,12 +71,13 @@ Scene block_scene(long long particles, const std::string& shape, const std::stri
     "name": "bench_block",
     "grid": {{ "origin": [0, 0, 0], "size": [{0}, {0}, {1}], "cell_size": {2} }},
     "time": {{ "end": 1.0e9, "courant": 0.3 }},
-    "solver": {{ "shape": "{6}", "scheme": "{7}" }},
+    "solver": {{ "shape": "{6}", "scheme": "{7}"{9} }},
     "materials": {{ "m": {{ {8} }} }},
     "bodies": [ {{ "name": "block", "material": "m", "box": {{ "min": [{3}, {3}, 0], "max": [{4}, {4}, {5}] }},
                   "particles_per_cell": 2, "velocity": [0.5, 0.2, 0] }} ],
     "boundaries": {{ "z-": {{ "type": "friction", "friction_coefficient": 0.3 }}, "z+": "open" }}
-  }})", edge + 8 * h, edge + 4 * h, h, 4 * h, 4 * h + edge, edge, shape, scheme, material == "dp" ? kSand : kElastic);
+  }})", edge + 8 * h, edge + 4 * h, h, 4 * h, 4 * h + edge, edge, shape, scheme, material == "dp" ? kSand : kElastic,
+                                       mls_json);
   return parse_scene(json, "bench block scene");
 }
 
@@ -80,7 +85,8 @@ Scene block_scene(long long particles, const std::string& shape, const std::stri
 /// cell) released at t = 0 on a frictional floor (mu = 0.5); it collapses and spreads, so after the
 /// first steps nearly every particle is yielding (Drucker-Prager on most particles, the issue's
 /// reference measurement). The grid leaves room for the runout on every side.
-Scene column_scene(long long particles, const std::string& shape, const std::string& scheme, const std::string& material) {
+Scene column_scene(long long particles, const std::string& shape, const std::string& scheme, const std::string& material,
+                   const std::string& mls_json) {
   const int side = std::max(2, static_cast<int>(std::lround(std::cbrt(particles / 16.0))));  // cells across
   const double h = 0.01;
   const double width = side * h, height = 2 * side * h, room = 1.5 * width + 4 * h;
@@ -88,13 +94,13 @@ Scene column_scene(long long particles, const std::string& shape, const std::str
     "name": "bench_column",
     "grid": {{ "origin": [0, 0, 0], "size": [{0}, {0}, {1}], "cell_size": {2} }},
     "time": {{ "end": 1.0e9, "courant": 0.3 }},
-    "solver": {{ "shape": "{5}", "scheme": "{6}" }},
+    "solver": {{ "shape": "{5}", "scheme": "{6}"{9} }},
     "materials": {{ "m": {{ {7} }} }},
     "bodies": [ {{ "name": "column", "material": "m", "box": {{ "min": [{3}, {3}, 0], "max": [{4}, {4}, {8}] }},
                   "particles_per_cell": 2 }} ],
     "boundaries": {{ "z-": {{ "type": "friction", "friction_coefficient": 0.5 }}, "z+": "open" }}
   }})", width + 2 * room, height + 4 * h, h, room, room + width, shape, scheme,
-                                       material == "dp" ? kSand : kElastic, height);
+                                       material == "dp" ? kSand : kElastic, height, mls_json);
   return parse_scene(json, "bench column scene");
 }
 
@@ -112,14 +118,18 @@ void refuse_unavailable(const BenchOptions& o) {
     throw input_error(fmt::format("--scene {}: unknown; available: block, column", o.scene));
   if (!one_of(o.material, {"elastic", "dp"}))
     throw input_error(fmt::format("--material {}: unknown; available: elastic, dp", o.material));
-  if (o.mls != "off") throw input_error(fmt::format("--mls {}: the MLS smoother is not built yet; available: off", o.mls));
+  if (!one_of(o.mls, {"off", "linear", "quadratic", "cubic"}))
+    throw input_error(fmt::format("--mls {}: unknown; available: off, linear, quadratic, cubic", o.mls));
 }
 
 void run_bench(const BenchOptions& o) {
   refuse_unavailable(o);
   if (o.threads > 0) omp_set_num_threads(o.threads);
-  Solver solver(o.scene == "column" ? column_scene(o.particles, o.shape, o.scheme, o.material)
-                                    : block_scene(o.particles, o.shape, o.scheme, o.material));
+  const std::string mls_json =
+      o.mls == "off" ? std::string()
+                     : fmt::format(R"(, "smoothing": {{ "basis": "{}", "radius_factor": {} }})", o.mls, o.mls_radius);
+  Solver solver(o.scene == "column" ? column_scene(o.particles, o.shape, o.scheme, o.material, mls_json)
+                                    : block_scene(o.particles, o.shape, o.scheme, o.material, mls_json));
   const std::size_t n = solver.particles().size();
   solver.step();  // first step: first touch of the grid pages; not timed
   solver.phase_times() = PhaseTimes{};
@@ -135,6 +145,7 @@ void run_bench(const BenchOptions& o) {
   j["shape"] = o.shape;
   j["material"] = o.material;
   j["mls"] = o.mls;
+  if (o.mls != "off") j["mls_radius_factor"] = o.mls_radius;
   j["scheme"] = to_string(solver.scene().scheme);
   j["particles"] = n;
   j["steps"] = o.steps;
@@ -146,6 +157,11 @@ void run_bench(const BenchOptions& o) {
   for (int p = 0; p < static_cast<int>(Phase::Count); ++p) phases[kPhaseNames[p]] = solver.phase_times().seconds[p];
   j["phases"] = phases;
   j["sorts"] = solver.sort_count();
+  if (const MlsStrainSmoother* mls = solver.smoother()) {
+    j["mls_radius"] = mls->radius();
+    j["mls_terms"] = mls->term_count();
+    j["mls_unsmoothed_last_step"] = solver.last_smoothing().unsmoothed;
+  }
   j["bytes_per_particle"] = double(rss) / n;
   j["particle_field_bytes_per_particle"] = double(solver.particles().bytes()) / n;
   j["grid_active_bytes"] = solver.grid().active_bytes();
@@ -180,6 +196,9 @@ void add_bench_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--material", o->material, "elastic | dp (Drucker-Prager sand, seed 001 Table 2)")->capture_default_str();
   cmd->add_option("--mls", o->mls, "off | linear | quadratic | cubic")->capture_default_str();
+  cmd->add_option("--mls-radius", o->mls_radius, "MLS radius in cells (solver.smoothing.radius_factor)")
+      ->check(CLI::Range(0.5, 8.0))
+      ->capture_default_str();
   cmd->add_option("--threads", o->threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)")->check(CLI::Range(1, 4096));
   cmd->add_option("--steps", o->steps, "Timed steps (after one untimed step)")->check(CLI::Range(1, 1000000))->capture_default_str();
   cmd->add_option("--json", o->json_path, "Also write the results as JSON to this file");

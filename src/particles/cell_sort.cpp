@@ -33,6 +33,16 @@ std::array<int, 3> CellSort::block_origin(std::size_t b) const {
   return {bx * block_cells_, by * block_cells_, bz * block_cells_};
 }
 
+long long CellSort::active_block_of_cell(int i, int j, int k) const {
+  if (i < 0 || j < 0 || k < 0 || i >= cells_[0] || j >= cells_[1] || k >= cells_[2]) return -1;
+  const std::uint32_t index = static_cast<std::uint32_t>(
+      (static_cast<std::size_t>(i / block_cells_) * block_counts_[1] + j / block_cells_) * block_counts_[2] + k / block_cells_);
+  // bbox_block_index_ holds the compact index for active blocks and 0 elsewhere; 0 is also block
+  // 0's index, so confirm against blocks_.
+  const std::uint32_t b = bbox_block_index_[index];
+  return b < blocks_.size() && blocks_[b] == index ? static_cast<long long>(b) : -1;
+}
+
 void CellSort::sort(ParticleStore& particles, Grid& grid) {
   const std::size_t n = particles.size();
   const auto& g = grid.geometry();

@@ -58,6 +58,13 @@ class ObjectReader {
     return has(key) ? integer(key, lo, hi) : fallback;
   }
 
+  bool boolean_or(const std::string& key, bool fallback) {
+    if (!has(key)) return fallback;
+    const Json& j = raw(key);
+    if (!j.is_boolean()) throw input_error(fmt::format("{} must be true or false, got {}", key_path(key), j.dump()));
+    return j.get<bool>();
+  }
+
   std::string string(const std::string& key) {
     const Json& j = raw(key);
     if (!j.is_string()) throw input_error(fmt::format("{} must be a string, got {}", key_path(key), j.dump()));

@@ -2,6 +2,7 @@
 
 #include "json_fields.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -70,7 +71,52 @@ void read_time(ObjectReader r, Scene& s) {
   r.finish();
 }
 
-void read_solver(ObjectReader r, Scene& s) {
+// MLS smoothing (seed 000 eq. 38-46, 54). Body names are resolved once the bodies are read.
+void read_smoothing(ObjectReader r, Scene& s, std::vector<std::string>& body_names) {
+  SmoothingSpec& m = s.smoothing;
+  m.enabled = r.boolean_or("enabled", true);
+  const std::string basis = r.choice("basis", "linear", {"linear", "quadratic", "cubic"});
+  m.mls.basis = basis == "cubic" ? MlsBasis::Cubic : basis == "quadratic" ? MlsBasis::Quadratic : MlsBasis::Linear;
+  m.mls.radius_factor = r.number_or("radius_factor", m.mls.radius_factor, 0.5, 8.0);
+  const std::string axes = r.choice("axes", "xyz", {"xyz", "xy", "xz", "yz", "x", "y", "z"});
+  for (int d = 0; d < 3; ++d) m.mls.axes[d] = axes.find(static_cast<char>('x' + d)) != std::string::npos;
+  m.mls.min_rcond = r.number_or("min_rcond", m.mls.min_rcond, 0.0, 1.0, true, true);
+  if (r.has("bodies")) {
+    const Json& b = r.raw("bodies");
+    if (!b.is_array() || b.empty())
+      throw input_error(fmt::format("{} must be a non-empty array of body names, got {}", r.key_path("bodies"), b.dump()));
+    for (std::size_t i = 0; i < b.size(); ++i) {
+      if (!b[i].is_string())
+        throw input_error(fmt::format("{}[{}] must be a body name (string), got {}", r.key_path("bodies"), i, b[i].dump()));
+      body_names.push_back(b[i].get<std::string>());
+    }
+  }
+  r.finish();
+}
+
+void resolve_smoothing_bodies(const std::vector<std::string>& names, Scene& s) {
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    int found = -1;
+    std::string known;
+    for (std::size_t b = 0; b < s.bodies.size(); ++b) {
+      if (s.bodies[b].name == names[i]) found = static_cast<int>(b);
+      known += (known.empty() ? "" : ", ") + s.bodies[b].name;
+    }
+    if (found < 0)
+      throw input_error(fmt::format("solver.smoothing.bodies[{}] = \"{}\" names no body (defined: {})", i, names[i], known));
+    if (std::find(s.smoothing.bodies.begin(), s.smoothing.bodies.end(), found) == s.smoothing.bodies.end())
+      s.smoothing.bodies.push_back(found);
+  }
+}
+
+std::string axes_name(const std::array<bool, 3>& axes) {
+  std::string a;
+  for (int d = 0; d < 3; ++d)
+    if (axes[d]) a += static_cast<char>('x' + d);
+  return a;
+}
+
+void read_solver(ObjectReader r, Scene& s, std::vector<std::string>& smoothing_bodies) {
   const std::string scheme = r.choice("scheme", "musl", {"musl", "usl", "usf", "usavg"});
   s.scheme = scheme == "usl"     ? SchemeKind::Usl
              : scheme == "usf"   ? SchemeKind::Usf
@@ -83,6 +129,7 @@ void read_solver(ObjectReader r, Scene& s) {
                                   : ShapeKind::Linear;
   s.sort_interval = r.integer_or("sort_interval", s.sort_interval, 1, 1000000);
   s.gravity_ramp_time = r.number_or("gravity_ramp_time", s.gravity_ramp_time, 0.0, kHuge);
+  if (r.has("smoothing")) read_smoothing(r.object("smoothing"), s, smoothing_bodies);
   r.finish();
 }
 
@@ -258,7 +305,8 @@ Scene parse_scene(const std::string& text, const std::string& source) {
   read_grid(r.object("grid"), s);
   s.gravity = r.vec3_or("gravity", s.gravity);
   read_time(r.object("time"), s);
-  if (r.has("solver")) read_solver(r.object("solver"), s);
+  std::vector<std::string> smoothing_bodies;
+  if (r.has("solver")) read_solver(r.object("solver"), s, smoothing_bodies);
 
   std::map<std::string, int> material_index;
   {
@@ -278,6 +326,7 @@ Scene parse_scene(const std::string& text, const std::string& source) {
     for (std::size_t i = 0; i < bj.size(); ++i)
       s.bodies.push_back(read_body(ObjectReader(bj[i], fmt::format("bodies[{}]", i)), s, material_index));
   }
+  resolve_smoothing_bodies(smoothing_bodies, s);
   if (r.has("boundaries")) read_boundaries(r.object("boundaries"), s);
   if (r.has("output")) read_output(r.object("output"), s);
   if (r.has("guards")) read_guards(r.object("guards"), s);
@@ -326,6 +375,18 @@ nlohmann::json scene_to_json(const Scene& s) {
                  {"shape", to_string(s.shape)},
                  {"sort_interval", s.sort_interval},
                  {"gravity_ramp_time", s.gravity_ramp_time}};
+  {
+    Json names = Json::array();
+    for (std::size_t b = 0; b < s.bodies.size(); ++b)
+      if (s.smoothing.bodies.empty() || std::find(s.smoothing.bodies.begin(), s.smoothing.bodies.end(), int(b)) != s.smoothing.bodies.end())
+        names.push_back(s.bodies[b].name);
+    j["solver"]["smoothing"] = {{"enabled", s.smoothing.enabled},
+                                {"basis", to_string(s.smoothing.mls.basis)},
+                                {"radius_factor", s.smoothing.mls.radius_factor},
+                                {"axes", axes_name(s.smoothing.mls.axes)},
+                                {"min_rcond", s.smoothing.mls.min_rcond},
+                                {"bodies", names}};
+  }
   Json mats = Json::object();
   for (const auto& m : s.materials) {
     Json mj = {{"model", to_string(m.model)}, {"density", m.density}, {"young", m.elastic.young}, {"poisson", m.elastic.poisson}};

@@ -44,6 +44,16 @@ Solver::Solver(Scene scene) : scene_(std::move(scene)) {
   for (auto& d : displacement_) d.assign(particles_.size(), 0.0);
   // Nodes lighter than this are empty: far below any real nodal mass, far above round-off.
   mass_floor_ = 1e-12 * *std::min_element(particles_.mass.begin(), particles_.mass.end());
+  if (scene_.smoothing.enabled) {  // seed 000 eq. 54; buffers exist only for scenes that smooth
+    smoother_.emplace(scene_.smoothing.mls, scene_.grid.h);
+    smooth_body_.assign(scene_.bodies.size(), scene_.smoothing.bodies.empty() ? 1 : 0);
+    for (int b : scene_.smoothing.bodies) smooth_body_[b] = 1;
+    for (int c = 0; c < 6; ++c) {
+      raw_strain_[c].assign(particles_.size(), 0.0);
+      smooth_strain_[c].assign(particles_.size(), 0.0);
+    }
+    for (auto& w : raw_spin_) w.assign(particles_.size(), 0.0);
+  }
   sort_particles();
 }
 
@@ -120,8 +130,9 @@ void Solver::step_with(double dt) {
   const double first_dt = scheme == SchemeKind::Usavg ? 0.5 * dt : dt;  // USAVG: half the step each side
   const double last_dt = first_dt;
   // 1. sort: when a particle has drifted beyond its block's slack, and every sort_interval steps
-  //    to keep the memory order close to the cell order.
-  if (needs_sort_ || steps_since_sort_ >= scene_.sort_interval) sort_particles();
+  //    to keep the memory order close to the cell order. With MLS smoothing, every step: the
+  //    neighbour search reads the cell offsets, which must be those of the current positions.
+  if (smoother_ || needs_sort_ || steps_since_sort_ >= scene_.sort_interval) sort_particles();
   ++steps_since_sort_;
 
   // 2. P2G: nodal mass, momentum and internal force. USF / USAVG update the stress in between,
@@ -140,11 +151,8 @@ void Solver::step_with(double dt) {
       start_velocities(grid_, walls_, mass_floor_);
       mirror_ghost_nodes(grid_, walls_, GhostFields::Start);
     }
-    {
-      ScopedPhase timer(times_, Phase::Stress);
-      update_stress<Shape, Terrain>({grid_.velocity_l[0].data(), grid_.velocity_l[1].data(), grid_.velocity_l[2].data()},
-                                    first_dt, false);
-    }
+    update_stress<Shape, Terrain>({grid_.velocity_l[0].data(), grid_.velocity_l[1].data(), grid_.velocity_l[2].data()},
+                                  first_dt, false);
     ScopedPhase timer(times_, Phase::P2G);
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Force);
     fold_ghost_nodes(grid_, walls_, false, false, true, gravity_at(time_ + 0.5 * dt));
@@ -175,13 +183,13 @@ void Solver::step_with(double dt) {
     mirror_ghost_nodes(grid_, walls_, GhostFields::Remapped);
     node_velocity = {grid_.momentum[0].data(), grid_.momentum[1].data(), grid_.momentum[2].data()};
   }
-  // 6. strain and stress, then move the particles (USF: only move them).
-  {
+  // 6. strain (and its MLS smoothing when enabled) and stress, then move the particles (USF: only
+  //    move them).
+  if (stress_last) {
+    update_stress<Shape, Terrain>(node_velocity, last_dt, true);
+  } else {
     ScopedPhase timer(times_, Phase::Stress);
-    if (stress_last)
-      update_stress<Shape, Terrain>(node_velocity, last_dt, true);
-    else
-      move_particles();
+    move_particles();
   }
 }
 
@@ -208,6 +216,11 @@ void Solver::move_particles() {
 // displacement afterwards (the particles' last use of their start-of-step position).
 template <class Shape, class Terrain>
 void Solver::update_stress(const std::array<const double*, 3>& node_velocity, double dt, bool move) {
+  if (smoother_) {
+    update_stress_smoothed<Shape, Terrain>(node_velocity, dt, move);
+    return;
+  }
+  ScopedPhase timer(times_, Phase::Stress);
   ParticleStore& P = particles_;
   const std::size_t blocks = sort_.block_count();
   block_dissipation_.assign(blocks, 0.0);
@@ -220,17 +233,80 @@ void Solver::update_stress(const std::array<const double*, 3>& node_velocity, do
       for (std::size_t begin = sort_.block_begin(b); begin < sort_.block_end(b); begin += StrainIncrements::kCapacity) {
         const std::size_t end = std::min<std::size_t>(begin + StrainIncrements::kCapacity, sort_.block_end(b));
         strain_increments<Shape, Terrain>(P, grid_, node_velocity, dt, begin, end, inc);
-        dissipated += materials_.update(P, begin, end, inc);
-        if constexpr (Shape::kDomain == DomainSource::Current) {
-          // seed 000 eq. 57-58, l_p = G_p l_p0 with G_p <- (I + grad v dt) G_p, for a domain kept
-          // as an axis-aligned box: each half width stretches with the normal strain increment
-          // along its axis, l_d <- (1 + d_eps_dd) l_d (the shear part of G would tilt the box).
-          for (std::size_t p = begin; p < end; ++p)
-            for (int d = 0; d < 3; ++d) P.domain[d][p] *= 1.0 + inc.strain[d][p - begin];
+        dissipated += update_chunk<Shape>(begin, end, inc, move);
+      }
+      block_dissipation_[b] = dissipated;
+    }
+  }
+  for (double d : block_dissipation_) plastic_work_ += d;
+}
+
+// The material update of particles [begin, end) from their increments; returns the dissipation.
+template <class Shape>
+double Solver::update_chunk(std::size_t begin, std::size_t end, const StrainIncrements& inc, bool move) {
+  ParticleStore& P = particles_;
+  const double dissipated = materials_.update(P, begin, end, inc);
+  if constexpr (Shape::kDomain == DomainSource::Current) {
+    // seed 000 eq. 57-58, l_p = G_p l_p0 with G_p <- (I + grad v dt) G_p, for a domain kept
+    // as an axis-aligned box: each half width stretches with the normal strain increment
+    // along its axis, l_d <- (1 + d_eps_dd) l_d (the shear part of G would tilt the box).
+    for (std::size_t p = begin; p < end; ++p)
+      for (int d = 0; d < 3; ++d) P.domain[d][p] *= 1.0 + inc.strain[d][p - begin];
+  }
+  if (move)
+    for (std::size_t p = begin; p < end; ++p)
+      for (int d = 0; d < 3; ++d) P.x[d][p] += displacement_[d][p];
+  return dissipated;
+}
+
+// With MLS smoothing (seed 000 eq. 53-56) a particle's fit needs its neighbours' increments, so
+// the increments of all particles are computed first into full arrays, then smoothed, then the
+// material update runs per chunk with the smoothed strain increments (the spin is not smoothed:
+// it only rotates the stress, eq. 54 names the strain). Positions move in the last pass, after
+// the smoother has read them.
+template <class Shape, class Terrain>
+void Solver::update_stress_smoothed(const std::array<const double*, 3>& node_velocity, double dt, bool move) {
+  ParticleStore& P = particles_;
+  const std::size_t blocks = sort_.block_count();
+  {
+    ScopedPhase timer(times_, Phase::Stress);
+#pragma omp parallel
+    {
+      StrainIncrements inc;
+#pragma omp for schedule(dynamic, 1)
+      for (std::size_t b = 0; b < blocks; ++b)
+        for (std::size_t begin = sort_.block_begin(b); begin < sort_.block_end(b); begin += StrainIncrements::kCapacity) {
+          const std::size_t end = std::min<std::size_t>(begin + StrainIncrements::kCapacity, sort_.block_end(b));
+          strain_increments<Shape, Terrain>(P, grid_, node_velocity, dt, begin, end, inc);  // eq. 53
+          for (int c = 0; c < 6; ++c) std::copy_n(inc.strain[c].data(), end - begin, raw_strain_[c].data() + begin);
+          for (int c = 0; c < 3; ++c) std::copy_n(inc.spin[c].data(), end - begin, raw_spin_[c].data() + begin);
         }
-        if (move)
-          for (std::size_t p = begin; p < end; ++p)
-            for (int d = 0; d < 3; ++d) P.x[d][p] += displacement_[d][p];
+    }
+  }
+  {
+    ScopedPhase timer(times_, Phase::Smooth);  // eq. 54
+    std::array<const double*, 6> in;
+    std::array<double*, 6> out;
+    for (int c = 0; c < 6; ++c) {
+      in[c] = raw_strain_[c].data();
+      out[c] = smooth_strain_[c].data();
+    }
+    last_smoothing_ = smoother_->smooth(P, sort_, scene_.grid, in, out, smooth_body_);
+    unsmoothed_total_ += static_cast<std::int64_t>(last_smoothing_.unsmoothed);
+  }
+  ScopedPhase timer(times_, Phase::Stress);
+  block_dissipation_.assign(blocks, 0.0);
+#pragma omp parallel
+  {
+    StrainIncrements inc;
+#pragma omp for schedule(dynamic, 1)
+    for (std::size_t b = 0; b < blocks; ++b) {
+      double dissipated = 0.0;
+      for (std::size_t begin = sort_.block_begin(b); begin < sort_.block_end(b); begin += StrainIncrements::kCapacity) {
+        const std::size_t end = std::min<std::size_t>(begin + StrainIncrements::kCapacity, sort_.block_end(b));
+        for (int c = 0; c < 6; ++c) std::copy_n(smooth_strain_[c].data() + begin, end - begin, inc.strain[c].data());
+        for (int c = 0; c < 3; ++c) std::copy_n(raw_spin_[c].data() + begin, end - begin, inc.spin[c].data());
+        dissipated += update_chunk<Shape>(begin, end, inc, move);  // eq. 55-56
       }
       block_dissipation_[b] = dissipated;
     }

@@ -113,6 +113,18 @@ TEST(Cli, BenchWritesTheJsonContract) {
     EXPECT_EQ(column.exit_code, 0) << column.output;
     EXPECT_NE(column.output.find("column scene"), std::string::npos) << column.output;
   }
+  // --mls runs the smoother and reports its phase.
+  const fs::path mls_json = dir / "bench_mls.json";
+  const Result mls = run("bench --particles 2000 --mls quadratic --threads 1 --steps 2 --json " + mls_json.string());
+  EXPECT_EQ(mls.exit_code, 0) << mls.output;
+  EXPECT_NE(mls.output.find("MLS quadratic"), std::string::npos) << mls.output;
+  std::ifstream mls_in(mls_json);
+  const std::string mls_text((std::istreambuf_iterator<char>(mls_in)), std::istreambuf_iterator<char>());
+  for (const char* key : {"\"smooth\"", "\"mls\": \"quadratic\"", "\"mls_terms\": 10"})
+    EXPECT_NE(mls_text.find(key), std::string::npos) << key;
+  const Result bad_mls = run("bench --mls quartic");
+  EXPECT_EQ(bad_mls.exit_code, 2);
+  EXPECT_NE(bad_mls.output.find("--mls quartic: unknown; available: off, linear, quadratic, cubic"), std::string::npos);
   const Result refused = run("bench --shape quintic");
   EXPECT_EQ(refused.exit_code, 2);
   EXPECT_NE(refused.output.find("--shape quintic"), std::string::npos);

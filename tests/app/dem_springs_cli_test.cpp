@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -31,7 +32,10 @@ std::string read_file(const std::string& path) {
 
 CommandResult run_talus(const std::string& arguments) {
   static int counter = 0;
-  const std::string stem = ::testing::TempDir() + "dem_springs_cli_" + std::to_string(counter++);
+  // ctest runs each test in its own process (and CI may run two at once): the process id keeps
+  // their output files apart
+  const std::string stem =
+      ::testing::TempDir() + "dem_springs_cli_" + std::to_string(getpid()) + "_" + std::to_string(counter++);
   const std::string command = std::string("\"") + TALUS_BINARY + "\" " + arguments + " >" + stem + ".out 2>" + stem + ".err";
   const int status = std::system(command.c_str());
   CommandResult result;

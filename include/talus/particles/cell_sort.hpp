@@ -42,6 +42,9 @@ class CellSort {
   const std::vector<std::uint32_t>& colour(int c) const { return colour_blocks_[c]; }
   /// Particles of cell (local index l in block b): [cell_start[b*cells_per_block + l], ... + 1).
   const std::vector<std::uint32_t>& cell_start() const { return cell_start_; }
+  /// Compact index of the active block that holds padded cell (i, j, k) (cell coordinates as
+  /// floor(GridGeometry::to_grid)), or -1 when no particle was sorted into that block.
+  long long active_block_of_cell(int i, int j, int k) const;
 
   /// Whether a particle sorted into block b may sit in cell (i, j, k) without breaking the colouring.
   bool within_slack(std::size_t b, int i, int j, int k) const {

@@ -4,6 +4,7 @@
 #include "talus/core/types.hpp"
 #include "talus/grid/grid.hpp"
 #include "talus/material/drucker_prager.hpp"
+#include "talus/smoothing/mls_settings.hpp"
 
 #include <array>
 #include <string>
@@ -87,6 +88,13 @@ struct GuardSpec {
   int snapshot_interval = 10;          // [steps] between in-memory copies of the last good state; 0 = none
 };
 
+/// MLS smoothing of the strain increments (seed 000 eq. 38-46, 54; docs/theory.md).
+struct SmoothingSpec {
+  bool enabled = false;
+  MlsSettings mls;
+  std::vector<int> bodies;  // indices into Scene::bodies of the smoothed bodies; empty = every body
+};
+
 struct Scene {
   std::string name;
   std::string description;
@@ -101,6 +109,7 @@ struct Scene {
   /// Gravity (the body force) grows linearly from 0 to its full value over this time [s]; 0 = applied
   /// at once. A quasi-static load (the Bardenhagen-Kober column, seed 000 sec. 4(1)) needs it.
   double gravity_ramp_time = 0.0;
+  SmoothingSpec smoothing;
   std::vector<MaterialSpec> materials;
   std::vector<BodySpec> bodies;
   // walls[axis][side]: side 0 = lower face (x-, y-, z-), side 1 = upper face.

@@ -6,9 +6,11 @@
 
 namespace talus {
 
-enum class Phase { Sort, P2G, Grid, G2P, Remap, Stress, Output, Count };
+// Smooth: the MLS fit of the strain increments (only when the scene enables it); Stress holds the
+// strain pass and the material update around it.
+enum class Phase { Sort, P2G, Grid, G2P, Remap, Smooth, Stress, Output, Count };
 inline constexpr std::array<const char*, static_cast<int>(Phase::Count)> kPhaseNames = {
-    "sort", "p2g", "grid", "g2p", "remap", "stress", "output"};
+    "sort", "p2g", "grid", "g2p", "remap", "smooth", "stress", "output"};
 
 struct PhaseTimes {
   std::array<double, static_cast<int>(Phase::Count)> seconds{};

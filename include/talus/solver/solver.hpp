@@ -4,13 +4,16 @@
 #include "talus/boundary/walls.hpp"
 #include "talus/grid/grid.hpp"
 #include "talus/solver/body_materials.hpp"
+#include "talus/transfer/transfers.hpp"
 #include "talus/particles/cell_sort.hpp"
 #include "talus/particles/particle_store.hpp"
 #include "talus/scene/scene.hpp"
+#include "talus/smoothing/mls_strain_smoother.hpp"
 #include "talus/solver/phase_timer.hpp"
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace talus {
@@ -76,6 +79,12 @@ class Solver {
   const PhaseTimes& phase_times() const { return times_; }
   std::int64_t sort_count() const { return sorts_; }
 
+  /// MLS smoothing (seed 000 eq. 54): the smoother, or null when the scene does not enable it;
+  /// the counts of the last smoothing pass and the particle-passes left unsmoothed by its guard.
+  const MlsStrainSmoother* smoother() const { return smoother_ ? &*smoother_ : nullptr; }
+  MlsCounts last_smoothing() const { return last_smoothing_; }
+  std::int64_t unsmoothed_total() const { return unsmoothed_total_; }
+
   /// Checkpoint/restart: the state besides the particles, and continuing from a saved one. The
   /// particles must be those of the saved solver, in its order (restore() keeps that order).
   SolverState state() const;
@@ -88,6 +97,10 @@ class Solver {
   void step_with(double dt);
   template <class Shape, class Terrain>
   void update_stress(const std::array<const double*, 3>& node_velocity, double dt, bool move);
+  template <class Shape, class Terrain>
+  void update_stress_smoothed(const std::array<const double*, 3>& node_velocity, double dt, bool move);
+  template <class Shape>
+  double update_chunk(std::size_t begin, std::size_t end, const StrainIncrements& inc, bool move);
   void move_particles();
   /// The body force at time t: scene gravity, ramped over scene.gravity_ramp_time.
   Vec3 gravity_at(double t) const;
@@ -112,6 +125,13 @@ class Solver {
   double friction_work_ = 0.0;
   double plastic_work_ = 0.0;
   PhaseTimes times_;
+  // MLS smoothing: allocated only when the scene enables it.
+  std::optional<MlsStrainSmoother> smoother_;
+  std::vector<std::uint8_t> smooth_body_;                 // per body: smoothed or not
+  std::array<std::vector<double>, 6> raw_strain_, smooth_strain_;  // per particle, this pass
+  std::array<std::vector<double>, 3> raw_spin_;          // the spin stays unsmoothed
+  MlsCounts last_smoothing_;
+  std::int64_t unsmoothed_total_ = 0;
 };
 
 }  // namespace talus

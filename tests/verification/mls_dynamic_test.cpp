@@ -1,0 +1,60 @@
+// MLS smoothing on the dynamic benchmarks (seed 000 sec. 4(2)-(3)): the dynamic bar (Fig. 9-10,
+// eq. 63) and the block between walls (Fig. 12-13). Numbers: docs/verification.md.
+#include "mls_runs.hpp"
+
+#include <gtest/gtest.h>
+
+namespace talus {
+namespace {
+
+using test::benchmark_scene;
+using test::with_mls;
+
+// The wave behind the front is -E v0 / c; without MLS it is jagged (MPM) or rippled (GIMP).
+TEST(MlsDynamicBar, SmoothingRemovesTheRippleBehindTheFront) {
+  for (ShapeKind shape : {ShapeKind::Linear, ShapeKind::CpGimp}) {
+    const Scene s = benchmark_scene("dynamic_bar", shape, SchemeKind::Musl);
+    const auto off = test::bar(s, "off");
+    const auto cubic = test::bar(with_mls(s, MlsBasis::Cubic, 2.0, "x"), "cubic x");
+    const auto linear = test::bar(with_mls(s, MlsBasis::Linear, 2.0, "xyz"), "linear xyz");
+    // measured roughness (RMS second difference / exact): linear MPM 0.214 -> 0.073 (cubic x),
+    // 0.069 (linear xyz); cpGIMP 0.061 -> 0.019, 0.017. Mean / exact: 1.015 -> 1.018, 1.022 (MPM),
+    // 1.016 -> 1.017, 1.024 (cpGIMP): the level is kept within the 3% of the unsmoothed test.
+    EXPECT_LT(cubic.roughness, off.roughness / 2.5) << to_string(shape);
+    EXPECT_LT(linear.roughness, off.roughness / 2.5) << to_string(shape);
+    EXPECT_NEAR(cubic.ratio, 1.0, 0.03) << to_string(shape);
+    EXPECT_NEAR(linear.ratio, 1.0, 0.03) << to_string(shape);
+  }
+}
+
+// The smoother itself neither feeds nor drains energy: the dynamic bar run on for 12 wave transits
+// (0.5 s) against its fixed (bilateral) end. Measured max |E/E0 - 1|: cpGIMP 2.60% without MLS,
+// 2.54% with the cubic-x fit (final -1.93%, -1.89%): the loss is the wall impact's, MLS changes it
+// by less than 0.1% of E0.
+TEST(MlsDynamicBar, EnergyOverTwelveTransitsMatchesTheUnsmoothedRun) {
+  Scene s = benchmark_scene("dynamic_bar", ShapeKind::CpGimp, SchemeKind::Musl);
+  s.end_time = 0.5;
+  const auto off = test::walls(s, "bar off");
+  const auto on = test::walls(with_mls(s, MlsBasis::Cubic, 2.0, "x"), "bar cubic x");
+  EXPECT_LT(std::max(on.max_gain, on.max_loss), 0.03);
+  EXPECT_NEAR(on.final_drift, off.final_drift, 0.002);
+}
+
+// Block between unilateral walls (seed 000 Fig. 12-13), through its first impact (t = 11.25 s).
+// Target (issue 4): total energy within +-1% through 4 impacts with MLS; measured values for the
+// full run are in docs/verification.md. Each impact changes the energy by several percent with or
+// without MLS (the wall contact's own error, not the smoother's), so what is asserted here is that
+// smoothing changes the energy of one impact by less than 2% of E0. Measured through t = 15 s:
+//   without main's wall fix (5260c4c): final +15.1% without MLS, +13.7% with (gain at the wall);
+//   with it:                           final  -9.4% without MLS, -10.6% with (loss at the wall).
+TEST(MlsBlockBetweenWalls, SmoothingChangesTheEnergyOfOneImpactByLessThanTwoPercent) {
+  Scene s = benchmark_scene("block_between_walls", ShapeKind::CpGimp, SchemeKind::Musl);
+  s.end_time = 15.0;
+  const auto off = test::walls(s, "walls off");
+  const auto on = test::walls(with_mls(s, MlsBasis::Cubic, 2.0, "x"), "walls cubic x");
+  EXPECT_NEAR(on.final_drift, off.final_drift, 0.02);
+  EXPECT_GT(std::abs(off.final_drift), 0.02);  // the impact itself does change the energy
+}
+
+}  // namespace
+}  // namespace talus
