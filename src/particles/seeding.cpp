@@ -1,6 +1,7 @@
 #include "talus/particles/seeding.hpp"
 
 #include "talus/core/error.hpp"
+#include "talus/particles/body_shape.hpp"
 
 #include <fmt/core.h>
 
@@ -37,16 +38,26 @@ ParticleStore seed_particles(const Scene& scene) {
     std::array<std::vector<double>, 3> axes;
     for (int d = 0; d < 3; ++d)
       axes[d] = axis_points(scene.grid.origin[d], h, n, body.box_min[d], body.box_max[d]);
+    const bool box = body.shape == BodyShapeKind::Box;
+    const std::string key = box ? fmt::format("bodies[{}]", b) : fmt::format("bodies[{}].{}", b, to_string(body.shape));
     if (axes[0].empty() || axes[1].empty() || axes[2].empty())
       throw input_error(fmt::format(
-          "bodies[{}] (\"{}\") holds no particle: its box is thinner than the particle spacing h/n = {} "
-          "along some axis", b, body.name, h / n));
+          "{} (\"{}\") holds no particle: its {} is thinner than the particle spacing h/n = {} "
+          "along some axis", key, body.name, box ? "box" : "bounding box", h / n));
     const double volume = std::pow(h / n, 3);
     const double mass = material.density * volume;
+    const std::int64_t first_id = next_id;
+    // The candidates span the bounding box; a box keeps them all, other shapes keep those inside.
     for (double px : axes[0])
       for (double py : axes[1])
-        for (double pz : axes[2])
-          store.add(next_id++, Vec3(px, py, pz), body.velocity, mass, volume, static_cast<std::uint16_t>(b));
+        for (double pz : axes[2]) {
+          const Vec3 position(px, py, pz);
+          if (box || body_contains(body, position))
+            store.add(next_id++, position, body.velocity, mass, volume, static_cast<std::uint16_t>(b));
+        }
+    if (next_id == first_id)
+      throw input_error(fmt::format("{} (\"{}\") holds no particle: no particle point (spacing h/n = {}) "
+                                    "lies inside it", key, body.name, h / n));
   }
   return store;
 }
