@@ -44,7 +44,7 @@ void print_runout(const RunoutResult& r, const RunSummary& summary) {
   if (r.beyond_runout_plane)
     fmt::print(", {:.4f} m onto the runout plane (starts at s = {:.4f} m)", *r.beyond_runout_plane, *r.runout_plane_s);
   fmt::print("; tail at s = {:.4f} m\n", r.tail);
-  fmt::print("talus: runout history: {}{}\n", summary.runout_path,
+  fmt::print("talus: runout history: {}; result: {}{}\n", summary.runout_path, summary.runout_summary_path,
              summary.deposit_path.empty() ? "" : "; deposit thickness: " + summary.deposit_path);
 }
 

@@ -69,7 +69,7 @@ void prepare_output_folder(const std::string& dir) {
   // Replace the outputs of an earlier run in the same folder, so no stale frame survives.
   for (const auto& entry : fs::directory_iterator(fs::path(dir) / "frames"))
     if (entry.path().extension() == ".vtu") fs::remove(entry.path());
-  for (const char* f : {"particles.pvd", "energy.csv", "scene.json", "checkpoint.h5", "runout.csv", "deposit.csv", "terrain.vtu"})
+  for (const char* f : {"particles.pvd", "energy.csv", "scene.json", "checkpoint.h5", "runout.csv", "runout.json", "deposit.csv", "terrain.vtu"})
     fs::remove(fs::path(dir) / f, ec);
   remove_temporaries(dir);
 }
@@ -346,6 +346,8 @@ RunSummary run_scene(Solver& solver, const RunOptions& options) {
   history.flush();
   if (runout && runout->has_samples()) {
     summary.runout = runout->result();
+    summary.runout_summary_path = (dir / "runout.json").string();
+    write_file_atomically(summary.runout_summary_path, runout_result_json(*summary.runout, solver.time()) + "\n");
     if (solver.finished()) {  // the deposit of a completed run (not of one stopped by a signal)
       ScopedPhase timer(solver.phase_times(), Phase::Output);
       const FlumeCoordinates& c = runout->coordinates();

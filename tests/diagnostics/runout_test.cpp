@@ -8,6 +8,7 @@
 #include "talus/solver/solver.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <omp.h>
 #include <unistd.h>
 #include <vtkCellData.h>
@@ -254,6 +255,14 @@ TEST(RunoutOutput, RunWritesRunoutHistoryAndDeposit) {
   EXPECT_NEAR(summary.runout->from_gate, last->front - 0.14, 1e-9);
   EXPECT_NEAR(*summary.runout->beyond_runout_plane, last->front - 0.3, 1e-9);
   EXPECT_GT(last->centre_velocity_s, 0.0);  // it slides down +x
+  {
+    std::ifstream in(dir / "runout.json");
+    const nlohmann::json j = nlohmann::json::parse(in);
+    EXPECT_NEAR(j.at("front").get<double>(), last->front, 1e-8);
+    EXPECT_NEAR(j.at("gate_s").get<double>(), 0.14, 1e-12);
+    EXPECT_TRUE(j.at("gate_from_scene").get<bool>());
+    EXPECT_NEAR(j.at("beyond_runout_plane").get<double>(), last->front - 0.3, 1e-8);
+  }
   // deposit.csv: one row per raster cell (20 x 1 cells of 0.02 m); the volume matches the particles'.
   std::ifstream dep(dir / "deposit.csv");
   std::getline(dep, line);

@@ -9,6 +9,7 @@
 //   energy.csv           time, step, dt, kinetic, strain, gravity, boundary_work, plastic_work, total
 //   checkpoint.h5        the last checkpoint (output.checkpoint_interval, SIGINT/SIGTERM, instability)
 //   runout.csv           runout diagnostics on the history schedule (only with diagnostics.runout)
+//   runout.json          the runout after the last step: front, tail, gate, runout plane (diagnostics.runout)
 //   deposit.csv          the deposit thickness raster at the end (only with diagnostics.runout)
 //   terrain.vtu          the terrain surface, written once (only when the scene has a terrain)
 //
@@ -47,6 +48,7 @@ struct RunSummary {
   int interrupted_signal = 0;   // SIGINT/SIGTERM caught: the run stopped after writing a checkpoint
   std::optional<RunoutResult> runout;  // with diagnostics.runout: the front after the last step
   std::string runout_path;             // <out_dir>/runout.csv (with diagnostics.runout)
+  std::string runout_summary_path;     // <out_dir>/runout.json (with diagnostics.runout)
   std::string deposit_path;            // <out_dir>/deposit.csv (written when the run reached its end)
   std::string terrain_path;            // <out_dir>/terrain.vtu (when the scene has a terrain)
 };
