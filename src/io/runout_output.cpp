@@ -26,7 +26,9 @@ std::string runout_csv_header() {
 }
 
 std::string runout_csv_row(const RunoutSample& r) {
-  return fmt::format("{:.10e},{},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e}",
+  // The shortest text that reads back to the same double: a restart continues from these rows
+  // (the front velocity differences the last one), so they must round-trip exactly.
+  return fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{}",
                      r.time, r.step, r.mass, r.front, r.tail, r.s_min, r.s_max, r.centre_s, r.centre[0], r.centre[1],
                      r.centre[2], r.centre_velocity_s, r.front_velocity);
 }

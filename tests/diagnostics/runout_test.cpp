@@ -1,7 +1,9 @@
 // Runout diagnostics on synthetic particle sets: quantile front and tail that stray particles do not
 // move, centre of mass and its velocity along the bed, the deposit raster, the terrain's runout
 // plane, and the files the run driver writes.
+#include "talus/core/error.hpp"
 #include "talus/diagnostics/runout.hpp"
+#include "talus/io/checkpoint.hpp"
 #include "talus/io/run_driver.hpp"
 #include "talus/io/runout_output.hpp"
 #include "talus/scene/scene_json.hpp"
@@ -22,6 +24,7 @@
 #include <fstream>
 #include <numeric>
 #include <random>
+#include <sstream>
 
 namespace talus {
 namespace {
@@ -182,9 +185,11 @@ TEST(RunoutOutput, CsvRowRoundTrips) {
   const auto back = parse_runout_csv_row(runout_csv_row(r));
   ASSERT_TRUE(back.has_value());
   EXPECT_EQ(back->step, 77);
-  EXPECT_NEAR(back->front, 1.25, 1e-12);
-  EXPECT_NEAR(back->centre[2], 0.3, 1e-12);
-  EXPECT_NEAR(back->front_velocity, 0.7, 1e-12);
+  EXPECT_EQ(back->front, 1.25);
+  EXPECT_EQ(back->centre[2], 0.3);
+  EXPECT_EQ(back->front_velocity, 0.7);
+  r.centre_s = 1.0 / 3.0;  // exactly, not to 10 digits
+  EXPECT_EQ(parse_runout_csv_row(runout_csv_row(r))->centre_s, 1.0 / 3.0);
   EXPECT_FALSE(parse_runout_csv_row("1,2,3").has_value());
 }
 
@@ -218,9 +223,8 @@ TEST(RunoutOutput, TerrainSurfaceReadsBackOnTheBed) {
   fs::remove_all(dir);
 }
 
-TEST(RunoutOutput, RunWritesRunoutHistoryAndDeposit) {
-  // A sand block sliding on a flat floor, gravity tilted 31.4 deg down +x.
-  const std::string json = R"({
+// A sand block sliding on a flat floor, gravity tilted 31.4 deg down +x.
+const char* kSlideScene = R"({
     "name": "slide", "grid": { "origin": [0, 0, 0], "size": [0.4, 0.02, 0.1], "cell_size": 0.02 },
     "gravity": [5.11, 0, -8.37], "time": { "end": 0.02 },
     "materials": { "sand": { "model": "drucker_prager", "density": 1600, "young": 2e6, "poisson": 0.3,
@@ -229,7 +233,16 @@ TEST(RunoutOutput, RunWritesRunoutHistoryAndDeposit) {
     "boundaries": { "z-": { "type": "friction", "friction_coefficient": 0.554 }, "z+": "open" },
     "output": { "history_interval": 0.005 },
     "diagnostics": { "runout": { "gate_x": 0.14, "runout_plane_x": 0.3 } } })";
-  Solver solver(parse_scene(json, "slide"));
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+TEST(RunoutOutput, RunWritesRunoutHistoryAndDeposit) {
+  Solver solver(parse_scene(kSlideScene, "slide"));
   const fs::path dir = temp_dir("runout_run");
   RunOptions options;
   options.out_dir = dir.string();
@@ -280,6 +293,66 @@ TEST(RunoutOutput, RunWritesRunoutHistoryAndDeposit) {
   for (double v : solver.particles().volume) particle_volume += v;
   EXPECT_NEAR(volume, particle_volume, 1e-6 * particle_volume);
   fs::remove_all(dir);
+}
+
+TEST(RunoutOutput, RestartContinuesTheHistoryBitForBit) {
+  Scene scene = parse_scene(kSlideScene, "slide");
+  scene.output.checkpoint_interval = 0.012;  // one checkpoint, mid-run
+  const fs::path dir = temp_dir("runout_restart");
+  RunOptions options;
+  options.out_dir = dir.string();
+  options.progress = false;
+  options.handle_signals = false;
+  {
+    Solver solver(scene);
+    run_scene(solver, options);
+  }
+  const std::string reference = read_text(dir / "runout.csv");
+  const std::string reference_result = read_text(dir / "runout.json");
+  const std::string checkpoint_path = (dir / "checkpoint.h5").string();
+  const Checkpoint checkpoint = read_checkpoint(checkpoint_path);
+  ASSERT_GT(checkpoint.solver.step, 0);
+  Solver resumed(scene);
+  restore_checkpoint(resumed, checkpoint, checkpoint_path);
+  options.resume = &checkpoint.run;
+  run_scene(resumed, options);
+  // The rows after the checkpoint are rewritten identically, front velocity included (it needs
+  // the last row before the checkpoint), and the runout is measured from the same gate.
+  EXPECT_EQ(read_text(dir / "runout.csv"), reference);
+  EXPECT_EQ(read_text(dir / "runout.json"), reference_result);
+  fs::remove_all(dir);
+}
+
+TEST(RunoutSpec, BadDiagnosticsKeysAreRefusedNamingTheKey) {
+  auto error_of = [](const std::string& runout) {
+    std::string json = kSlideScene;
+    const std::string given = R"({ "gate_x": 0.14, "runout_plane_x": 0.3 })";
+    json.replace(json.find(given), given.size(), runout);
+    try {
+      parse_scene(json, "slide");
+    } catch (const Error& e) {
+      EXPECT_EQ(e.exit_code(), 2);
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error_of(R"({ "front_quantile": 1.5 })").find("diagnostics.runout.front_quantile = 1.5 is outside the allowed range [0.5, 1]"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({ "deposit_cell": 0 })").find("diagnostics.runout.deposit_cell = 0 is outside the allowed range (0"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({ "deposit_cell": 1e-6 })").find("at most 1e7"), std::string::npos);
+  EXPECT_NE(error_of(R"({ "front": 0.9 })").find("unknown key diagnostics.runout.front"), std::string::npos);
+  // Defaults resolved and echoed.
+  std::string json = kSlideScene;
+  const std::string given = R"({ "gate_x": 0.14, "runout_plane_x": 0.3 })";
+  json.replace(json.find(given), given.size(), "{}");
+  const Scene s = parse_scene(json, "slide");
+  EXPECT_TRUE(s.runout.enabled);
+  EXPECT_EQ(s.runout.deposit_cell, 0.02);
+  EXPECT_FALSE(s.runout.has_gate);
+  const Scene echoed = parse_scene(scene_to_json(s).dump(), "echo");
+  EXPECT_TRUE(echoed.runout.enabled);
+  EXPECT_EQ(echoed.runout.front_quantile, 0.995);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@ namespace talus {
 
 /// time,step,mass,front,tail,s_min,s_max,centre_s,centre_x,centre_y,centre_z,centre_velocity_s,front_velocity
 std::string runout_csv_header();
+/// One row; every number in the shortest form that reads back exactly (a restart continues from it).
 std::string runout_csv_row(const RunoutSample& sample);
 /// The inverse of runout_csv_row (a restart reads its history back); empty for a malformed row.
 std::optional<RunoutSample> parse_runout_csv_row(const std::string& row);
