@@ -80,7 +80,7 @@ def build(a):
             "z+": "open",
         },
         "output": {"frame_interval": a.frame_interval, "history_interval": 0.01, "compression": "lz4"},
-        "diagnostics": {"runout": {"gate_x": 0.0, "runout_plane_x": r6(vx + tangent)}},
+        "diagnostics": {"runout": {"gate_x": 0.0, "runout_plane_x": r6(vx + tangent), "deposit_cell": 2 * h}},
     }
     return scene
 
@@ -100,7 +100,7 @@ def flat_slope(a):
     scene["name"] += "_flat_slope"
     scene["gravity"] = [9.81 * math.sin(t), 0.0, -9.81 * math.cos(t)]
     scene["bodies"][0]["prism"]["points"] = [[0.0, 0.0], [0.0, round(d, 6)], [round(-a.wedge_length, 6), 0.0]]
-    scene["diagnostics"]["runout"] = {"gate_x": 0.0}
+    scene["diagnostics"]["runout"] = {"gate_x": 0.0, "deposit_cell": 2 * h}
     return scene
 
 

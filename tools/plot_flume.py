@@ -77,9 +77,14 @@ def main():
     s_values = np.unique(d["s"])
     y_values = np.unique(d["y"])
     thickness = d["thickness"].reshape(len(s_values), len(y_values))  # rows of constant s
-    centre = np.argmin(np.abs(y_values))
+    # The centre line: the mean of the raster rows whose centres lie within one cell of y = 0.
+    dy_cell = y_values[1] - y_values[0] if len(y_values) > 1 else 1.0
+    band = np.abs(y_values) <= dy_cell * (1 + 1e-9)
+    if not band.any():
+        band = np.abs(y_values) == np.abs(y_values).min()
     fig, ax = plt.subplots(figsize=(7, 3.2))
-    ax.plot(s_values, thickness[:, centre] * 1000, drawstyle="steps-mid", label=f"y = {y_values[centre]:.3g} m")
+    ax.plot(s_values, thickness[:, band].mean(axis=1) * 1000, drawstyle="steps-mid",
+            label=f"mean over |y| <= {dy_cell:.3g} m ({band.sum()} rows)")
     ax.axvline(gate, color="k", lw=0.6, ls="--", label="gate")
     if plane is not None:
         ax.axvline(plane, color="brown", lw=0.6, ls="--", label="start of runout plane")
@@ -95,18 +100,25 @@ def main():
     fig.savefig(os.path.join(out, "deposit_profile.png"), dpi=130)
     plt.close(fig)
 
-    fig, ax = plt.subplots(figsize=(8, 3.2))
     ds = s_values[1] - s_values[0] if len(s_values) > 1 else 1.0
     dy = y_values[1] - y_values[0] if len(y_values) > 1 else 1.0
     extent = [s_values[0] - ds / 2, s_values[-1] + ds / 2, y_values[0] - dy / 2, y_values[-1] + dy / 2]
+    # Crop to the deposit (plus a margin), and size the figure to its aspect ratio.
+    s_lo, s_hi, y_lo, y_hi = extent
+    occupied_y = np.nonzero(thickness.max(axis=0) > 0)[0]
+    if occupied.size and occupied_y.size:
+        s_lo, s_hi = s_values[occupied[0]] - pad, s_values[occupied[-1]] + pad
+        y_lo, y_hi = y_values[occupied_y[0]] - 3 * dy, y_values[occupied_y[-1]] + 3 * dy
+    ratio = (s_hi - s_lo) / max(y_hi - y_lo, 1e-9)
+    fig, ax = plt.subplots(figsize=(min(12.0, max(4.0, 2.8 * ratio)) + 1.5, 3.6))
     masked = np.ma.masked_where(thickness <= 0, thickness * 1000)
-    im = ax.imshow(masked.T, origin="lower", extent=extent, aspect="equal", cmap="viridis")
-    fig.colorbar(im, ax=ax, label="thickness [mm]")
-    ax.axvline(gate, color="k", lw=0.6, ls="--")
+    im = ax.imshow(masked.T, origin="lower", extent=extent, aspect="equal", cmap="viridis", interpolation="nearest")
+    fig.colorbar(im, ax=ax, label="thickness [mm]", shrink=0.9)
+    ax.axvline(gate, color="k", lw=0.6, ls="--", label="gate")
     if plane is not None:
-        ax.axvline(plane, color="brown", lw=0.6, ls="--")
-    if occupied.size:
-        ax.set_xlim(s_values[occupied[0]] - pad, s_values[occupied[-1]] + pad)
+        ax.axvline(plane, color="brown", lw=0.6, ls="--", label="start of runout plane")
+    ax.set_xlim(s_lo, s_hi)
+    ax.set_ylim(y_lo, y_hi)
     ax.set_xlabel("s along the flume [m]")
     ax.set_ylabel("y [m]")
     ax.set_title(f"{name}: deposit thickness, plan view")
