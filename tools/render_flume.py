@@ -14,7 +14,8 @@ server: `xvfb-run -a pvbatch tools/render_flume.py RUN_DIR --frame -1` (Debian: 
 xvfb, xauth). On a machine with libvtk9-dev, python3-paraview conflicts with python3-vtk9; unpack it
 instead: `apt-get download python3-paraview && dpkg-deb -x python3-paraview_*.deb /tmp/pv` and run
 `PYTHONPATH=/tmp/pv/usr/lib/python3/dist-packages xvfb-run -a pvbatch tools/render_flume.py ...`
-(docs/flume.md "Viewing a run").
+(docs/flume.md "Viewing a run"). Tested with ParaView 5.11 (Debian 12) that way; xvfb-run now and then
+fails to start its server under load ("bad X server connection"): run it again.
 """
 import argparse
 import os
@@ -44,6 +45,8 @@ def main():
 
     view = GetActiveViewOrCreate("RenderView")
     view.ViewSize = [width, height]
+    if hasattr(view, "UseColorPaletteForBackground"):  # ParaView >= 5.10: else the palette wins
+        view.UseColorPaletteForBackground = 0
     view.Background = [1.0, 1.0, 1.0]
     view.OrientationAxesVisibility = 1
 
@@ -52,20 +55,22 @@ def main():
         terrain = XMLUnstructuredGridReader(FileName=[terrain_path])
         t_display = Show(terrain, view)
         t_display.Representation = "Surface"
-        ColorBy(t_display, None)
+        t_display.ColorArrayName = ["POINTS", ""]  # plain colour, no array
         t_display.DiffuseColor = [0.78, 0.72, 0.62]
         t_display.Opacity = 0.9
 
     particles = PVDReader(FileName=pvd)
     p_display = Show(particles, view)
     p_display.Representation = "Points"
-    p_display.PointSize = 2.0
+    p_display.PointSize = 3.0
     ColorBy(p_display, ("POINTS", "speed"))
     lut = GetColorTransferFunction("speed")
     lut.ApplyPreset("Viridis (matplotlib)", True)
     bar = GetScalarBar(lut, view)
     bar.Title = "speed [m/s]"
     bar.ComponentTitle = ""
+    bar.TitleColor = [0.0, 0.0, 0.0]  # readable on the white background
+    bar.LabelColor = [0.0, 0.0, 0.0]
     p_display.SetScalarBarVisibility(view, True)
 
     times = list(particles.TimestepValues) if particles.TimestepValues else [0.0]
@@ -77,9 +82,10 @@ def main():
             sys.exit(f"render_flume: --frame {k} outside 0..{len(times) - 1} (or -{len(times)}..-1)")
         frames = [k % len(times)]
 
+    view.CameraParallelProjection = 0 if a.view == "oblique" else 1
     camera = view.GetActiveCamera()
     if a.view == "side":
-        camera.SetPosition(0, -10, 0)
+        camera.SetPosition(0, -10, 2.5)  # a little from above, or the bed strip is seen edge-on
         camera.SetViewUp(0, 0, 1)
     elif a.view == "top":
         camera.SetPosition(0, 0, 10)
