@@ -37,6 +37,17 @@ void print_scene_summary(const Solver& solver) {
              solver.grid().active_bytes() / 1e6);
 }
 
+// The end-of-run lines of a scene with runout diagnostics (docs/flume.md).
+void print_runout(const RunoutResult& r, const RunSummary& summary) {
+  fmt::print("talus: runout: front at s = {:.4f} m, {:.4f} m beyond the gate ({}, s = {:.4f} m)", r.front, r.from_gate,
+             r.gate_from_scene ? "diagnostics.runout.gate_x" : "the initial front", r.gate_s);
+  if (r.beyond_runout_plane)
+    fmt::print(", {:.4f} m onto the runout plane (starts at s = {:.4f} m)", *r.beyond_runout_plane, *r.runout_plane_s);
+  fmt::print("; tail at s = {:.4f} m\n", r.tail);
+  fmt::print("talus: runout history: {}; result: {}{}\n", summary.runout_path, summary.runout_summary_path,
+             summary.deposit_path.empty() ? "" : "; deposit thickness: " + summary.deposit_path);
+}
+
 }  // namespace
 
 void add_run_command(CLI::App& app) {
@@ -85,6 +96,8 @@ void add_run_command(CLI::App& app) {
                summary.wall_seconds, summary.steps * double(solver.particles().size()) / summary.wall_seconds / 1e6);
     fmt::print("talus: energy budget closes to {:.3e} of the initial energy\n", (summary.final.total() - e0) / scale);
     fmt::print("talus: ParaView series: {} ({} frames); energy history: {}/energy.csv\n", summary.pvd_path, summary.frames, dir);
+    if (!summary.terrain_path.empty()) fmt::print("talus: terrain surface: {} (open it with the series)\n", summary.terrain_path);
+    if (summary.runout) print_runout(*summary.runout, summary);
   });
 }
 

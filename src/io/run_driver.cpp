@@ -1,6 +1,7 @@
 #include "talus/io/run_driver.hpp"
 
 #include "talus/core/error.hpp"
+#include "talus/io/runout_output.hpp"
 #include "talus/io/vtu_writer.hpp"
 #include "talus/scene/scene_json.hpp"
 #include "talus/solver/stability_guards.hpp"
@@ -68,7 +69,8 @@ void prepare_output_folder(const std::string& dir) {
   // Replace the outputs of an earlier run in the same folder, so no stale frame survives.
   for (const auto& entry : fs::directory_iterator(fs::path(dir) / "frames"))
     if (entry.path().extension() == ".vtu") fs::remove(entry.path());
-  for (const char* f : {"particles.pvd", "energy.csv", "scene.json", "checkpoint.h5"}) fs::remove(fs::path(dir) / f, ec);
+  for (const char* f : {"particles.pvd", "energy.csv", "scene.json", "checkpoint.h5", "runout.csv", "runout.json", "deposit.csv", "terrain.vtu"})
+    fs::remove(fs::path(dir) / f, ec);
   remove_temporaries(dir);
 }
 
@@ -111,6 +113,27 @@ void prepare_output_folder_for_resume(const std::string& dir, const RunProgress&
   }
   in.close();
   write_file_atomically(history.string(), kept);
+}
+
+/// A restart with runout diagnostics: keep the rows of runout.csv up to the checkpoint's step
+/// (rewritten atomically) and return the first and the last of them; empty if there are none.
+std::optional<std::pair<RunoutSample, RunoutSample>> cut_runout_history(const fs::path& path, std::int64_t step) {
+  std::string kept = runout_csv_header() + "\n";
+  std::optional<RunoutSample> first, last;
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    const auto row = parse_runout_csv_row(line);
+    if (!row || row->step > step) break;
+    if (!first) first = row;
+    last = row;
+    kept += line + "\n";
+  }
+  in.close();
+  write_file_atomically(path.string(), kept);
+  if (!first) return std::nullopt;
+  return std::make_pair(*first, *last);
 }
 
 std::string format_duration(double seconds) {
@@ -156,6 +179,33 @@ RunSummary run_scene(Solver& solver, const RunOptions& options) {
   if (!history) throw io_error(fmt::format("cannot write {}", (dir / "energy.csv").string()));
   if (!resuming) history << "time,step,dt,kinetic,strain,gravity,friction_work,plastic_work,total\n";
 
+  // Runout diagnostics (docs/flume.md): only when the scene asks for them.
+  std::optional<RunoutMonitor> runout;
+  std::ofstream runout_history;
+  if (scene.runout.enabled) {
+    runout.emplace(scene.runout, flume_coordinates_of(scene));
+    summary.runout_path = (dir / "runout.csv").string();
+    if (resuming) {
+      if (const auto kept = cut_runout_history(summary.runout_path, solver.step_count()))
+        runout->resume(kept->first, kept->second);
+    }
+    runout_history.open(summary.runout_path, resuming ? std::ios::app : std::ios::trunc);
+    if (!runout_history) throw io_error(fmt::format("cannot write {}", summary.runout_path));
+    if (!resuming) runout_history << runout_csv_header() << "\n";
+  }
+  if (const FlumeCoordinates bed = flume_coordinates_of(scene); !bed.flat()) {
+    // The terrain surface, once, over the grid's x and y range (ParaView shows it with the particles).
+    const GridGeometry& g = scene.grid;
+    summary.terrain_path = (dir / "terrain.vtu").string();
+    write_terrain_vtu(summary.terrain_path, bed.profile(), g.origin[0], g.origin[0] + g.cells[0] * g.h, g.origin[1],
+                      g.origin[1] + g.cells[1] * g.h, 0.25 * g.h);
+  }
+  auto write_runout = [&]() {
+    if (!runout) return;
+    runout_history << runout_csv_row(runout->sample(solver.particles(), solver.time(), solver.step_count())) << "\n";
+    runout_history.flush();
+  };
+
   // Each row is flushed on its own, so a killed run leaves only whole rows behind.
   auto write_history = [&](const EnergyBudget& e) {
     history << fmt::format("{:.10e},{},{:.6e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e}\n", solver.time(),
@@ -189,6 +239,7 @@ RunSummary run_scene(Solver& solver, const RunOptions& options) {
     progress.initial = summary.initial;
     energy_guard = EnergyGuard(scene, solver.particles(), summary.initial);
     write_history(summary.initial);
+    write_runout();
     write_frame();
     progress.next_frame = scene.output.frame_interval;
     progress.next_history = scene.output.history_interval;
@@ -250,6 +301,7 @@ RunSummary run_scene(Solver& solver, const RunOptions& options) {
         ScopedPhase timer(solver.phase_times(), Phase::Output);
         const EnergyBudget e = solver.energies();
         write_history(e);
+        write_runout();
         while (scene.output.history_interval > 0.0 && progress.next_history <= solver.time())
           progress.next_history += scene.output.history_interval;
         energy_guard.check(e, solver.particles(), scene, solver.step_count(), solver.time());
@@ -300,6 +352,21 @@ RunSummary run_scene(Solver& solver, const RunOptions& options) {
     }
   }
   history.flush();
+  if (runout && runout->has_samples()) {
+    summary.runout = runout->result();
+    summary.runout_summary_path = (dir / "runout.json").string();
+    write_file_atomically(summary.runout_summary_path, runout_result_json(*summary.runout, solver.time()) + "\n");
+    if (solver.finished()) {  // the deposit of a completed run (not of one stopped by a signal)
+      ScopedPhase timer(solver.phase_times(), Phase::Output);
+      const FlumeCoordinates& c = runout->coordinates();
+      const GridGeometry& g = scene.grid;
+      const double x1 = g.origin[0] + g.cells[0] * g.h;
+      const DepositRaster deposit = measure_deposit(solver.particles(), c, c.s(g.origin[0]), c.s(x1), g.origin[1],
+                                                    g.origin[1] + g.cells[1] * g.h, scene.runout.deposit_cell);
+      summary.deposit_path = (dir / "deposit.csv").string();
+      write_deposit_csv(summary.deposit_path, deposit, c);
+    }
+  }
   summary.steps = solver.step_count();
   summary.time = solver.time();
   summary.wall_seconds = elapsed();

@@ -1,6 +1,7 @@
 #include "talus/particles/seeding.hpp"
 
 #include "talus/core/error.hpp"
+#include "talus/particles/body_shape.hpp"
 
 #include <fmt/core.h>
 
@@ -38,18 +39,17 @@ void seed_on_terrain(const Scene& scene, std::size_t b, const ProfileTerrain& be
   const double w_top = g.origin[2] + g.cells[2] * h;
   const std::vector<double> xs = axis_points(g.origin[0], h, n, body.box_min[0], body.box_max[0]);
   const std::vector<double> ys = axis_points(g.origin[1], h, n, body.box_min[1], body.box_max[1]);
-  // every point of the grid's w column; the box selects among them
   // every point of the grid's w column, and one cell of points above the top: a body that holds
   // one of those reaches above the grid
   const std::vector<double> ws = axis_points(g.origin[2], h, n, g.origin[2], w_top + h);
   const double volume = std::pow(h / n, 3);
   const double mass = scene.materials[body.material].density * volume;
   const bool terrain_frame = body.frame == BoxFrame::Terrain;
-  // Whether a candidate lies in the body (the box's x and y ranges are those of xs and ys). Other
-  // body shapes plug in here with their inside test at the physical point (x, y, z).
-  const auto inside = [&](double pw, double pz) {
-    const double c = terrain_frame ? pw : pz;
-    return c >= body.box_min[2] && c < body.box_max[2];
+  // Whether a candidate lies in the body (the box's x and y ranges are those of xs and ys): a
+  // terrain-frame box by its w range, any physical body by its own inside test at (x, y, z).
+  const auto inside = [&](double px, double py, double pw, double pz) {
+    if (terrain_frame) return pw >= body.box_min[2] && pw < body.box_max[2];
+    return body_contains(body, Vec3(px, py, pz));
   };
   const std::size_t first = store.size();
   bool above_top = false;
@@ -58,7 +58,7 @@ void seed_on_terrain(const Scene& scene, std::size_t b, const ProfileTerrain& be
     for (double py : ys)
       for (double pw : ws) {
         const double pz = pw + zb;
-        if (!inside(pw, pz)) continue;
+        if (!inside(px, py, pw, pz)) continue;
         if (pw >= w_top) {
           above_top = true;
           continue;
@@ -73,9 +73,9 @@ void seed_on_terrain(const Scene& scene, std::size_t b, const ProfileTerrain& be
         b, body.name, w_top));
   if (store.size() == first)
     throw input_error(fmt::format(
-        "bodies[{}] (\"{}\") holds no particle: its box lies below the bed (grid.terrain) or is thinner than the "
+        "bodies[{}]{} (\"{}\") holds no particle: it lies below the bed (grid.terrain) or is thinner than the "
         "particle spacing h/n = {}",
-        b, body.name, h / n));
+        b, body.shape == BodyShapeKind::Prism ? ".prism" : "", body.name, h / n));
 }
 
 }  // namespace
@@ -96,16 +96,26 @@ ParticleStore seed_particles(const Scene& scene) {
     std::array<std::vector<double>, 3> axes;
     for (int d = 0; d < 3; ++d)
       axes[d] = axis_points(scene.grid.origin[d], h, n, body.box_min[d], body.box_max[d]);
+    const bool box = body.shape == BodyShapeKind::Box;
+    const std::string key = box ? fmt::format("bodies[{}]", b) : fmt::format("bodies[{}].{}", b, to_string(body.shape));
     if (axes[0].empty() || axes[1].empty() || axes[2].empty())
       throw input_error(fmt::format(
-          "bodies[{}] (\"{}\") holds no particle: its box is thinner than the particle spacing h/n = {} "
-          "along some axis", b, body.name, h / n));
+          "{} (\"{}\") holds no particle: its {} is thinner than the particle spacing h/n = {} "
+          "along some axis", key, body.name, box ? "box" : "bounding box", h / n));
     const double volume = std::pow(h / n, 3);
     const double mass = material.density * volume;
+    const std::int64_t first_id = next_id;
+    // The candidates span the bounding box; a box keeps them all, other shapes keep those inside.
     for (double px : axes[0])
       for (double py : axes[1])
-        for (double pz : axes[2])
-          store.add(next_id++, Vec3(px, py, pz), body.velocity, mass, volume, static_cast<std::uint16_t>(b));
+        for (double pz : axes[2]) {
+          const Vec3 position(px, py, pz);
+          if (box || body_contains(body, position))
+            store.add(next_id++, position, body.velocity, mass, volume, static_cast<std::uint16_t>(b));
+        }
+    if (next_id == first_id)
+      throw input_error(fmt::format("{} (\"{}\") holds no particle: no particle point (spacing h/n = {}) "
+                                    "lies inside it", key, body.name, h / n));
   }
   return store;
 }

@@ -46,6 +46,14 @@ const char* to_string(ConeFit cone) {
   return "?";
 }
 
+const char* to_string(BodyShapeKind shape) {
+  switch (shape) {
+    case BodyShapeKind::Box: return "box";
+    case BodyShapeKind::Prism: return "prism";
+  }
+  return "?";
+}
+
 const char* to_string(WallType type) {
   switch (type) {
     case WallType::Open: return "open";

@@ -186,6 +186,64 @@ MaterialSpec read_material(ObjectReader r, const std::string& name) {
   return m;
 }
 
+// The body's bounding box must lie in the grid. (On a terrain grid the third axis is w = z - z_b(x):
+// the terrain branch maps this check.)
+void check_inside_grid(const BodySpec& b, const std::string& path, const Scene& s) {
+  for (int d = 0; d < 3; ++d) {
+    // A physical body on a terrain grid is checked against the bed when seeding (seeding.cpp): the
+    // grid's z range depends on x there.
+    if (d == 2 && s.grid.has_terrain() && b.frame == BoxFrame::Physical) continue;
+    const double lo = s.grid.origin[d];
+    const double hi = lo + s.grid.cells[d] * s.grid.h;
+    if (b.box_min[d] < lo - 1e-12 * std::abs(lo) || b.box_max[d] > hi + 1e-12 * std::abs(hi))
+      throw input_error(fmt::format("{} [{}, {}] along axis {} lies outside the grid [{}, {}]", path, b.box_min[d],
+                                    b.box_max[d], d, lo, hi));
+  }
+}
+
+// "prism": {"points": [[x, z], ...], "y": [y0, y1]}: a simple polygon in the x-z plane, extruded.
+void read_prism(ObjectReader r, BodySpec& b) {
+  b.shape = BodyShapeKind::Prism;
+  const Json& pts = r.raw("points");
+  const std::string points_path = r.key_path("points");
+  if (!pts.is_array() || pts.size() < 3)
+    throw input_error(fmt::format("{} must be an array of at least 3 [x, z] points, got {}", points_path,
+                                  pts.is_array() ? fmt::format("{} points", pts.size()) : pts.dump()));
+  if (pts.size() > 10000) throw input_error(fmt::format("{} has {} points; at most 10000", points_path, pts.size()));
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const std::string at = fmt::format("{}[{}]", points_path, i);
+    if (!pts[i].is_array() || pts[i].size() != 2)
+      throw input_error(fmt::format("{} must be an [x, z] pair of numbers, got {}", at, pts[i].dump()));
+    std::array<double, 2> p;
+    for (int c = 0; c < 2; ++c)
+      p[c] = ObjectReader::check_number(pts[i][c], fmt::format("{}[{}]", at, c), -kHuge, kHuge, false, false);
+    b.prism.points.push_back(p);
+  }
+  const auto crossing = polygon_crossing_edges(b.prism.points);
+  if (crossing[0] >= 0)
+    throw input_error(fmt::format("{} is not a simple polygon: edge {} (points {} to {}) touches edge {} (points {} to {})",
+                                  points_path, crossing[0], crossing[0], (crossing[0] + 1) % pts.size(), crossing[1],
+                                  crossing[1], (crossing[1] + 1) % pts.size()));
+  if (polygon_signed_area(b.prism.points) == 0.0)
+    throw input_error(fmt::format("{} encloses no area", points_path));
+  const Json& y = r.raw("y");
+  if (!y.is_array() || y.size() != 2)
+    throw input_error(fmt::format("{} must be [y0, y1] with y0 < y1, got {}", r.key_path("y"), y.dump()));
+  b.prism.y0 = ObjectReader::check_number(y[0], r.key_path("y") + "[0]", -kHuge, kHuge, false, false);
+  b.prism.y1 = ObjectReader::check_number(y[1], r.key_path("y") + "[1]", -kHuge, kHuge, false, false);
+  if (!(b.prism.y0 < b.prism.y1))
+    throw input_error(fmt::format("{} = [{}, {}] must have y0 < y1", r.key_path("y"), b.prism.y0, b.prism.y1));
+  r.finish();
+  b.box_min = Vec3(kHuge, b.prism.y0, kHuge);
+  b.box_max = Vec3(-kHuge, b.prism.y1, -kHuge);
+  for (const auto& p : b.prism.points) {
+    b.box_min[0] = std::min(b.box_min[0], p[0]);
+    b.box_max[0] = std::max(b.box_max[0], p[0]);
+    b.box_min[2] = std::min(b.box_min[2], p[1]);
+    b.box_max[2] = std::max(b.box_max[2], p[1]);
+  }
+}
+
 BodySpec read_body(ObjectReader r, const Scene& s, const std::map<std::string, int>& materials) {
   BodySpec b;
   b.name = r.string("name");
@@ -197,28 +255,27 @@ BodySpec read_body(ObjectReader r, const Scene& s, const std::map<std::string, i
     throw input_error(fmt::format("{} = \"{}\" names no material (defined: {})", r.key_path("material"), material, known));
   }
   b.material = it->second;
-  ObjectReader box = r.object("box");
-  b.box_min = box.vec3("min");
-  b.box_max = box.vec3("max");
-  if (box.has("frame")) {
-    if (!s.grid.has_terrain())
-      throw input_error(fmt::format("{} needs grid.terrain (on a flat grid z is the height above the floor)",
-                                    box.key_path("frame")));
-    b.frame = box.choice("frame", "physical", {"physical", "terrain"}) == "terrain" ? BoxFrame::Terrain
-                                                                                     : BoxFrame::Physical;
-  }
-  box.finish();
-  for (int d = 0; d < 3; ++d) {
-    const double lo = s.grid.origin[d];
-    const double hi = lo + s.grid.cells[d] * s.grid.h;
-    if (!(b.box_min[d] < b.box_max[d]))
-      throw input_error(fmt::format("{}.min[{}] = {} must be below max[{}] = {}", box.path(), d, b.box_min[d], d, b.box_max[d]));
-    // A physical box on a terrain grid is checked against the bed when seeding (seeding.cpp): the
-    // grid's z range depends on x there.
-    if (d == 2 && s.grid.has_terrain() && b.frame == BoxFrame::Physical) continue;
-    if (b.box_min[d] < lo - 1e-12 * std::abs(lo) || b.box_max[d] > hi + 1e-12 * std::abs(hi))
-      throw input_error(fmt::format("{} [{}, {}] along axis {} lies outside the grid [{}, {}]", box.path(), b.box_min[d],
-                                    b.box_max[d], d, lo, hi));
+  if (r.has("box") == r.has("prism"))
+    throw input_error(fmt::format("{} needs exactly one shape: \"box\" or \"prism\"", r.path()));
+  if (r.has("box")) {
+    ObjectReader box = r.object("box");
+    b.box_min = box.vec3("min");
+    b.box_max = box.vec3("max");
+    if (box.has("frame")) {
+      if (!s.grid.has_terrain())
+        throw input_error(fmt::format("{} needs grid.terrain (on a flat grid z is the height above the floor)",
+                                      box.key_path("frame")));
+      b.frame = box.choice("frame", "physical", {"physical", "terrain"}) == "terrain" ? BoxFrame::Terrain
+                                                                                       : BoxFrame::Physical;
+    }
+    box.finish();
+    for (int d = 0; d < 3; ++d)
+      if (!(b.box_min[d] < b.box_max[d]))
+        throw input_error(fmt::format("{}.min[{}] = {} must be below max[{}] = {}", box.path(), d, b.box_min[d], d, b.box_max[d]));
+    check_inside_grid(b, box.path(), s);
+  } else {
+    read_prism(r.object("prism"), b);
+    check_inside_grid(b, r.key_path("prism"), s);
   }
   b.particles_per_cell = r.integer_or("particles_per_cell", b.particles_per_cell, 1, 8);
   b.velocity = r.vec3_or("velocity", Vec3::Zero());
@@ -284,6 +341,28 @@ void read_guards(ObjectReader r, Scene& s) {
   r.finish();
 }
 
+// "diagnostics": {"runout": {...}} (docs/flume.md "Runout diagnostics").
+void read_diagnostics(ObjectReader r, Scene& s) {
+  if (r.has("runout")) {
+    ObjectReader d = r.object("runout");
+    RunoutSpec& rs = s.runout;
+    rs.enabled = true;
+    rs.front_quantile = d.number_or("front_quantile", rs.front_quantile, 0.5, 1.0, false, false);
+    rs.tail_quantile = d.number_or("tail_quantile", rs.tail_quantile, 0.0, 0.5, false, false);
+    rs.has_gate = d.has("gate_x");
+    rs.gate_x = d.number_or("gate_x", 0.0, -kHuge, kHuge);
+    rs.has_runout_plane = d.has("runout_plane_x");
+    rs.runout_plane_x = d.number_or("runout_plane_x", 0.0, -kHuge, kHuge);
+    rs.deposit_cell = d.number_or("deposit_cell", s.grid.h, 0.0, kHuge, true);
+    const double raster_cells = (s.grid.cells[0] * s.grid.h / rs.deposit_cell) * (s.grid.cells[1] * s.grid.h / rs.deposit_cell);
+    if (raster_cells > 1e7)
+      throw input_error(fmt::format("{} = {} makes a deposit raster of {:.3g} cells over the grid; at most 1e7",
+                                    d.key_path("deposit_cell"), rs.deposit_cell, raster_cells));
+    d.finish();
+  }
+  r.finish();
+}
+
 }  // namespace
 
 Scene parse_scene(const std::string& text, const std::string& source) {
@@ -330,6 +409,7 @@ Scene parse_scene(const std::string& text, const std::string& source) {
   if (r.has("boundaries")) read_boundaries(r.object("boundaries"), s);
   if (r.has("output")) read_output(r.object("output"), s);
   if (r.has("guards")) read_guards(r.object("guards"), s);
+  if (r.has("diagnostics")) read_diagnostics(r.object("diagnostics"), s);
   r.finish();
   check_problem_size(s);
   return s;
@@ -407,14 +487,20 @@ nlohmann::json scene_to_json(const Scene& s) {
   }
   j["materials"] = mats;
   Json bodies = Json::array();
-  for (const auto& b : s.bodies)
-    bodies.push_back({{"name", b.name},
-                      {"material", s.materials[b.material].name},
-                      {"box", b.frame == BoxFrame::Terrain
-                                  ? Json{{"min", vec(b.box_min)}, {"max", vec(b.box_max)}, {"frame", "terrain"}}
-                                  : Json{{"min", vec(b.box_min)}, {"max", vec(b.box_max)}}},
-                      {"particles_per_cell", b.particles_per_cell},
-                      {"velocity", vec(b.velocity)}});
+  for (const auto& b : s.bodies) {
+    Json bj = {{"name", b.name}, {"material", s.materials[b.material].name}};
+    if (b.shape == BodyShapeKind::Prism) {
+      Json pts = Json::array();
+      for (const auto& p : b.prism.points) pts.push_back(Json::array({p[0], p[1]}));
+      bj["prism"] = {{"points", pts}, {"y", Json::array({b.prism.y0, b.prism.y1})}};
+    } else {
+      bj["box"] = {{"min", vec(b.box_min)}, {"max", vec(b.box_max)}};
+      if (b.frame == BoxFrame::Terrain) bj["box"]["frame"] = "terrain";
+    }
+    bj["particles_per_cell"] = b.particles_per_cell;
+    bj["velocity"] = vec(b.velocity);
+    bodies.push_back(bj);
+  }
   j["bodies"] = bodies;
   Json walls = Json::object();
   for (int d = 0; d < 3; ++d)
@@ -430,6 +516,14 @@ nlohmann::json scene_to_json(const Scene& s) {
                  {"history_interval", s.output.history_interval},
                  {"compression", s.output.compress ? "lz4" : "none"},
                  {"checkpoint_interval", s.output.checkpoint_interval}};
+  if (s.runout.enabled) {
+    Json runout = {{"front_quantile", s.runout.front_quantile},
+                   {"tail_quantile", s.runout.tail_quantile},
+                   {"deposit_cell", s.runout.deposit_cell}};
+    if (s.runout.has_gate) runout["gate_x"] = s.runout.gate_x;
+    if (s.runout.has_runout_plane) runout["runout_plane_x"] = s.runout.runout_plane_x;
+    j["diagnostics"] = {{"runout", runout}};
+  }
   j["guards"] = {{"max_step_displacement", s.guards.max_step_displacement},
                  {"energy_growth_factor", s.guards.energy_growth_factor},
                  {"snapshot_interval", s.guards.snapshot_interval}};

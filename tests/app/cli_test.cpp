@@ -132,3 +132,21 @@ TEST(Cli, BenchWritesTheJsonContract) {
 }
 
 }  // namespace
+
+namespace {
+
+// A scene with runout diagnostics ends with the runout distance and where its files are (issue 7).
+TEST(Cli, RunWithRunoutDiagnosticsPrintsTheRunoutAndItsFiles) {
+  const fs::path dir = temp_dir("runout");
+  const Result r = run("run " + kInputs + "benchmarks/sand_slide_incline.json --quiet --threads 2 --out " + dir.string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("talus: runout: front at s = "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("beyond the gate (diagnostics.runout.gate_x, s = 0.6102 m)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("ParaView series: " + (dir / "particles.pvd").string()), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find((dir / "runout.json").string()), std::string::npos) << r.output;
+  for (const char* f : {"runout.csv", "runout.json", "deposit.csv", "particles.pvd"}) EXPECT_TRUE(fs::exists(dir / f)) << f;
+  EXPECT_FALSE(fs::exists(dir / "terrain.vtu"));  // a flat grid has no terrain surface
+  fs::remove_all(dir);
+}
+
+}  // namespace

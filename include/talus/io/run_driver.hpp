@@ -8,13 +8,19 @@
 //   frames/particles_NNNNNN.vtu
 //   energy.csv           time, step, dt, kinetic, strain, gravity, boundary_work, plastic_work, total
 //   checkpoint.h5        the last checkpoint (output.checkpoint_interval, SIGINT/SIGTERM, instability)
+//   runout.csv           runout diagnostics on the history schedule (only with diagnostics.runout)
+//   runout.json          the runout after the last step: front, tail, gate, runout plane (diagnostics.runout)
+//   deposit.csv          the deposit thickness raster at the end (only with diagnostics.runout)
+//   terrain.vtu          the terrain surface, written once (only when the scene has a terrain)
 //
 // Crash safety (docs/reliability.md): frames, the .pvd index, scene.json and checkpoints are written
 // to a temporary name and renamed; energy rows are flushed one by one, and a restart rewrites the
 // history up to the checkpoint's step (atomically) before it appends.
+#include "talus/diagnostics/runout.hpp"
 #include "talus/io/checkpoint.hpp"
 #include "talus/solver/solver.hpp"
 
+#include <optional>
 #include <string>
 
 namespace talus {
@@ -40,6 +46,11 @@ struct RunSummary {
   std::string checkpoint_path;  // <out_dir>/checkpoint.h5
   std::size_t checkpoints = 0;  // checkpoints written by this call
   int interrupted_signal = 0;   // SIGINT/SIGTERM caught: the run stopped after writing a checkpoint
+  std::optional<RunoutResult> runout;  // with diagnostics.runout: the front after the last step
+  std::string runout_path;             // <out_dir>/runout.csv (with diagnostics.runout)
+  std::string runout_summary_path;     // <out_dir>/runout.json (with diagnostics.runout)
+  std::string deposit_path;            // <out_dir>/deposit.csv (written when the run reached its end)
+  std::string terrain_path;            // <out_dir>/terrain.vtu (when the scene has a terrain)
 };
 
 /// Prepare `out_dir` (creating it; earlier talus outputs there are replaced, unless resuming) and run

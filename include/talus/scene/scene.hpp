@@ -1,6 +1,7 @@
 #pragma once
 // The validated description of a run: plain structs, filled in and checked by scene_reader.cpp.
 // Nothing below the solver reads JSON; everything it needs is here, with defaults resolved.
+#include "talus/core/polygon.hpp"
 #include "talus/core/types.hpp"
 #include "talus/grid/grid.hpp"
 #include "talus/material/drucker_prager.hpp"
@@ -55,13 +56,24 @@ struct MaterialSpec {
 /// it), or in the grid's (x, y, w), w = height above the bed (a layer of uniform vertical thickness
 /// that follows the terrain; its cells are the grid's isoparametric cells).
 enum class BoxFrame { Physical, Terrain };
+/// The region a body fills: an axis-aligned box, or a prism (a polygon in the x-z plane extruded
+/// over [y0, y1]; e.g. the sand wedge behind a flume gate). particles/body_shape.hpp tests points.
+enum class BodyShapeKind { Box, Prism };
+
+struct PrismSpec {
+  PolygonPoints points;   // (x, z) vertices, a simple polygon, >= 3
+  double y0 = 0.0, y1 = 0.0;
+};
 
 struct BodySpec {
   std::string name;
   int material = 0;                      // index into Scene::materials
-  Vec3 box_min = Vec3::Zero();           // axis-aligned box filled with particles
+  BodyShapeKind shape = BodyShapeKind::Box;
+  /// The box filled with particles; for a prism its bounding box (the candidates seeding tests).
+  Vec3 box_min = Vec3::Zero();
   Vec3 box_max = Vec3::Zero();
   BoxFrame frame = BoxFrame::Physical;   // grid.terrain only
+  PrismSpec prism;                       // BodyShapeKind::Prism only
   int particles_per_cell = 2;            // n: n x n x n particles per cell
   Vec3 velocity = Vec3::Zero();          // initial velocity
 };
@@ -95,6 +107,19 @@ struct SmoothingSpec {
   std::vector<int> bodies;  // indices into Scene::bodies of the smoothed bodies; empty = every body
 };
 
+/// Runout diagnostics (diagnostics/runout.hpp, docs/flume.md): along the flume's arc-length
+/// coordinate s (s = x on a flat grid). Off unless the scene has a "diagnostics.runout" object.
+struct RunoutSpec {
+  bool enabled = false;
+  double front_quantile = 0.995;   // front: s below which this share of the mass lies
+  double tail_quantile = 0.005;    // tail: s below which this share of the mass lies
+  bool has_gate = false;           // gate_x given; otherwise the initial front is the reference
+  double gate_x = 0.0;             // [m] x of the gate (the runout is measured from it)
+  bool has_runout_plane = false;   // runout_plane_x given (or derived from the terrain)
+  double runout_plane_x = 0.0;     // [m] x where the runout plane starts
+  double deposit_cell = 0.0;       // [m] raster cell (s and y) of deposit.csv (the JSON default: the grid's h)
+};
+
 struct Scene {
   std::string name;
   std::string description;
@@ -116,6 +141,7 @@ struct Scene {
   std::array<std::array<WallSpec, 2>, 3> walls{};
   OutputSpec output;
   GuardSpec guards;
+  RunoutSpec runout;
 };
 
 const char* to_string(SchemeKind scheme);
@@ -123,5 +149,6 @@ const char* to_string(ShapeKind shape);
 const char* to_string(WallType type);
 const char* to_string(MaterialModel model);
 const char* to_string(ConeFit cone);
+const char* to_string(BodyShapeKind shape);
 
 }  // namespace talus

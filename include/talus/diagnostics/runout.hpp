@@ -1,0 +1,89 @@
+#pragma once
+// Runout diagnostics of a granular flow down a flume (docs/flume.md "Runout diagnostics"). All
+// positions are along the flume coordinate s (FlumeCoordinates: arc length on a terrain, x when flat).
+//
+// Front and tail are mass quantiles, so that a few stray particles do not move them: with the
+// particles ordered by s (ties by id) and C_k the mass of the first k of them, the q-quantile is the
+// s of the first particle with C_k >= q M. front = quantile(front_quantile = 0.995),
+// tail = quantile(tail_quantile = 0.005). The extremes s_min, s_max are reported alongside.
+//
+// Everything is summed in that (s, id) order, serially: the numbers do not depend on the thread
+// count nor on the order of the particle store.
+#include "talus/diagnostics/flume_coordinates.hpp"
+#include "talus/particles/particle_store.hpp"
+#include "talus/scene/scene.hpp"
+
+#include <optional>
+#include <vector>
+
+namespace talus {
+
+struct RunoutSample {
+  double time = 0.0;
+  std::int64_t step = 0;
+  double mass = 0.0;               // total particle mass [kg]
+  double front = 0.0, tail = 0.0;  // mass quantiles of s [m]
+  double s_min = 0.0, s_max = 0.0; // the rearmost and foremost particle [m]
+  double centre_s = 0.0;           // mass-weighted mean of s [m]
+  Vec3 centre = Vec3::Zero();      // centre of mass (x, y, z) [m]
+  double centre_velocity_s = 0.0;  // mass-weighted mean of v . t(x): the momentum along the bed / M [m/s]
+  double front_velocity = 0.0;     // (front - previous front) / (time - previous time) [m/s]; 0 for the first
+};
+
+/// One sample of the particle set (front_velocity left 0; RunoutMonitor fills it in).
+RunoutSample measure_runout(const ParticleStore& particles, const FlumeCoordinates& coordinates,
+                            double front_quantile, double tail_quantile);
+
+/// The deposit thickness on the bed: a raster of cells ds x dy in (s, y); thickness = the particle
+/// volume (current volume V_p) whose s and y fall in the cell, divided by the cell's bed area ds dy.
+/// For a uniform layer that is its bed-normal thickness. Cell (i, j) covers
+/// [s0 + i ds, s0 + (i + 1) ds) x [y0 + j dy, y0 + (j + 1) dy).
+struct DepositRaster {
+  double s0 = 0.0, ds = 0.0, y0 = 0.0, dy = 0.0;
+  int ns = 0, ny = 0;
+  std::vector<double> thickness;  // ns * ny, index i * ny + j
+  double volume_outside = 0.0;    // particle volume outside the raster [m^3]
+  double at(int i, int j) const { return thickness[static_cast<std::size_t>(i) * ny + j]; }
+  double s_centre(int i) const { return s0 + (i + 0.5) * ds; }
+  double y_centre(int j) const { return y0 + (j + 0.5) * dy; }
+};
+
+/// Raster over [s0, s1) x [y0, y1) with square cells of about `cell` (whole numbers of cells that
+/// cover the range). Particles are added in id order (independent of the store's order).
+DepositRaster measure_deposit(const ParticleStore& particles, const FlumeCoordinates& coordinates, double s0,
+                              double s1, double y0, double y1, double cell);
+
+/// The final runout: the front at the end of the run, measured from the gate and from the start of
+/// the runout plane (where known).
+struct RunoutResult {
+  double front = 0.0, tail = 0.0;
+  double gate_s = 0.0;                    // s of the gate (scene gate_x, else the initial front)
+  bool gate_from_scene = false;
+  double from_gate = 0.0;                 // front - gate_s
+  std::optional<double> runout_plane_s;   // s where the runout plane starts
+  std::optional<double> beyond_runout_plane;  // front - runout_plane_s
+};
+
+/// Samples the run on the history schedule and keeps the first and the previous sample (the
+/// reference front and the front velocity).
+class RunoutMonitor {
+ public:
+  RunoutMonitor(const RunoutSpec& spec, FlumeCoordinates coordinates);
+  const FlumeCoordinates& coordinates() const { return coordinates_; }
+  /// Measure the particles at (time, step); fills front_velocity from the previous sample.
+  RunoutSample sample(const ParticleStore& particles, double time, std::int64_t step);
+  /// A restart: continue after these samples (the first of the run and the last before the checkpoint).
+  void resume(const RunoutSample& first, const RunoutSample& last);
+  bool has_samples() const { return first_.has_value(); }
+  const RunoutSample& first() const { return *first_; }
+  const RunoutSample& last() const { return *last_; }
+  /// The runout after the last sample.
+  RunoutResult result() const;
+
+ private:
+  RunoutSpec spec_;
+  FlumeCoordinates coordinates_;
+  std::optional<RunoutSample> first_, last_;
+};
+
+}  // namespace talus

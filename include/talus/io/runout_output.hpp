@@ -1,0 +1,30 @@
+#pragma once
+// The runout diagnostics' files (docs/flume.md): runout.csv, one row per history interval, and
+// deposit.csv, the deposit thickness raster at the end of the run.
+#include "talus/diagnostics/runout.hpp"
+
+#include <optional>
+#include <string>
+
+namespace talus {
+
+/// time,step,mass,front,tail,s_min,s_max,centre_s,centre_x,centre_y,centre_z,centre_velocity_s,front_velocity
+std::string runout_csv_header();
+/// One row; every number in the shortest form that reads back exactly (a restart continues from it).
+std::string runout_csv_row(const RunoutSample& sample);
+/// The inverse of runout_csv_row (a restart reads its history back); empty for a malformed row.
+std::optional<RunoutSample> parse_runout_csv_row(const std::string& row);
+
+/// The runout result as a JSON object (runout.json): time, front, tail, gate_s, gate_from_scene,
+/// from_gate, and runout_plane_s, beyond_runout_plane where known (null otherwise).
+std::string runout_result_json(const RunoutResult& result, double time);
+
+/// s,y,x,thickness: one row per raster cell (cell centres), s fastest-varying last (rows of constant s).
+void write_deposit_csv(const std::string& path, const DepositRaster& raster, const FlumeCoordinates& coordinates);
+
+/// The terrain surface as a strip of quads over [y0, y1] (VTK_QUAD cells in a .vtu), sampled in x at
+/// spacing <= max_segment and at every kink, with point arrays "arc_length" (s) and "slope_angle" [deg].
+void write_terrain_vtu(const std::string& path, const TerrainProfile& profile, double x0, double x1, double y0,
+                       double y1, double max_segment);
+
+}  // namespace talus

@@ -1,0 +1,130 @@
+#include "talus/diagnostics/runout.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+namespace talus {
+
+namespace {
+
+struct Entry {
+  double s;
+  std::int64_t id;
+  std::size_t index;
+};
+
+}  // namespace
+
+RunoutSample measure_runout(const ParticleStore& P, const FlumeCoordinates& c, double front_quantile,
+                            double tail_quantile) {
+  RunoutSample r;
+  const std::size_t n = P.size();
+  if (n == 0) return r;
+  std::vector<Entry> order(n);
+#pragma omp parallel for schedule(static)
+  for (std::size_t p = 0; p < n; ++p) order[p] = Entry{c.s(P.x[0][p]), P.id[p], p};
+  std::sort(order.begin(), order.end(), [](const Entry& a, const Entry& b) { return a.s < b.s || (a.s == b.s && a.id < b.id); });
+
+  double mass = 0.0;
+  for (const Entry& e : order) mass += P.mass[e.index];
+  r.mass = mass;
+  r.s_min = order.front().s;
+  r.s_max = order.back().s;
+  // Quantiles: the first particle, in (s, id) order, at which the cumulative mass reaches q M.
+  const double tail_mass = tail_quantile * mass, front_mass = front_quantile * mass;
+  bool have_tail = false, have_front = false;
+  double cumulative = 0.0, sum_s = 0.0, sum_v = 0.0;
+  Vec3 sum_x = Vec3::Zero();
+  for (const Entry& e : order) {
+    const std::size_t p = e.index;
+    const double m = P.mass[p];
+    cumulative += m;
+    if (!have_tail && cumulative >= tail_mass) {
+      r.tail = e.s;
+      have_tail = true;
+    }
+    if (!have_front && cumulative >= front_mass) {
+      r.front = e.s;
+      have_front = true;
+    }
+    sum_s += m * e.s;
+    for (int d = 0; d < 3; ++d) sum_x[d] += m * P.x[d][p];
+    const Vec3 t = c.tangent(P.x[0][p]);
+    sum_v += m * (P.v[0][p] * t[0] + P.v[1][p] * t[1] + P.v[2][p] * t[2]);
+  }
+  if (!have_front) r.front = r.s_max;  // round-off: the cumulative sum fell a hair short of q M
+  if (!have_tail) r.tail = r.s_max;
+  r.centre_s = sum_s / mass;
+  r.centre = sum_x / mass;
+  r.centre_velocity_s = sum_v / mass;
+  return r;
+}
+
+DepositRaster measure_deposit(const ParticleStore& P, const FlumeCoordinates& c, double s0, double s1, double y0,
+                              double y1, double cell) {
+  if (!(cell > 0.0) || !(s1 > s0) || !(y1 > y0))
+    throw std::invalid_argument("measure_deposit: empty raster or cell size <= 0");
+  DepositRaster r;
+  r.s0 = s0;
+  r.y0 = y0;
+  r.ds = r.dy = cell;
+  r.ns = std::max(1, static_cast<int>(std::ceil((s1 - s0) / cell - 1e-9)));
+  r.ny = std::max(1, static_cast<int>(std::ceil((y1 - y0) / cell - 1e-9)));
+  r.thickness.assign(static_cast<std::size_t>(r.ns) * r.ny, 0.0);
+  std::vector<std::size_t> by_id(P.size());
+  std::iota(by_id.begin(), by_id.end(), std::size_t{0});
+  std::sort(by_id.begin(), by_id.end(), [&](std::size_t a, std::size_t b) { return P.id[a] < P.id[b]; });
+  const double area = r.ds * r.dy;
+  for (std::size_t p : by_id) {
+    const double fi = std::floor((c.s(P.x[0][p]) - s0) / r.ds);
+    const double fj = std::floor((P.x[1][p] - y0) / r.dy);
+    if (fi < 0 || fi >= r.ns || fj < 0 || fj >= r.ny) {
+      r.volume_outside += P.volume[p];
+      continue;
+    }
+    r.thickness[static_cast<std::size_t>(fi) * r.ny + static_cast<std::size_t>(fj)] += P.volume[p] / area;
+  }
+  return r;
+}
+
+RunoutMonitor::RunoutMonitor(const RunoutSpec& spec, FlumeCoordinates coordinates)
+    : spec_(spec), coordinates_(std::move(coordinates)) {}
+
+RunoutSample RunoutMonitor::sample(const ParticleStore& particles, double time, std::int64_t step) {
+  RunoutSample s = measure_runout(particles, coordinates_, spec_.front_quantile, spec_.tail_quantile);
+  s.time = time;
+  s.step = step;
+  if (last_ && time > last_->time) s.front_velocity = (s.front - last_->front) / (time - last_->time);
+  if (!first_) first_ = s;
+  last_ = s;
+  return s;
+}
+
+void RunoutMonitor::resume(const RunoutSample& first, const RunoutSample& last) {
+  first_ = first;
+  last_ = last;
+}
+
+RunoutResult RunoutMonitor::result() const {
+  RunoutResult r;
+  if (!last_) return r;
+  r.front = last_->front;
+  r.tail = last_->tail;
+  r.gate_from_scene = spec_.has_gate;
+  r.gate_s = spec_.has_gate ? coordinates_.s(spec_.gate_x) : first_->front;
+  r.from_gate = r.front - r.gate_s;
+  std::optional<double> plane_x;
+  if (spec_.has_runout_plane)
+    plane_x = spec_.runout_plane_x;
+  else
+    plane_x = coordinates_.last_segment_start();
+  if (plane_x) {
+    r.runout_plane_s = coordinates_.s(*plane_x);
+    r.beyond_runout_plane = r.front - *r.runout_plane_s;
+  }
+  return r;
+}
+
+}  // namespace talus

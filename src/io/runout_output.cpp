@@ -1,0 +1,135 @@
+#include "talus/io/runout_output.hpp"
+
+#include "talus/core/error.hpp"
+#include "talus/io/vtu_writer.hpp"
+
+#include <fmt/core.h>
+#include <vtkCellArray.h>
+#include <vtkCellType.h>
+#include <vtkDoubleArray.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridWriter.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+#include <vector>
+
+namespace talus {
+
+std::string runout_csv_header() {
+  return "time,step,mass,front,tail,s_min,s_max,centre_s,centre_x,centre_y,centre_z,centre_velocity_s,front_velocity";
+}
+
+std::string runout_csv_row(const RunoutSample& r) {
+  // The shortest text that reads back to the same double: a restart continues from these rows
+  // (the front velocity differences the last one), so they must round-trip exactly.
+  return fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                     r.time, r.step, r.mass, r.front, r.tail, r.s_min, r.s_max, r.centre_s, r.centre[0], r.centre[1],
+                     r.centre[2], r.centre_velocity_s, r.front_velocity);
+}
+
+std::optional<RunoutSample> parse_runout_csv_row(const std::string& row) {
+  std::vector<std::string> fields;
+  std::stringstream in(row);
+  for (std::string f; std::getline(in, f, ',');) fields.push_back(f);
+  if (fields.size() != 13) return std::nullopt;
+  RunoutSample r;
+  try {
+    std::size_t k = 0;
+    auto next = [&]() { return std::stod(fields[k++]); };
+    r.time = next();
+    r.step = std::stoll(fields[k++]);
+    r.mass = next();
+    r.front = next();
+    r.tail = next();
+    r.s_min = next();
+    r.s_max = next();
+    r.centre_s = next();
+    for (int d = 0; d < 3; ++d) r.centre[d] = next();
+    r.centre_velocity_s = next();
+    r.front_velocity = next();
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+  return r;
+}
+
+std::string runout_result_json(const RunoutResult& r, double time) {
+  auto number = [](double v) { return fmt::format("{:.10g}", v); };
+  auto optional = [&](const std::optional<double>& v) { return v ? number(*v) : std::string("null"); };
+  return fmt::format(
+      "{{\"time\": {}, \"front\": {}, \"tail\": {}, \"gate_s\": {}, \"gate_from_scene\": {}, \"from_gate\": {}, "
+      "\"runout_plane_s\": {}, \"beyond_runout_plane\": {}}}",
+      number(time), number(r.front), number(r.tail), number(r.gate_s), r.gate_from_scene ? "true" : "false",
+      number(r.from_gate), optional(r.runout_plane_s), optional(r.beyond_runout_plane));
+}
+
+void write_deposit_csv(const std::string& path, const DepositRaster& raster, const FlumeCoordinates& c) {
+  std::string text = "s,y,x,thickness\n";
+  text.reserve(text.size() + static_cast<std::size_t>(raster.ns) * raster.ny * 56);
+  for (int i = 0; i < raster.ns; ++i) {
+    const double s = raster.s_centre(i);
+    const double x = c.x_at(s);
+    for (int j = 0; j < raster.ny; ++j)
+      text += fmt::format("{:.8e},{:.8e},{:.8e},{:.8e}\n", s, raster.y_centre(j), x, raster.at(i, j));
+  }
+  write_file_atomically(path, text);
+}
+
+void write_terrain_vtu(const std::string& path, const TerrainProfile& profile, double x0, double x1, double y0,
+                       double y1, double max_segment) {
+  // Sample x uniformly, plus the kinks, so the strip follows the bed's corners exactly.
+  std::vector<double> xs;
+  const int segments = std::max(1, static_cast<int>(std::ceil((x1 - x0) / max_segment)));
+  for (int i = 0; i <= segments; ++i) xs.push_back(x0 + (x1 - x0) * i / segments);
+  for (double k : profile.kinks())
+    if (k > x0 && k < x1) xs.push_back(k);
+  std::sort(xs.begin(), xs.end());
+  xs.erase(std::unique(xs.begin(), xs.end()), xs.end());
+
+  const auto n = static_cast<vtkIdType>(xs.size());
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(2 * n);
+  vtkNew<vtkDoubleArray> arc, angle;
+  arc->SetName("arc_length");
+  arc->SetNumberOfTuples(2 * n);
+  angle->SetName("slope_angle");
+  angle->SetNumberOfTuples(2 * n);
+  for (vtkIdType i = 0; i < n; ++i) {
+    const double x = xs[i], z = profile.height(x);
+    const double s = profile.arc_length(x);
+    const double deg = std::atan(-profile.slope(x)) * 180.0 / M_PI;  // positive where the bed descends in +x
+    for (int side = 0; side < 2; ++side) {
+      points->SetPoint(2 * i + side, x, side == 0 ? y0 : y1, z);
+      arc->SetValue(2 * i + side, s);
+      angle->SetValue(2 * i + side, deg);
+    }
+  }
+  vtkNew<vtkCellArray> cells;
+  for (vtkIdType i = 0; i + 1 < n; ++i) {
+    const vtkIdType quad[4] = {2 * i, 2 * (i + 1), 2 * (i + 1) + 1, 2 * i + 1};
+    cells->InsertNextCell(4, quad);
+  }
+  vtkNew<vtkUnstructuredGrid> grid;
+  grid->SetPoints(points);
+  grid->SetCells(VTK_QUAD, cells);
+  grid->GetPointData()->AddArray(arc);
+  grid->GetPointData()->AddArray(angle);
+  const std::string tmp = path + ".tmp";
+  vtkNew<vtkXMLUnstructuredGridWriter> writer;
+  writer->SetFileName(tmp.c_str());
+  writer->SetInputData(grid);
+  writer->SetDataModeToAppended();
+  writer->EncodeAppendedDataOff();
+  writer->SetCompressorTypeToNone();
+  if (writer->Write() != 1) throw io_error(fmt::format("cannot write terrain surface {}", path));
+  std::filesystem::rename(tmp, path);
+}
+
+}  // namespace talus

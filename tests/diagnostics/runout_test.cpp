@@ -1,0 +1,359 @@
+// Runout diagnostics on synthetic particle sets: quantile front and tail that stray particles do not
+// move, centre of mass and its velocity along the bed, the deposit raster, the terrain's runout
+// plane, and the files the run driver writes.
+#include "talus/core/error.hpp"
+#include "talus/diagnostics/runout.hpp"
+#include "talus/io/checkpoint.hpp"
+#include "talus/io/run_driver.hpp"
+#include "talus/io/runout_output.hpp"
+#include "talus/scene/scene_json.hpp"
+#include "talus/solver/solver.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <omp.h>
+#include <unistd.h>
+#include <vtkCellData.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numeric>
+#include <random>
+#include <sstream>
+
+namespace talus {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// n equal particles spread evenly over s in [0, length) (x = s on a flat bed), shuffled so the store
+/// order is not the s order.
+ParticleStore uniform_strip(int n, double length, double mass = 1.0, unsigned seed = 1) {
+  std::vector<int> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  std::mt19937 rng(seed);
+  std::shuffle(order.begin(), order.end(), rng);
+  ParticleStore P;
+  for (int k : order) P.add(k, Vec3((k + 0.5) * length / n, 0.1 * (k % 3), 0.05), Vec3(1.0, 0.0, 0.0), mass, 1e-3, 0);
+  return P;
+}
+
+TEST(Runout, QuantileFrontAndTailOfAUniformStrip) {
+  const ParticleStore P = uniform_strip(1000, 2.0);
+  const RunoutSample r = measure_runout(P, FlumeCoordinates(), 0.995, 0.005);
+  // The 995th of 1000 particles (cumulative mass 995 >= 0.995 * 1000) at s = 994.5 * 2 / 1000.
+  EXPECT_DOUBLE_EQ(r.front, 994.5 * 0.002);
+  EXPECT_DOUBLE_EQ(r.tail, 4.5 * 0.002);
+  EXPECT_DOUBLE_EQ(r.s_max, 999.5 * 0.002);
+  EXPECT_DOUBLE_EQ(r.mass, 1000.0);
+  EXPECT_NEAR(r.centre_s, 1.0, 1e-12);
+  EXPECT_NEAR(r.centre[0], 1.0, 1e-12);
+  EXPECT_NEAR(r.centre[2], 0.05, 1e-12);
+  EXPECT_NEAR(r.centre_velocity_s, 1.0, 1e-12);
+}
+
+TEST(Runout, StrayParticlesDoNotMoveTheFront) {
+  ParticleStore P = uniform_strip(1000, 2.0);
+  const RunoutSample clean = measure_runout(P, FlumeCoordinates(), 0.995, 0.005);
+  // Three strays (0.3% of the mass) far ahead and two far behind.
+  for (int k = 0; k < 3; ++k) P.add(2000 + k, Vec3(5.0 + k, 0.0, 0.05), Vec3::Zero(), 1.0, 1e-3, 0);
+  for (int k = 0; k < 2; ++k) P.add(3000 + k, Vec3(-3.0 - k, 0.0, 0.05), Vec3::Zero(), 1.0, 1e-3, 0);
+  const RunoutSample stray = measure_runout(P, FlumeCoordinates(), 0.995, 0.005);
+  EXPECT_DOUBLE_EQ(stray.s_max, 7.0);   // the extremes see them ...
+  EXPECT_DOUBLE_EQ(stray.s_min, -4.0);
+  // ... the quantiles move by a few particle spacings (0.002 m), not metres. Exactly: 1005 particles,
+  // 0.995 * 1005 = 999.975, so the front is the 1000th in s order = strip particle 997 (two strays
+  // lie behind); 0.005 * 1005 = 5.025, so the tail is the 6th = strip particle 3.
+  EXPECT_DOUBLE_EQ(stray.front, 997.5 * 0.002);
+  EXPECT_DOUBLE_EQ(stray.tail, 3.5 * 0.002);
+  EXPECT_NEAR(stray.front, clean.front, 3.01 * 0.002);
+  EXPECT_NEAR(stray.tail, clean.tail, 1.01 * 0.002);
+  // The raw extremes are not robust: that is why front and tail are quantiles.
+  EXPECT_GT(stray.s_max - clean.s_max, 5.0);
+}
+
+TEST(Runout, IndependentOfStoreOrderAndThreadCount) {
+  const ParticleStore a = uniform_strip(5000, 1.7, 0.3, 1);
+  const ParticleStore b = uniform_strip(5000, 1.7, 0.3, 2);  // another order of the same particles
+  omp_set_num_threads(1);
+  const RunoutSample ra = measure_runout(a, FlumeCoordinates(), 0.99, 0.01);
+  omp_set_num_threads(2);
+  const RunoutSample rb = measure_runout(b, FlumeCoordinates(), 0.99, 0.01);
+  EXPECT_EQ(ra.front, rb.front);
+  EXPECT_EQ(ra.tail, rb.tail);
+  EXPECT_EQ(ra.centre_s, rb.centre_s);  // bit for bit: summed in (s, id) order
+  EXPECT_EQ(ra.centre[1], rb.centre[1]);
+  EXPECT_EQ(measure_deposit(a, FlumeCoordinates(), 0, 2, -0.1, 0.3, 0.05).thickness,
+            measure_deposit(b, FlumeCoordinates(), 0, 2, -0.1, 0.3, 0.05).thickness);
+}
+
+TerrainSpec flume_terrain(double slope_deg, double radius) {
+  // A slope down to a horizontal runout plane at z = 0, the vertex at x = 1.
+  const double t = std::tan(slope_deg * M_PI / 180.0);
+  return TerrainSpec{{{0.0, t}, {1.0, 0.0}, {2.5, 0.0}}, {0.0, radius, 0.0}};
+}
+
+TEST(Runout, ArcLengthAndTangentVelocityOnATerrain) {
+  const TerrainProfile profile(flume_terrain(31.4, 0.2));
+  const FlumeCoordinates c(profile);
+  // A particle on the slope moving down it at 2 m/s, one on the runout plane at rest.
+  const double th = 31.4 * M_PI / 180.0;
+  ParticleStore P;
+  P.add(0, Vec3(0.3, 0.0, profile.height(0.3) + 0.01), Vec3(2 * std::cos(th), 0.0, -2 * std::sin(th)), 1.0, 1e-3, 0);
+  P.add(1, Vec3(2.0, 0.0, 0.01), Vec3::Zero(), 1.0, 1e-3, 0);
+  const RunoutSample r = measure_runout(P, c, 0.995, 0.005);
+  EXPECT_NEAR(r.tail, 0.3 / std::cos(th), 1e-12);  // s on the straight slope
+  EXPECT_NEAR(r.front, profile.arc_length(2.0), 1e-12);
+  EXPECT_NEAR(r.centre_velocity_s, 1.0, 1e-12);  // (2 + 0) / 2 along the local tangents
+}
+
+TEST(Runout, RunoutPlaneStartsWhereTheTransitionEnds) {
+  const double th = 31.4 * M_PI / 180.0, r = 0.2;
+  const FlumeCoordinates c{TerrainProfile(flume_terrain(31.4, r))};
+  const double x = *c.last_segment_start();
+  EXPECT_NEAR(x, 1.0 + r * std::tan(th / 2), 1e-12);  // tangent length of the fillet
+  // The bed is level from there on and still curved just before.
+  EXPECT_NEAR(c.profile().slope(x + 1e-6), 0.0, 1e-12);
+  EXPECT_LT(c.profile().slope(x - 1e-3), -1e-3);
+  // A sharp kink: the vertex itself. Flat: unknown.
+  EXPECT_DOUBLE_EQ(*FlumeCoordinates(TerrainProfile(flume_terrain(31.4, 0.0))).last_segment_start(), 1.0);
+  EXPECT_FALSE(FlumeCoordinates().last_segment_start().has_value());
+}
+
+TEST(Runout, MonitorDifferencesTheFrontAndMeasuresFromTheGate) {
+  RunoutSpec spec;
+  spec.enabled = true;
+  RunoutMonitor monitor(spec, FlumeCoordinates());
+  ParticleStore P = uniform_strip(200, 1.0);
+  monitor.sample(P, 0.0, 0);
+  for (std::size_t p = 0; p < P.size(); ++p) P.x[0][p] += 0.3;  // everything moved 0.3 m in 0.5 s
+  const RunoutSample s = monitor.sample(P, 0.5, 10);
+  EXPECT_NEAR(s.front_velocity, 0.6, 1e-12);
+  RunoutResult r = monitor.result();
+  EXPECT_FALSE(r.gate_from_scene);
+  EXPECT_NEAR(r.from_gate, 0.3, 1e-12);  // from the initial front
+  EXPECT_FALSE(r.beyond_runout_plane.has_value());
+  spec.has_gate = true;
+  spec.gate_x = 0.5;
+  spec.has_runout_plane = true;
+  spec.runout_plane_x = 1.0;
+  RunoutMonitor given(spec, FlumeCoordinates());
+  given.resume(monitor.first(), monitor.last());
+  r = given.result();
+  EXPECT_NEAR(r.from_gate, s.front - 0.5, 1e-12);
+  EXPECT_NEAR(*r.beyond_runout_plane, s.front - 1.0, 1e-12);
+}
+
+TEST(Deposit, UniformLayerHasItsThicknessAndVolumeIsConserved) {
+  // A layer 0.04 m thick on [0.2, 0.6) x [0, 0.2): particles of volume 1e-6 m^3 on a 0.01 m lattice
+  // in s and y, 4 per column (0.04 m thick as volume per area: 4e-6 / 1e-4).
+  ParticleStore P;
+  std::int64_t id = 0;
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 20; ++j)
+      for (int k = 0; k < 4; ++k)
+        P.add(id++, Vec3(0.2 + (i + 0.5) * 0.01, (j + 0.5) * 0.01, (k + 0.5) * 0.01), Vec3::Zero(), 1.6e-3, 1e-6, 0);
+  P.add(id++, Vec3(5.0, 0.1, 0.0), Vec3::Zero(), 1.6e-3, 1e-6, 0);  // a stray beyond the raster
+  const DepositRaster d = measure_deposit(P, FlumeCoordinates(), 0.0, 1.0, 0.0, 0.2, 0.05);
+  ASSERT_EQ(d.ns, 20);
+  ASSERT_EQ(d.ny, 4);
+  double volume = 0.0;
+  for (int i = 0; i < d.ns; ++i)
+    for (int j = 0; j < d.ny; ++j) {
+      const double s = d.s_centre(i);
+      EXPECT_NEAR(d.at(i, j), s > 0.2 && s < 0.6 ? 0.04 : 0.0, 1e-12) << "cell " << i << ", " << j;
+      volume += d.at(i, j) * d.ds * d.dy;
+    }
+  EXPECT_NEAR(volume, 3200e-6, 1e-12);
+  EXPECT_DOUBLE_EQ(d.volume_outside, 1e-6);
+}
+
+TEST(RunoutOutput, CsvRowRoundTrips) {
+  RunoutSample r;
+  r.time = 0.125;
+  r.step = 77;
+  r.mass = 6.1;
+  r.front = 1.25;
+  r.tail = -0.2;
+  r.centre = Vec3(0.5, 0.01, 0.3);
+  r.front_velocity = 0.7;
+  const auto back = parse_runout_csv_row(runout_csv_row(r));
+  ASSERT_TRUE(back.has_value());
+  EXPECT_EQ(back->step, 77);
+  EXPECT_EQ(back->front, 1.25);
+  EXPECT_EQ(back->centre[2], 0.3);
+  EXPECT_EQ(back->front_velocity, 0.7);
+  r.centre_s = 1.0 / 3.0;  // exactly, not to 10 digits
+  EXPECT_EQ(parse_runout_csv_row(runout_csv_row(r))->centre_s, 1.0 / 3.0);
+  EXPECT_FALSE(parse_runout_csv_row("1,2,3").has_value());
+}
+
+fs::path temp_dir(const std::string& name) {
+  fs::path dir = fs::temp_directory_path() / ("talus_test_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+TEST(RunoutOutput, TerrainSurfaceReadsBackOnTheBed) {
+  const TerrainProfile profile(flume_terrain(31.4, 0.2));
+  const fs::path dir = temp_dir("terrain");
+  const std::string path = (dir / "terrain.vtu").string();
+  write_terrain_vtu(path, profile, -0.1, 2.4, -0.3, 0.3, 0.01);
+  vtkNew<vtkXMLUnstructuredGridReader> reader;
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  vtkUnstructuredGrid* g = reader->GetOutput();
+  ASSERT_EQ(g->GetNumberOfPoints(), 2 * 251);  // 250 segments of 0.01 m (the transition has no kink)
+  EXPECT_EQ(g->GetNumberOfCells(), 250);
+  ASSERT_NE(g->GetPointData()->GetArray("arc_length"), nullptr);
+  ASSERT_NE(g->GetPointData()->GetArray("slope_angle"), nullptr);
+  for (vtkIdType p = 0; p < g->GetNumberOfPoints(); ++p) {
+    double x[3];
+    g->GetPoint(p, x);
+    EXPECT_NEAR(x[2], profile.height(x[0]), 1e-12);
+    EXPECT_DOUBLE_EQ(x[1], p % 2 == 0 ? -0.3 : 0.3);
+  }
+  EXPECT_NEAR(g->GetPointData()->GetArray("slope_angle")->GetTuple1(0), 31.4, 1e-9);
+  fs::remove_all(dir);
+}
+
+// A sand block sliding on a flat floor, gravity tilted 31.4 deg down +x.
+const char* kSlideScene = R"({
+    "name": "slide", "grid": { "origin": [0, 0, 0], "size": [0.4, 0.02, 0.1], "cell_size": 0.02 },
+    "gravity": [5.11, 0, -8.37], "time": { "end": 0.02 },
+    "materials": { "sand": { "model": "drucker_prager", "density": 1600, "young": 2e6, "poisson": 0.3,
+                             "friction_angle": 40, "cohesion": 10 } },
+    "bodies": [ { "name": "b", "material": "sand", "box": { "min": [0.04, 0, 0], "max": [0.14, 0.02, 0.04] } } ],
+    "boundaries": { "z-": { "type": "friction", "friction_coefficient": 0.554 }, "z+": "open" },
+    "output": { "history_interval": 0.005 },
+    "diagnostics": { "runout": { "gate_x": 0.14, "runout_plane_x": 0.3 } } })";
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+TEST(RunoutOutput, RunWritesRunoutHistoryAndDeposit) {
+  Solver solver(parse_scene(kSlideScene, "slide"));
+  const fs::path dir = temp_dir("runout_run");
+  RunOptions options;
+  options.out_dir = dir.string();
+  options.progress = false;
+  const RunSummary summary = run_scene(solver, options);
+  ASSERT_TRUE(summary.runout.has_value());
+  EXPECT_TRUE(summary.terrain_path.empty());  // flat: no terrain surface
+  EXPECT_FALSE(fs::exists(dir / "terrain.vtu"));
+  std::ifstream csv(dir / "runout.csv");
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, runout_csv_header());
+  int rows = 0;
+  std::optional<RunoutSample> last;
+  while (std::getline(csv, line)) {
+    last = parse_runout_csv_row(line);
+    ASSERT_TRUE(last.has_value()) << line;
+    ++rows;
+  }
+  EXPECT_EQ(rows, 1 + 4);  // t = 0 and every 0.005 s to 0.02 s
+  EXPECT_NEAR(last->time, 0.02, 1e-12);
+  EXPECT_NEAR(summary.runout->front, last->front, 1e-9);
+  EXPECT_NEAR(summary.runout->from_gate, last->front - 0.14, 1e-9);
+  EXPECT_NEAR(*summary.runout->beyond_runout_plane, last->front - 0.3, 1e-9);
+  EXPECT_GT(last->centre_velocity_s, 0.0);  // it slides down +x
+  {
+    std::ifstream in(dir / "runout.json");
+    const nlohmann::json j = nlohmann::json::parse(in);
+    EXPECT_NEAR(j.at("front").get<double>(), last->front, 1e-8);
+    EXPECT_NEAR(j.at("gate_s").get<double>(), 0.14, 1e-12);
+    EXPECT_TRUE(j.at("gate_from_scene").get<bool>());
+    EXPECT_NEAR(j.at("beyond_runout_plane").get<double>(), last->front - 0.3, 1e-8);
+  }
+  // deposit.csv: one row per raster cell (20 x 1 cells of 0.02 m); the volume matches the particles'.
+  std::ifstream dep(dir / "deposit.csv");
+  std::getline(dep, line);
+  EXPECT_EQ(line, "s,y,x,thickness");
+  double volume = 0.0;
+  rows = 0;
+  while (std::getline(dep, line)) {
+    double s, y, x, t;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf", &s, &y, &x, &t), 4) << line;
+    volume += t * 0.02 * 0.02;
+    ++rows;
+  }
+  EXPECT_EQ(rows, 20);
+  double particle_volume = 0.0;
+  for (double v : solver.particles().volume) particle_volume += v;
+  EXPECT_NEAR(volume, particle_volume, 1e-6 * particle_volume);
+  fs::remove_all(dir);
+}
+
+TEST(RunoutOutput, RestartContinuesTheHistoryBitForBit) {
+  Scene scene = parse_scene(kSlideScene, "slide");
+  scene.output.checkpoint_interval = 0.012;  // one checkpoint, mid-run
+  const fs::path dir = temp_dir("runout_restart");
+  RunOptions options;
+  options.out_dir = dir.string();
+  options.progress = false;
+  options.handle_signals = false;
+  {
+    Solver solver(scene);
+    run_scene(solver, options);
+  }
+  const std::string reference = read_text(dir / "runout.csv");
+  const std::string reference_result = read_text(dir / "runout.json");
+  const std::string checkpoint_path = (dir / "checkpoint.h5").string();
+  const Checkpoint checkpoint = read_checkpoint(checkpoint_path);
+  ASSERT_GT(checkpoint.solver.step, 0);
+  Solver resumed(scene);
+  restore_checkpoint(resumed, checkpoint, checkpoint_path);
+  options.resume = &checkpoint.run;
+  run_scene(resumed, options);
+  // The rows after the checkpoint are rewritten identically, front velocity included (it needs
+  // the last row before the checkpoint), and the runout is measured from the same gate.
+  EXPECT_EQ(read_text(dir / "runout.csv"), reference);
+  EXPECT_EQ(read_text(dir / "runout.json"), reference_result);
+  fs::remove_all(dir);
+}
+
+TEST(RunoutSpec, BadDiagnosticsKeysAreRefusedNamingTheKey) {
+  auto error_of = [](const std::string& runout) {
+    std::string json = kSlideScene;
+    const std::string given = R"({ "gate_x": 0.14, "runout_plane_x": 0.3 })";
+    json.replace(json.find(given), given.size(), runout);
+    try {
+      parse_scene(json, "slide");
+    } catch (const Error& e) {
+      EXPECT_EQ(e.exit_code(), 2);
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error_of(R"({ "front_quantile": 1.5 })").find("diagnostics.runout.front_quantile = 1.5 is outside the allowed range [0.5, 1]"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({ "deposit_cell": 0 })").find("diagnostics.runout.deposit_cell = 0 is outside the allowed range (0"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({ "deposit_cell": 1e-6 })").find("at most 1e7"), std::string::npos);
+  EXPECT_NE(error_of(R"({ "front": 0.9 })").find("unknown key diagnostics.runout.front"), std::string::npos);
+  // Defaults resolved and echoed.
+  std::string json = kSlideScene;
+  const std::string given = R"({ "gate_x": 0.14, "runout_plane_x": 0.3 })";
+  json.replace(json.find(given), given.size(), "{}");
+  const Scene s = parse_scene(json, "slide");
+  EXPECT_TRUE(s.runout.enabled);
+  EXPECT_EQ(s.runout.deposit_cell, 0.02);
+  EXPECT_FALSE(s.runout.has_gate);
+  const Scene echoed = parse_scene(scene_to_json(s).dump(), "echo");
+  EXPECT_TRUE(echoed.runout.enabled);
+  EXPECT_EQ(echoed.runout.front_quantile, 0.995);
+}
+
+}  // namespace
+}  // namespace talus

@@ -1,0 +1,137 @@
+#!/usr/bin/env python3
+"""Write a Denlinger-style sand flume scene (docs/flume.md): an inclined plane, a circular transition
+and a horizontal runout plane, with a sand wedge at rest behind a bed-normal gate.
+
+    python3 tools/make_flume_scene.py > inputs/denlinger_flume.json                 # the defaults
+    python3 tools/make_flume_scene.py --slope 30 --bed-friction 27 --name denlinger_flume_seed001 \
+        > inputs/denlinger_flume_seed001.json                                       # seed 001's set
+    python3 tools/make_flume_scene.py --cell 0.01 --name flume_h010 > /tmp/flume_h010.json  # resolution study
+
+Geometry (x down-flume, z up, y across; the runout plane is z = 0, the gate foot is x = 0):
+  gate foot A on the bed; the gate is the bed normal through A;
+  the slope runs `--slope-length` (1.2 m) from A to the start of the transition, a circular arc of
+  radius `--radius` (0.2 m) tangent to the slope and to the runout plane, which runs `--runout-length`
+  (1.2 m) from the end of the arc. The slope continues `--headroom` (0.1 m) up behind the wedge.
+  The wedge: the triangle A, B = A + L (-cos t, sin t) (L = `--wedge-length` along the bed, 0.25 m) and
+  C = A + L tan t (sin t, cos t) on the gate, so the free surface BC is horizontal; it spans
+  `--wedge-width` (0.2 m) across the centre of the `--width` (0.6 m) plane.
+The grid follows the terrain (third coordinate w = z - z_b(x), the z- face is the bed).
+"""
+import argparse
+import json
+import math
+import sys
+
+
+def build(a):
+    t = math.radians(a.slope)
+    h = a.cell
+    tangent = a.radius * math.tan(t / 2)                 # fillet tangent length
+    along = a.slope_length + tangent                     # gate foot -> slope/runout vertex, along the bed
+    ax, az = 0.0, along * math.sin(t)                    # gate foot A; the vertex V is at z = 0
+    vx = along * math.cos(t)
+    end_x = vx + tangent + a.runout_length               # end of the runout plane
+    up = a.wedge_length + a.headroom                     # slope behind the gate
+    x0 = math.floor((ax - up * math.cos(t)) / h) * h     # grid origin on a whole cell
+    nx = math.ceil((end_x - x0) / h - 1e-9)
+    x1 = x0 + nx * h
+    bed = lambda x: az - (x - ax) * math.tan(t)           # the slope line
+    d = a.wedge_length * math.tan(t)                     # wetted gate height (bed normal)
+    A = (ax, az)
+    B = (ax - a.wedge_length * math.cos(t), az + a.wedge_length * math.sin(t))
+    C = (ax + d * math.sin(t), az + d * math.cos(t))
+    w_top = d / math.cos(t)                              # the wedge's height above the bed at x = C_x
+    nw = math.ceil(max(a.height, 1.5 * w_top) / h - 1e-9)
+    ny = math.ceil(a.width / h - 1e-9)
+    r6 = lambda v: round(v, 6)
+    mu = math.tan(math.radians(a.bed_friction))
+    mass = 0.5 * a.wedge_length * d * a.wedge_width * a.density
+    scene = {
+        "name": a.name,
+        "description": (f"Denlinger-style dry sand flume (docs/flume.md): {a.slope} deg slope, {a.slope_length} m gate to "
+                        f"transition, transition radius {a.radius} m, {a.runout_length} m runout plane, {a.width} m wide "
+                        f"with open sides; a {a.wedge_length} m x {a.wedge_width} m sand wedge ({mass:.2f} kg) behind a "
+                        f"bed-normal gate removed at t = 0; internal friction {a.friction} deg, bed friction {a.bed_friction} deg"),
+        "comment": "written by tools/make_flume_scene.py " + " ".join(sys.argv[1:]),
+        "grid": {
+            "origin": [r6(x0), r6(-ny * h / 2), 0.0],
+            "size": [r6(nx * h), r6(ny * h), r6(nw * h)],
+            "cell_size": h,
+            "terrain": {"points": [[r6(x0), r6(bed(x0))], [r6(vx), 0.0], [r6(x1), 0.0]],
+                        "radii": [0.0, a.radius, 0.0]},
+        },
+        "gravity": [0.0, 0.0, -9.81],
+        "time": {"end": a.end, "courant": 0.3},
+        "solver": {"scheme": "musl", "shape": "linear"},
+        "materials": {
+            "sand": {"model": "drucker_prager", "density": a.density, "young": 2.0e6, "poisson": 0.3,
+                     "friction_angle": a.friction, "dilatancy_angle": 0.0, "cohesion": 10.0,
+                     "hardening_modulus": 0.0, "kinematic_fraction": 0.2, "cone": "plane_strain"}
+        },
+        "bodies": [{
+            "name": "wedge", "material": "sand",
+            "prism": {"points": [[r6(A[0]), r6(A[1])], [r6(C[0]), r6(C[1])], [r6(B[0]), r6(B[1])]],
+                      "y": [r6(-a.wedge_width / 2), r6(a.wedge_width / 2)]},
+            "particles_per_cell": a.particles_per_cell,
+        }],
+        "boundaries": {
+            "x-": "slip", "x+": "open", "y-": "open", "y+": "open",
+            "z-": {"type": "friction", "friction_coefficient": mu},
+            "z+": "open",
+        },
+        "output": {"frame_interval": a.frame_interval, "history_interval": 0.01, "compression": "lz4"},
+        "diagnostics": {"runout": {"gate_x": 0.0, "runout_plane_x": r6(vx + tangent), "deposit_cell": 2 * h}},
+    }
+    return scene
+
+
+def flat_slope(a):
+    """The same wedge on an endless inclined plane, in coordinates along (x) and normal to (z) the bed."""
+    t = math.radians(a.slope)
+    h = a.cell
+    scene = build(a)
+    d = a.wedge_length * math.tan(t)
+    x0 = -math.ceil((a.wedge_length + a.headroom) / h) * h
+    nx = math.ceil((a.slope_length - x0) / h)
+    g = scene["grid"]
+    g.pop("terrain")
+    g["origin"][0] = round(x0, 6)
+    g["size"][0] = round(nx * h, 6)
+    scene["name"] += "_flat_slope"
+    scene["gravity"] = [9.81 * math.sin(t), 0.0, -9.81 * math.cos(t)]
+    scene["bodies"][0]["prism"]["points"] = [[0.0, 0.0], [0.0, round(d, 6)], [round(-a.wedge_length, 6), 0.0]]
+    scene["diagnostics"]["runout"] = {"gate_x": 0.0, "deposit_cell": 2 * h}
+    return scene
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--name", default="denlinger_flume")
+    p.add_argument("--slope", type=float, default=31.4, help="slope angle [deg] (experiment: 31.4, seed 001: 30)")
+    p.add_argument("--bed-friction", type=float, default=29.0, help="bed friction angle [deg] (29; seed 001: 27)")
+    p.add_argument("--friction", type=float, default=40.0, help="internal friction angle [deg]")
+    p.add_argument("--density", type=float, default=1600.0)
+    p.add_argument("--slope-length", type=float, default=1.2, help="gate to the start of the transition [m]")
+    p.add_argument("--radius", type=float, default=0.2, help="transition radius [m]")
+    p.add_argument("--runout-length", type=float, default=1.2, help="runout plane length [m]")
+    p.add_argument("--width", type=float, default=0.6, help="plane width [m]")
+    p.add_argument("--wedge-length", type=float, default=0.25, help="wedge length along the bed [m]")
+    p.add_argument("--wedge-width", type=float, default=0.2, help="wedge width [m]")
+    p.add_argument("--headroom", type=float, default=0.1, help="slope behind the wedge [m]")
+    p.add_argument("--height", type=float, default=0.3, help="grid height above the bed [m] (at least 1.5x the wedge)")
+    p.add_argument("--cell", type=float, default=0.0125, help="cell size [m]")
+    p.add_argument("--particles-per-cell", type=int, default=2, help="n: n^3 particles per cell")
+    p.add_argument("--end", type=float, default=4.0, help="end time [s]")
+    p.add_argument("--frame-interval", type=float, default=0.05)
+    p.add_argument("--flat-slope", action="store_true",
+                   help="no terrain: the slope alone in bed-aligned coordinates with gravity tilted (runs without "
+                        "the terrain grid; for timing and checks)")
+    a = p.parse_args()
+    scene = flat_slope(a) if a.flat_slope else build(a)
+    # One line per key below the top level keeps the file short and diffable.
+    lines = [f'  {json.dumps(k)}: {json.dumps(v)}' for k, v in scene.items()]
+    sys.stdout.write("{\n" + ",\n".join(lines) + "\n}\n")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,132 @@
+#!/usr/bin/env python3
+"""Plots of a flume run's runout diagnostics (docs/flume.md "Runout diagnostics").
+
+Reads RUN_DIR/runout.csv, runout.json, deposit.csv and scene.json (written by `talus run` for a
+scene with diagnostics.runout) and writes into RUN_DIR (or --out):
+  front_tail.png       front, tail and centre of mass along the flume vs time, and the front velocity
+  deposit_profile.png  deposit thickness along the centre line (y = 0) vs s, gate and runout plane marked
+  deposit_map.png      plan-view thickness map in (s, y)
+Usage: /usr/bin/python3 tools/plot_flume.py runs/denlinger_flume [--out DIR]
+"""
+import argparse
+import csv
+import json
+import os
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+
+def read_csv(path):
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]} if rows else {}
+
+
+def reference_s(run_dir, runout):
+    """s of the gate and of the runout plane's start, as the run measured them (runout.json)."""
+    path = os.path.join(run_dir, "runout.json")
+    if not os.path.exists(path):
+        return float(runout["front"][0]), None
+    with open(path) as f:
+        r = json.load(f)
+    return r["gate_s"], r.get("runout_plane_s")
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("run_dir")
+    p.add_argument("--out", help="folder for the PNGs (default: the run folder)")
+    a = p.parse_args()
+    out = a.out or a.run_dir
+    os.makedirs(out, exist_ok=True)
+    runout = read_csv(os.path.join(a.run_dir, "runout.csv"))
+    with open(os.path.join(a.run_dir, "scene.json")) as f:
+        scene = json.load(f)
+    gate, plane = reference_s(a.run_dir, runout)
+    name = scene.get("name", os.path.basename(a.run_dir.rstrip("/")))
+
+    t = runout["time"]
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 6.5), sharex=True)
+    ax1.plot(t, runout["front"], label="front (99.5% mass quantile)")
+    ax1.plot(t, runout["centre_s"], label="centre of mass")
+    ax1.plot(t, runout["tail"], label="tail (0.5% mass quantile)")
+    ax1.plot(t, runout["s_max"], ":", color="grey", lw=0.8, label="foremost particle")
+    ax1.axhline(gate, color="k", lw=0.6, ls="--", label="gate")
+    if plane is not None:
+        ax1.axhline(plane, color="brown", lw=0.6, ls="--", label="start of runout plane")
+    ax1.set_ylabel("s along the flume [m]")
+    ax1.legend(fontsize=8)
+    ax1.set_title(f"{name}: front and tail")
+    ax2.plot(t, runout["front_velocity"], label="front velocity d(front)/dt")
+    ax2.plot(t, runout["centre_velocity_s"], label="centre-of-mass velocity along the bed")
+    ax2.set_xlabel("time [s]")
+    ax2.set_ylabel("velocity [m/s]")
+    ax2.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "front_tail.png"), dpi=130)
+    plt.close(fig)
+
+    deposit_path = os.path.join(a.run_dir, "deposit.csv")
+    if not os.path.exists(deposit_path):
+        print(f"{deposit_path} missing (the run did not reach its end): only front_tail.png written")
+        return
+    d = read_csv(deposit_path)
+    s_values = np.unique(d["s"])
+    y_values = np.unique(d["y"])
+    thickness = d["thickness"].reshape(len(s_values), len(y_values))  # rows of constant s
+    # The centre line: the mean of the raster rows whose centres lie within one cell of y = 0.
+    dy_cell = y_values[1] - y_values[0] if len(y_values) > 1 else 1.0
+    band = np.abs(y_values) <= dy_cell * (1 + 1e-9)
+    if not band.any():
+        band = np.abs(y_values) == np.abs(y_values).min()
+    fig, ax = plt.subplots(figsize=(7, 3.2))
+    ax.plot(s_values, thickness[:, band].mean(axis=1) * 1000, drawstyle="steps-mid",
+            label=f"mean over |y| <= {dy_cell:.3g} m ({band.sum()} rows)")
+    ax.axvline(gate, color="k", lw=0.6, ls="--", label="gate")
+    if plane is not None:
+        ax.axvline(plane, color="brown", lw=0.6, ls="--", label="start of runout plane")
+    occupied = np.nonzero(thickness.max(axis=1) > 0)[0]
+    if occupied.size:
+        pad = 5 * (s_values[1] - s_values[0]) if len(s_values) > 1 else 0.1
+        ax.set_xlim(s_values[occupied[0]] - pad, s_values[occupied[-1]] + pad)
+    ax.set_xlabel("s along the flume [m]")
+    ax.set_ylabel("deposit thickness [mm]")
+    ax.set_title(f"{name}: deposit along the centre line (volume per bed area)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "deposit_profile.png"), dpi=130)
+    plt.close(fig)
+
+    ds = s_values[1] - s_values[0] if len(s_values) > 1 else 1.0
+    dy = y_values[1] - y_values[0] if len(y_values) > 1 else 1.0
+    extent = [s_values[0] - ds / 2, s_values[-1] + ds / 2, y_values[0] - dy / 2, y_values[-1] + dy / 2]
+    # Crop to the deposit (plus a margin), and size the figure to its aspect ratio.
+    s_lo, s_hi, y_lo, y_hi = extent
+    occupied_y = np.nonzero(thickness.max(axis=0) > 0)[0]
+    if occupied.size and occupied_y.size:
+        s_lo, s_hi = s_values[occupied[0]] - pad, s_values[occupied[-1]] + pad
+        y_lo, y_hi = y_values[occupied_y[0]] - 3 * dy, y_values[occupied_y[-1]] + 3 * dy
+    ratio = (s_hi - s_lo) / max(y_hi - y_lo, 1e-9)
+    fig, ax = plt.subplots(figsize=(min(12.0, max(4.0, 2.8 * ratio)) + 1.5, 3.6))
+    masked = np.ma.masked_where(thickness <= 0, thickness * 1000)
+    im = ax.imshow(masked.T, origin="lower", extent=extent, aspect="equal", cmap="viridis", interpolation="nearest")
+    fig.colorbar(im, ax=ax, label="thickness [mm]", shrink=0.9)
+    ax.axvline(gate, color="k", lw=0.6, ls="--", label="gate")
+    if plane is not None:
+        ax.axvline(plane, color="brown", lw=0.6, ls="--", label="start of runout plane")
+    ax.set_xlim(s_lo, s_hi)
+    ax.set_ylim(y_lo, y_hi)
+    ax.set_xlabel("s along the flume [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(f"{name}: deposit thickness, plan view")
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "deposit_map.png"), dpi=130)
+    plt.close(fig)
+    print(f"wrote {out}/front_tail.png, deposit_profile.png, deposit_map.png")
+
+
+if __name__ == "__main__":
+    main()
