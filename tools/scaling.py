@@ -8,6 +8,9 @@ Strong scaling: fixed particle count, threads 1..N (powers of two and N).
 Weak scaling: particles proportional to the thread count.
 Threads are pinned with OMP_PROC_BIND=close and OMP_PLACES=cores (set them yourself to override);
 on a multi-socket node, compare with OMP_PROC_BIND=spread. Runs unchanged on 2 to 64+ cores.
+Each bench also measures the STREAM triad at the same thread count (`talus bench --stream`), so the
+CSV shows the MPM speed-up next to the memory-bandwidth speed-up of the same machine in the same run:
+`speedup_vs_stream` = (MPM speed-up) / (STREAM speed-up), the issue's target being >= 0.9 at 2 threads.
 """
 import argparse
 import csv
@@ -33,7 +36,7 @@ def bench(talus, particles, threads, steps, extra):
         env.setdefault("OMP_PROC_BIND", "close")
         env.setdefault("OMP_PLACES", "cores")
         cmd = [talus, "bench", "--particles", str(particles), "--threads", str(threads), "--steps", str(steps),
-               "--json", f.name] + extra
+               "--json", f.name, "--stream"] + extra
         subprocess.run(cmd, check=True, env=env, stdout=subprocess.DEVNULL)
         return json.load(open(f.name))
 
@@ -54,9 +57,17 @@ def main():
             n = a.particles if kind == "strong" else a.particles * t
             r = bench(a.talus, n, t, a.steps, a.bench_args)
             rows.append({"kind": kind, "threads": t, "particles": r["particles"],
-                         "updates_per_second": r["particle_updates_per_second"], "cpu": r["cpu"]})
-            print(f"{kind:6} threads={t:3} particles={r['particles']:9} {r['particle_updates_per_second'] / 1e6:8.3f} M/s",
-                  flush=True)
+                         "updates_per_second": r["particle_updates_per_second"],
+                         "stream_triad_gb_per_s": r["stream_triad_bytes_per_second"] / 1e9, "cpu": r["cpu"]})
+            base = [x for x in rows if x["kind"] == kind][0]
+            mpm_speedup = rows[-1]["updates_per_second"] / base["updates_per_second"]
+            stream_speedup = rows[-1]["stream_triad_gb_per_s"] / base["stream_triad_gb_per_s"]
+            rows[-1]["speedup"] = mpm_speedup
+            rows[-1]["stream_speedup"] = stream_speedup
+            rows[-1]["speedup_vs_stream"] = mpm_speedup / stream_speedup
+            print(f"{kind:6} threads={t:3} particles={r['particles']:9} {r['particle_updates_per_second'] / 1e6:8.3f} M/s"
+                  f"  speed-up {mpm_speedup:5.2f}  STREAM {rows[-1]['stream_triad_gb_per_s']:6.2f} GB/s"
+                  f" (speed-up {stream_speedup:5.2f})  ratio {mpm_speedup / stream_speedup:5.2f}", flush=True)
     path = os.path.join(a.out, "scaling.csv")
     with open(path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))

@@ -31,8 +31,37 @@ struct BenchOptions {
   double mls_radius = 2.0;
   int threads = 0;
   int steps = 20;
+  bool stream = false;  // also measure the STREAM triad bandwidth at the same thread count
   std::string json_path;
 };
+
+/// The STREAM triad a[i] = b[i] + s c[i] (McCalpin) over three arrays of 2^24 doubles (128 MiB
+/// each, far beyond any cache), first-touched by the threads that use them; the best of 5 passes,
+/// counted as 24 bytes per element as STREAM does. It gives the memory bandwidth the MPM step can
+/// hope for at this thread count, measured in the same process (docs/performance.md).
+double stream_triad_bytes_per_second() {
+  const std::size_t n = std::size_t(1) << 24;
+  std::unique_ptr<double[]> a(new double[n]), b(new double[n]), c(new double[n]);
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < n; ++i) {
+    a[i] = 0.0;
+    b[i] = 1.0;
+    c[i] = 2.0;
+  }
+  double best = 1e300;
+  for (int pass = 0; pass < 5; ++pass) {
+    const auto start = std::chrono::steady_clock::now();
+    const double scalar = 3.0 + pass;
+    double* pa = a.get();
+    const double* pb = b.get();
+    const double* pc = c.get();
+#pragma omp parallel for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) pa[i] = pb[i] + scalar * pc[i];
+    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  if (a[n / 2] != 1.0 + 7.0 * 2.0) throw io_error("stream triad: wrong result");  // keeps the loop honest
+  return 24.0 * double(n) / best;
+}
 
 /// Peak resident memory of this process in bytes (VmHWM).
 std::size_t peak_rss_bytes() {
@@ -125,6 +154,7 @@ void refuse_unavailable(const BenchOptions& o) {
 void run_bench(const BenchOptions& o) {
   refuse_unavailable(o);
   if (o.threads > 0) omp_set_num_threads(o.threads);
+  const double stream = o.stream ? stream_triad_bytes_per_second() : 0.0;
   const std::string mls_json =
       o.mls == "off" ? std::string()
                      : fmt::format(R"(, "smoothing": {{ "basis": "{}", "radius_factor": {} }})", o.mls, o.mls_radius);
@@ -166,6 +196,7 @@ void run_bench(const BenchOptions& o) {
   j["particle_field_bytes_per_particle"] = double(solver.particles().bytes()) / n;
   j["grid_active_bytes"] = solver.grid().active_bytes();
   j["peak_rss_bytes"] = rss;
+  if (o.stream) j["stream_triad_bytes_per_second"] = stream;
 
   fmt::print("talus bench: {} scene, {} particles, {} shape, {} scheme, {} material, MLS {}, {} threads, {} steps\n", o.scene, n,
              o.shape, o.scheme, o.material, o.mls, omp_get_max_threads(), o.steps);
@@ -174,6 +205,7 @@ void run_bench(const BenchOptions& o) {
   for (int p = 0; p < static_cast<int>(Phase::Count); ++p)
     fmt::print("  {:<7} {:8.4f} s  {:5.1f}%\n", kPhaseNames[p], solver.phase_times().seconds[p],
                100.0 * solver.phase_times().seconds[p] / std::max(total, 1e-300));
+  if (o.stream) fmt::print("  STREAM triad: {:.2f} GB/s at {} threads\n", stream / 1e9, omp_get_max_threads());
   fmt::print("  memory: {:.0f} B/particle peak RSS ({:.0f} B/particle in particle fields), grid {:.1f} MB active\n", double(rss) / n,
              double(solver.particles().bytes()) / n, solver.grid().active_bytes() / 1e6);
   if (!o.json_path.empty()) {
@@ -202,6 +234,7 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("--threads", o->threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)")->check(CLI::Range(1, 4096));
   cmd->add_option("--steps", o->steps, "Timed steps (after one untimed step)")->check(CLI::Range(1, 1000000))->capture_default_str();
   cmd->add_option("--json", o->json_path, "Also write the results as JSON to this file");
+  cmd->add_flag("--stream", o->stream, "Also measure the STREAM triad memory bandwidth at the same thread count");
   cmd->callback([o]() { run_bench(*o); });
 }
 

@@ -95,6 +95,13 @@ void add_run_command(CLI::App& app) {
     fmt::print("talus: done: {} steps to t = {:.6g} s in {:.2f} s ({:.2f} M particle-updates/s)\n", summary.steps, summary.time,
                summary.wall_seconds, summary.steps * double(solver.particles().size()) / summary.wall_seconds / 1e6);
     fmt::print("talus: energy budget closes to {:.3e} of the initial energy\n", (summary.final.total() - e0) / scale);
+    if (solver.outflow_particles() > 0) {
+      double mass = solver.outflow_mass();
+      for (double m : solver.particles().mass) mass += m;
+      fmt::print("talus: {} particles ({:.4g} kg, {:.2f}% of the mass) left through open faces (removed; energy column "
+                 "'outflow')\n",
+                 solver.outflow_particles(), solver.outflow_mass(), 100.0 * solver.outflow_mass() / mass);
+    }
     fmt::print("talus: ParaView series: {} ({} frames); energy history: {}/energy.csv\n", summary.pvd_path, summary.frames, dir);
     if (!summary.terrain_path.empty()) fmt::print("talus: terrain surface: {} (open it with the series)\n", summary.terrain_path);
     if (summary.runout) print_runout(*summary.runout, summary);

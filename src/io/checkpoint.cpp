@@ -15,7 +15,7 @@ namespace talus {
 namespace {
 
 constexpr const char* kFormat = "talus-checkpoint";
-constexpr int kFormatVersion = 1;
+constexpr int kFormatVersion = 2;  // 2: outflow through open faces
 
 template <class T>
 const H5::PredType& h5_type();
@@ -118,6 +118,9 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
       write_attribute(s, "last_dt", state.last_dt);
       write_attribute(s, "friction_work", state.friction_work);
       write_attribute(s, "plastic_work", state.plastic_work);
+      write_attribute(s, "outflow_energy", state.outflow_energy);
+      write_attribute(s, "outflow_mass", state.outflow_mass);
+      write_attribute(s, "outflow_particles", state.outflow_particles);
       write_attribute(s, "steps_since_sort", static_cast<std::int32_t>(state.steps_since_sort));
       write_attribute(s, "sorts", state.sorts);
       write_attribute(s, "needs_sort", static_cast<std::int32_t>(state.needs_sort));
@@ -180,6 +183,9 @@ Checkpoint read_checkpoint(const std::string& path) {
     c.solver.last_dt = read_attribute<double>(s, "last_dt");
     c.solver.friction_work = read_attribute<double>(s, "friction_work");
     c.solver.plastic_work = read_attribute<double>(s, "plastic_work");
+    c.solver.outflow_energy = read_attribute<double>(s, "outflow_energy");
+    c.solver.outflow_mass = read_attribute<double>(s, "outflow_mass");
+    c.solver.outflow_particles = read_attribute<std::int64_t>(s, "outflow_particles");
     c.solver.steps_since_sort = read_attribute<std::int32_t>(s, "steps_since_sort");
     c.solver.sorts = read_attribute<std::int64_t>(s, "sorts");
     c.solver.needs_sort = read_attribute<std::int32_t>(s, "needs_sort") != 0;

@@ -89,7 +89,7 @@ void prepare_output_folder_for_resume(const std::string& dir, const RunProgress&
       fs::remove(entry.path(), ec);
   }
   const fs::path history = fs::path(dir) / "energy.csv";
-  std::string kept = "time,step,dt,kinetic,strain,gravity,friction_work,plastic_work,total\n";
+  std::string kept = "time,step,dt,kinetic,strain,gravity,friction_work,plastic_work,outflow,total\n";
   std::ifstream in(history);
   std::string line;
   bool header = true;
@@ -177,7 +177,7 @@ RunSummary run_scene(Solver& solver, const RunOptions& options) {
   }
   std::ofstream history(dir / "energy.csv", resuming ? std::ios::app : std::ios::trunc);
   if (!history) throw io_error(fmt::format("cannot write {}", (dir / "energy.csv").string()));
-  if (!resuming) history << "time,step,dt,kinetic,strain,gravity,friction_work,plastic_work,total\n";
+  if (!resuming) history << "time,step,dt,kinetic,strain,gravity,friction_work,plastic_work,outflow,total\n";
 
   // Runout diagnostics (docs/flume.md): only when the scene asks for them.
   std::optional<RunoutMonitor> runout;
@@ -208,9 +208,9 @@ RunSummary run_scene(Solver& solver, const RunOptions& options) {
 
   // Each row is flushed on its own, so a killed run leaves only whole rows behind.
   auto write_history = [&](const EnergyBudget& e) {
-    history << fmt::format("{:.10e},{},{:.6e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e}\n", solver.time(),
+    history << fmt::format("{:.10e},{},{:.6e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e}\n", solver.time(),
                            solver.step_count(), solver.last_dt(), e.kinetic, e.strain, e.gravity, e.friction_work,
-                           e.plastic_work, e.total());
+                           e.plastic_work, e.outflow, e.total());
     history.flush();
   };
   auto write_frame = [&]() {

@@ -41,19 +41,81 @@ Solver::Solver(Scene scene) : scene_(std::move(scene)) {
   if (scene_.shape == ShapeKind::CpGimp) particles_.enable_domain_state();  // seed 000 eq. 57-58
   walls_ = Walls(scene_.walls, scene_.grid, grid_.profile_terrain());
   materials_ = BodyMaterials(scene_, particles_);
-  for (auto& d : displacement_) d.assign(particles_.size(), 0.0);
   // Nodes lighter than this are empty: far below any real nodal mass, far above round-off.
   mass_floor_ = 1e-12 * *std::min_element(particles_.mass.begin(), particles_.mass.end());
   if (scene_.smoothing.enabled) {  // seed 000 eq. 54; buffers exist only for scenes that smooth
     smoother_.emplace(scene_.smoothing.mls, scene_.grid.h);
     smooth_body_.assign(scene_.bodies.size(), scene_.smoothing.bodies.empty() ? 1 : 0);
     for (int b : scene_.smoothing.bodies) smooth_body_[b] = 1;
-    for (int c = 0; c < 6; ++c) {
-      raw_strain_[c].assign(particles_.size(), 0.0);
-      smooth_strain_[c].assign(particles_.size(), 0.0);
-    }
-    for (auto& w : raw_spin_) w.assign(particles_.size(), 0.0);
   }
+  size_scratch();
+  for (const auto& axis : scene_.walls)
+    for (const auto& w : axis) has_open_faces_ = has_open_faces_ || w.type == WallType::Open;
+  sort_particles();
+}
+
+void Solver::size_scratch() {
+  const std::size_t n = particles_.size();
+  for (auto& d : displacement_) d.assign(n, 0.0);
+  if (smoother_) {
+    for (int c = 0; c < 6; ++c) {
+      raw_strain_[c].assign(n, 0.0);
+      smooth_strain_[c].assign(n, 0.0);
+    }
+    for (auto& w : raw_spin_) w.assign(n, 0.0);
+  }
+}
+
+// An open face lets material leave: a particle that has crossed one (it is past the face after
+// this step's move) is removed, so sand can fall off the open side of a flume. The energy it
+// carries (kinetic, stored strain, gravitational, as in energies()) and its mass are added to the
+// outflow, so the energy budget still closes. The CFL guard (at most max_step_displacement = 1
+// cell per step) keeps a particle inside the 2 ghost cells until it is removed.
+void Solver::remove_outflow() {
+  ParticleStore& P = particles_;
+  const GridGeometry& g = scene_.grid;
+  const std::size_t n = P.size();
+  double lo[3], hi[3];
+  bool open[3][2];
+  for (int d = 0; d < 3; ++d) {
+    lo[d] = g.origin[d];
+    hi[d] = g.origin[d] + g.cells[d] * g.h;
+    for (int side = 0; side < 2; ++side) open[d][side] = scene_.walls[d][side].type == WallType::Open;
+  }
+  auto beyond = [&](std::size_t p) {
+    for (int d = 0; d < 3; ++d) {
+      const double c = d == 2 ? grid_.w_of(P.x[0][p], P.x[2][p]) : P.x[d][p];  // w on a terrain grid
+      if ((open[d][0] && c < lo[d]) || (open[d][1] && c > hi[d])) return true;
+    }
+    return false;
+  };
+  std::size_t leaving = 0;
+#pragma omp parallel for schedule(static) reduction(+ : leaving)
+  for (std::size_t p = 0; p < n; ++p) leaving += beyond(p) ? 1 : 0;
+  if (leaving == 0) return;
+  if (leaving == n)
+    throw instability_error(fmt::format("step {}, t = {:.6g} s: every particle has left the grid through its open faces",
+                                        step_, time_));
+  std::vector<std::uint32_t> kept;
+  kept.reserve(n - leaving);
+  const Vec3 gravity = scene_.gravity;
+  for (std::size_t p = 0; p < n; ++p) {
+    if (!beyond(p)) {
+      kept.push_back(static_cast<std::uint32_t>(p));
+      continue;
+    }
+    const double v2 = P.v[0][p] * P.v[0][p] + P.v[1][p] * P.v[1][p] + P.v[2][p] * P.v[2][p];
+    Sym6 stress;
+    for (int c = 0; c < 6; ++c) stress[c] = P.stress[c][p];
+    outflow_energy_ += 0.5 * P.mass[p] * v2 + P.volume[p] * materials_.stored_energy_density(P.body[p], stress) -
+                       P.mass[p] * (gravity[0] * P.x[0][p] + gravity[1] * P.x[1][p] + gravity[2] * P.x[2][p]);
+    outflow_mass_ += P.mass[p];
+    ++outflow_particles_;
+  }
+  P.permute(kept);
+  size_scratch();
+  // Sort now: the cell offsets describe the old particle set, and state() (a checkpoint, the last
+  // good state) reads them before the next step would sort.
   sort_particles();
 }
 
@@ -98,6 +160,7 @@ void Solver::step() {
   else
     step_with_shape<FlatTerrain>(dt);
   check_step_displacement(particles_, displacement_, scene_, step_, time_);  // stability_guards.hpp
+  if (has_open_faces_) remove_outflow();
   if ((step_ + 1) % kFieldCheckInterval == 0) check_particle_fields(particles_, scene_, step_, time_);
   time_ += dt;
   ++step_;
@@ -331,6 +394,7 @@ EnergyBudget Solver::energies() const {
   e.gravity = sums[2];
   e.friction_work = friction_work_;
   e.plastic_work = plastic_work_;
+  e.outflow = outflow_energy_;
   return e;
 }
 
@@ -353,6 +417,9 @@ SolverState Solver::state() const {
   s.last_dt = last_dt_;
   s.friction_work = friction_work_;
   s.plastic_work = plastic_work_;
+  s.outflow_energy = outflow_energy_;
+  s.outflow_mass = outflow_mass_;
+  s.outflow_particles = outflow_particles_;
   s.steps_since_sort = steps_since_sort_;
   s.sorts = sorts_;
   s.needs_sort = needs_sort_;
@@ -378,12 +445,14 @@ SolverState Solver::state() const {
 
 void Solver::restore(ParticleStore particles, const SolverState& s) {
   const std::size_t n = particles.size();
-  if (n != particles_.size())
-    throw io_error(fmt::format("restart: {} particles saved, the scene seeds {}", n, particles_.size()));
+  // Fewer particles than the scene seeds: the others left through open faces (remove_outflow).
+  if (n > particles_.size() || static_cast<std::int64_t>(particles_.size() - n) != s.outflow_particles)
+    throw io_error(fmt::format("restart: {} particles saved and {} left through open faces, the scene seeds {}", n,
+                               s.outflow_particles, particles_.size()));
   for (const auto& c : s.sort_cell)
     if (c.size() != n) throw io_error("restart: the saved sort state does not match the particles");
   particles_ = std::move(particles);
-  for (auto& d : displacement_) d.assign(n, 0.0);
+  size_scratch();
   // Rebuild the cell sort exactly as the saved solver had it: sort with every particle placed at
   // the centre of its saved cell. The particles are already in that key order, so the (stable)
   // sort keeps their order and rebuilds the same blocks, colours and active tiles.
@@ -404,6 +473,9 @@ void Solver::restore(ParticleStore particles, const SolverState& s) {
   last_dt_ = s.last_dt;
   friction_work_ = s.friction_work;
   plastic_work_ = s.plastic_work;
+  outflow_energy_ = s.outflow_energy;
+  outflow_mass_ = s.outflow_mass;
+  outflow_particles_ = s.outflow_particles;
   steps_since_sort_ = s.steps_since_sort;
   sorts_ = s.sorts;
   needs_sort_ = s.needs_sort;

@@ -28,7 +28,8 @@ struct EnergyBudget {
   double gravity = 0.0;         // -sum m g.x (zero at the grid origin)
   double friction_work = 0.0;   // work dissipated by wall friction, accumulated
   double plastic_work = 0.0;    // accumulated plastic dissipation
-  double total() const { return kinetic + strain + gravity + friction_work + plastic_work; }
+  double outflow = 0.0;         // energy (kinetic + strain + gravity) carried out through open faces
+  double total() const { return kinetic + strain + gravity + friction_work + plastic_work + outflow; }
 };
 
 /// Everything besides the particle arrays that the next step depends on: what a checkpoint saves
@@ -39,6 +40,9 @@ struct SolverState {
   double last_dt = 0.0;
   double friction_work = 0.0;
   double plastic_work = 0.0;
+  double outflow_energy = 0.0;          // see EnergyBudget::outflow
+  double outflow_mass = 0.0;            // [kg] of the particles removed at open faces
+  std::int64_t outflow_particles = 0;
   int steps_since_sort = 0;
   std::int64_t sorts = 0;
   bool needs_sort = false;
@@ -78,6 +82,10 @@ class Solver {
   PhaseTimes& phase_times() { return times_; }
   const PhaseTimes& phase_times() const { return times_; }
   std::int64_t sort_count() const { return sorts_; }
+  /// Particles that crossed an open face of the domain are removed at the end of their step (an
+  /// outflow boundary: sand falling off the open side of a flume). Their count and mass so far.
+  std::int64_t outflow_particles() const { return outflow_particles_; }
+  double outflow_mass() const { return outflow_mass_; }
 
   /// MLS smoothing (seed 000 eq. 54): the smoother, or null when the scene does not enable it;
   /// the counts of the last smoothing pass and the particle-passes left unsmoothed by its guard.
@@ -102,6 +110,11 @@ class Solver {
   template <class Shape>
   double update_chunk(std::size_t begin, std::size_t end, const StrainIncrements& inc, bool move);
   void move_particles();
+  /// Remove the particles beyond an open face (after they moved), adding their energy and mass to
+  /// the outflow; deterministic (the kept particles keep their order).
+  void remove_outflow();
+  /// Size the per-particle scratch arrays to the current particle count.
+  void size_scratch();
   /// The body force at time t: scene gravity, ramped over scene.gravity_ramp_time.
   Vec3 gravity_at(double t) const;
   void sort_particles();
@@ -124,6 +137,10 @@ class Solver {
   std::int64_t sorts_ = 0;
   double friction_work_ = 0.0;
   double plastic_work_ = 0.0;
+  double outflow_energy_ = 0.0;
+  double outflow_mass_ = 0.0;
+  std::int64_t outflow_particles_ = 0;
+  bool has_open_faces_ = false;
   PhaseTimes times_;
   // MLS smoothing: allocated only when the scene enables it.
   std::optional<MlsStrainSmoother> smoother_;
