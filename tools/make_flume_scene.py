@@ -62,7 +62,7 @@ def build(a):
         },
         "gravity": [0.0, 0.0, -9.81],
         "time": {"end": a.end, "courant": 0.3},
-        "solver": {"scheme": "musl", "shape": "linear"},
+        "solver": {"scheme": "musl", "shape": "linear", "pic_fraction": a.pic_fraction},
         "materials": {
             "sand": {"model": "drucker_prager", "density": a.density, "young": 2.0e6, "poisson": 0.3,
                      "friction_angle": a.friction, "dilatancy_angle": 0.0, "cohesion": 10.0,
@@ -122,6 +122,8 @@ def main():
     p.add_argument("--cell", type=float, default=0.0125, help="cell size [m]")
     p.add_argument("--particles-per-cell", type=int, default=2, help="n: n^3 particles per cell")
     p.add_argument("--end", type=float, default=4.0, help="end time [s]")
+    p.add_argument("--pic-fraction", type=float, default=0.01,
+                   help="PIC share of the G2P update (solver.pic_fraction): 0.01 lets the deposit come to rest")
     p.add_argument("--frame-interval", type=float, default=0.05)
     p.add_argument("--flat-slope", action="store_true",
                    help="no terrain: the slope alone in bed-aligned coordinates with gravity tilted (runs without "

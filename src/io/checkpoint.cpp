@@ -119,6 +119,7 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
       write_attribute(s, "friction_work", state.friction_work);
       write_attribute(s, "plastic_work", state.plastic_work);
       write_attribute(s, "outflow_energy", state.outflow_energy);
+      write_attribute(s, "damping_work", state.damping_work);
       write_attribute(s, "outflow_mass", state.outflow_mass);
       write_attribute(s, "outflow_particles", state.outflow_particles);
       write_attribute(s, "steps_since_sort", static_cast<std::int32_t>(state.steps_since_sort));
@@ -184,6 +185,7 @@ Checkpoint read_checkpoint(const std::string& path) {
     c.solver.friction_work = read_attribute<double>(s, "friction_work");
     c.solver.plastic_work = read_attribute<double>(s, "plastic_work");
     c.solver.outflow_energy = read_attribute<double>(s, "outflow_energy");
+    c.solver.damping_work = read_attribute<double>(s, "damping_work");
     c.solver.outflow_mass = read_attribute<double>(s, "outflow_mass");
     c.solver.outflow_particles = read_attribute<std::int64_t>(s, "outflow_particles");
     c.solver.steps_since_sort = read_attribute<std::int32_t>(s, "steps_since_sort");

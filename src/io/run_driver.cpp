@@ -9,10 +9,12 @@
 #include <fmt/core.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -22,6 +24,11 @@ namespace talus {
 namespace fs = std::filesystem;
 
 namespace {
+
+/// The columns of energy.csv (one per EnergyBudget term, then the total).
+constexpr const char* kEnergyHeader =
+    "time,step,dt,kinetic,strain,gravity,friction_work,plastic_work,outflow,damping,total";
+
 
 volatile std::sig_atomic_t g_signal = 0;
 
@@ -89,7 +96,8 @@ void prepare_output_folder_for_resume(const std::string& dir, const RunProgress&
       fs::remove(entry.path(), ec);
   }
   const fs::path history = fs::path(dir) / "energy.csv";
-  std::string kept = "time,step,dt,kinetic,strain,gravity,friction_work,plastic_work,outflow,total\n";
+  std::string kept = std::string(kEnergyHeader) + "\n";
+  const auto commas = std::count(kEnergyHeader, kEnergyHeader + std::strlen(kEnergyHeader), ',');
   std::ifstream in(history);
   std::string line;
   bool header = true;
@@ -101,7 +109,7 @@ void prepare_output_folder_for_resume(const std::string& dir, const RunProgress&
     // time,step,...: keep complete rows up to the checkpoint's step.
     const auto c1 = line.find(',');
     const auto c2 = c1 == std::string::npos ? std::string::npos : line.find(',', c1 + 1);
-    if (c2 == std::string::npos || std::count(line.begin(), line.end(), ',') != 8) break;
+    if (c2 == std::string::npos || std::count(line.begin(), line.end(), ',') != commas) break;
     long long row_step = 0;
     try {
       row_step = std::stoll(line.substr(c1 + 1, c2 - c1 - 1));
@@ -177,7 +185,7 @@ RunSummary run_scene(Solver& solver, const RunOptions& options) {
   }
   std::ofstream history(dir / "energy.csv", resuming ? std::ios::app : std::ios::trunc);
   if (!history) throw io_error(fmt::format("cannot write {}", (dir / "energy.csv").string()));
-  if (!resuming) history << "time,step,dt,kinetic,strain,gravity,friction_work,plastic_work,outflow,total\n";
+  if (!resuming) history << kEnergyHeader << "\n";
 
   // Runout diagnostics (docs/flume.md): only when the scene asks for them.
   std::optional<RunoutMonitor> runout;
@@ -208,9 +216,9 @@ RunSummary run_scene(Solver& solver, const RunOptions& options) {
 
   // Each row is flushed on its own, so a killed run leaves only whole rows behind.
   auto write_history = [&](const EnergyBudget& e) {
-    history << fmt::format("{:.10e},{},{:.6e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e}\n", solver.time(),
-                           solver.step_count(), solver.last_dt(), e.kinetic, e.strain, e.gravity, e.friction_work,
-                           e.plastic_work, e.outflow, e.total());
+    history << fmt::format("{:.10e},{},{:.6e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e},{:.10e}\n",
+                           solver.time(), solver.step_count(), solver.last_dt(), e.kinetic, e.strain, e.gravity,
+                           e.friction_work, e.plastic_work, e.outflow, e.damping, e.total());
     history.flush();
   };
   auto write_frame = [&]() {

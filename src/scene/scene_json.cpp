@@ -129,6 +129,7 @@ void read_solver(ObjectReader r, Scene& s, std::vector<std::string>& smoothing_b
                                   : ShapeKind::Linear;
   s.sort_interval = r.integer_or("sort_interval", s.sort_interval, 1, 1000000);
   s.gravity_ramp_time = r.number_or("gravity_ramp_time", s.gravity_ramp_time, 0.0, kHuge);
+  s.pic_fraction = r.number_or("pic_fraction", s.pic_fraction, 0.0, 1.0);
   if (r.has("smoothing")) read_smoothing(r.object("smoothing"), s, smoothing_bodies);
   r.finish();
 }
@@ -454,7 +455,7 @@ nlohmann::json scene_to_json(const Scene& s) {
   j["solver"] = {{"scheme", to_string(s.scheme)},
                  {"shape", to_string(s.shape)},
                  {"sort_interval", s.sort_interval},
-                 {"gravity_ramp_time", s.gravity_ramp_time}};
+                 {"gravity_ramp_time", s.gravity_ramp_time}, {"pic_fraction", s.pic_fraction}};
   {
     Json names = Json::array();
     for (std::size_t b = 0; b < s.bodies.size(); ++b)

@@ -36,6 +36,7 @@ CellSort make_cell_sort(const Grid& grid, ShapeKind shape) {
 
 Solver::Solver(Scene scene) : scene_(std::move(scene)) {
   particles_ = seed_particles(scene_);
+  seeded_particles_ = static_cast<std::int64_t>(particles_.size());
   grid_ = Grid(scene_.grid);
   sort_ = make_cell_sort(grid_, scene_.shape);
   if (scene_.shape == ShapeKind::CpGimp) particles_.enable_domain_state();  // seed 000 eq. 57-58
@@ -229,7 +230,11 @@ void Solver::step_with(double dt) {
   // 4. G2P: particle velocities and this step's displacement.
   {
     ScopedPhase timer(times_, Phase::G2P);
-    const GatherResult r = gather_from_grid<Shape, Terrain>(particles_, sort_, grid_, dt, displacement_);
+    const double pic = scene_.pic_fraction;
+    if (pic > 0.0) block_damping_.assign(sort_.block_count(), 0.0);
+    const GatherResult r = gather_from_grid<Shape, Terrain>(particles_, sort_, grid_, dt, displacement_, pic, block_damping_);
+    if (pic > 0.0)
+      for (double d : block_damping_) damping_work_ += d;  // in block order: thread-independent
     if (r.nonfinite >= 0) report_bad_particle(r.nonfinite, "velocity is not finite");
     if (r.outside >= 0) report_bad_particle(r.outside, "left the grid");
     needs_sort_ = r.needs_sort;
@@ -395,6 +400,7 @@ EnergyBudget Solver::energies() const {
   e.friction_work = friction_work_;
   e.plastic_work = plastic_work_;
   e.outflow = outflow_energy_;
+  e.damping = damping_work_;
   return e;
 }
 
@@ -418,6 +424,7 @@ SolverState Solver::state() const {
   s.friction_work = friction_work_;
   s.plastic_work = plastic_work_;
   s.outflow_energy = outflow_energy_;
+  s.damping_work = damping_work_;
   s.outflow_mass = outflow_mass_;
   s.outflow_particles = outflow_particles_;
   s.steps_since_sort = steps_since_sort_;
@@ -446,9 +453,9 @@ SolverState Solver::state() const {
 void Solver::restore(ParticleStore particles, const SolverState& s) {
   const std::size_t n = particles.size();
   // Fewer particles than the scene seeds: the others left through open faces (remove_outflow).
-  if (n > particles_.size() || static_cast<std::int64_t>(particles_.size() - n) != s.outflow_particles)
+  if (static_cast<std::int64_t>(n) + s.outflow_particles != seeded_particles_)
     throw io_error(fmt::format("restart: {} particles saved and {} left through open faces, the scene seeds {}", n,
-                               s.outflow_particles, particles_.size()));
+                               s.outflow_particles, seeded_particles_));
   for (const auto& c : s.sort_cell)
     if (c.size() != n) throw io_error("restart: the saved sort state does not match the particles");
   particles_ = std::move(particles);
@@ -474,6 +481,7 @@ void Solver::restore(ParticleStore particles, const SolverState& s) {
   friction_work_ = s.friction_work;
   plastic_work_ = s.plastic_work;
   outflow_energy_ = s.outflow_energy;
+  damping_work_ = s.damping_work;
   outflow_mass_ = s.outflow_mass;
   outflow_particles_ = s.outflow_particles;
   steps_since_sort_ = s.steps_since_sort;

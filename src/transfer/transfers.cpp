@@ -86,7 +86,8 @@ void scatter_to_grid(const ParticleStore& P, const CellSort& sort, Grid& grid, S
 
 template <class Shape, class Terrain>
 GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, const Grid& grid, double dt,
-                              std::array<std::vector<double>, 3>& displacement) {
+                              std::array<std::vector<double>, 3>& displacement, double pic_fraction,
+                              std::vector<double>& block_damping) {
   constexpr int N = Shape::kNodes;
   const Terrain& terrain = grid.template terrain<Terrain>();
   const GridGeometry& g = grid.geometry();
@@ -100,6 +101,7 @@ GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, const Grid
 #pragma omp parallel for schedule(dynamic, 1) reduction(|| : needs_sort) reduction(max : nonfinite, outside)
   for (std::size_t b = 0; b < blocks; ++b) {
     Stencil<Shape> s;
+    double damped = 0.0;  // kinetic energy the PIC share removed in this block
     for (std::size_t p = sort.block_begin(b); p < sort.block_end(b); ++p) {
       double hw[3];
       half_widths<Shape>(P, p, 1.0 / g.h, hw);
@@ -121,6 +123,19 @@ GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, const Grid
       bool finite = true, inside = true;
       int cell[3];
       double next[3];
+      if (pic_fraction > 0.0) {
+        // v_p = (1 - beta) (v_p + sum N dv) + beta sum N v^L: the PIC share beta damps the particle
+        // velocity's part that the grid cannot represent; the kinetic energy it removes is counted
+        double before = 0.0, after = 0.0;
+        for (int d = 0; d < 3; ++d) {
+          const double flip = P.v[d][p] + dvp[d];
+          const double blended = (1.0 - pic_fraction) * flip + pic_fraction * vlp[d];
+          before += flip * flip;
+          after += blended * blended;
+          dvp[d] = blended - P.v[d][p];
+        }
+        damped += 0.5 * P.mass[p] * (before - after);
+      }
       for (int d = 0; d < 3; ++d) {
         P.v[d][p] += dvp[d];                 // seed 000 eq. 50: v_p += dt sum a_i N_i
         disp[d][p] = dt * vlp[d];            // seed 000 eq. 51: x_p += dt sum v_i^L N_i (applied later)
@@ -139,6 +154,7 @@ GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, const Grid
       if (!inside) outside = std::max(outside, static_cast<long long>(p));
       if (!sort.within_slack(b, cell[0], cell[1], cell[2])) needs_sort = true;
     }
+    if (pic_fraction > 0.0) block_damping[b] = damped;
   }
   return {needs_sort, nonfinite, outside};
 }
@@ -185,7 +201,7 @@ void strain_increments(const ParticleStore& P, const Grid& grid, const std::arra
 #define TALUS_INSTANTIATE_TRANSFERS(SHAPE, TERRAIN)                                                          \
   template void scatter_to_grid<SHAPE, TERRAIN>(const ParticleStore&, const CellSort&, Grid&, ScatterFields); \
   template GatherResult gather_from_grid<SHAPE, TERRAIN>(ParticleStore&, const CellSort&, const Grid&, double,  \
-                                                         std::array<std::vector<double>, 3>&);               \
+                                                         std::array<std::vector<double>, 3>&, double, std::vector<double>&);               \
   template void strain_increments<SHAPE, TERRAIN>(const ParticleStore&, const Grid&,                          \
                                                   const std::array<const double*, 3>&, double, std::size_t,    \
                                                   std::size_t, StrainIncrements&);

@@ -111,7 +111,7 @@ inline void expect_readable_run_folder(const fs::path& dir) {
       ++fields;
       EXPECT_TRUE(std::isfinite(std::stod(field))) << "energy.csv row " << row << ": " << line;
     }
-    EXPECT_EQ(fields, 9) << "energy.csv row " << row << " is incomplete: " << line;
+    EXPECT_EQ(fields, 11) << "energy.csv row " << row << " is incomplete: " << line;  // run_driver.cpp header
   }
   EXPECT_GT(row, 1);
 }

@@ -134,6 +134,10 @@ struct Scene {
   /// Gravity (the body force) grows linearly from 0 to its full value over this time [s]; 0 = applied
   /// at once. A quasi-static load (the Bardenhagen-Kober column, seed 000 sec. 4(1)) needs it.
   double gravity_ramp_time = 0.0;
+  /// The PIC share beta of the G2P velocity update, v_p = (1 - beta) FLIP + beta PIC (0 = pure FLIP,
+  /// seed 000 eq. 50). A small share (the flume uses 0.01) damps the grid-scale velocity noise that
+  /// otherwise keeps a granular deposit jittering; the energy it removes is the budget's `damping`.
+  double pic_fraction = 0.0;
   SmoothingSpec smoothing;
   std::vector<MaterialSpec> materials;
   std::vector<BodySpec> bodies;

@@ -29,7 +29,8 @@ struct EnergyBudget {
   double friction_work = 0.0;   // work dissipated by wall friction, accumulated
   double plastic_work = 0.0;    // accumulated plastic dissipation
   double outflow = 0.0;         // energy (kinetic + strain + gravity) carried out through open faces
-  double total() const { return kinetic + strain + gravity + friction_work + plastic_work + outflow; }
+  double damping = 0.0;         // kinetic energy removed by the PIC share of the G2P update (solver.pic_fraction)
+  double total() const { return kinetic + strain + gravity + friction_work + plastic_work + outflow + damping; }
 };
 
 /// Everything besides the particle arrays that the next step depends on: what a checkpoint saves
@@ -41,6 +42,7 @@ struct SolverState {
   double friction_work = 0.0;
   double plastic_work = 0.0;
   double outflow_energy = 0.0;          // see EnergyBudget::outflow
+  double damping_work = 0.0;            // see EnergyBudget::damping
   double outflow_mass = 0.0;            // [kg] of the particles removed at open faces
   std::int64_t outflow_particles = 0;
   int steps_since_sort = 0;
@@ -138,8 +140,11 @@ class Solver {
   double friction_work_ = 0.0;
   double plastic_work_ = 0.0;
   double outflow_energy_ = 0.0;
+  double damping_work_ = 0.0;
+  std::vector<double> block_damping_;  // per sort block, this step's PIC damping
   double outflow_mass_ = 0.0;
   std::int64_t outflow_particles_ = 0;
+  std::int64_t seeded_particles_ = 0;
   bool has_open_faces_ = false;
   PhaseTimes times_;
   // MLS smoothing: allocated only when the scene enables it.

@@ -37,8 +37,12 @@ struct GatherResult {
 /// Updates v_p and writes the step's displacement dt sum N_i v_i^L into `displacement`; positions
 /// are moved only after the strain pass, so every transfer of a step uses the weights at x_p^k.
 template <class Shape, class Terrain>
+/// `pic_fraction` beta in [0, 1]: v_p = (1 - beta) (v_p + sum N (v^L - v)) + beta sum N v^L (0 = FLIP,
+/// seed 000 eq. 50; 1 = PIC). With beta > 0 the kinetic energy the blend removes is written per sort
+/// block into `block_damping` (sized to the block count), for a thread-independent sum.
 GatherResult gather_from_grid(ParticleStore& particles, const CellSort& sort, const Grid& grid, double dt,
-                              std::array<std::vector<double>, 3>& displacement);
+                              std::array<std::vector<double>, 3>& displacement, double pic_fraction,
+                              std::vector<double>& block_damping);
 
 /// Per-particle strain and spin increments of a range, structure of arrays.
 struct StrainIncrements {

@@ -1,0 +1,97 @@
+#!/usr/bin/env python3
+"""Resolution study of the sand flume (docs/flume.md "Resolution study").
+
+For each cell size, writes the flume scene with tools/make_flume_scene.py (the defaults otherwise),
+runs it with `talus run` (skipped when RUNS/flume_hNNNN/runout.json exists, unless --rerun), and
+collects the front at three times, the final runout, the share of the mass that left over the open
+sides, the final kinetic energy over its peak and the run time. Writes
+    docs/flume/resolution.csv      one row per cell size
+    docs/flume/resolution.png      front vs time for every cell size
+Usage: /usr/bin/python3 tools/flume_resolution.py [--talus build/talus] [--cells 0.02 0.0125 0.01]
+                                                  [--threads 2] [--runs runs] [--rerun]
+"""
+import argparse
+import csv
+import json
+import os
+import subprocess
+import sys
+import time
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+TIMES = (0.5, 1.0, 2.0)  # [s] front positions compared between resolutions
+
+
+def read_csv(path):
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--talus", default=os.path.join(ROOT, "build", "talus"))
+    ap.add_argument("--cells", type=float, nargs="+", default=[0.02, 0.0125, 0.01])
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--runs", default=os.path.join(ROOT, "runs"))
+    ap.add_argument("--out", default=os.path.join(ROOT, "docs", "flume"))
+    ap.add_argument("--rerun", action="store_true")
+    a = ap.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    rows, histories = [], {}
+    for h in a.cells:
+        name = f"flume_h{round(h * 1e4):04d}"
+        run_dir = os.path.join(a.runs, name)
+        wall_path = os.path.join(run_dir, "wall_seconds.txt")
+        if a.rerun or not os.path.exists(os.path.join(run_dir, "runout.json")):
+            scene = os.path.join(a.runs, name + ".json")
+            os.makedirs(a.runs, exist_ok=True)
+            with open(scene, "w") as f:
+                subprocess.run([sys.executable, os.path.join(ROOT, "tools", "make_flume_scene.py"), "--cell", str(h),
+                                "--name", name], check=True, stdout=f)
+            t0 = time.perf_counter()
+            subprocess.run([a.talus, "run", scene, "--out", run_dir, "--threads", str(a.threads), "--quiet"], check=True)
+            with open(wall_path, "w") as f:
+                f.write(f"{time.perf_counter() - t0:.1f}\n")
+        runout = read_csv(os.path.join(run_dir, "runout.csv"))
+        energy = read_csv(os.path.join(run_dir, "energy.csv"))
+        with open(os.path.join(run_dir, "runout.json")) as f:
+            result = json.load(f)
+        histories[h] = runout
+        fronts = [float(np.interp(t, runout["time"], runout["front"])) - result["gate_s"] for t in TIMES]
+        mass0 = runout["mass"][0]
+        kinetic = energy["kinetic"]
+        row = {"cell_size": h, "wall_seconds": float(open(wall_path).read()) if os.path.exists(wall_path) else None,
+               **{f"front_from_gate_t{t:g}": round(v, 4) for t, v in zip(TIMES, fronts)},
+               "runout_from_gate": round(result["from_gate"], 4),
+               "onto_runout_plane": round(result["beyond_runout_plane"], 4) if result.get("beyond_runout_plane") is not None else None,
+               "mass_left_open_sides": round(1.0 - runout["mass"][-1] / mass0, 4),
+               "final_kinetic_over_peak": float(f"{kinetic[-1] / kinetic.max():.3e}"),
+               "budget_gap": float(f"{(energy['total'][-1] - energy['total'][0]) / abs(energy['total'][0]):.3e}")}
+        rows.append(row)
+        print(row, flush=True)
+    with open(os.path.join(a.out, "resolution.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        w.writeheader()
+        w.writerows(rows)
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    for h, r in histories.items():
+        ax.plot(r["time"], r["front"], label=f"front, h = {h:g} m")
+        ax.plot(r["time"], r["tail"], "--", lw=0.8, label=f"tail, h = {h:g} m")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("s along the flume [m]")
+    ax.set_title("sand flume: front and tail at three cell sizes")
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(os.path.join(a.out, "resolution.png"), dpi=120)
+    print("wrote", os.path.join(a.out, "resolution.csv"), "and resolution.png")
+
+
+if __name__ == "__main__":
+    main()
