@@ -11,7 +11,7 @@ jobs="${TALUS_JOBS:-$(nproc)}"
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-O1 -DTALUS_SANITIZE=ON > build-asan.log 2>&1 || { cat build-asan.log; exit 1; }
 known=$(cmake --build build-asan --target help 2>/dev/null | sed -n 's/^\.\.\. \([^ ]*\).*/\1/p')
 targets=()
-for t in talus_core_tests talus_material_tests talus_dem_tests talus_solver_tests talus_reliability_tests; do
+for t in talus_core_tests talus_material_tests talus_dem_tests talus_grid_tests talus_smoothing_tests talus_diagnostics_tests talus_solver_tests talus_reliability_tests; do
   if grep -qx "$t" <<<"$known"; then targets+=("$t"); fi  # a group without sources has no target
 done
 cmake --build build-asan -j "$jobs" --target "${targets[@]}" >> build-asan.log 2>&1 || { tail -50 build-asan.log; exit 1; }
