@@ -22,18 +22,19 @@ std::size_t ParticleStore::add(std::int64_t particle_id, const Vec3& position, c
     strain[c].push_back(0.0);
   }
   body.push_back(body_index);
-  if (plastic_enabled_) {
-    plastic_strain.push_back(0.0);
+  if (plastic_enabled_) plastic_strain.push_back(0.0);
+  if (back_stress_enabled_)
     for (auto& b : back_stress) b.push_back(0.0);
-  }
   if (domain_enabled_)
     for (auto& l : domain) l.push_back(0.5 * std::cbrt(particle_volume));
   return id.size() - 1;
 }
 
-void ParticleStore::enable_plastic_state() {
+void ParticleStore::enable_plastic_state(bool with_back_stress) {
   plastic_enabled_ = true;
   plastic_strain.assign(size(), 0.0);
+  if (!with_back_stress) return;
+  back_stress_enabled_ = true;
   for (auto& b : back_stress) b.assign(size(), 0.0);
 }
 

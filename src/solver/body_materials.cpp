@@ -17,10 +17,12 @@ BodyMaterials::BodyMaterials(const Scene& scene, ParticleStore& particles) {
       body.plastic.push_back(body.plastic[0].with_dilatancy(m.granular.flowing_dilatancy_angle_deg));
       body.granular = m.granular;
       any_plastic_ = true;
+      // the back stress moves only with kinematic hardening (docs/drucker-prager.md)
+      any_kinematic_ = any_kinematic_ || (m.drucker_prager.hardening_modulus > 0.0 && m.drucker_prager.kinematic_fraction > 0.0);
     }
     bodies_.push_back(std::move(body));
   }
-  if (any_plastic_ && !particles.has_plastic_state()) particles.enable_plastic_state();
+  if (any_plastic_ && !particles.has_plastic_state()) particles.enable_plastic_state(any_kinematic_);
 }
 
 double BodyMaterials::update(ParticleStore& P, std::size_t begin, std::size_t end, const StrainIncrements& inc) const {
@@ -57,21 +59,27 @@ double BodyMaterials::update_drucker_prager(const Body& body, ParticleStore& P, 
     // released without doing work on the continuum; count it as dissipated so the budget closes.
     const double released = P.volume[p] * body.elastic.energy_density(s);
     P.plastic_strain[p] = 0.0;
-    for (int c = 0; c < 6; ++c) P.back_stress[c][p] = 0.0;
+    if (P.has_back_stress())
+      for (int c = 0; c < 6; ++c) P.back_stress[c][p] = 0.0;
     s.setZero();
     return released;
   }
   DruckerPragerState state;
   state.equivalent_plastic_strain = P.plastic_strain[p];
-  for (int c = 0; c < 6; ++c) state.back_stress[c] = P.back_stress[c][p];
+  const bool kinematic = P.has_back_stress();  // otherwise the back stress is zero and stays zero
+  if (kinematic)
+    for (int c = 0; c < 6; ++c) state.back_stress[c] = P.back_stress[c][p];
+  else
+    state.back_stress.setZero();
   // seed 001 sec. 7: dilatancy set to its flowing value once the particle flows.
   const bool flowing = state.equivalent_plastic_strain > body.granular.flowing_plastic_strain;
   const DruckerPrager& model = body.plastic[flowing ? 1 : 0];
   rotate_objectively(s, w_yz, w_xz, w_xy);
-  model.rotate_state(state, w_yz, w_xz, w_xy);
+  if (kinematic) model.rotate_state(state, w_yz, w_xz, w_xy);
   const DruckerPragerResult r = model.update(s, state, de);  // seed 001 eq. 23-25, closed-form return
   P.plastic_strain[p] = state.equivalent_plastic_strain;
-  for (int c = 0; c < 6; ++c) P.back_stress[c][p] = state.back_stress[c];
+  if (kinematic)
+    for (int c = 0; c < 6; ++c) P.back_stress[c][p] = state.back_stress[c];
   return r.plastic_work * P.volume[p];
 }
 

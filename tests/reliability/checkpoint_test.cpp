@@ -44,7 +44,8 @@ Scene drucker_prager_scene() {
     "grid": { "origin": [0, 0, 0], "size": [0.6, 0.3, 0.4], "cell_size": 0.025 },
     "time": { "end": 0.2, "courant": 0.4 },
     "materials": { "sand": { "model": "drucker_prager", "density": 1600.0, "young": 2.0e6, "poisson": 0.3,
-                             "friction_angle": 30.0, "cohesion": 5.0, "kinematic_fraction": 0.2 } },
+                             "friction_angle": 30.0, "cohesion": 5.0, "hardening_modulus": 2.0e4,
+                             "kinematic_fraction": 0.2 } },
     "bodies": [ { "name": "heap", "material": "sand", "box": { "min": [0.1, 0.05, 0.0], "max": [0.3, 0.25, 0.25] },
                   "particles_per_cell": 2, "velocity": [1.5, 0.0, 0.0] } ],
     "boundaries": { "z-": { "type": "friction", "friction_coefficient": 0.5 }, "z+": "open" }

@@ -58,6 +58,12 @@ TEST(GranularCollapse, PlasticStateExistsOnlyWithDruckerPrager) {
   Solver sand(test::column_collapse_scene(0.02, 0.01));
   EXPECT_TRUE(sand.particles().has_plastic_state());
   EXPECT_EQ(sand.particles().plastic_strain.size(), sand.particles().size());
+  // perfect plasticity (H = 0): the back stress would stay zero, so it is not allocated
+  EXPECT_FALSE(sand.particles().has_back_stress());
+  EXPECT_TRUE(sand.particles().back_stress[0].empty());
+  Solver hardening(test::column_collapse_scene(0.02, 0.01, R"(, "hardening_modulus": 1.0e5, "kinematic_fraction": 0.2)"));
+  EXPECT_TRUE(hardening.particles().has_back_stress());
+  EXPECT_EQ(hardening.particles().back_stress[5].size(), hardening.particles().size());
 }
 
 TEST(GranularCollapse, SeparatedParticlesAreStressFreeAndVirgin) {

@@ -25,7 +25,7 @@ struct ParticleStore {
 
   // Drucker-Prager state: allocated only when some body uses that material.
   std::vector<double> plastic_strain;            // equivalent plastic strain
-  std::array<std::vector<double>, 6> back_stress;  // kinematic hardening centre [Pa]
+  std::array<std::vector<double>, 6> back_stress;  // kinematic hardening centre [Pa]; only with kinematic hardening
 
   // cpGIMP particle domain: current half widths per axis [m] (seed 000 eq. 57-58); allocated only
   // when the scene uses cpGIMP.
@@ -40,7 +40,10 @@ struct ParticleStore {
                   double particle_mass, double particle_volume, std::uint16_t body_index);
 
   /// Allocate (zeroed) the plastic state arrays for all particles.
-  void enable_plastic_state();
+  /// The back stress only with `with_back_stress`: it stays zero unless some body has kinematic
+  /// hardening (H > 0 and kinematic_fraction > 0), and then costs 48 B per particle for nothing.
+  void enable_plastic_state(bool with_back_stress = true);
+  bool has_back_stress() const { return back_stress_enabled_; }
 
   /// Allocate the cpGIMP domain half widths, each set to its initial value V0^(1/3)/2.
   void enable_domain_state();
@@ -101,6 +104,7 @@ struct ParticleStore {
   }
 
   bool plastic_enabled_ = false;
+  bool back_stress_enabled_ = false;
   bool domain_enabled_ = false;
   std::vector<double> scratch_;
   std::vector<std::int64_t> id_scratch_;

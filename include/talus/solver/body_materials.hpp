@@ -66,6 +66,7 @@ class BodyMaterials {
 
   std::vector<Body> bodies_;
   bool any_plastic_ = false;
+  bool any_kinematic_ = false;  // some Drucker-Prager body with kinematic hardening (H > 0, kinematic_fraction > 0)
 };
 
 }  // namespace talus
