@@ -11,7 +11,6 @@
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkUnstructuredGrid.h>
-#include <vtkXMLUnstructuredGridWriter.h>
 
 #include <algorithm>
 #include <cmath>
@@ -121,15 +120,7 @@ void write_terrain_vtu(const std::string& path, const TerrainProfile& profile, d
   grid->SetCells(VTK_QUAD, cells);
   grid->GetPointData()->AddArray(arc);
   grid->GetPointData()->AddArray(angle);
-  const std::string tmp = path + ".tmp";
-  vtkNew<vtkXMLUnstructuredGridWriter> writer;
-  writer->SetFileName(tmp.c_str());
-  writer->SetInputData(grid);
-  writer->SetDataModeToAppended();
-  writer->EncodeAppendedDataOff();
-  writer->SetCompressorTypeToNone();
-  if (writer->Write() != 1) throw io_error(fmt::format("cannot write terrain surface {}", path));
-  std::filesystem::rename(tmp, path);
+  write_vtu_atomically(grid, path, false, "terrain surface");
 }
 
 }  // namespace talus

@@ -99,6 +99,10 @@ void write_particles_vtu(const std::string& path, const ParticleStore& P, bool c
   pd->AddArray(body);
   pd->SetActiveScalars("speed");
 
+  write_vtu_atomically(grid, path, compress, "particle frame");
+}
+
+void write_vtu_atomically(vtkUnstructuredGrid* grid, const std::string& path, bool compress, const char* what) {
   const std::string tmp = path + ".tmp";
   vtkNew<vtkXMLUnstructuredGridWriter> writer;
   writer->SetFileName(tmp.c_str());
@@ -109,7 +113,7 @@ void write_particles_vtu(const std::string& path, const ParticleStore& P, bool c
     writer->SetCompressorTypeToLZ4();
   else
     writer->SetCompressorTypeToNone();
-  if (writer->Write() != 1) throw io_error(fmt::format("cannot write particle frame {}", path));
+  if (writer->Write() != 1) throw io_error(fmt::format("cannot write {} {}", what, path));
   std::filesystem::rename(tmp, path);
 }
 

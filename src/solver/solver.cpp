@@ -289,7 +289,16 @@ void Solver::update_stress(const std::array<const double*, 3>& node_velocity, do
     return;
   }
   ScopedPhase timer(times_, Phase::Stress);
-  ParticleStore& P = particles_;
+  update_material_by_chunks<Shape>(move, [&](std::size_t begin, std::size_t end, StrainIncrements& inc) {
+    strain_increments<Shape, Terrain>(particles_, grid_, node_velocity, dt, begin, end, inc);
+  });
+}
+
+// The material update over chunks of StrainIncrements::kCapacity particles, parallel over sort
+// blocks: fill(begin, end, inc) provides the chunk's strain and spin increments. The dissipation
+// is summed per block, then over blocks in block order, so it does not depend on the thread count.
+template <class Shape, class FillChunk>
+void Solver::update_material_by_chunks(bool move, FillChunk fill) {
   const std::size_t blocks = sort_.block_count();
   block_dissipation_.assign(blocks, 0.0);
 #pragma omp parallel
@@ -300,7 +309,7 @@ void Solver::update_stress(const std::array<const double*, 3>& node_velocity, do
       double dissipated = 0.0;
       for (std::size_t begin = sort_.block_begin(b); begin < sort_.block_end(b); begin += StrainIncrements::kCapacity) {
         const std::size_t end = std::min<std::size_t>(begin + StrainIncrements::kCapacity, sort_.block_end(b));
-        strain_increments<Shape, Terrain>(P, grid_, node_velocity, dt, begin, end, inc);
+        fill(begin, end, inc);
         dissipated += update_chunk<Shape>(begin, end, inc, move);
       }
       block_dissipation_[b] = dissipated;
@@ -363,23 +372,10 @@ void Solver::update_stress_smoothed(const std::array<const double*, 3>& node_vel
     unsmoothed_total_ += static_cast<std::int64_t>(last_smoothing_.unsmoothed);
   }
   ScopedPhase timer(times_, Phase::Stress);
-  block_dissipation_.assign(blocks, 0.0);
-#pragma omp parallel
-  {
-    StrainIncrements inc;
-#pragma omp for schedule(dynamic, 1)
-    for (std::size_t b = 0; b < blocks; ++b) {
-      double dissipated = 0.0;
-      for (std::size_t begin = sort_.block_begin(b); begin < sort_.block_end(b); begin += StrainIncrements::kCapacity) {
-        const std::size_t end = std::min<std::size_t>(begin + StrainIncrements::kCapacity, sort_.block_end(b));
-        for (int c = 0; c < 6; ++c) std::copy_n(smooth_strain_[c].data() + begin, end - begin, inc.strain[c].data());
-        for (int c = 0; c < 3; ++c) std::copy_n(raw_spin_[c].data() + begin, end - begin, inc.spin[c].data());
-        dissipated += update_chunk<Shape>(begin, end, inc, move);  // eq. 55-56
-      }
-      block_dissipation_[b] = dissipated;
-    }
-  }
-  for (double d : block_dissipation_) plastic_work_ += d;
+  update_material_by_chunks<Shape>(move, [&](std::size_t begin, std::size_t end, StrainIncrements& inc) {
+    for (int c = 0; c < 6; ++c) std::copy_n(smooth_strain_[c].data() + begin, end - begin, inc.strain[c].data());
+    for (int c = 0; c < 3; ++c) std::copy_n(raw_spin_[c].data() + begin, end - begin, inc.spin[c].data());
+  });  // eq. 55-56
 }
 
 EnergyBudget Solver::energies() const {

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+class vtkUnstructuredGrid;
+
 namespace talus {
 
 /// Write the particles to `path` (written to a temporary name, then renamed, so a reader never sees
@@ -29,6 +31,10 @@ class PvdIndex {
   std::string path_;
   std::vector<std::pair<double, std::string>> entries_;
 };
+
+/// Write a VTK unstructured grid to `path` as .vtu (appended raw binary, LZ4 when `compress`)
+/// through a temporary file and a rename; `what` names the file in the error ("particle frame").
+void write_vtu_atomically(vtkUnstructuredGrid* grid, const std::string& path, bool compress, const char* what);
 
 /// Write `text` to `path` through a temporary file and a rename (atomic on POSIX file systems).
 void write_file_atomically(const std::string& path, const std::string& text);
