@@ -7,6 +7,7 @@
 #include "talus/transfer/stencil.hpp"
 
 #include <cmath>
+#include <type_traits>
 
 namespace talus {
 
@@ -34,7 +35,6 @@ namespace {
 // the tests (the innermost loop runs 8-64 times per particle).
 template <class Shape, class Terrain, bool with_mass, bool with_momentum, bool with_force>
 void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid) {
-  constexpr int N = Shape::kNodes;
   const Terrain& terrain = grid.template terrain<Terrain>();
   const double inv_h = 1.0 / grid.geometry().h;
   double* mass = grid.mass.data();
@@ -47,42 +47,44 @@ void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid) {
 #pragma omp parallel for schedule(dynamic, 1)
     for (std::size_t bi = 0; bi < count; ++bi) {
       const std::size_t b = blocks[bi];
-      Stencil<Shape> s;
+      ParticleStencil<Shape> stencil;
       for (std::size_t p = sort.block_begin(b); p < sort.block_end(b); ++p) {
         double hw[3];
         half_widths<Shape>(P, p, inv_h, hw);
-        s.evaluate(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw);
         const double m = P.mass[p];
         const double mv[3] = {m * P.v[0][p], m * P.v[1][p], m * P.v[2][p]};
         // -V sigma, for f_int = -sum V_p sigma_p grad N (seed 000 eq. 22)
         const double vol = P.volume[p];
         const double sxx = -vol * P.stress[XX][p], syy = -vol * P.stress[YY][p], szz = -vol * P.stress[ZZ][p];
         const double syz = -vol * P.stress[YZ][p], sxz = -vol * P.stress[XZ][p], sxy = -vol * P.stress[XY][p];
-        for (int a = 0; a < N; ++a)
-          for (int bb = 0; bb < N; ++bb) {
-            const std::size_t row = s.ix[a] + s.iy[bb];
-            const double wxy = s.wx[a] * s.wy[bb];
-            // Stencil::gradient with the (a, b) products hoisted out of the c loop (same roundings)
-            const double gxy = s.gx[a] * s.wy[bb], wgy = s.wx[a] * s.gy[bb];
-            for (int c = 0; c < N; ++c) {
-              const std::size_t n = row + s.iz[c];
-              const double w = wxy * s.wz[c];
-              if constexpr (with_mass) mass[n] += m * w;
-              if constexpr (with_force) {
-                double dx = gxy * s.wz[c];
-                const double dy = wgy * s.wz[c], dz = wxy * s.gz[c];
-                if constexpr (!Terrain::kIsFlat) dx -= s.terrain_slope * dz;
-                force[0][n] += sxx * dx + sxy * dy + sxz * dz;
-                force[1][n] += sxy * dx + syy * dy + syz * dz;
-                force[2][n] += sxz * dx + syz * dy + szz * dz;
-              }
-              if constexpr (with_momentum) {
-                mom[0][n] += mv[0] * w;
-                mom[1][n] += mv[1] * w;
-                mom[2][n] += mv[2] * w;
+        stencil.visit(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw, [&](const auto& s) {
+          constexpr int N = std::decay_t<decltype(s)>::N;
+          for (int a = 0; a < N; ++a)
+            for (int bb = 0; bb < N; ++bb) {
+              const std::size_t row = s.ix[a] + s.iy[bb];
+              const double wxy = s.wx[a] * s.wy[bb];
+              // Stencil::gradient with the (a, b) products hoisted out of the c loop (same roundings)
+              const double gxy = s.gx[a] * s.wy[bb], wgy = s.wx[a] * s.gy[bb];
+              for (int c = 0; c < N; ++c) {
+                const std::size_t n = row + s.iz[c];
+                const double w = wxy * s.wz[c];
+                if constexpr (with_mass) mass[n] += m * w;
+                if constexpr (with_force) {
+                  double dx = gxy * s.wz[c];
+                  const double dy = wgy * s.wz[c], dz = wxy * s.gz[c];
+                  if constexpr (!Terrain::kIsFlat) dx -= s.terrain_slope * dz;
+                  force[0][n] += sxx * dx + sxy * dy + sxz * dz;
+                  force[1][n] += sxy * dx + syy * dy + syz * dz;
+                  force[2][n] += sxz * dx + syz * dy + szz * dz;
+                }
+                if constexpr (with_momentum) {
+                  mom[0][n] += mv[0] * w;
+                  mom[1][n] += mv[1] * w;
+                  mom[2][n] += mv[2] * w;
+                }
               }
             }
-          }
+        });
       }
     }
   }
@@ -104,7 +106,6 @@ template <class Shape, class Terrain>
 GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, const Grid& grid, double dt,
                               std::array<std::vector<double>, 3>& displacement, double pic_fraction,
                               std::vector<double>& block_damping) {
-  constexpr int N = Shape::kNodes;
   const Terrain& terrain = grid.template terrain<Terrain>();
   const GridGeometry& g = grid.geometry();
   const auto nodes = g.nodes();
@@ -116,27 +117,29 @@ GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, const Grid
   long long nonfinite = -1, outside = -1;
 #pragma omp parallel for schedule(dynamic, 1) reduction(|| : needs_sort) reduction(max : nonfinite, outside)
   for (std::size_t b = 0; b < blocks; ++b) {
-    Stencil<Shape> s;
+    ParticleStencil<Shape> stencil;
     const auto origin = sort.block_origin(b);
     double damped = 0.0;  // kinetic energy the PIC share removed in this block
     for (std::size_t p = sort.block_begin(b); p < sort.block_end(b); ++p) {
       double hw[3];
       half_widths<Shape>(P, p, 1.0 / g.h, hw);
-      s.evaluate(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw);
       double dvp[3] = {0, 0, 0}, vlp[3] = {0, 0, 0};
-      for (int a = 0; a < N; ++a)
-        for (int bb = 0; bb < N; ++bb) {
-          const std::size_t row = s.ix[a] + s.iy[bb];
-          const double wxy = s.wx[a] * s.wy[bb];
-          for (int c = 0; c < N; ++c) {
-            const std::size_t n = row + s.iz[c];
-            const double w = wxy * s.wz[c];
-            for (int d = 0; d < 3; ++d) {
-              dvp[d] += w * dv[d][n];
-              vlp[d] += w * vl[d][n];
+      stencil.visit(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw, [&](const auto& s) {
+        constexpr int N = std::decay_t<decltype(s)>::N;
+        for (int a = 0; a < N; ++a)
+          for (int bb = 0; bb < N; ++bb) {
+            const std::size_t row = s.ix[a] + s.iy[bb];
+            const double wxy = s.wx[a] * s.wy[bb];
+            for (int c = 0; c < N; ++c) {
+              const std::size_t n = row + s.iz[c];
+              const double w = wxy * s.wz[c];
+              for (int d = 0; d < 3; ++d) {
+                dvp[d] += w * dv[d][n];
+                vlp[d] += w * vl[d][n];
+              }
             }
           }
-        }
+      });
       bool finite = true, inside = true;
       int cell[3];
       double next[3];
@@ -179,30 +182,31 @@ GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, const Grid
 template <class Shape, class Terrain>
 void strain_increments(const ParticleStore& P, const Grid& grid, const std::array<const double*, 3>& nv,
                        double dt, std::size_t begin, std::size_t end, StrainIncrements& out) {
-  constexpr int N = Shape::kNodes;
   const Terrain& terrain = grid.template terrain<Terrain>();
   const double h = grid.geometry().h;
-  Stencil<Shape> s;
+  ParticleStencil<Shape> stencil;
   for (std::size_t p = begin; p < end; ++p) {
     double hw[3];
     half_widths<Shape>(P, p, 1.0 / h, hw);
-    s.evaluate(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw);
     double L[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  // L_ij = dv_i / dx_j
-    for (int a = 0; a < N; ++a)
-      for (int bb = 0; bb < N; ++bb) {
-        const std::size_t row = s.ix[a] + s.iy[bb];
-        // Stencil::gradient with the (a, b) products hoisted out of the c loop (same roundings)
-        const double gxy = s.gx[a] * s.wy[bb], wgy = s.wx[a] * s.gy[bb], wxy = s.wx[a] * s.wy[bb];
-        for (int c = 0; c < N; ++c) {
-          const std::size_t n = row + s.iz[c];
-          double grad[3] = {gxy * s.wz[c], wgy * s.wz[c], wxy * s.gz[c]};
-          if constexpr (!Terrain::kIsFlat) grad[0] -= s.terrain_slope * grad[2];  // dN/dx_phys = dN/dx - z_b' dN/dw
-          for (int i = 0; i < 3; ++i) {
-            const double vi = nv[i][n];
-            for (int j = 0; j < 3; ++j) L[i][j] += vi * grad[j];
+    stencil.visit(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw, [&](const auto& s) {
+      constexpr int N = std::decay_t<decltype(s)>::N;
+      for (int a = 0; a < N; ++a)
+        for (int bb = 0; bb < N; ++bb) {
+          const std::size_t row = s.ix[a] + s.iy[bb];
+          // Stencil::gradient with the (a, b) products hoisted out of the c loop (same roundings)
+          const double gxy = s.gx[a] * s.wy[bb], wgy = s.wx[a] * s.gy[bb], wxy = s.wx[a] * s.wy[bb];
+          for (int c = 0; c < N; ++c) {
+            const std::size_t n = row + s.iz[c];
+            double grad[3] = {gxy * s.wz[c], wgy * s.wz[c], wxy * s.gz[c]};
+            if constexpr (!Terrain::kIsFlat) grad[0] -= s.terrain_slope * grad[2];  // dN/dx_phys = dN/dx - z_b' dN/dw
+            for (int i = 0; i < 3; ++i) {
+              const double vi = nv[i][n];
+              for (int j = 0; j < 3; ++j) L[i][j] += vi * grad[j];
+            }
           }
         }
-      }
+    });
     const std::size_t k = p - begin;
     // seed 000 eq. 33: d_eps = dt/2 (L + L^T); spin dW = dt/2 (L - L^T)
     out.strain[XX][k] = dt * L[0][0];

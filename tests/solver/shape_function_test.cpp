@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <random>
+#include <type_traits>
 
 namespace talus {
 namespace {
@@ -97,6 +98,7 @@ TEST(ShapeFunctions, UGimpPartitionOfUnityAndLinearCompleteness) {
 // cells, and beyond (clamped to one cell).
 TEST(ShapeFunctions, CpGimpPartitionOfUnityAndLinearCompletenessForStretchedDomains) {
   for (double lp : {0.05, 0.25, 0.5, 0.8, 1.0, 2.5}) check_consistency<CpGimpShape>(lp);
+  for (double lp : {0.0, 0.05, 0.25, 0.5}) check_consistency<CpGimpNarrowShape>(lp);
   const double anisotropic[3] = {0.9, 0.2, 0.45};
   check_consistency<CpGimpShape>(anisotropic);
   for (double lp : {0.25, 0.7, 1.0}) check_derivative<CpGimpShape>(lp);
@@ -162,6 +164,7 @@ TEST(ShapeFunctions, GimpWeightsMatchTheClosedFormOfSeed000Eq30And31) {
   for (double lp : {0.125, 0.25, 0.5}) {
     check_gimp_closed_form<UGimpShape>(lp);
     check_gimp_closed_form<CpGimpShape>(lp);
+    check_gimp_closed_form<CpGimpNarrowShape>(lp);
   }
   // A domain wider than a cell (cpGIMP under stretch): the average of the hat over [x - lp, x + lp]
   // by quadrature.
@@ -178,6 +181,57 @@ TEST(ShapeFunctions, GimpWeightsMatchTheClosedFormOfSeed000Eq30And31) {
     }
     EXPECT_NEAR(w[a], integral / n, 1e-9);
   }
+}
+
+// The transfers evaluate cpGIMP on 3 nodes per axis where the domain fits (ParticleStencil): the
+// weighted sums over the nodes must equal those of the 4-node stencil to round-off, and wider
+// domains must take the 4-node one.
+TEST(ShapeFunctions, NarrowCpGimpStencilGivesTheSameSumsAsTheFullOne) {
+  GridGeometry g;
+  g.origin = Vec3(-1.0, 2.0, 0.5);
+  g.h = 0.3;
+  g.cells = {10, 10, 10};
+  Grid grid(g);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 3.0), width(0.0, 0.5);
+  // A node field to sum, distinct per node: f(n) = sin(n).
+  auto weighted_sums = [](const auto& s, double out[4]) {
+    constexpr int N = std::decay_t<decltype(s)>::N;
+    for (int k = 0; k < 4; ++k) out[k] = 0.0;
+    for (int a = 0; a < N; ++a)
+      for (int b = 0; b < N; ++b)
+        for (int c = 0; c < N; ++c) {
+          const double f = std::sin(static_cast<double>(s.ix[a] + s.iy[b] + s.iz[c]));
+          double grad[3];
+          s.gradient(a, b, c, grad[0], grad[1], grad[2]);
+          out[0] += f * s.wx[a] * s.wy[b] * s.wz[c];
+          for (int d = 0; d < 3; ++d) out[1 + d] += f * grad[d];
+        }
+    return N;
+  };
+  for (int trial = 0; trial < 500; ++trial) {
+    const Vec3 x = g.origin + Vec3(u(rng), u(rng), u(rng));
+    double hw[3] = {width(rng), width(rng), width(rng)};
+    if (trial % 5 == 0) hw[trial % 3] = trial % 2 ? 0.5 : 0.0;  // the edges of the narrow range
+    Stencil<CpGimpShape> full;
+    full.evaluate(grid, FlatTerrain{}, x[0], x[1], x[2], hw);
+    double expected[4], got[4];
+    weighted_sums(full, expected);
+    ParticleStencil<CpGimpShape> stencil;
+    int nodes = 0;
+    stencil.visit(grid, FlatTerrain{}, x[0], x[1], x[2], hw, [&](const auto& s) { nodes = weighted_sums(s, got); });
+    EXPECT_EQ(nodes, 3);
+    // round-off of sums of O(1) terms; the gradients carry 1/h
+    for (int k = 0; k < 4; ++k)
+      EXPECT_NEAR(got[k], expected[k], 1e-13 * (1.0 + std::abs(expected[k])) * (k == 0 ? 1.0 : 1.0 / g.h))
+          << "trial " << trial << " sum " << k;
+  }
+  const double wide[3] = {0.2, 0.51, 0.3};
+  ParticleStencil<CpGimpShape> stencil;
+  int nodes = 0;
+  double unused[4];
+  stencil.visit(grid, FlatTerrain{}, 0.3, 3.1, 1.2, wide, [&](const auto& s) { nodes = weighted_sums(s, unused); });
+  EXPECT_EQ(nodes, 4);
 }
 
 TEST(ShapeFunctions, QuadraticBSplineWeightsMatchTheClosedForm) {

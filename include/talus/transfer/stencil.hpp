@@ -6,6 +6,8 @@
 #include "talus/grid/grid.hpp"
 
 #include <cstddef>
+#include <type_traits>
+#include <utility>
 
 namespace talus {
 
@@ -59,6 +61,50 @@ struct Stencil {
     dz = wx[a] * wy[b] * gz[c];
     if (terrain_slope != 0.0) dx -= terrain_slope * dz;  // dN/dx_phys = dN/dx - z_b' dN/dw
   }
+};
+
+/// The shape's narrow variant (same weights on fewer nodes, for particles whose domain fits it),
+/// or void where the shape has none.
+template <class Shape>
+struct NarrowShapeOf {
+  using type = void;
+};
+template <class Shape>
+  requires requires { typename Shape::Narrow; }
+struct NarrowShapeOf<Shape> {
+  using type = typename Shape::Narrow;
+};
+
+/// The stencil of one particle after another, on the fewest nodes its weights need: for a shape
+/// with a Narrow variant (cpGIMP) a particle whose half widths all fit it is evaluated on the
+/// narrow support, the others on the full one. The nodes dropped have weight and gradient exactly
+/// zero, so every sum is the same; visit() hands the stencil to `body` as `const auto&`, and the
+/// body reads its node count from the stencil's type (decltype(s)::N), keeping compile-time extents.
+template <class Shape>
+class ParticleStencil {
+  using Narrow = typename NarrowShapeOf<Shape>::type;
+  static constexpr bool kHasNarrow = !std::is_void_v<Narrow>;
+  struct None {};
+
+ public:
+  template <class Terrain, class Body>
+  [[gnu::always_inline]] inline void visit(const Grid& grid, const Terrain& terrain, double x, double y, double z,
+                                           const double half_width[3], Body&& body) {
+    if constexpr (kHasNarrow) {
+      constexpr double fit = Narrow::kMaxHalfWidth;
+      if (half_width[0] <= fit && half_width[1] <= fit && half_width[2] <= fit) {
+        narrow_.evaluate(grid, terrain, x, y, z, half_width);
+        body(std::as_const(narrow_));
+        return;
+      }
+    }
+    full_.evaluate(grid, terrain, x, y, z, half_width);
+    body(std::as_const(full_));
+  }
+
+ private:
+  Stencil<Shape> full_;
+  [[no_unique_address]] std::conditional_t<kHasNarrow, Stencil<std::conditional_t<kHasNarrow, Narrow, Shape>>, None> narrow_;
 };
 
 }  // namespace talus
