@@ -227,25 +227,28 @@ void Solver::step_with(double dt) {
     friction_work_ += update_grid(grid_, walls_, gravity_at(time_ + 0.5 * dt), dt, mass_floor_);
     mirror_ghost_nodes(grid_, walls_, GhostFields::AfterGridUpdate);
   }
-  // 4. G2P: particle velocities and this step's displacement.
+  // 4. G2P: particle velocities and this step's displacement. MUSL and USAVG scatter the new
+  //    momentum for the remap in the same pass (the weights are those of x_p^k in both).
+  const bool remap = scheme == SchemeKind::Musl || scheme == SchemeKind::Usavg;
   {
     ScopedPhase timer(times_, Phase::G2P);
+    if (remap) grid_.clear_momentum();
     const double pic = scene_.pic_fraction;
     if (pic > 0.0) block_damping_.assign(sort_.block_count(), 0.0);
-    const GatherResult r = gather_from_grid<Shape, Terrain>(particles_, sort_, grid_, dt, displacement_, pic, block_damping_);
+    const GatherResult r =
+        gather_from_grid<Shape, Terrain>(particles_, sort_, grid_, dt, displacement_, pic, block_damping_, remap);
     if (pic > 0.0)
       for (double d : block_damping_) damping_work_ += d;  // in block order: thread-independent
     if (r.nonfinite >= 0) report_bad_particle(r.nonfinite, "velocity is not finite");
     if (r.outside >= 0) report_bad_particle(r.outside, "left the grid");
     needs_sort_ = r.needs_sort;
   }
-  // 5. remap (MUSL): v_i^{k+1} = sum m_p v_p N_i / m_i, with the walls (seed 000 eq. 52).
+  // 5. remap (MUSL): v_i^{k+1} = sum m_p v_p N_i / m_i, with the walls (seed 000 eq. 52); the
+  //    momentum was scattered in the G2P pass.
   std::array<const double*, 3> node_velocity = {grid_.velocity_l[0].data(), grid_.velocity_l[1].data(),
                                                 grid_.velocity_l[2].data()};
-  if (scheme == SchemeKind::Musl || scheme == SchemeKind::Usavg) {
+  if (remap) {
     ScopedPhase timer(times_, Phase::Remap);
-    grid_.clear_momentum();
-    scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Momentum);
     fold_ghost_nodes(grid_, walls_, false, true, false, gravity_at(time_ + 0.5 * dt));
     velocities_from_momentum(grid_, walls_, mass_floor_);
     mirror_ghost_nodes(grid_, walls_, GhostFields::Remapped);

@@ -102,30 +102,39 @@ void scatter_to_grid(const ParticleStore& P, const CellSort& sort, Grid& grid, S
   }
 }
 
-template <class Shape, class Terrain>
-GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, const Grid& grid, double dt,
-                              std::array<std::vector<double>, 3>& displacement, double pic_fraction,
-                              std::vector<double>& block_damping) {
+namespace {
+
+// G2P over the blocks `block_list` (all blocks, or one colour's), in parallel. With `remap` each
+// particle's new momentum m_p v_p is scattered into grid.momentum with the same stencil right
+// after its gather (the MUSL remap, seed 000 eq. 52): that is race-free only when the blocks are
+// one colour's, and it saves the remap's own pass over the particles and its weight evaluation.
+template <class Shape, class Terrain, bool remap, class BlockList>
+void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, double dt,
+                   std::array<std::vector<double>, 3>& displacement, double pic_fraction,
+                   std::vector<double>& block_damping, std::size_t count, BlockList block_list,
+                   GatherResult& result) {
   const Terrain& terrain = grid.template terrain<Terrain>();
   const GridGeometry& g = grid.geometry();
   const auto nodes = g.nodes();
   const double* dv[3] = {grid.force[0].data(), grid.force[1].data(), grid.force[2].data()};
   const double* vl[3] = {grid.velocity_l[0].data(), grid.velocity_l[1].data(), grid.velocity_l[2].data()};
+  double* mom[3] = {grid.momentum[0].data(), grid.momentum[1].data(), grid.momentum[2].data()};
   double* disp[3] = {displacement[0].data(), displacement[1].data(), displacement[2].data()};
-  const std::size_t blocks = sort.block_count();
-  bool needs_sort = false;
-  long long nonfinite = -1, outside = -1;
+  bool needs_sort = result.needs_sort;
+  long long nonfinite = result.nonfinite, outside = result.outside;
 #pragma omp parallel for schedule(dynamic, 1) reduction(|| : needs_sort) reduction(max : nonfinite, outside)
-  for (std::size_t b = 0; b < blocks; ++b) {
+  for (std::size_t bi = 0; bi < count; ++bi) {
+    const std::size_t b = block_list(bi);
     ParticleStencil<Shape> stencil;
     const auto origin = sort.block_origin(b);
     double damped = 0.0;  // kinetic energy the PIC share removed in this block
     for (std::size_t p = sort.block_begin(b); p < sort.block_end(b); ++p) {
       double hw[3];
       half_widths<Shape>(P, p, 1.0 / g.h, hw);
-      double dvp[3] = {0, 0, 0}, vlp[3] = {0, 0, 0};
+      bool finite = true;
       stencil.visit(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw, [&](const auto& s) {
         constexpr int N = std::decay_t<decltype(s)>::N;
+        double dvp[3] = {0, 0, 0}, vlp[3] = {0, 0, 0};
         for (int a = 0; a < N; ++a)
           for (int bb = 0; bb < N; ++bb) {
             const std::size_t row = s.ix[a] + s.iy[bb];
@@ -139,29 +148,43 @@ GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, const Grid
               }
             }
           }
+        if (pic_fraction > 0.0) {
+          // v_p = (1 - beta) (v_p + sum N dv) + beta sum N v^L: the PIC share beta damps the particle
+          // velocity's part that the grid cannot represent; the kinetic energy it removes is counted
+          double before = 0.0, after = 0.0;
+          for (int d = 0; d < 3; ++d) {
+            const double flip = P.v[d][p] + dvp[d];
+            const double blended = (1.0 - pic_fraction) * flip + pic_fraction * vlp[d];
+            before += flip * flip;
+            after += blended * blended;
+            dvp[d] = blended - P.v[d][p];
+          }
+          damped += 0.5 * P.mass[p] * (before - after);
+        }
+        for (int d = 0; d < 3; ++d) {
+          P.v[d][p] += dvp[d];       // seed 000 eq. 50: v_p += dt sum a_i N_i
+          disp[d][p] = dt * vlp[d];  // seed 000 eq. 51: x_p += dt sum v_i^L N_i (applied later)
+          finite = finite && std::isfinite(P.v[d][p]) && std::isfinite(disp[d][p]);
+        }
+        if constexpr (remap) {
+          const double m = P.mass[p];
+          const double mv[3] = {m * P.v[0][p], m * P.v[1][p], m * P.v[2][p]};
+          for (int a = 0; a < N; ++a)
+            for (int bb = 0; bb < N; ++bb) {
+              const std::size_t row = s.ix[a] + s.iy[bb];
+              const double wxy = s.wx[a] * s.wy[bb];
+              for (int c = 0; c < N; ++c) {
+                const std::size_t n = row + s.iz[c];
+                const double w = wxy * s.wz[c];
+                for (int d = 0; d < 3; ++d) mom[d][n] += mv[d] * w;  // as scatter_to_grid's Momentum
+              }
+            }
+        }
       });
-      bool finite = true, inside = true;
+      bool inside = true;
       int cell[3];
       double next[3];
-      if (pic_fraction > 0.0) {
-        // v_p = (1 - beta) (v_p + sum N dv) + beta sum N v^L: the PIC share beta damps the particle
-        // velocity's part that the grid cannot represent; the kinetic energy it removes is counted
-        double before = 0.0, after = 0.0;
-        for (int d = 0; d < 3; ++d) {
-          const double flip = P.v[d][p] + dvp[d];
-          const double blended = (1.0 - pic_fraction) * flip + pic_fraction * vlp[d];
-          before += flip * flip;
-          after += blended * blended;
-          dvp[d] = blended - P.v[d][p];
-        }
-        damped += 0.5 * P.mass[p] * (before - after);
-      }
-      for (int d = 0; d < 3; ++d) {
-        P.v[d][p] += dvp[d];                 // seed 000 eq. 50: v_p += dt sum a_i N_i
-        disp[d][p] = dt * vlp[d];            // seed 000 eq. 51: x_p += dt sum v_i^L N_i (applied later)
-        finite = finite && std::isfinite(P.v[d][p]) && std::isfinite(disp[d][p]);
-        next[d] = P.x[d][p] + disp[d][p];
-      }
+      for (int d = 0; d < 3; ++d) next[d] = P.x[d][p] + disp[d][p];
       // the next step's cell in (x, y, w): the same map as the stencil and the cell sort
       if constexpr (!Terrain::kIsFlat) next[2] -= terrain.height(next[0]);
       for (int d = 0; d < 3; ++d) {
@@ -176,7 +199,30 @@ GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, const Grid
     }
     if (pic_fraction > 0.0) block_damping[b] = damped;
   }
-  return {needs_sort, nonfinite, outside};
+  result = {needs_sort, nonfinite, outside};
+}
+
+}  // namespace
+
+template <class Shape, class Terrain>
+GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, Grid& grid, double dt,
+                              std::array<std::vector<double>, 3>& displacement, double pic_fraction,
+                              std::vector<double>& block_damping, bool remap) {
+  GatherResult result;
+  if (!remap) {
+    gather_blocks<Shape, Terrain, false>(P, sort, grid, dt, displacement, pic_fraction, block_damping,
+                                         sort.block_count(), [](std::size_t b) { return b; }, result);
+    return result;
+  }
+  // The remap scatters, so the blocks go colour by colour as in scatter_to_grid: each node sums
+  // its particles in the same order for any thread count.
+  for (int colour = 0; colour < 8; ++colour) {
+    const auto& blocks = sort.colour(colour);
+    gather_blocks<Shape, Terrain, true>(P, sort, grid, dt, displacement, pic_fraction, block_damping, blocks.size(),
+                                        [&blocks](std::size_t bi) { return static_cast<std::size_t>(blocks[bi]); },
+                                        result);
+  }
+  return result;
 }
 
 template <class Shape, class Terrain>
@@ -223,8 +269,9 @@ void strain_increments(const ParticleStore& P, const Grid& grid, const std::arra
 
 #define TALUS_INSTANTIATE_TRANSFERS(SHAPE, TERRAIN)                                                          \
   template void scatter_to_grid<SHAPE, TERRAIN>(const ParticleStore&, const CellSort&, Grid&, ScatterFields); \
-  template GatherResult gather_from_grid<SHAPE, TERRAIN>(ParticleStore&, const CellSort&, const Grid&, double,  \
-                                                         std::array<std::vector<double>, 3>&, double, std::vector<double>&);               \
+  template GatherResult gather_from_grid<SHAPE, TERRAIN>(ParticleStore&, const CellSort&, Grid&, double,        \
+                                                         std::array<std::vector<double>, 3>&, double, std::vector<double>&, \
+                                                         bool);                                                       \
   template void strain_increments<SHAPE, TERRAIN>(const ParticleStore&, const Grid&,                          \
                                                   const std::array<const double*, 3>&, double, std::size_t,    \
                                                   std::size_t, StrainIncrements&);

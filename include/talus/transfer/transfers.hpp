@@ -5,7 +5,8 @@
 //  scatter_to_grid    P2G: nodal mass, momentum and internal force (seed 000 eq. 47-49), as 8
 //                     colour passes over blocks: no atomics, same order for any thread count.
 //  gather_from_grid   G2P: v_p += sum N_i (v_i^L - v_i), x_p += dt sum N_i v_i^L (seed 000 eq. 50-51),
-//                     parallel over blocks (pure gather).
+//                     parallel over blocks (pure gather); with the MUSL remap folded in, the new
+//                     momentum is scattered right after each particle's gather, in colour passes.
 //  strain_increments  d_eps_p = dt/2 sum (grad N_i (x) v_i + transpose) and the spin increment
 //                     (seed 000 eq. 33), for a range of particles into a small buffer.
 #include "talus/grid/grid.hpp"
@@ -36,13 +37,16 @@ struct GatherResult {
 
 /// Updates v_p and writes the step's displacement dt sum N_i v_i^L into `displacement`; positions
 /// are moved only after the strain pass, so every transfer of a step uses the weights at x_p^k.
-template <class Shape, class Terrain>
 /// `pic_fraction` beta in [0, 1]: v_p = (1 - beta) (v_p + sum N (v^L - v)) + beta sum N v^L (0 = FLIP,
 /// seed 000 eq. 50; 1 = PIC). With beta > 0 the kinetic energy the blend removes is written per sort
 /// block into `block_damping` (sized to the block count), for a thread-independent sum.
-GatherResult gather_from_grid(ParticleStore& particles, const CellSort& sort, const Grid& grid, double dt,
+/// `remap` (MUSL, USAVG): also scatter the new particle momentum m_p v_p into grid.momentum (cleared
+/// by the caller), the remap of seed 000 eq. 52, in the same pass with the same weights; the
+/// nodal sums are those of scatter_to_grid(..., ScatterFields::Momentum), in the same order.
+template <class Shape, class Terrain>
+GatherResult gather_from_grid(ParticleStore& particles, const CellSort& sort, Grid& grid, double dt,
                               std::array<std::vector<double>, 3>& displacement, double pic_fraction,
-                              std::vector<double>& block_damping);
+                              std::vector<double>& block_damping, bool remap);
 
 /// Per-particle strain and spin increments of a range, structure of arrays.
 struct StrainIncrements {
