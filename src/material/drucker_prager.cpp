@@ -13,7 +13,7 @@ namespace talus {
 
 namespace {
 
-constexpr double kSqrt2 = 1.4142135623730951;
+constexpr double kSqrt2 = std::numbers::sqrt2;  // as in update() (drucker_prager.hpp)
 constexpr double kSqrt3 = 1.7320508075688772;
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
 
@@ -124,34 +124,16 @@ void DruckerPrager::rotate_state(DruckerPragerState& state, double w_yz, double 
   rotate_objectively(state.back_stress, w_yz, w_xz, w_xy);
 }
 
-DruckerPragerResult DruckerPrager::update(Sym6& stress, DruckerPragerState& state,
-                                          const Sym6& strain_increment) const {
+DruckerPragerResult DruckerPrager::plastic_return(Sym6& stress, DruckerPragerState& state, const Sym6& xi, double xi_norm,
+                                                  double i1, double f) const {
   using Regime = DruckerPragerResult::Regime;
   const double g = shear_, kb = bulk_;
   const double hi = hardening_isotropic_, hk = hardening_kinematic_;
-
-  // 1. Elastic trial: sigma += lambda tr(d_eps) I + 2 G d_eps (tensor shear components).
-  const double de_v = strain_increment[XX] + strain_increment[YY] + strain_increment[ZZ];
-  stress += 2.0 * g * strain_increment;
-  stress[XX] += lame_ * de_v;
-  stress[YY] += lame_ * de_v;
-  stress[ZZ] += lame_ * de_v;
-
-  // 2. Trial invariants, relative to the back stress: xi = s - beta, q = sqrt(J2(xi)).
-  const double i1 = stress[XX] + stress[YY] + stress[ZZ];
-  const double mean = i1 / 3.0;
-  Sym6 xi = stress - state.back_stress;
-  xi[XX] -= mean;
-  xi[YY] -= mean;
-  xi[ZZ] -= mean;
-  const double xi_norm = std::sqrt(double_contract(xi, xi));  // |xi| = sqrt(2) q
   const double q = xi_norm / kSqrt2;
   const double k = k0_ + hi * state.equivalent_plastic_strain;
-  const double f = alpha_ * i1 + q - k;  // seed 001 eq. 23 at the trial state
   const double i1_cut = first_invariant_cutoff_;
 
   DruckerPragerResult result;
-  if (f <= 0.0 && i1 <= i1_cut) return result;  // elastic
 
   // Writes sigma = xi_new + beta_new + I1/3 I for a return along n = xi/|xi| that shrinks |xi|
   // to sqrt(2) q_new with plastic multiplier dl (deviatoric plastic strain dl n/sqrt(2)), and

@@ -32,7 +32,9 @@
 #include "talus/core/tensor.hpp"
 #include "talus/core/types.hpp"
 
+#include <cmath>
 #include <limits>
+#include <numbers>
 #include <string_view>
 
 namespace talus {
@@ -107,6 +109,8 @@ class DruckerPrager {
   /// Elastic trial step sigma += lambda tr(d_eps) I + 2 G d_eps, then return mapping in closed
   /// form. `stress` must already be rotated to the end of the step (objective update, see top).
   /// After a plastic return |f| <= 1e-10 relative to the stress scale.
+  /// Inline: the elastic trial and the yield test run for every particle every step; only the
+  /// return mapping (plastic_return) is a call.
   DruckerPragerResult update(Sym6& stress, DruckerPragerState& state,
                              const Sym6& strain_increment) const;
 
@@ -148,6 +152,47 @@ class DruckerPrager {
   double hardening_isotropic_ = 0.0, hardening_kinematic_ = 0.0;
   double first_invariant_cutoff_ = 0.0;  // 3 tension_cutoff (may be +inf)
   double cone_denominator_ = 0.0;        // G + 9 K alpha alpha_g + H
+
+  /// Steps 3-5 of update() for a trial state outside the elastic domain (f > 0 or I1 beyond the
+  /// cut-off): xi = s_trial - beta, |xi|, the trial I1 and f.
+  DruckerPragerResult plastic_return(Sym6& stress, DruckerPragerState& state, const Sym6& xi, double xi_norm,
+                                     double i1, double f) const;
 };
+
+inline DruckerPragerResult DruckerPrager::update(Sym6& stress, DruckerPragerState& state,
+                                                 const Sym6& strain_increment) const {
+  // Plain arrays, element by element, copied into Sym6 only for the (rarer) plastic return: the
+  // caller fills `stress` one component at a time, and Eigen two-wide loads of it, or a Sym6 that
+  // escapes into the out-of-line return, kept it on the stack with stalled reloads (store
+  // forwarding) that were 7% of a Drucker-Prager step.
+  // 1. Elastic trial: sigma += lambda tr(d_eps) I + 2 G d_eps (tensor shear components).
+  const double de_v = strain_increment[XX] + strain_increment[YY] + strain_increment[ZZ];
+  double trial[6];
+  for (int c = 0; c < 6; ++c) trial[c] = stress[c] + 2.0 * shear_ * strain_increment[c];
+  for (int c = 0; c < 3; ++c) trial[c] += lame_ * de_v;
+
+  // 2. Trial invariants, relative to the back stress: xi = s - beta, q = sqrt(J2(xi)).
+  const double i1 = trial[XX] + trial[YY] + trial[ZZ];
+  const double mean = i1 / 3.0;
+  double xi[6];
+  for (int c = 0; c < 6; ++c) xi[c] = trial[c] - state.back_stress[c] - (c < 3 ? mean : 0.0);
+  const double xi_norm = std::sqrt(xi[XX] * xi[XX] + xi[YY] * xi[YY] + xi[ZZ] * xi[ZZ] +
+                                   2.0 * (xi[YZ] * xi[YZ] + xi[XZ] * xi[XZ] + xi[XY] * xi[XY]));  // sqrt(2) q
+  const double q = xi_norm / std::numbers::sqrt2;
+  const double k = k0_ + hardening_isotropic_ * state.equivalent_plastic_strain;
+  const double f = alpha_ * i1 + q - k;  // seed 001 eq. 23 at the trial state
+  if (f <= 0.0 && i1 <= first_invariant_cutoff_) {  // elastic
+    for (int c = 0; c < 6; ++c) stress[c] = trial[c];
+    return {};
+  }
+  Sym6 returned, deviator_trial;
+  for (int c = 0; c < 6; ++c) {
+    returned[c] = trial[c];
+    deviator_trial[c] = xi[c];
+  }
+  const DruckerPragerResult result = plastic_return(returned, state, deviator_trial, xi_norm, i1, f);
+  stress = returned;
+  return result;
+}
 
 }  // namespace talus
