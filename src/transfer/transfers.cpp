@@ -59,29 +59,38 @@ void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid) {
         const double syz = -vol * P.stress[YZ][p], sxz = -vol * P.stress[XZ][p], sxy = -vol * P.stress[XY][p];
         stencil.visit(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw, [&](const auto& s) {
           constexpr int N = std::decay_t<decltype(s)>::N;
+          // Sum factorisation: with grad N = (gx wy wz, wx gy wz, wx wy gz) (Stencil::gradient) the
+          // force on node (a, b, c) is wz[c] A + gz[c] B with A, B fixed per (a, b) row, so the
+          // innermost loop does 2 multiply-adds per component instead of forming the gradient.
           for (int a = 0; a < N; ++a)
             for (int bb = 0; bb < N; ++bb) {
               const std::size_t row = s.ix[a] + s.iy[bb];
               const double wxy = s.wx[a] * s.wy[bb];
-              // Stencil::gradient with the (a, b) products hoisted out of the c loop (same roundings)
               const double gxy = s.gx[a] * s.wy[bb], wgy = s.wx[a] * s.gy[bb];
+              const double mw = m * wxy;
+              const double mvw[3] = {mv[0] * wxy, mv[1] * wxy, mv[2] * wxy};
+              double fa[3], fb[3];  // f_d = sum_j s_dj dN/dx_j = wz fa_d + gz fb_d
+              if constexpr (with_force) {
+                fa[0] = sxx * gxy + sxy * wgy;
+                fa[1] = sxy * gxy + syy * wgy;
+                fa[2] = sxz * gxy + syz * wgy;
+                fb[0] = sxz * wxy;
+                fb[1] = syz * wxy;
+                fb[2] = szz * wxy;
+                if constexpr (!Terrain::kIsFlat) {  // dN/dx_phys = dN/dx - z_b' dN/dw
+                  const double t = s.terrain_slope * wxy;
+                  fb[0] -= t * sxx;
+                  fb[1] -= t * sxy;
+                  fb[2] -= t * sxz;
+                }
+              }
               for (int c = 0; c < N; ++c) {
                 const std::size_t n = row + s.iz[c];
-                const double w = wxy * s.wz[c];
-                if constexpr (with_mass) mass[n] += m * w;
-                if constexpr (with_force) {
-                  double dx = gxy * s.wz[c];
-                  const double dy = wgy * s.wz[c], dz = wxy * s.gz[c];
-                  if constexpr (!Terrain::kIsFlat) dx -= s.terrain_slope * dz;
-                  force[0][n] += sxx * dx + sxy * dy + sxz * dz;
-                  force[1][n] += sxy * dx + syy * dy + syz * dz;
-                  force[2][n] += sxz * dx + syz * dy + szz * dz;
-                }
-                if constexpr (with_momentum) {
-                  mom[0][n] += mv[0] * w;
-                  mom[1][n] += mv[1] * w;
-                  mom[2][n] += mv[2] * w;
-                }
+                if constexpr (with_mass) mass[n] += mw * s.wz[c];
+                if constexpr (with_force)
+                  for (int d = 0; d < 3; ++d) force[d][n] += fa[d] * s.wz[c] + fb[d] * s.gz[c];
+                if constexpr (with_momentum)
+                  for (int d = 0; d < 3; ++d) mom[d][n] += mvw[d] * s.wz[c];
               }
             }
         });
@@ -135,17 +144,22 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, double dt
       stencil.visit(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw, [&](const auto& s) {
         constexpr int N = std::decay_t<decltype(s)>::N;
         double dvp[3] = {0, 0, 0}, vlp[3] = {0, 0, 0};
+        // Sum factorisation: N = wx wy wz, so each (a, b) row sums wz-weighted values first.
         for (int a = 0; a < N; ++a)
           for (int bb = 0; bb < N; ++bb) {
             const std::size_t row = s.ix[a] + s.iy[bb];
-            const double wxy = s.wx[a] * s.wy[bb];
+            double row_dv[3] = {0, 0, 0}, row_vl[3] = {0, 0, 0};
             for (int c = 0; c < N; ++c) {
               const std::size_t n = row + s.iz[c];
-              const double w = wxy * s.wz[c];
               for (int d = 0; d < 3; ++d) {
-                dvp[d] += w * dv[d][n];
-                vlp[d] += w * vl[d][n];
+                row_dv[d] += s.wz[c] * dv[d][n];
+                row_vl[d] += s.wz[c] * vl[d][n];
               }
+            }
+            const double wxy = s.wx[a] * s.wy[bb];
+            for (int d = 0; d < 3; ++d) {
+              dvp[d] += wxy * row_dv[d];
+              vlp[d] += wxy * row_vl[d];
             }
           }
         if (pic_fraction > 0.0) {
@@ -173,10 +187,10 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, double dt
             for (int bb = 0; bb < N; ++bb) {
               const std::size_t row = s.ix[a] + s.iy[bb];
               const double wxy = s.wx[a] * s.wy[bb];
+              const double mvw[3] = {mv[0] * wxy, mv[1] * wxy, mv[2] * wxy};
               for (int c = 0; c < N; ++c) {
                 const std::size_t n = row + s.iz[c];
-                const double w = wxy * s.wz[c];
-                for (int d = 0; d < 3; ++d) mom[d][n] += mv[d] * w;  // as scatter_to_grid's Momentum
+                for (int d = 0; d < 3; ++d) mom[d][n] += mvw[d] * s.wz[c];  // as scatter_to_grid's Momentum
               }
             }
         }
@@ -237,19 +251,28 @@ void strain_increments(const ParticleStore& P, const Grid& grid, const std::arra
     double L[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  // L_ij = dv_i / dx_j
     stencil.visit(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw, [&](const auto& s) {
       constexpr int N = std::decay_t<decltype(s)>::N;
+      // Sum factorisation: with grad N = (gx wy wz, wx gy wz, wx wy gz) (Stencil::gradient),
+      // L_i. = sum_(a,b) (gxy S_i, wgy S_i, wxy G_i) with S_i = sum_c v_i wz[c], G_i = sum_c v_i gz[c].
       for (int a = 0; a < N; ++a)
         for (int bb = 0; bb < N; ++bb) {
           const std::size_t row = s.ix[a] + s.iy[bb];
-          // Stencil::gradient with the (a, b) products hoisted out of the c loop (same roundings)
-          const double gxy = s.gx[a] * s.wy[bb], wgy = s.wx[a] * s.gy[bb], wxy = s.wx[a] * s.wy[bb];
+          double sw[3] = {0, 0, 0}, sg[3] = {0, 0, 0};
           for (int c = 0; c < N; ++c) {
             const std::size_t n = row + s.iz[c];
-            double grad[3] = {gxy * s.wz[c], wgy * s.wz[c], wxy * s.gz[c]};
-            if constexpr (!Terrain::kIsFlat) grad[0] -= s.terrain_slope * grad[2];  // dN/dx_phys = dN/dx - z_b' dN/dw
             for (int i = 0; i < 3; ++i) {
               const double vi = nv[i][n];
-              for (int j = 0; j < 3; ++j) L[i][j] += vi * grad[j];
+              sw[i] += vi * s.wz[c];
+              sg[i] += vi * s.gz[c];
             }
+          }
+          const double gxy = s.gx[a] * s.wy[bb], wgy = s.wx[a] * s.gy[bb], wxy = s.wx[a] * s.wy[bb];
+          for (int i = 0; i < 3; ++i) {
+            double dx = gxy * sw[i];
+            const double dz = wxy * sg[i];
+            if constexpr (!Terrain::kIsFlat) dx -= s.terrain_slope * dz;  // dN/dx_phys = dN/dx - z_b' dN/dw
+            L[i][0] += dx;
+            L[i][1] += wgy * sw[i];
+            L[i][2] += dz;
           }
         }
     });
