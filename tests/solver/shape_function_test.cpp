@@ -16,12 +16,18 @@
 namespace talus {
 namespace {
 
-template <class Shape>
-void check_consistency(const double half_width[3]) {
+/// The small grid the stencil checks run on (off-origin, non-unit spacing).
+GridGeometry test_geometry() {
   GridGeometry g;
   g.origin = Vec3(-1.0, 2.0, 0.5);
   g.h = 0.3;
   g.cells = {10, 10, 10};
+  return g;
+}
+
+template <class Shape>
+void check_consistency(const double half_width[3]) {
+  const GridGeometry g = test_geometry();
   Grid grid(g);
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(0.0, 3.0);
@@ -187,10 +193,7 @@ TEST(ShapeFunctions, GimpWeightsMatchTheClosedFormOfSeed000Eq30And31) {
 // weighted sums over the nodes must equal those of the 4-node stencil to round-off, and wider
 // domains must take the 4-node one.
 TEST(ShapeFunctions, NarrowCpGimpStencilGivesTheSameSumsAsTheFullOne) {
-  GridGeometry g;
-  g.origin = Vec3(-1.0, 2.0, 0.5);
-  g.h = 0.3;
-  g.cells = {10, 10, 10};
+  const GridGeometry g = test_geometry();
   Grid grid(g);
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(0.0, 3.0), width(0.0, 0.5);
