@@ -75,13 +75,58 @@ struct MlsScratch {
   // Candidates: every particle in the cells that meet the ball around any particle of the cell.
   std::vector<double> cx[3], cbody;
   std::vector<std::uint32_t> cq;  // store index
-  std::vector<double> s2;         // squared scaled distance to the current particle (>= 1 for other bodies)
+  std::vector<double> s2;         // squared scaled distance to the current particle (2 for other bodies)
   // Neighbours of the current particle, compacted, padded with zero weights to a multiple of kLanes.
   std::vector<std::uint32_t> nb;  // candidate index
   std::vector<double> u[3], w;
 };
 
-constexpr int kLanes = 4;  // neighbours per step of the accumulation loops (two SSE2 or one AVX2 vector)
+constexpr int kLanes = 2;  // neighbours per step of the accumulation loops
+
+/// The fit's solve for a well-conditioned A (the common case), in plain fixed-size loops that the
+/// compiler unrolls: Cholesky A = L L^T, then A^-1 = L^-T L^-1 explicitly, a = A^-1 e_0 its first
+/// column, and the exact reciprocal condition number 1 / (|A|_1 |A^-1|_1). Eigen's rcond() is an
+/// estimate of the same quantity from below for |A^-1|_1, so it is never smaller than the exact
+/// value: when the exact one clears 2 * min_rcond (the factor 2 absorbs round-off in A^-1), the
+/// guard passes for certain. Returns false otherwise (not positive definite, or ill-conditioned,
+/// or not finite): the caller then decides with Eigen's LLT and rcond() as before.
+template <int T>
+bool solve_well_conditioned(const double (&A)[T][T], double min_rcond, double (&a)[T]) {
+  double L[T][T] = {}, Li[T][T] = {};
+  for (int j = 0; j < T; ++j) {
+    double d = A[j][j];
+    for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
+    if (!(d > 0.0)) return false;
+    L[j][j] = std::sqrt(d);
+    const double inv = 1.0 / L[j][j];
+    for (int i = j + 1; i < T; ++i) {
+      double v = A[i][j];
+      for (int k = 0; k < j; ++k) v -= L[i][k] * L[j][k];
+      L[i][j] = v * inv;
+    }
+    Li[j][j] = inv;
+  }
+  for (int j = 0; j < T; ++j)  // L^-1, lower triangular, column by column
+    for (int i = j + 1; i < T; ++i) {
+      double v = 0.0;
+      for (int k = j; k < i; ++k) v += L[i][k] * Li[k][j];
+      Li[i][j] = -v * Li[i][i];
+    }
+  double a_norm = 0.0, ainv_norm = 0.0;  // 1-norms: largest column sum of magnitudes
+  for (int c = 0; c < T; ++c) {
+    double sa = 0.0, si = 0.0;
+    for (int r = 0; r < T; ++r) {
+      double v = 0.0;  // (A^-1)_rc = sum_k (L^-1)_kr (L^-1)_kc, k >= max(r, c)
+      for (int k = r > c ? r : c; k < T; ++k) v += Li[k][r] * Li[k][c];
+      if (c == 0) a[r] = v;
+      sa += std::abs(A[r][c]);
+      si += std::abs(v);
+    }
+    a_norm = sa > a_norm ? sa : a_norm;
+    ainv_norm = si > ainv_norm ? si : ainv_norm;
+  }
+  return a_norm * ainv_norm * (2.0 * min_rcond) <= 1.0;  // false for NaN or inf
+}
 
 }  // namespace
 
@@ -208,10 +253,8 @@ MlsCounts MlsStrainSmoother::smooth_with(const ParticleStore& P, const CellSort&
           for (std::size_t I = 0; I < nc; ++I) {
             const double d0 = (cx0[I] - xp0) * inv_radius, d1 = (cx1[I] - xp1) * inv_radius,
                          d2 = (cx2[I] - xp2) * inv_radius;
-            // Another body adds at least 1 (bodies are integers), the own body exactly 0: no
-            // select, which GCC would not if-convert here.
-            const double db = cbody[I] - bodyd;
-            s2[I] = d0 * d0 + d1 * d1 + d2 * d2 + db * db;
+            const double r2 = d0 * d0 + d1 * d1 + d2 * d2;
+            s2[I] = cbody[I] == bodyd ? r2 : 2.0;
           }
           // Compact the neighbours (s < 1) without branches.
           std::size_t m = 0;
@@ -239,7 +282,7 @@ MlsCounts MlsStrainSmoother::smooth_with(const ParticleStore& P, const CellSort&
             w[k] = k < m ? mls_weight_inside(s) : 0.0;  // seed 000 eq. 39
           }
           bool ok = m >= static_cast<std::size_t>(T);
-          VecT a;
+          double a[T];
           if (ok) {
             // A = sum_I W_I F(u_I) F(u_I)^T (seed 000 eq. 42), upper triangle, kLanes neighbours per
             // step in separate lanes so the loop body vectorises; lanes are summed at the end.
@@ -260,18 +303,24 @@ MlsCounts MlsStrainSmoother::smooth_with(const ParticleStore& P, const CellSort&
                 for (int c = r; c < T; ++c, ++e)
                   for (int v = 0; v < kLanes; ++v) acc[e][v] += WF[r][v] * F[c][v];
             }
-            MatT A;
+            double A[T][T];
             int e = 0;
             for (int r = 0; r < T; ++r)
               for (int c = r; c < T; ++c, ++e) {
                 double sum = 0.0;
                 for (int v = 0; v < kLanes; ++v) sum += acc[e][v];
-                A(r, c) = A(c, r) = sum;
+                A[r][c] = A[c][r] = sum;
               }
-            const Eigen::LLT<MatT> llt(A);
-            ok = llt.info() == Eigen::Success && llt.rcond() >= min_rcond;
-            if (ok) a = llt.solve(VecT::Unit(0));  // a = A^-1 F(u_p), F(0) = e_0 (eq. 45)
-            ok = ok && a.allFinite();
+            // a = A^-1 F(u_p), F(0) = e_0 (eq. 45)
+            if (!solve_well_conditioned<T>(A, min_rcond, a)) {
+              const MatT Am = Eigen::Map<const Eigen::Matrix<double, T, T, Eigen::RowMajor>>(&A[0][0]);
+              const Eigen::LLT<MatT> llt(Am);
+              ok = llt.info() == Eigen::Success && llt.rcond() >= min_rcond;
+              VecT av;
+              if (ok) av = llt.solve(VecT::Unit(0));
+              ok = ok && av.allFinite();
+              for (int r = 0; r < T; ++r) a[r] = ok ? av[r] : 0.0;
+            }
           }
           if (!ok) {  // guard: too few neighbours for the basis, or A (nearly) singular
             for (int c = 0; c < 6; ++c) out[c][p] = in[c][p];
