@@ -81,7 +81,7 @@ struct MlsScratch {
   std::vector<double> u[3], w;
 };
 
-constexpr int kLanes = 2;  // neighbours per step of the accumulation loops
+constexpr int kLanes = 2;  // neighbours per step of the accumulation loops (10 SSE2 accumulators for linear)
 
 /// The fit's solve for a well-conditioned A (the common case), in plain fixed-size loops that the
 /// compiler unrolls: Cholesky A = L L^T, then A^-1 = L^-T L^-1 explicitly, a = A^-1 e_0 its first
@@ -225,6 +225,8 @@ MlsCounts MlsStrainSmoother::smooth_with(const ParticleStore& P, const CellSort&
             }
           }
         }
+        bool one_body = true;
+        for (std::size_t I = 1; I < nc; ++I) one_body = one_body && S.cbody[I] == S.cbody[0];
         if (S.s2.size() < nc) {
           S.s2.resize(S.cq.size());
           S.nb.resize(S.cq.size() + kLanes);
@@ -248,13 +250,23 @@ MlsCounts MlsStrainSmoother::smooth_with(const ParticleStore& P, const CellSort&
           const double xp[3] = {xp0, xp1, xp2};
           const double bodyd = body;
           // Distance test over all candidates (vectorised); strain is discontinuous across bodies,
-          // so another body's particle is never a neighbour.
+          // so another body's particle is never a neighbour (the usual case, candidates of one
+          // body only, skips that test).
+          if (one_body) {
 #pragma omp simd
-          for (std::size_t I = 0; I < nc; ++I) {
-            const double d0 = (cx0[I] - xp0) * inv_radius, d1 = (cx1[I] - xp1) * inv_radius,
-                         d2 = (cx2[I] - xp2) * inv_radius;
-            const double r2 = d0 * d0 + d1 * d1 + d2 * d2;
-            s2[I] = cbody[I] == bodyd ? r2 : 2.0;
+            for (std::size_t I = 0; I < nc; ++I) {
+              const double d0 = (cx0[I] - xp0) * inv_radius, d1 = (cx1[I] - xp1) * inv_radius,
+                           d2 = (cx2[I] - xp2) * inv_radius;
+              s2[I] = d0 * d0 + d1 * d1 + d2 * d2;
+            }
+          } else {
+#pragma omp simd
+            for (std::size_t I = 0; I < nc; ++I) {
+              const double d0 = (cx0[I] - xp0) * inv_radius, d1 = (cx1[I] - xp1) * inv_radius,
+                           d2 = (cx2[I] - xp2) * inv_radius;
+              const double r2 = d0 * d0 + d1 * d1 + d2 * d2;
+              s2[I] = cbody[I] == bodyd ? r2 : 2.0;
+            }
           }
           // Compact the neighbours (s < 1) without branches.
           std::size_t m = 0;
@@ -329,17 +341,20 @@ MlsCounts MlsStrainSmoother::smooth_with(const ParticleStore& P, const CellSort&
           }
           // eq. 45-46: Phi_I = W_I a^T F(u_I), d_eps_p = sum_I Phi_I d_eps_I (a^T B d_eps summed
           // per neighbour: one pass of T + 6 products instead of T x 6 sums of B d_eps).
+          // a^T F summed term by term across the lanes, so the lanes vectorise (4 or 8 lanes here
+          // measured slower: spills and padding).
           double sum[6][kLanes] = {};
           for (std::size_t k0 = 0; k0 < m_pad; k0 += kLanes) {
-            double phi[kLanes];
+            double F[T][kLanes], phi[kLanes] = {};
             for (int v = 0; v < kLanes; ++v) {
               double uu[Axes], f[T];
               for (int ax = 0; ax < Axes; ++ax) uu[ax] = u[ax][k0 + v];
               mls_basis<Degree, Axes>(uu, f);
-              double af = 0.0;
-              for (int r = 0; r < T; ++r) af += a[r] * f[r];
-              phi[v] = w[k0 + v] * af;
+              for (int r = 0; r < T; ++r) F[r][v] = f[r];
             }
+            for (int r = 0; r < T; ++r)
+              for (int v = 0; v < kLanes; ++v) phi[v] += a[r] * F[r][v];
+            for (int v = 0; v < kLanes; ++v) phi[v] *= w[k0 + v];
             for (int c = 0; c < 6; ++c) {
               const double* ec = in[c];
               for (int v = 0; v < kLanes; ++v) sum[c][v] += phi[v] * ec[S.cq[nb[k0 + v]]];
