@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace talus {
 
@@ -52,10 +53,80 @@ MlsCounts MlsStrainSmoother::smooth(const ParticleStore& particles, const CellSo
 
 namespace {
 
-constexpr int kBatch = 128;  // neighbours buffered before their sums are added to A and M
+/// Distance (in cells) from the grid-coordinate interval [lo, hi] to the cell [i, i + 1). With
+/// lo = hi = x this is the distance from the point x; it only shrinks as [lo, hi] grows.
+inline double gap_to_cell(int i, double lo, double hi) {
+  const double a = i - hi, b = lo - (i + 1);
+  const double g = a > b ? a : b;
+  return g > 0.0 ? g : 0.0;
+}
 
-/// Distance (in cells) from grid coordinate x to the cell [i, i + 1).
-inline double gap_to_cell(int i, double x) { return std::max({0.0, i - x, x - (i + 1)}); }
+/// Cubic spline of seed 000 eq. 39 for 0 <= s < 1, the same arithmetic as mls_weight but as one
+/// select, so the loop over neighbours vectorises (callers pass s < 1 only, or zero-weight padding).
+inline double mls_weight_inside(double s) {
+  const double inner = 2.0 / 3.0 - 4.0 * s * s + 4.0 * s * s * s;
+  const double outer = 4.0 / 3.0 - 4.0 * s + 4.0 * s * s - 4.0 / 3.0 * s * s * s;
+  return s < 0.5 ? inner : outer;
+}
+
+/// Thread-local scratch: the candidate particles of one cell, and the neighbours of one particle.
+/// Vectors only grow, so after the first cells a thread allocates nothing.
+struct MlsScratch {
+  // Candidates: every particle in the cells that meet the ball around any particle of the cell.
+  std::vector<double> cx[3], cbody;
+  std::vector<std::uint32_t> cq;  // store index
+  std::vector<double> s2;         // squared scaled distance to the current particle (2 for other bodies)
+  // Neighbours of the current particle, compacted, padded with zero weights to a multiple of kLanes.
+  std::vector<std::uint32_t> nb;  // candidate index
+  std::vector<double> u[3], w;
+};
+
+constexpr int kLanes = 2;  // neighbours per step of the accumulation loops (10 SSE2 accumulators for linear)
+
+/// The fit's solve for a well-conditioned A (the common case), in plain fixed-size loops that the
+/// compiler unrolls: Cholesky A = L L^T, then A^-1 = L^-T L^-1 explicitly, a = A^-1 e_0 its first
+/// column, and the exact reciprocal condition number 1 / (|A|_1 |A^-1|_1). Eigen's rcond() is an
+/// estimate of the same quantity from below for |A^-1|_1, so it is never smaller than the exact
+/// value: when the exact one clears 2 * min_rcond (the factor 2 absorbs round-off in A^-1), the
+/// guard passes for certain. Returns false otherwise (not positive definite, or ill-conditioned,
+/// or not finite): the caller then decides with Eigen's LLT and rcond() as before.
+template <int T>
+bool solve_well_conditioned(const double (&A)[T][T], double min_rcond, double (&a)[T]) {
+  double L[T][T] = {}, Li[T][T] = {};
+  for (int j = 0; j < T; ++j) {
+    double d = A[j][j];
+    for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
+    if (!(d > 0.0)) return false;
+    L[j][j] = std::sqrt(d);
+    const double inv = 1.0 / L[j][j];
+    for (int i = j + 1; i < T; ++i) {
+      double v = A[i][j];
+      for (int k = 0; k < j; ++k) v -= L[i][k] * L[j][k];
+      L[i][j] = v * inv;
+    }
+    Li[j][j] = inv;
+  }
+  for (int j = 0; j < T; ++j)  // L^-1, lower triangular, column by column
+    for (int i = j + 1; i < T; ++i) {
+      double v = 0.0;
+      for (int k = j; k < i; ++k) v += L[i][k] * Li[k][j];
+      Li[i][j] = -v * Li[i][i];
+    }
+  double a_norm = 0.0, ainv_norm = 0.0;  // 1-norms: largest column sum of magnitudes
+  for (int c = 0; c < T; ++c) {
+    double sa = 0.0, si = 0.0;
+    for (int r = 0; r < T; ++r) {
+      double v = 0.0;  // (A^-1)_rc = sum_k (L^-1)_kr (L^-1)_kc, k >= max(r, c)
+      for (int k = r > c ? r : c; k < T; ++k) v += Li[k][r] * Li[k][c];
+      if (c == 0) a[r] = v;
+      sa += std::abs(A[r][c]);
+      si += std::abs(v);
+    }
+    a_norm = sa > a_norm ? sa : a_norm;
+    ainv_norm = si > ainv_norm ? si : ainv_norm;
+  }
+  return a_norm * ainv_norm * (2.0 * min_rcond) <= 1.0;  // false for NaN or inf
+}
 
 }  // namespace
 
@@ -64,12 +135,13 @@ MlsCounts MlsStrainSmoother::smooth_with(const ParticleStore& P, const CellSort&
                                          const std::array<const double*, 6>& in, const std::array<double*, 6>& out,
                                          const std::vector<std::uint8_t>& smooth_body) const {
   constexpr int T = mls_term_count(Degree, Axes);
+  constexpr int NA = T * (T + 1) / 2;  // upper triangle of A
   using MatT = Eigen::Matrix<double, T, T>;
   using VecT = Eigen::Matrix<double, T, 1>;
-  const std::int64_t n = static_cast<std::int64_t>(P.size());
   const int bc = sort.block_cells();
   const std::size_t cells_per_block = static_cast<std::size_t>(bc) * bc * bc;
   const std::vector<std::uint32_t>& cell_start = sort.cell_start();
+  const std::int64_t blocks = static_cast<std::int64_t>(sort.block_count());
   const double inv_radius = 1.0 / radius_;
   const double rg = radius_ / grid.h;  // radius in cells
   const double rg2 = rg * rg;
@@ -78,106 +150,225 @@ MlsCounts MlsStrainSmoother::smooth_with(const ParticleStore& P, const CellSort&
   const double min_rcond = settings_.min_rcond;
   std::size_t smoothed = 0, unsmoothed = 0;
 
-#pragma omp parallel for schedule(dynamic, 256) reduction(+ : smoothed, unsmoothed)
-  for (std::int64_t pi = 0; pi < n; ++pi) {
-    const std::size_t p = static_cast<std::size_t>(pi);
-    const std::uint16_t body = P.body[p];
-    if (!smooth_body[body]) {
-      for (int c = 0; c < 6; ++c) out[c][p] = in[c][p];
-      continue;
-    }
-    const double xp[3] = {P.x[0][p], P.x[1][p], P.x[2][p]};
-    double xg[3];
-    int cell[3];
-    for (int d = 0; d < 3; ++d) {
-      xg[d] = grid.to_grid(d, xp[d]);
-      cell[d] = static_cast<int>(std::floor(xg[d]));
-    }
-    MatT A = MatT::Zero();                         // seed 000 eq. 42 (upper triangle accumulated)
-    Eigen::Matrix<double, T, 6> M = Eigen::Matrix<double, T, 6>::Zero();  // sum_I W_I F_I d_eps_I^T = B d_eps
-    int count = 0;
-    // Neighbours are buffered (weight, basis, increments) and added to A and M in batches: the
-    // sums over a batch are simple dot products the compiler vectorises.
-    alignas(64) double Fb[T][kBatch], WFb[T][kBatch], Eb[6][kBatch];
-    int nb = 0;
-    auto flush = [&]() {
-      for (int r = 0; r < T; ++r) {
-        for (int c = r; c < T; ++c) {
-          double sum = 0.0;
-#pragma omp simd reduction(+ : sum)
-          for (int I = 0; I < nb; ++I) sum += WFb[r][I] * Fb[c][I];
-          A(r, c) += sum;
+  // Work goes cell by cell: the candidates of all particles of a cell are gathered once into a
+  // contiguous buffer, and each particle then tests them in a loop that vectorises. Every particle's
+  // result depends only on the inputs and a fixed visiting order, and is written only by its own
+  // iteration: the output is bit-identical for any thread count.
+#pragma omp parallel reduction(+ : smoothed, unsmoothed)
+  {
+    MlsScratch S;
+#pragma omp for schedule(dynamic, 1)
+    for (std::int64_t bi = 0; bi < blocks; ++bi) {
+      const std::size_t b = static_cast<std::size_t>(bi);
+      const std::size_t base = b * cells_per_block;
+      for (std::size_t l = 0; l < cells_per_block; ++l) {
+        const std::uint32_t p_begin = cell_start[base + l], p_end = cell_start[base + l + 1];
+        if (p_begin == p_end) continue;
+        // The box (grid coordinates) of the cell's particles to smooth; the others are copied. The
+        // box, not the cell, bounds the search, so a particle off its sorted cell still finds all
+        // its neighbours.
+        double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+        for (std::uint32_t p = p_begin; p < p_end; ++p) {
+          if (!smooth_body[P.body[p]]) {
+            for (int c = 0; c < 6; ++c) out[c][p] = in[c][p];
+            continue;
+          }
+          for (int d = 0; d < 3; ++d) {
+            const double xg = grid.to_grid(d, P.x[d][p]);
+            lo[d] = xg < lo[d] ? xg : lo[d];
+            hi[d] = xg > hi[d] ? xg : hi[d];
+          }
         }
-        for (int c = 0; c < 6; ++c) {
-          double sum = 0.0;
-#pragma omp simd reduction(+ : sum)
-          for (int I = 0; I < nb; ++I) sum += WFb[r][I] * Eb[c][I];
-          M(r, c) += sum;
-        }
-      }
-      count += nb;
-      nb = 0;
-    };
-    // The cells that meet the ball of radius h around x_p; along k, the cells of one block are
-    // contiguous in the store, so each (i, j) column is one particle range per block.
-    for (int i = std::max(0, cell[0] - reach); i <= cell[0] + reach; ++i) {
-      const double gi = gap_to_cell(i, xg[0]);
-      if (gi * gi >= rg2) continue;
-      for (int j = std::max(0, cell[1] - reach); j <= cell[1] + reach; ++j) {
-        const double gj = gap_to_cell(j, xg[1]);
-        const double rem = rg2 - gi * gi - gj * gj;
-        if (rem <= 0.0) continue;
-        const double half = std::sqrt(rem);
-        int k = std::max(0, static_cast<int>(std::floor(xg[2] - half)));
-        const int k_last = static_cast<int>(std::floor(xg[2] + half));
-        while (k <= k_last) {
-          const int k_end = std::min(k_last, (k / bc) * bc + bc - 1);  // last cell of this block along k
-          const long long b = sort.active_block_of_cell(i, j, k);
-          if (b >= 0) {
-            // Local cell within the block: the block's origin is the cell index rounded down to a
-            // multiple of bc (cheaper than CellSort::block_origin's divisions by the block counts).
-            const std::size_t base = static_cast<std::size_t>(b) * cells_per_block;
-            const std::size_t l0 = static_cast<std::size_t>(((i % bc) * bc + (j % bc)) * bc + (k % bc));
-            const std::size_t l1 = l0 + static_cast<std::size_t>(k_end - k);
-            for (std::uint32_t q = cell_start[base + l0]; q < cell_start[base + l1 + 1]; ++q) {
-              if (P.body[q] != body) continue;  // strain is discontinuous across bodies
-              const double dx[3] = {(P.x[0][q] - xp[0]) * inv_radius, (P.x[1][q] - xp[1]) * inv_radius,
-                                    (P.x[2][q] - xp[2]) * inv_radius};
-              const double s2 = dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2];
-              if (s2 >= 1.0) continue;
-              const double w = mls_weight(std::sqrt(s2));  // seed 000 eq. 39
-              double u[Axes], F[T];
-              for (int a = 0; a < Axes; ++a) u[a] = dx[axes[a]];
-              mls_basis<Degree, Axes>(u, F);
-              for (int r = 0; r < T; ++r) {
-                Fb[r][nb] = F[r];
-                WFb[r][nb] = w * F[r];
+        if (!(lo[0] <= hi[0])) continue;  // nothing to smooth in this cell
+        // Gather the cells that meet the ball of radius h around any point of the box: the same
+        // walk as for a single particle (lo = hi), so each particle's own search is a subset.
+        // Along k the cells of one block are contiguous in the store: one range per block.
+        std::size_t nc = 0;
+        auto append = [&](std::uint32_t q0, std::uint32_t q1) {
+          const std::size_t need = nc + (q1 - q0);
+          if (S.cq.size() < need) {
+            const std::size_t cap = std::max<std::size_t>(need, 2 * S.cq.size());
+            for (int d = 0; d < 3; ++d) S.cx[d].resize(cap);
+            S.cbody.resize(cap);
+            S.cq.resize(cap);
+          }
+          for (std::uint32_t q = q0; q < q1; ++q, ++nc) {
+            for (int d = 0; d < 3; ++d) S.cx[d][nc] = P.x[d][q];
+            S.cbody[nc] = P.body[q];
+            S.cq[nc] = q;
+          }
+        };
+        const int i0 = static_cast<int>(std::floor(lo[0])), i1 = static_cast<int>(std::floor(hi[0]));
+        const int j0 = static_cast<int>(std::floor(lo[1])), j1 = static_cast<int>(std::floor(hi[1]));
+        for (int i = std::max(0, i0 - reach); i <= i1 + reach; ++i) {
+          const double gi = gap_to_cell(i, lo[0], hi[0]);
+          if (gi * gi >= rg2) continue;
+          for (int j = std::max(0, j0 - reach); j <= j1 + reach; ++j) {
+            const double gj = gap_to_cell(j, lo[1], hi[1]);
+            const double rem = rg2 - gi * gi - gj * gj;
+            if (rem <= 0.0) continue;
+            const double half = std::sqrt(rem);
+            int k = std::max(0, static_cast<int>(std::floor(lo[2] - half)));
+            const int k_last = static_cast<int>(std::floor(hi[2] + half));
+            while (k <= k_last) {
+              const int k_end = std::min(k_last, (k / bc) * bc + bc - 1);  // last cell of this block along k
+              const long long cb = sort.active_block_of_cell(i, j, k);
+              if (cb >= 0) {
+                // Local cell within the block: the block's origin is the cell index rounded down to
+                // a multiple of bc (cheaper than CellSort::block_origin's divisions).
+                const std::size_t cbase = static_cast<std::size_t>(cb) * cells_per_block;
+                const std::size_t l0 = static_cast<std::size_t>(((i % bc) * bc + (j % bc)) * bc + (k % bc));
+                const std::size_t l1 = l0 + static_cast<std::size_t>(k_end - k);
+                append(cell_start[cbase + l0], cell_start[cbase + l1 + 1]);
               }
-              for (int c = 0; c < 6; ++c) Eb[c][nb] = in[c][q];
-              if (++nb == kBatch) flush();
+              k = k_end + 1;
             }
           }
-          k = k_end + 1;
+        }
+        bool one_body = true;
+        for (std::size_t I = 1; I < nc; ++I) one_body = one_body && S.cbody[I] == S.cbody[0];
+        if (S.s2.size() < nc) {
+          S.s2.resize(S.cq.size());
+          S.nb.resize(S.cq.size() + kLanes);
+          for (int d = 0; d < 3; ++d) S.u[d].resize(S.cq.size() + kLanes);
+          S.w.resize(S.cq.size() + kLanes);
+        }
+        const double* cx0 = S.cx[0].data();
+        const double* cx1 = S.cx[1].data();
+        const double* cx2 = S.cx[2].data();
+        const double* cbody = S.cbody.data();
+        double* s2 = S.s2.data();
+        std::uint32_t* nb = S.nb.data();
+        const double* cx[3] = {cx0, cx1, cx2};
+        double* u[3] = {S.u[0].data(), S.u[1].data(), S.u[2].data()};
+        double* w = S.w.data();
+
+        for (std::uint32_t p = p_begin; p < p_end; ++p) {
+          const std::uint16_t body = P.body[p];
+          if (!smooth_body[body]) continue;  // copied above
+          const double xp0 = P.x[0][p], xp1 = P.x[1][p], xp2 = P.x[2][p];
+          const double xp[3] = {xp0, xp1, xp2};
+          const double bodyd = body;
+          // Distance test over all candidates (vectorised); strain is discontinuous across bodies,
+          // so another body's particle is never a neighbour (the usual case, candidates of one
+          // body only, skips that test).
+          if (one_body) {
+#pragma omp simd
+            for (std::size_t I = 0; I < nc; ++I) {
+              const double d0 = (cx0[I] - xp0) * inv_radius, d1 = (cx1[I] - xp1) * inv_radius,
+                           d2 = (cx2[I] - xp2) * inv_radius;
+              s2[I] = d0 * d0 + d1 * d1 + d2 * d2;
+            }
+          } else {
+#pragma omp simd
+            for (std::size_t I = 0; I < nc; ++I) {
+              const double d0 = (cx0[I] - xp0) * inv_radius, d1 = (cx1[I] - xp1) * inv_radius,
+                           d2 = (cx2[I] - xp2) * inv_radius;
+              const double r2 = d0 * d0 + d1 * d1 + d2 * d2;
+              s2[I] = cbody[I] == bodyd ? r2 : 2.0;
+            }
+          }
+          // Compact the neighbours (s < 1) without branches.
+          std::size_t m = 0;
+          for (std::size_t I = 0; I < nc; ++I) {
+            nb[m] = static_cast<std::uint32_t>(I);
+            m += s2[I] < 1.0 ? 1 : 0;
+          }
+          // Scaled offsets and weights of the neighbours; padded to whole steps of kLanes with
+          // zero weights (their terms add exactly zero).
+          // u holds only the axes the basis spans, in order.
+          for (std::size_t k = 0; k < m; ++k) {
+            const std::uint32_t I = nb[k];
+            for (int ax = 0; ax < Axes; ++ax) u[ax][k] = (cx[axes[ax]][I] - xp[axes[ax]]) * inv_radius;
+            w[k] = s2[I];
+          }
+          const std::size_t m_pad = (m + kLanes - 1) / kLanes * kLanes;
+          for (std::size_t k = m; k < m_pad; ++k) {
+            for (int ax = 0; ax < Axes; ++ax) u[ax][k] = 0.0;
+            w[k] = 1.0;  // s^2 = 1: weight 0
+            nb[k] = 0;
+          }
+#pragma omp simd
+          for (std::size_t k = 0; k < m_pad; ++k) {
+            const double s = std::sqrt(w[k]);
+            w[k] = k < m ? mls_weight_inside(s) : 0.0;  // seed 000 eq. 39
+          }
+          bool ok = m >= static_cast<std::size_t>(T);
+          double a[T];
+          if (ok) {
+            // A = sum_I W_I F(u_I) F(u_I)^T (seed 000 eq. 42), upper triangle, kLanes neighbours per
+            // step in separate lanes so the loop body vectorises; lanes are summed at the end.
+            double acc[NA][kLanes] = {};
+            for (std::size_t k0 = 0; k0 < m_pad; k0 += kLanes) {
+              double F[T][kLanes], WF[T][kLanes];
+              for (int v = 0; v < kLanes; ++v) {
+                double uu[Axes], f[T];
+                for (int ax = 0; ax < Axes; ++ax) uu[ax] = u[ax][k0 + v];
+                mls_basis<Degree, Axes>(uu, f);
+                for (int r = 0; r < T; ++r) {
+                  F[r][v] = f[r];
+                  WF[r][v] = w[k0 + v] * f[r];
+                }
+              }
+              int e = 0;
+              for (int r = 0; r < T; ++r)
+                for (int c = r; c < T; ++c, ++e)
+                  for (int v = 0; v < kLanes; ++v) acc[e][v] += WF[r][v] * F[c][v];
+            }
+            double A[T][T];
+            int e = 0;
+            for (int r = 0; r < T; ++r)
+              for (int c = r; c < T; ++c, ++e) {
+                double sum = 0.0;
+                for (int v = 0; v < kLanes; ++v) sum += acc[e][v];
+                A[r][c] = A[c][r] = sum;
+              }
+            // a = A^-1 F(u_p), F(0) = e_0 (eq. 45)
+            if (!solve_well_conditioned<T>(A, min_rcond, a)) {
+              const MatT Am = Eigen::Map<const Eigen::Matrix<double, T, T, Eigen::RowMajor>>(&A[0][0]);
+              const Eigen::LLT<MatT> llt(Am);
+              ok = llt.info() == Eigen::Success && llt.rcond() >= min_rcond;
+              VecT av;
+              if (ok) av = llt.solve(VecT::Unit(0));
+              ok = ok && av.allFinite();
+              for (int r = 0; r < T; ++r) a[r] = ok ? av[r] : 0.0;
+            }
+          }
+          if (!ok) {  // guard: too few neighbours for the basis, or A (nearly) singular
+            for (int c = 0; c < 6; ++c) out[c][p] = in[c][p];
+            ++unsmoothed;
+            continue;
+          }
+          // eq. 45-46: Phi_I = W_I a^T F(u_I), d_eps_p = sum_I Phi_I d_eps_I (a^T B d_eps summed
+          // per neighbour: one pass of T + 6 products instead of T x 6 sums of B d_eps).
+          // a^T F summed term by term across the lanes, so the lanes vectorise (4 or 8 lanes here
+          // measured slower: spills and padding).
+          double sum[6][kLanes] = {};
+          for (std::size_t k0 = 0; k0 < m_pad; k0 += kLanes) {
+            double F[T][kLanes], phi[kLanes] = {};
+            for (int v = 0; v < kLanes; ++v) {
+              double uu[Axes], f[T];
+              for (int ax = 0; ax < Axes; ++ax) uu[ax] = u[ax][k0 + v];
+              mls_basis<Degree, Axes>(uu, f);
+              for (int r = 0; r < T; ++r) F[r][v] = f[r];
+            }
+            for (int r = 0; r < T; ++r)
+              for (int v = 0; v < kLanes; ++v) phi[v] += a[r] * F[r][v];
+            for (int v = 0; v < kLanes; ++v) phi[v] *= w[k0 + v];
+            for (int c = 0; c < 6; ++c) {
+              const double* ec = in[c];
+              for (int v = 0; v < kLanes; ++v) sum[c][v] += phi[v] * ec[S.cq[nb[k0 + v]]];
+            }
+          }
+          for (int c = 0; c < 6; ++c) {
+            double total = 0.0;
+            for (int v = 0; v < kLanes; ++v) total += sum[c][v];
+            out[c][p] = total;
+          }
+          ++smoothed;
         }
       }
     }
-    flush();
-    bool ok = count >= T;
-    VecT a;
-    if (ok) {
-      A.template triangularView<Eigen::StrictlyLower>() = A.transpose();
-      const Eigen::LLT<MatT> llt(A);
-      ok = llt.info() == Eigen::Success && llt.rcond() >= min_rcond;
-      if (ok) a = llt.solve(VecT::Unit(0));  // a = A^-1 F(u_p), F(0) = e_0 (eq. 45)
-      ok = ok && a.allFinite();
-    }
-    if (!ok) {  // guard: too few neighbours for the basis, or A (nearly) singular
-      for (int c = 0; c < 6; ++c) out[c][p] = in[c][p];
-      ++unsmoothed;
-      continue;
-    }
-    for (int c = 0; c < 6; ++c) out[c][p] = a.dot(M.col(c));  // eq. 46: sum_I Phi_I d_eps_I
-    ++smoothed;
   }
   return {smoothed, unsmoothed};
 }

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -265,6 +266,54 @@ TEST(MlsStrainSmoother, OnlySelectedBodiesAreSmoothedAndBodiesDoNotMix) {
       else
         EXPECT_EQ(c.out[k][p], c.in[k][p]);  // not smoothed: copied bit for bit
     }
+}
+
+TEST(MlsStrainSmoother, GuardDecidesLikeEigensRcondAtAnyThreshold) {
+  // The smoother decides well-conditioned fits from the exact condition number and leaves the rest
+  // to Eigen's LLT and rcond(). Thresholds taken from the particles' own rcond values put many of
+  // them just above and below the threshold, so both paths decide; each particle must be smoothed
+  // exactly when the reference LLT + rcond() (seed 000 eq. 42, relative coordinates) accepts it.
+  Cloud c = box_cloud(10, 0.45, 21);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  for (int k = 0; k < 6; ++k)
+    for (auto& v : c.in[k]) v = uniform(rng);
+  const auto& P = c.particles;
+  const double h = 1.0;
+  std::vector<double> rcond(P.size(), 0.0);  // 0: too few neighbours or not positive definite
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    Eigen::Matrix4d A = Eigen::Matrix4d::Zero();
+    int n = 0;
+    for (std::size_t q = 0; q < P.size(); ++q) {
+      const Eigen::Vector3d u((P.x[0][q] - P.x[0][p]) / h, (P.x[1][q] - P.x[1][p]) / h, (P.x[2][q] - P.x[2][p]) / h);
+      if (u.norm() >= 1.0) continue;
+      Eigen::Vector4d f;
+      mls_basis<1, 3>(u.data(), f.data());
+      A += mls_weight(u.norm()) * f * f.transpose();
+      ++n;
+    }
+    const Eigen::LLT<Eigen::Matrix4d> llt(A);
+    if (n >= 4 && llt.info() == Eigen::Success) rcond[p] = llt.rcond();
+  }
+  std::vector<double> sorted = rcond;
+  std::sort(sorted.begin(), sorted.end());
+  for (double quantile : {0.1, 0.5, 0.9}) {
+    MlsSettings s;
+    s.radius_factor = h;
+    s.min_rcond = sorted[static_cast<std::size_t>(quantile * (sorted.size() - 1))] * (1.0 + 1e-9);
+    const MlsCounts n = MlsStrainSmoother(s, 1.0).smooth(P, c.sort, c.geometry, c.inputs(), c.outputs(), {1});
+    std::size_t expected_unsmoothed = 0, near = 0;
+    for (std::size_t p = 0; p < P.size(); ++p) {
+      const bool accept = rcond[p] >= s.min_rcond;
+      expected_unsmoothed += accept ? 0 : 1;
+      near += accept && rcond[p] < 2.0 * s.min_rcond ? 1 : 0;  // decided by Eigen's rcond()
+      for (int k = 0; k < 6; ++k)  // kept bit for bit, or replaced by the fit of random values
+        EXPECT_EQ(c.out[k][p] == c.in[k][p], !accept) << p;
+    }
+    EXPECT_GT(near, 0u) << quantile;
+    EXPECT_EQ(n.unsmoothed, expected_unsmoothed) << quantile;
+    EXPECT_EQ(n.smoothed + n.unsmoothed, P.size());
+  }
 }
 
 TEST(MlsStrainSmoother, BitIdenticalForOneAndTwoThreads) {
