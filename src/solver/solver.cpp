@@ -50,8 +50,13 @@ Solver::Solver(Scene scene) : scene_(std::move(scene)) {
     for (int b : scene_.smoothing.bodies) smooth_body_[b] = 1;
   }
   size_scratch();
-  for (const auto& axis : scene_.walls)
-    for (const auto& w : axis) has_open_faces_ = has_open_faces_ || w.type == WallType::Open;
+  // What G2P flags: a displacement beyond the CFL guard, a particle beyond an open face.
+  gather_limits_.max_displacement = scene_.guards.max_step_displacement * scene_.grid.h;
+  for (int d = 0; d < 3; ++d) {
+    gather_limits_.lo[d] = scene_.grid.origin[d];
+    gather_limits_.hi[d] = scene_.grid.origin[d] + scene_.grid.cells[d] * scene_.grid.h;
+    for (int side = 0; side < 2; ++side) gather_limits_.open[d][side] = scene_.walls[d][side].type == WallType::Open;
+  }
   sort_particles();
 }
 
@@ -74,19 +79,12 @@ void Solver::size_scratch() {
 // cell per step) keeps a particle inside the 2 ghost cells until it is removed.
 void Solver::remove_outflow() {
   ParticleStore& P = particles_;
-  const GridGeometry& g = scene_.grid;
   const std::size_t n = P.size();
-  double lo[3], hi[3];
-  bool open[3][2];
-  for (int d = 0; d < 3; ++d) {
-    lo[d] = g.origin[d];
-    hi[d] = g.origin[d] + g.cells[d] * g.h;
-    for (int side = 0; side < 2; ++side) open[d][side] = scene_.walls[d][side].type == WallType::Open;
-  }
+  const GatherOptions& f = gather_limits_;  // the faces G2P tested
   auto beyond = [&](std::size_t p) {
     for (int d = 0; d < 3; ++d) {
       const double c = d == 2 ? grid_.w_of(P.x[0][p], P.x[2][p]) : P.x[d][p];  // w on a terrain grid
-      if ((open[d][0] && c < lo[d]) || (open[d][1] && c > hi[d])) return true;
+      if ((f.open[d][0] && c < f.lo[d]) || (f.open[d][1] && c > f.hi[d])) return true;
     }
     return false;
   };
@@ -160,8 +158,10 @@ void Solver::step() {
     step_with_shape<ProfileTerrain>(dt);
   else
     step_with_shape<FlatTerrain>(dt);
-  check_step_displacement(particles_, displacement_, scene_, step_, time_);  // stability_guards.hpp
-  if (has_open_faces_) remove_outflow();
+  // G2P flagged these while it computed the displacements and the new positions; the scans that
+  // name the particle (CFL guard) or remove the leaving ones run only when flagged.
+  if (large_displacement_) check_step_displacement(particles_, displacement_, scene_, step_, time_);  // stability_guards.hpp
+  if (crosses_open_face_) remove_outflow();
   if ((step_ + 1) % kFieldCheckInterval == 0) check_particle_fields(particles_, scene_, step_, time_);
   time_ += dt;
   ++step_;
@@ -233,15 +233,19 @@ void Solver::step_with(double dt) {
   {
     ScopedPhase timer(times_, Phase::G2P);
     if (remap) grid_.clear_momentum();
-    const double pic = scene_.pic_fraction;
-    if (pic > 0.0) block_damping_.assign(sort_.block_count(), 0.0);
-    const GatherResult r =
-        gather_from_grid<Shape, Terrain>(particles_, sort_, grid_, dt, displacement_, pic, block_damping_, remap);
-    if (pic > 0.0)
+    GatherOptions options = gather_limits_;
+    options.dt = dt;
+    options.pic_fraction = scene_.pic_fraction;
+    options.remap = remap;
+    if (options.pic_fraction > 0.0) block_damping_.assign(sort_.block_count(), 0.0);
+    const GatherResult r = gather_from_grid<Shape, Terrain>(particles_, sort_, grid_, displacement_, block_damping_, options);
+    if (options.pic_fraction > 0.0)
       for (double d : block_damping_) damping_work_ += d;  // in block order: thread-independent
     if (r.nonfinite >= 0) report_bad_particle(r.nonfinite, "velocity is not finite");
     if (r.outside >= 0) report_bad_particle(r.outside, "left the grid");
     needs_sort_ = r.needs_sort;
+    large_displacement_ = r.large_displacement;
+    crosses_open_face_ = r.crosses_open_face;
   }
   // 5. remap (MUSL): v_i^{k+1} = sum m_p v_p N_i / m_i, with the walls (seed 000 eq. 52); the
   //    momentum was scattered in the G2P pass.

@@ -118,10 +118,11 @@ namespace {
 // after its gather (the MUSL remap, seed 000 eq. 52): that is race-free only when the blocks are
 // one colour's, and it saves the remap's own pass over the particles and its weight evaluation.
 template <class Shape, class Terrain, bool remap, class BlockList>
-void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, double dt,
-                   std::array<std::vector<double>, 3>& displacement, double pic_fraction,
-                   std::vector<double>& block_damping, std::size_t count, BlockList block_list,
-                   GatherResult& result) {
+void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::array<std::vector<double>, 3>& displacement,
+                   std::vector<double>& block_damping, const GatherOptions& options, std::size_t count,
+                   BlockList block_list, GatherResult& result) {
+  const double dt = options.dt, pic_fraction = options.pic_fraction;
+  const double max_d2 = options.max_displacement * options.max_displacement;
   const Terrain& terrain = grid.template terrain<Terrain>();
   const GridGeometry& g = grid.geometry();
   const auto nodes = g.nodes();
@@ -129,9 +130,10 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, double dt
   const double* vl[3] = {grid.velocity_l[0].data(), grid.velocity_l[1].data(), grid.velocity_l[2].data()};
   double* mom[3] = {grid.momentum[0].data(), grid.momentum[1].data(), grid.momentum[2].data()};
   double* disp[3] = {displacement[0].data(), displacement[1].data(), displacement[2].data()};
-  bool needs_sort = result.needs_sort;
+  bool needs_sort = result.needs_sort, large = result.large_displacement, crossing = result.crosses_open_face;
   long long nonfinite = result.nonfinite, outside = result.outside;
-#pragma omp parallel for schedule(dynamic, 1) reduction(|| : needs_sort) reduction(max : nonfinite, outside)
+#pragma omp parallel for schedule(dynamic, 1) reduction(|| : needs_sort, large, crossing) \
+    reduction(max : nonfinite, outside)
   for (std::size_t bi = 0; bi < count; ++bi) {
     const std::size_t b = block_list(bi);
     ParticleStencil<Shape> stencil;
@@ -206,33 +208,37 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, double dt
         cell[d] = static_cast<int>(std::floor(xi));
         // The support of the next step must stay inside the padded arrays.
         inside = inside && cell[d] - Shape::kReachLow >= 0 && cell[d] + Shape::kReachHigh < nodes[d];
+        // After the move x_p = x_p + displacement: exactly next[] (the same sum), in (x, y, w).
+        crossing = crossing || (options.open[d][0] && next[d] < options.lo[d]) ||
+                   (options.open[d][1] && next[d] > options.hi[d]);
       }
+      large = large || disp[0][p] * disp[0][p] + disp[1][p] * disp[1][p] + disp[2][p] * disp[2][p] > max_d2;
       if (!finite) nonfinite = std::max(nonfinite, static_cast<long long>(p));
       if (!inside) outside = std::max(outside, static_cast<long long>(p));
       if (!sort.within_slack_of(origin, cell[0], cell[1], cell[2])) needs_sort = true;
     }
     if (pic_fraction > 0.0) block_damping[b] = damped;
   }
-  result = {needs_sort, nonfinite, outside};
+  result = {needs_sort, nonfinite, outside, large, crossing};
 }
 
 }  // namespace
 
 template <class Shape, class Terrain>
-GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, Grid& grid, double dt,
-                              std::array<std::vector<double>, 3>& displacement, double pic_fraction,
-                              std::vector<double>& block_damping, bool remap) {
+GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, Grid& grid,
+                              std::array<std::vector<double>, 3>& displacement, std::vector<double>& block_damping,
+                              const GatherOptions& options) {
   GatherResult result;
-  if (!remap) {
-    gather_blocks<Shape, Terrain, false>(P, sort, grid, dt, displacement, pic_fraction, block_damping,
-                                         sort.block_count(), [](std::size_t b) { return b; }, result);
+  if (!options.remap) {
+    gather_blocks<Shape, Terrain, false>(P, sort, grid, displacement, block_damping, options, sort.block_count(),
+                                         [](std::size_t b) { return b; }, result);
     return result;
   }
   // The remap scatters, so the blocks go colour by colour as in scatter_to_grid: each node sums
   // its particles in the same order for any thread count.
   for (int colour = 0; colour < 8; ++colour) {
     const auto& blocks = sort.colour(colour);
-    gather_blocks<Shape, Terrain, true>(P, sort, grid, dt, displacement, pic_fraction, block_damping, blocks.size(),
+    gather_blocks<Shape, Terrain, true>(P, sort, grid, displacement, block_damping, options, blocks.size(),
                                         [&blocks](std::size_t bi) { return static_cast<std::size_t>(blocks[bi]); },
                                         result);
   }
@@ -292,9 +298,9 @@ void strain_increments(const ParticleStore& P, const Grid& grid, const std::arra
 
 #define TALUS_INSTANTIATE_TRANSFERS(SHAPE, TERRAIN)                                                          \
   template void scatter_to_grid<SHAPE, TERRAIN>(const ParticleStore&, const CellSort&, Grid&, ScatterFields); \
-  template GatherResult gather_from_grid<SHAPE, TERRAIN>(ParticleStore&, const CellSort&, Grid&, double,        \
-                                                         std::array<std::vector<double>, 3>&, double, std::vector<double>&, \
-                                                         bool);                                                       \
+  template GatherResult gather_from_grid<SHAPE, TERRAIN>(ParticleStore&, const CellSort&, Grid&,                \
+                                                         std::array<std::vector<double>, 3>&, std::vector<double>&, \
+                                                         const GatherOptions&);                                     \
   template void strain_increments<SHAPE, TERRAIN>(const ParticleStore&, const Grid&,                          \
                                                   const std::array<const double*, 3>&, double, std::size_t,    \
                                                   std::size_t, StrainIncrements&);

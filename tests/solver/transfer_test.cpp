@@ -52,7 +52,9 @@ void check_fused_remap() {
   for (auto& a : displacement) a.assign(P.size(), 0.0);
   std::vector<double> damping(sort.block_count(), 0.0);
   ParticleStore separate = P;
-  gather_from_grid<Shape, FlatTerrain>(separate, sort, grid, 1e-3, displacement, 0.0, damping, false);
+  GatherOptions options;
+  options.dt = 1e-3;
+  gather_from_grid<Shape, FlatTerrain>(separate, sort, grid, displacement, damping, options);
   grid.clear_momentum();
   scatter_to_grid<Shape, FlatTerrain>(separate, sort, grid, ScatterFields::Momentum);
   std::array<std::vector<double>, 3> expected;
@@ -62,7 +64,8 @@ void check_fused_remap() {
 
   ParticleStore fused = P;
   grid.clear_momentum();
-  gather_from_grid<Shape, FlatTerrain>(fused, sort, grid, 1e-3, displacement, 0.0, damping, true);
+  options.remap = true;
+  gather_from_grid<Shape, FlatTerrain>(fused, sort, grid, displacement, damping, options);
   double largest = 0.0;
   for (int d = 0; d < 3; ++d) {
     std::size_t k = 0;

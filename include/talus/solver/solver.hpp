@@ -147,7 +147,9 @@ class Solver {
   double outflow_mass_ = 0.0;
   std::int64_t outflow_particles_ = 0;
   std::int64_t seeded_particles_ = 0;
-  bool has_open_faces_ = false;
+  GatherOptions gather_limits_;            // the CFL limit and the open faces, for G2P's flags
+  bool large_displacement_ = false;        // G2P of this step: some displacement beyond the limit
+  bool crosses_open_face_ = false;         // G2P of this step: some particle leaves through an open face
   PhaseTimes times_;
   // MLS smoothing: allocated only when the scene enables it.
   std::optional<MlsStrainSmoother> smoother_;

@@ -15,6 +15,7 @@
 
 #include <array>
 #include <cstddef>
+#include <limits>
 #include <vector>
 
 namespace talus {
@@ -33,20 +34,35 @@ struct GatherResult {
   bool needs_sort = false;          // some particle drifted beyond its block's slack
   long long nonfinite = -1;         // index of a particle whose velocity became NaN/Inf, or -1
   long long outside = -1;           // index of a particle that left the grid, or -1
+  bool large_displacement = false;  // some displacement exceeded GatherOptions::max_displacement
+  bool crosses_open_face = false;   // some particle will be beyond an open face after the move
+};
+
+/// What G2P does besides the gather, and the limits it flags on the way (the CFL guard and the
+/// outflow faces read the displacement and the new positions the pass computes anyway, so their own
+/// scans of every particle run only in a step that a flag names).
+struct GatherOptions {
+  double dt = 0.0;
+  /// beta in [0, 1]: v_p = (1 - beta) (v_p + sum N (v^L - v)) + beta sum N v^L (0 = FLIP,
+  /// seed 000 eq. 50; 1 = PIC). With beta > 0 the kinetic energy the blend removes is written per
+  /// sort block into `block_damping` (sized to the block count), for a thread-independent sum.
+  double pic_fraction = 0.0;
+  /// MUSL, USAVG: also scatter the new particle momentum m_p v_p into grid.momentum (cleared by the
+  /// caller), the remap of seed 000 eq. 52, in the same pass with the same weights; the nodal sums
+  /// are those of scatter_to_grid(..., ScatterFields::Momentum), in the same order.
+  bool remap = false;
+  double max_displacement = std::numeric_limits<double>::infinity();  // [m], flags |dx_p| above it
+  /// Faces where particles leave (open walls): lo/hi bounds per axis, in (x, y, w).
+  std::array<std::array<bool, 2>, 3> open{};
+  std::array<double, 3> lo{}, hi{};
 };
 
 /// Updates v_p and writes the step's displacement dt sum N_i v_i^L into `displacement`; positions
 /// are moved only after the strain pass, so every transfer of a step uses the weights at x_p^k.
-/// `pic_fraction` beta in [0, 1]: v_p = (1 - beta) (v_p + sum N (v^L - v)) + beta sum N v^L (0 = FLIP,
-/// seed 000 eq. 50; 1 = PIC). With beta > 0 the kinetic energy the blend removes is written per sort
-/// block into `block_damping` (sized to the block count), for a thread-independent sum.
-/// `remap` (MUSL, USAVG): also scatter the new particle momentum m_p v_p into grid.momentum (cleared
-/// by the caller), the remap of seed 000 eq. 52, in the same pass with the same weights; the
-/// nodal sums are those of scatter_to_grid(..., ScatterFields::Momentum), in the same order.
 template <class Shape, class Terrain>
-GatherResult gather_from_grid(ParticleStore& particles, const CellSort& sort, Grid& grid, double dt,
-                              std::array<std::vector<double>, 3>& displacement, double pic_fraction,
-                              std::vector<double>& block_damping, bool remap);
+GatherResult gather_from_grid(ParticleStore& particles, const CellSort& sort, Grid& grid,
+                              std::array<std::vector<double>, 3>& displacement, std::vector<double>& block_damping,
+                              const GatherOptions& options);
 
 /// Per-particle strain and spin increments of a range, structure of arrays.
 struct StrainIncrements {
