@@ -4,6 +4,7 @@
 #include "talus/core/error.hpp"
 #include "talus/core/version.hpp"
 #include "talus/scene/scene_json.hpp"
+#include "talus/material/drucker_prager.hpp"
 #include "talus/solver/solver.hpp"
 
 #include <fmt/core.h>
@@ -14,6 +15,7 @@
 #include <cmath>
 #include <fstream>
 #include <initializer_list>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -143,12 +145,42 @@ void refuse_unavailable(const BenchOptions& o) {
     throw input_error(fmt::format("--shape {}: unknown; available: linear, ugimp, cpgimp, bspline2", o.shape));
   if (!one_of(o.scheme, {"musl", "usl", "usf", "usavg"}))
     throw input_error(fmt::format("--scheme {}: unknown; available: musl, usl, usf, usavg", o.scheme));
-  if (!one_of(o.scene, {"block", "column"}))
-    throw input_error(fmt::format("--scene {}: unknown; available: block, column", o.scene));
+  if (!one_of(o.scene, {"block", "column", "shear"}))
+    throw input_error(fmt::format("--scene {}: unknown; available: block, column, shear", o.scene));
+  if (o.scene == "shear" && o.material != "dp")
+    throw input_error("--scene shear needs --material dp (the sand is put at its yield stress)");
   if (!one_of(o.material, {"elastic", "dp"}))
     throw input_error(fmt::format("--material {}: unknown; available: elastic, dp", o.material));
   if (!one_of(o.mls, {"off", "linear", "quadratic", "cubic"}))
     throw input_error(fmt::format("--mls {}: unknown; available: off, linear, quadratic, cubic", o.mls));
+}
+
+/// The shear scene: the block scene's sand put into steady simple shear at its yield stress, so that
+/// every particle takes the plastic (cone) return in every step, the flowing state of a runout.
+/// Velocity v_x = rate (z - z_mid); stress -p I + tau (e_x e_z + e_z e_x) with the overburden
+/// p = rho g (z_top - z) + 1 kPa and tau = k + 3 alpha p, i.e. f = alpha I1 + q - k = 0 (seed 001
+/// eq. 23, q = tau in pure shear). The shear rate 1/s loads the stress by G dt per step, far more
+/// than round-off, so each step's trial lies outside the cone.
+void start_in_simple_shear(Solver& solver) {
+  const Scene& scene = solver.scene();
+  const MaterialSpec& m = scene.materials.at(0);
+  const DruckerPrager model(m.drucker_prager);
+  ParticleStore& P = solver.particles();
+  double z_low = std::numeric_limits<double>::infinity(), z_top = -z_low;
+  for (double z : P.x[2]) {
+    z_low = std::min(z_low, z);
+    z_top = std::max(z_top, z);
+  }
+  const double z_mid = 0.5 * (z_low + z_top), rate = 1.0, g = std::abs(scene.gravity[2]);
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    const double pressure = m.density * g * (z_top - P.x[2][p]) + 1.0e3;
+    const double tau = model.initial_strength() + 3.0 * model.alpha() * pressure;
+    P.v[0][p] = rate * (P.x[2][p] - z_mid);
+    P.v[1][p] = P.v[2][p] = 0.0;
+    for (int c = 0; c < 3; ++c) P.stress[c][p] = -pressure;
+    P.stress[YZ][p] = P.stress[XY][p] = 0.0;
+    P.stress[XZ][p] = tau;
+  }
 }
 
 void run_bench(const BenchOptions& o) {
@@ -159,14 +191,40 @@ void run_bench(const BenchOptions& o) {
                      : fmt::format(R"(, "smoothing": {{ "basis": "{}", "radius_factor": {} }})", o.mls, o.mls_radius);
   Solver solver(o.scene == "column" ? column_scene(o.particles, o.shape, o.scheme, o.material, mls_json)
                                     : block_scene(o.particles, o.shape, o.scheme, o.material, mls_json));
+  if (o.scene == "shear") start_in_simple_shear(solver);
   const std::size_t n = solver.particles().size();
   solver.step();  // first step: first touch of the grid pages; not timed
   solver.phase_times() = PhaseTimes{};
-  const auto start = std::chrono::steady_clock::now();
-  for (int s = 0; s < o.steps; ++s) solver.step();
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  auto start = std::chrono::steady_clock::now();
+  std::vector<double> plastic_before;  // eps_p before the last timed step (not timed: a copy)
+  std::size_t sorts_before = 0, rss_before_copy = 0;
+  double wall = 0.0;
+  for (int s = 0; s < o.steps; ++s) {
+    if (s + 1 == o.steps && solver.particles().has_plastic_state()) {
+      wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      rss_before_copy = peak_rss_bytes();  // the copy below is the bench's, not the solver's
+      plastic_before = solver.particles().plastic_strain;
+      sorts_before = solver.sort_count();
+      start = std::chrono::steady_clock::now();
+    }
+    solver.step();
+  }
+  wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  // The share of particles whose plastic strain grew in the last step: how much of the Drucker-
+  // Prager cost is the return mapping rather than the elastic trial. A sort in that step reorders
+  // the particles: then the share is not reported.
+  double plastic_share = -1.0;
+  if (!plastic_before.empty() && plastic_before.size() == solver.particles().size() &&
+      solver.sort_count() == static_cast<std::int64_t>(sorts_before)) {
+    std::size_t grew = 0;
+    for (std::size_t p = 0; p < plastic_before.size(); ++p)
+      grew += solver.particles().plastic_strain[p] > plastic_before[p] ? 1 : 0;
+    plastic_share = double(grew) / n;
+  }
   const double rate = double(n) * o.steps / wall;
-  const std::size_t rss = peak_rss_bytes();
+  // The high-water mark of the steps; with plastic state, as it was before the bench copied eps_p
+  // (the steps allocate nothing, so the last step cannot raise it except by a sort's buffers).
+  const std::size_t rss = rss_before_copy > 0 ? rss_before_copy : peak_rss_bytes();
   // after the memory high-water mark is read: the triad's 384 MiB must not count as the solver's
   const double stream = o.stream ? stream_triad_bytes_per_second() : 0.0;
 
@@ -188,6 +246,7 @@ void run_bench(const BenchOptions& o) {
   for (int p = 0; p < static_cast<int>(Phase::Count); ++p) phases[kPhaseNames[p]] = solver.phase_times().seconds[p];
   j["phases"] = phases;
   j["sorts"] = solver.sort_count();
+  if (plastic_share >= 0.0) j["plastic_share_last_step"] = plastic_share;
   if (const MlsStrainSmoother* mls = solver.smoother()) {
     j["mls_radius"] = mls->radius();
     j["mls_terms"] = mls->term_count();
@@ -206,6 +265,7 @@ void run_bench(const BenchOptions& o) {
   for (int p = 0; p < static_cast<int>(Phase::Count); ++p)
     fmt::print("  {:<7} {:8.4f} s  {:5.1f}%\n", kPhaseNames[p], solver.phase_times().seconds[p],
                100.0 * solver.phase_times().seconds[p] / std::max(total, 1e-300));
+  if (plastic_share >= 0.0) fmt::print("  plastic in the last step: {:.1f}% of the particles\n", 100.0 * plastic_share);
   if (o.stream) fmt::print("  STREAM triad: {:.2f} GB/s at {} threads\n", stream / 1e9, omp_get_max_threads());
   fmt::print("  memory: {:.0f} B/particle peak RSS ({:.0f} B/particle in particle fields), grid {:.1f} MB active\n", double(rss) / n,
              double(solver.particles().bytes()) / n, solver.grid().active_bytes() / 1e6);
@@ -221,7 +281,7 @@ void run_bench(const BenchOptions& o) {
 void add_bench_command(CLI::App& app) {
   auto o = std::make_shared<BenchOptions>();
   auto* cmd = app.add_subcommand("bench", "Measure speed: particle-updates per second, time per phase, memory per particle");
-  cmd->add_option("--scene", o->scene, "block (a cube sliding on a frictional floor) | column (a sand column collapsing, 2:1)")->capture_default_str();
+  cmd->add_option("--scene", o->scene, "block (a cube sliding on a frictional floor) | column (a sand column collapsing, 2:1) | shear (the block's sand in simple shear at yield: every particle plastic every step; --material dp)")->capture_default_str();
   cmd->add_option("--particles", o->particles, "Approximate particle count")->check(CLI::Range(1000LL, 100000000LL))->capture_default_str();
   cmd->add_option("--shape", o->shape, "linear | ugimp | cpgimp | bspline2")
       ->capture_default_str();

@@ -1,5 +1,6 @@
 // The talus program as a user meets it: exit codes, one-line errors, no half-written output.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <array>
 #include <cstdio>
@@ -113,6 +114,19 @@ TEST(Cli, BenchWritesTheJsonContract) {
     EXPECT_EQ(column.exit_code, 0) << column.output;
     EXPECT_NE(column.output.find("column scene"), std::string::npos) << column.output;
   }
+  // The shear scene keeps (nearly) every particle on the yield surface: the share the bench reports
+  // for the last step, read from its JSON.
+  const fs::path shear_json = dir / "bench_shear.json";
+  const Result shear = run("bench --scene shear --particles 4000 --material dp --shape bspline2 --threads 1 --steps 3 --json " +
+                           shear_json.string());
+  EXPECT_EQ(shear.exit_code, 0) << shear.output;
+  std::ifstream shear_in(shear_json);
+  const nlohmann::json shear_result = nlohmann::json::parse(shear_in);
+  ASSERT_TRUE(shear_result.contains("plastic_share_last_step")) << shear.output;
+  EXPECT_GT(shear_result["plastic_share_last_step"].get<double>(), 0.8) << shear.output;
+  const Result shear_elastic = run("bench --scene shear --material elastic");
+  EXPECT_EQ(shear_elastic.exit_code, 2);
+  EXPECT_NE(shear_elastic.output.find("--scene shear needs --material dp"), std::string::npos) << shear_elastic.output;
   // --mls runs the smoother and reports its phase.
   const fs::path mls_json = dir / "bench_mls.json";
   const Result mls = run("bench --particles 2000 --mls quadratic --threads 1 --steps 2 --json " + mls_json.string());
