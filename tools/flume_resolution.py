@@ -11,7 +11,6 @@ Usage: /usr/bin/python3 tools/flume_resolution.py [--talus build/talus] [--cells
                                                   [--threads 2] [--runs runs] [--rerun]
 """
 import argparse
-import csv
 import json
 import os
 import subprocess
@@ -20,17 +19,14 @@ import time
 
 import matplotlib
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt
-import numpy as np
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
+from talus_plot import finish_axes, read_csv_columns, save_figure, write_csv_rows  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TIMES = (0.5, 1.0, 2.0)  # [s] front positions compared between resolutions
-
-
-def read_csv(path):
-    with open(path) as f:
-        rows = list(csv.DictReader(f))
-    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
 
 
 def main():
@@ -58,8 +54,8 @@ def main():
             subprocess.run([a.talus, "run", scene, "--out", run_dir, "--threads", str(a.threads), "--quiet"], check=True)
             with open(wall_path, "w") as f:
                 f.write(f"{time.perf_counter() - t0:.1f}\n")
-        runout = read_csv(os.path.join(run_dir, "runout.csv"))
-        energy = read_csv(os.path.join(run_dir, "energy.csv"))
+        runout = read_csv_columns(os.path.join(run_dir, "runout.csv"))
+        energy = read_csv_columns(os.path.join(run_dir, "energy.csv"))
         with open(os.path.join(run_dir, "runout.json")) as f:
             result = json.load(f)
         histories[h] = runout
@@ -75,21 +71,13 @@ def main():
                "budget_gap": float(f"{(energy['total'][-1] - energy['total'][0]) / abs(energy['total'][0]):.3e}")}
         rows.append(row)
         print(row, flush=True)
-    with open(os.path.join(a.out, "resolution.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-        w.writeheader()
-        w.writerows(rows)
+    write_csv_rows(os.path.join(a.out, "resolution.csv"), rows)
     fig, ax = plt.subplots(figsize=(6.5, 4))
     for h, r in histories.items():
         ax.plot(r["time"], r["front"], label=f"front, h = {h:g} m")
         ax.plot(r["time"], r["tail"], "--", lw=0.8, label=f"tail, h = {h:g} m")
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("s along the flume [m]")
-    ax.set_title("sand flume: front and tail at three cell sizes")
-    ax.legend(fontsize=7)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(os.path.join(a.out, "resolution.png"), dpi=120)
+    finish_axes(ax, "time [s]", "s along the flume [m]", "sand flume: front and tail at three cell sizes", fontsize=7)
+    save_figure(fig, os.path.join(a.out, "resolution.png"), 120)
     print("wrote", os.path.join(a.out, "resolution.csv"), "and resolution.png")
 
 

@@ -25,6 +25,9 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
+from talus_plot import finish_axes, save_figure  # noqa: E402
+
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PAPER = "equal_end_forces"
 EXACT = "uniform_stress_tractions"
@@ -94,14 +97,9 @@ def plot_fig7(rows, path):
 
     ax.set_xlim(-1.0, 1.0)
     ax.set_ylim(low, high)
-    ax.set_xlabel("kT / kN")
-    ax.set_ylabel("Poisson's ratio nu (eq. 35, plane strain)")
-    ax.set_title("Seed 002 Fig. 7: nu of a hexagonal disc block")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="upper right")
-    fig.tight_layout()
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
+    finish_axes(ax, "kT / kN", "Poisson's ratio nu (eq. 35, plane strain)",
+                "Seed 002 Fig. 7: nu of a hexagonal disc block", fontsize=8, loc="upper right")
+    save_figure(fig, path, 150)
 
 
 def plot_fig8(rows, path):
@@ -118,14 +116,9 @@ def plot_fig8(rows, path):
     xs, ys = series(rows, EXACT, "stiffness_measured", positive)
     ax.plot(xs, ys, "x", color="C3", ms=5, label=f"uniform-state boundary tractions ({block_label(rows, EXACT)})")
     ax.set_xlim(0.0, 1.02)
-    ax.set_xlabel("kT / kN")
-    ax.set_ylabel("2G / ((1 - nu) kN) = sigma11 / (kN eps11)")
-    ax.set_title("Seed 002 Fig. 8: stiffness of a hexagonal disc block")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="lower right")
-    fig.tight_layout()
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
+    finish_axes(ax, "kT / kN", "2G / ((1 - nu) kN) = sigma11 / (kN eps11)",
+                "Seed 002 Fig. 8: stiffness of a hexagonal disc block", fontsize=8, loc="lower right")
+    save_figure(fig, path, 150)
 
 
 def summary(rows):

@@ -9,20 +9,17 @@ scene with diagnostics.runout) and writes into RUN_DIR (or --out):
 Usage: /usr/bin/python3 tools/plot_flume.py runs/denlinger_flume [--out DIR]
 """
 import argparse
-import csv
 import json
 import os
+import sys
 
 import matplotlib
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt
-import numpy as np
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
 
-
-def read_csv(path):
-    with open(path) as f:
-        rows = list(csv.DictReader(f))
-    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]} if rows else {}
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
+from talus_plot import read_csv_columns  # noqa: E402
 
 
 def reference_s(run_dir, runout):
@@ -42,7 +39,7 @@ def main():
     a = p.parse_args()
     out = a.out or a.run_dir
     os.makedirs(out, exist_ok=True)
-    runout = read_csv(os.path.join(a.run_dir, "runout.csv"))
+    runout = read_csv_columns(os.path.join(a.run_dir, "runout.csv"))
     with open(os.path.join(a.run_dir, "scene.json")) as f:
         scene = json.load(f)
     gate, plane = reference_s(a.run_dir, runout)
@@ -73,7 +70,7 @@ def main():
     if not os.path.exists(deposit_path):
         print(f"{deposit_path} missing (the run did not reach its end): only front_tail.png written")
         return
-    d = read_csv(deposit_path)
+    d = read_csv_columns(deposit_path)
     s_values = np.unique(d["s"])
     y_values = np.unique(d["y"])
     thickness = d["thickness"].reshape(len(s_values), len(y_values))  # rows of constant s

@@ -11,8 +11,6 @@ Usage:  /usr/bin/python3 tools/plot_mls.py [--talus build/talus] [--threads 1] [
         [--radius 2.0] [--skip-walls]
 Needs numpy, matplotlib and VTK's Python module (Debian: python3-numpy python3-matplotlib python3-vtk9).
 """
-import argparse
-import csv
 import json
 import math
 import os
@@ -23,7 +21,8 @@ import numpy as np  # noqa: E402
 import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from speed_vs_error import E, RHO0, L0, OUT, find_talus, load, variant, run, profile, column_metrics  # noqa: E402
+from speed_vs_error import E, RHO0, L0, OUT, benchmark_parser, find_talus, load, variant, run, profile, column_metrics  # noqa: E402
+from talus_plot import finish_axes, save_figure, write_csv_rows  # noqa: E402
 
 SHAPES = ["linear", "ugimp", "cpgimp"]
 
@@ -39,9 +38,7 @@ def with_mls(scene, basis, radius, axes):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--talus")
-    ap.add_argument("--threads", type=int, default=1)
+    ap = benchmark_parser(__doc__)
     ap.add_argument("--basis", default="cubic", help="MLS basis for the 'with MLS' runs (the paper: cubic)")
     ap.add_argument("--radius", type=float, default=2.0, help="radius factor (h / cell size)")
     ap.add_argument("--axes", default="x", help="basis axes; the bars are 2 particles across, so 1D: x")
@@ -74,14 +71,9 @@ def main():
                     label=f"{label[mode]}: L2 {100 * l2:.2f}%, rough. {rough:.2g}")
         xs = np.linspace(0, 1, 200)
         ax.plot(xs, E * (np.sqrt(2 * RHO0 * b * (delta - xs * delta) / E + 1) - 1) / s0, "k--", lw=1, label="exact (eq. 61)")
-        ax.set_title(f"column W = 12500, {shape}")
-        ax.set_xlabel("x / Delta")
-        ax.legend(fontsize=7)
-        ax.grid(True, alpha=0.3)
+        finish_axes(ax, "x / Delta", title=f"column W = 12500, {shape}", fontsize=7)
     axes[0].set_ylabel("sigma / s0")
-    fig.tight_layout()
-    fig.savefig(os.path.join(OUT, "mls_column_w12500.png"), dpi=110)
-    plt.close(fig)
+    save_figure(fig, os.path.join(OUT, "mls_column_w12500.png"), 110)
 
     # 2. Dynamic bar (Fig. 9-10).
     base = load("dynamic_bar")
@@ -106,14 +98,9 @@ def main():
             ax.plot(xp, sp / abs(exact), "o-" if mode == "off" else "s-", ms=2.5, lw=0.8,
                     label=f"{label[mode]}: mean/exact {ratio:.3f}")
         ax.axhline(-1.0, color="k", ls="--", lw=1, label="exact behind the front (eq. 63)")
-        ax.set_title(f"dynamic bar at 80% crossing, {shape}")
-        ax.set_xlabel("x [m]")
-        ax.legend(fontsize=7)
-        ax.grid(True, alpha=0.3)
+        finish_axes(ax, "x [m]", title=f"dynamic bar at 80% crossing, {shape}", fontsize=7)
     axes[0].set_ylabel("sigma / (E |v0| / c)")
-    fig.tight_layout()
-    fig.savefig(os.path.join(OUT, "mls_dynamic_bar.png"), dpi=110)
-    plt.close(fig)
+    save_figure(fig, os.path.join(OUT, "mls_dynamic_bar.png"), 110)
 
     # 3. Block between walls (Fig. 12-13): energy histories.
     if not a.skip_walls:
@@ -133,22 +120,14 @@ def main():
                 print(f"walls  {shape:7s} {mode:9s} max |E/E0 - 1| {worst:.4f} final {tot[-1] - 1:+.4f}", flush=True)
                 ax.plot(e["time"], tot, lw=1, label=f"total, {label[mode]}")
                 ax.plot(e["time"], e["strain"] / e["total"][0], lw=0.7, ls=":", label=f"strain, {label[mode]}")
-            ax.set_title(f"block between walls, {shape}")
-            ax.set_xlabel("time [s]")
-            ax.legend(fontsize=6)
-            ax.grid(True, alpha=0.3)
+            finish_axes(ax, "time [s]", title=f"block between walls, {shape}", fontsize=6)
         axes[0].set_ylabel("energy / initial")
-        fig.tight_layout()
-        fig.savefig(os.path.join(OUT, "mls_block_between_walls.png"), dpi=110)
-        plt.close(fig)
+        save_figure(fig, os.path.join(OUT, "mls_block_between_walls.png"), 110)
 
     keys = []
     for r in rows:
         keys += [k for k in r if k not in keys]
-    with open(os.path.join(OUT, "mls_benchmarks.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=keys)
-        w.writeheader()
-        w.writerows(rows)
+    write_csv_rows(os.path.join(OUT, "mls_benchmarks.csv"), rows, keys)
 
 
 if __name__ == "__main__":

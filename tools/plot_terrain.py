@@ -15,12 +15,16 @@ import argparse
 import math
 import os
 import subprocess
+import sys
 import xml.etree.ElementTree as ET
 
 import matplotlib
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt
-import numpy as np
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
+from talus_plot import finish_axes, save_figure  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 G = 9.81
@@ -80,13 +84,8 @@ def main():
         ax.plot(t, c[:, 0], style, ms=3, label=f"MPM, {tag}")
         print(f"horizontal plane {tag}: stopping distance {c[-1, 0]:.4f} m, rigid {v0 ** 2 / (2 * mu * G):.4f} m "
               f"({100 * (c[-1, 0] / (v0 ** 2 / (2 * mu * G)) - 1):+.2f}%)")
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("centre travel [m]")
-    ax.set_title("Block on a horizontal plane, mu = 0.3, v0 = 10 m/s")
-    ax.legend()
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(os.path.join(args.out, "terrain_horizontal_plane.png"), dpi=120)
+    finish_axes(ax, "time [s]", "centre travel [m]", "Block on a horizontal plane, mu = 0.3, v0 = 10 m/s")
+    save_figure(fig, os.path.join(args.out, "terrain_horizontal_plane.png"), 120)
 
     # 2. 30-degree plane, seed 001 eq. 22
     fig, ax = plt.subplots(figsize=(6.5, 4))
@@ -102,13 +101,8 @@ def main():
         ax.plot(t, c[:, 0] * scale, style, ms=3, label=label)
         i = np.argmin(np.abs(t - 1.5))
         print(f"{name}: horizontal travel at t = {t[i]:.2f} s {c[i, 0] * scale:.4f} m (rigid mu = 0.3: {rigid:.4f} m)")
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("horizontal travel of the centre [m]")
-    ax.set_title("Block on a 30-degree plane from rest")
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(os.path.join(args.out, "terrain_incline30.png"), dpi=120)
+    finish_axes(ax, "time [s]", "horizontal travel of the centre [m]", "Block on a 30-degree plane from rest", fontsize=8)
+    save_figure(fig, os.path.join(args.out, "terrain_incline30.png"), 120)
 
     # 3. slope to runout through a circular transition
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 7))
@@ -146,8 +140,7 @@ def main():
     a2.set_ylabel("(total - initial) / released [%]")
     a2.legend(loc="lower left", fontsize=8)
     a2.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(os.path.join(args.out, "terrain_slope_to_runout.png"), dpi=120)
+    save_figure(fig, os.path.join(args.out, "terrain_slope_to_runout.png"), 120)
 
 
 if __name__ == "__main__":

@@ -12,7 +12,6 @@ Usage:  /usr/bin/python3 tools/speed_vs_error.py [--talus build/talus] [--thread
 Needs numpy, matplotlib and VTK's Python module (Debian: python3-numpy python3-matplotlib python3-vtk9).
 """
 import argparse
-import csv
 import json
 import math
 import os
@@ -21,12 +20,14 @@ import sys
 import tempfile
 import time
 
-import numpy as np
-import matplotlib
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import numpy as np  # noqa: E402
+import matplotlib  # noqa: E402
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt
-from vtk.util.numpy_support import vtk_to_numpy
-import vtk
+import matplotlib.pyplot as plt  # noqa: E402
+from vtk.util.numpy_support import vtk_to_numpy  # noqa: E402
+import vtk  # noqa: E402
+from talus_plot import finish_axes, save_figure, write_csv_rows  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 OUT = os.path.join(ROOT, "docs", "verification")
@@ -41,6 +42,14 @@ def find_talus(given):
         if os.path.exists(path):
             return path
     sys.exit("talus not found: build it (cmake --build build) or pass --talus")
+
+
+def benchmark_parser(doc):
+    """The command line shared by the benchmark drivers: the script's docstring as help, --talus, --threads."""
+    ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--talus")
+    ap.add_argument("--threads", type=int, default=1)
+    return ap
 
 
 def load(name):
@@ -128,9 +137,7 @@ def energy_drift(res):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--talus")
-    ap.add_argument("--threads", type=int, default=1)
+    ap = benchmark_parser(__doc__)
     ap.add_argument("--quick", action="store_true", help="fewer variants (a smoke test of the driver)")
     ap.add_argument("--mls", default="off", help="comma-separated MLS bases for the column and bar runs: off,linear,quadratic,cubic")
     a = ap.parse_args()
@@ -189,10 +196,7 @@ def main():
             record(name, shape, scheme, base["grid"]["cell_size"], 2, res, worst, "max |E - E0| / E0",
                    f"final={final:+.4g}")
 
-    with open(os.path.join(OUT, "speed_vs_error.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-        w.writeheader()
-        w.writerows(rows)
+    write_csv_rows(os.path.join(OUT, "speed_vs_error.csv"), rows)
 
     # Plots: error vs wall time per benchmark.
     markers = {"linear": "o", "ugimp": "s", "cpgimp": "^", "bspline2": "D"}
@@ -222,9 +226,7 @@ def main():
         ax.set_title(f"{bench}: error vs time")
         ax.legend(fontsize=7)
         ax.grid(True, which="both", alpha=0.3)
-        fig.tight_layout()
-        fig.savefig(os.path.join(OUT, f"{bench}_error_vs_time.png"), dpi=110)
-        plt.close(fig)
+        save_figure(fig, os.path.join(OUT, f"{bench}_error_vs_time.png"), 110)
 
     # Convergence of the column error with cell size (ppc 2).
     conv = []
@@ -244,15 +246,10 @@ def main():
     ax.set_title("column W = 10000: convergence")
     ax.legend(fontsize=8)
     ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(os.path.join(OUT, "column_convergence.png"), dpi=110)
-    plt.close(fig)
+    save_figure(fig, os.path.join(OUT, "column_convergence.png"), 110)
     if conv:
         keys = sorted({k for c in conv for k in c}, key=lambda k: (k != "shape", k != "rate", k))
-        with open(os.path.join(OUT, "column_convergence.csv"), "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=keys)
-            w.writeheader()
-            w.writerows(conv)
+        write_csv_rows(os.path.join(OUT, "column_convergence.csv"), conv, keys)
         for c in conv:
             print("convergence", c)
 
@@ -262,14 +259,8 @@ def main():
         for (n, shape, scheme), e in histories.items():
             if n == name:
                 ax.plot(e["time"], e["total"] / e["total"][0], label=f"{shape} {scheme}", lw=1)
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel("total energy / initial")
-        ax.set_title(f"{name}: energy history")
-        ax.legend(fontsize=7)
-        ax.grid(True, alpha=0.3)
-        fig.tight_layout()
-        fig.savefig(os.path.join(OUT, f"{name}_energy.png"), dpi=110)
-        plt.close(fig)
+        finish_axes(ax, "time [s]", "total energy / initial", f"{name}: energy history", fontsize=7)
+        save_figure(fig, os.path.join(OUT, f"{name}_energy.png"), 110)
 
 
 if __name__ == "__main__":

@@ -1,5 +1,6 @@
 // Verification of the Drucker–Prager model against closed forms (docs/drucker-prager.md, sec. 6).
 // Stress positive in tension; Voigt order xx, yy, zz, yz, xz, xy with tensor shear components.
+#include "element_specs.hpp"
 #include "talus/core/error.hpp"
 #include "talus/core/tensor.hpp"
 #include "talus/material/drucker_prager.hpp"
@@ -69,6 +70,15 @@ Sym6 random_sym6(std::mt19937& rng, double scale) {
   return s;
 }
 
+/// sand(30 degrees, psi, c) with linear hardening of modulus `hardening_modulus`, split by Prager's
+/// `kinematic_fraction` (0: isotropic, 1: kinematic): the material of the hardening tests.
+DruckerPragerParameters hardening_sand(double psi, double c, double hardening_modulus, double kinematic_fraction) {
+  DruckerPragerParameters p = sand(30.0, psi, c);
+  p.hardening_modulus = hardening_modulus;
+  p.kinematic_fraction = kinematic_fraction;
+  return p;
+}
+
 Mat3 random_rotation(std::mt19937& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
   Eigen::Quaterniond q(n(rng), n(rng), n(rng), n(rng));
@@ -78,14 +88,10 @@ Mat3 random_rotation(std::mt19937& rng) {
 
 Sym6 rotate(const Mat3& q, const Sym6& s) { return from_matrix(q * to_matrix(s) * q.transpose()); }
 
+/// test::element_spec with the simple-shear spin switched off (no Jaumann rotation of the stress).
 ElementTestSpec spec_for(ElementPath path, const DruckerPragerParameters& p, double pressure,
                          std::vector<double> targets, int increments) {
-  ElementTestSpec s;
-  s.material = p;
-  s.path = path;
-  s.pressure = pressure;
-  s.strain_targets = std::move(targets);
-  s.increments = increments;
+  ElementTestSpec s = test::element_spec(path, p, pressure, std::move(targets), increments);
   s.spin = false;
   return s;
 }
@@ -346,9 +352,7 @@ TEST(DruckerPragerHardening, SimpleShearSlopeIsGHOverGPlusH) {
   // d tau / d gamma = G H / (G + H) for every mixing (monotonic loading).
   Worst worst("simple shear hardening slope: relative error vs G H / (G + H), m = 0, 0.2, 1");
   for (double m : {0.0, 0.2, 1.0}) {
-    DruckerPragerParameters p = sand(30.0, 0.0, 5.0e3);
-    p.hardening_modulus = 2.0e6;
-    p.kinematic_fraction = m;
+    const DruckerPragerParameters p = hardening_sand(0.0, 5.0e3, 2.0e6, m);
     const DruckerPrager model(p);
     const auto pts = run_element_test(spec_for(ElementPath::SimpleShear, p, 1.0e4, {0.03}, 300));
     const std::size_t i = first_plastic(pts);
@@ -369,9 +373,7 @@ TEST(DruckerPragerHardening, UniaxialCompressionTangentModulus) {
   Worst worst("uniaxial hardening slope: relative error vs E_t, psi = 0, 15, m = 0, 0.2, 1");
   for (double psi : {0.0, 15.0}) {
     for (double m : {0.0, 0.2, 1.0}) {
-      DruckerPragerParameters p = sand(30.0, psi, 2.0e4);
-      p.hardening_modulus = 5.0e6;
-      p.kinematic_fraction = m;
+      const DruckerPragerParameters p = hardening_sand(psi, 2.0e4, 5.0e6, m);
       const DruckerPrager model(p);
       const auto pts = run_element_test(spec_for(ElementPath::UniaxialCompression, p, 0.0, {0.01}, 200));
       const std::size_t i = first_plastic(pts);
@@ -395,9 +397,7 @@ TEST(DruckerPragerHardening, ReverseYieldFollowsPragerMixing) {
   const double p0 = 1.0e4;
   Worst worst("reverse yield: |f(tau_rev)| / p0, m = 0, 0.2, 0.5, 1");
   for (double m : {0.0, 0.2, 0.5, 1.0}) {
-    DruckerPragerParameters p = sand(30.0, 0.0, 5.0e3);
-    p.hardening_modulus = 3.0e6;
-    p.kinematic_fraction = m;
+    const DruckerPragerParameters p = hardening_sand(0.0, 5.0e3, 3.0e6, m);
     const DruckerPrager model(p);
     Sym6 stress = -p0 * identity6();
     DruckerPragerState state;
@@ -448,9 +448,7 @@ TEST(DruckerPragerApex, HydrostaticTensionReturnsToTheApex) {
 TEST(DruckerPragerApex, ShearedTensionWithHardeningReturnsToTheMovedApex) {
   // Trial beyond the apex normal: xi -> 0, d eps_p = q_tr/(G + H_kin), I1 = k_{n+1}/alpha,
   // beta += H_kin xi_tr/(G + H_kin).
-  DruckerPragerParameters p = sand(30.0, 10.0, 5.0e3);
-  p.hardening_modulus = 4.0e6;
-  p.kinematic_fraction = 0.3;
+  const DruckerPragerParameters p = hardening_sand(10.0, 5.0e3, 4.0e6, 0.3);
   const DruckerPrager model(p);
   Sym6 stress = Sym6::Zero();
   DruckerPragerState state;
@@ -632,9 +630,7 @@ TEST(DruckerPragerObjectivity, SpinKeepsInvariantsToRoundOff) {
   // the invariants of sigma and beta are kept to round-off, the point stays on the surface with
   // no spurious plastic flow, and the result converges to the exact rotation Q sigma Q^T at
   // second order in 1/N (the Hughes–Winget angle per step is 2 atan(w/2) = w - w^3/12 + ...).
-  DruckerPragerParameters p = sand(30.0, 10.0, 2.0e3);
-  p.hardening_modulus = 2.0e6;
-  p.kinematic_fraction = 0.5;
+  const DruckerPragerParameters p = hardening_sand(10.0, 2.0e3, 2.0e6, 0.5);
   const DruckerPrager model(p);
   Sym6 stress0 = -1.0e4 * identity6();
   DruckerPragerState state0;

@@ -1,4 +1,5 @@
 // The single-point driver (talus::run_element_test): paths, mixed control, legs.
+#include "element_specs.hpp"
 #include "talus/core/error.hpp"
 #include "talus/core/tensor.hpp"
 #include "talus/material/element_test.hpp"
@@ -23,20 +24,11 @@ DruckerPragerParameters material(double c = 1.0e4) {
   return p;
 }
 
-ElementTestSpec spec(ElementPath path, DruckerPragerParameters p, double pressure,
-                     std::vector<double> targets, int increments) {
-  ElementTestSpec s;
-  s.material = p;
-  s.path = path;
-  s.pressure = pressure;
-  s.strain_targets = std::move(targets);
-  s.increments = increments;
-  return s;
-}
+using test::element_spec;
 
 TEST(ElementTest, OedometerElasticBranchIsUniaxialStrain) {
   // Elastic uniaxial strain: d sigma_yy / d eps_yy = lambda + 2G, d sigma_xx = nu/(1-nu) d sigma_yy.
-  const auto pts = run_element_test(spec(ElementPath::Oedometer, material(1.0e6), 1.0e4, {0.001}, 10));
+  const auto pts = run_element_test(element_spec(ElementPath::Oedometer, material(1.0e6), 1.0e4, {0.001}, 10));
   ASSERT_EQ(pts.size(), 11u);
   const double e = 2.0e6, nu = 0.3;
   const double constrained = e * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));
@@ -55,7 +47,7 @@ TEST(ElementTest, OedometerElasticBranchIsUniaxialStrain) {
 TEST(ElementTest, LegsShareIncrementsByLength) {
   // Targets 2 %, 0, 3 %: legs of length 2, 2, 3 (%) -> 200, 200, 300 of 700 increments.
   const auto pts = run_element_test(
-      spec(ElementPath::UniaxialCompression, material(), 0.0, {0.02, 0.0, 0.03}, 700));
+      element_spec(ElementPath::UniaxialCompression, material(), 0.0, {0.02, 0.0, 0.03}, 700));
   ASSERT_EQ(pts.size(), 701u);
   EXPECT_NEAR(pts[200].strain[YY], -0.02, 1e-15);
   EXPECT_NEAR(pts[400].strain[YY], 0.0, 1e-15);
@@ -72,7 +64,7 @@ TEST(ElementTest, MixedControlHoldsLateralStressThroughEveryRegime) {
   p.kinematic_fraction = 1.0;
   p.tension_cutoff = 2.0e3;
   const auto pts =
-      run_element_test(spec(ElementPath::UniaxialCompression, p, 0.0, {0.02, -0.02, 0.01}, 800));
+      run_element_test(element_spec(ElementPath::UniaxialCompression, p, 0.0, {0.02, -0.02, 0.01}, 800));
   bool seen[4] = {false, false, false, false};
   for (const auto& pt : pts) {
     seen[static_cast<int>(pt.regime)] = true;
@@ -100,7 +92,7 @@ TEST(ElementTest, SimpleShearSpinRotatesTheStress) {
   // The sum over N increments uses tau at the start of each: relative error 1/N = 1e-3.
   const DruckerPragerParameters p = material(1.0e7);
   const double g = p.young / (2.0 * (1.0 + p.poisson)), gamma = 0.01;
-  ElementTestSpec s = spec(ElementPath::SimpleShear, p, 1.0e4, {gamma}, 1000);
+  ElementTestSpec s = element_spec(ElementPath::SimpleShear, p, 1.0e4, {gamma}, 1000);
   s.spin = false;
   const auto plain = run_element_test(s);
   EXPECT_NEAR(plain.back().stress[XY], g * gamma, 1e-9 * g * gamma);
@@ -113,12 +105,12 @@ TEST(ElementTest, SimpleShearSpinRotatesTheStress) {
 }
 
 TEST(ElementTest, RejectsEmptyPath) {
-  EXPECT_THROW(run_element_test(spec(ElementPath::Oedometer, material(), 0.0, {0.0}, 10)), Error);
-  EXPECT_THROW(run_element_test(spec(ElementPath::Oedometer, material(), 0.0, {0.01}, 0)), Error);
+  EXPECT_THROW(run_element_test(element_spec(ElementPath::Oedometer, material(), 0.0, {0.0}, 10)), Error);
+  EXPECT_THROW(run_element_test(element_spec(ElementPath::Oedometer, material(), 0.0, {0.01}, 0)), Error);
   DruckerPragerParameters bad = material();
   bad.poisson = 0.5;
   try {
-    run_element_test(spec(ElementPath::Oedometer, bad, 0.0, {0.01}, 10));
+    run_element_test(element_spec(ElementPath::Oedometer, bad, 0.0, {0.01}, 10));
     FAIL() << "no error";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("material.poisson"), std::string::npos) << e.what();
@@ -126,7 +118,7 @@ TEST(ElementTest, RejectsEmptyPath) {
 }
 
 TEST(ElementTest, CsvHasDocumentedColumns) {
-  const auto pts = run_element_test(spec(ElementPath::DrainedTriaxial, material(0.0), 1.0e5, {0.1}, 20));
+  const auto pts = run_element_test(element_spec(ElementPath::DrainedTriaxial, material(0.0), 1.0e5, {0.1}, 20));
   std::ostringstream out;
   write_element_test_csv(out, pts);
   std::istringstream in(out.str());

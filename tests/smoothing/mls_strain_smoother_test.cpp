@@ -42,6 +42,14 @@ struct Cloud {
       out[c].assign(particles.size(), 0.0);
     }
   }
+  /// Every input component set to values drawn uniformly from [-1, 1] by a generator seeded with
+  /// `seed`: an arbitrary field for comparing two evaluations of the smoother.
+  void set_random_inputs(unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    for (int k = 0; k < 6; ++k)
+      for (auto& v : in[k]) v = u(rng);
+  }
   void set_field(const std::function<double(int, const double*)>& f) {
     for (std::size_t p = 0; p < particles.size(); ++p) {
       const double x[3] = {particles.x[0][p], particles.x[1][p], particles.x[2][p]};
@@ -156,10 +164,7 @@ TEST(MlsStrainSmoother, MatchesBruteForceEvaluationOfEq42To46) {
   add_lattice(c, {9, 8, 7}, 0.5, 0.45, Vec3(1.0, 1.3, 0.7), 0, 3);
   add_lattice(c, {5, 5, 5}, 0.5, 0.45, Vec3(5.6, 1.3, 0.7), 1, 4);  // a second body touching the first
   c.finish();
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  for (int k = 0; k < 6; ++k)
-    for (auto& v : c.in[k]) v = u(rng);
+  c.set_random_inputs(11);
   MlsSettings s;
   s.basis = MlsBasis::Quadratic;
   s.radius_factor = 1.7;
@@ -274,10 +279,7 @@ TEST(MlsStrainSmoother, GuardDecidesLikeEigensRcondAtAnyThreshold) {
   // them just above and below the threshold, so both paths decide; each particle must be smoothed
   // exactly when the reference LLT + rcond() (seed 000 eq. 42, relative coordinates) accepts it.
   Cloud c = box_cloud(10, 0.45, 21);
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
-  for (int k = 0; k < 6; ++k)
-    for (auto& v : c.in[k]) v = uniform(rng);
+  c.set_random_inputs(7);
   const auto& P = c.particles;
   const double h = 1.0;
   std::vector<double> rcond(P.size(), 0.0);  // 0: too few neighbours or not positive definite
@@ -318,10 +320,7 @@ TEST(MlsStrainSmoother, GuardDecidesLikeEigensRcondAtAnyThreshold) {
 
 TEST(MlsStrainSmoother, BitIdenticalForOneAndTwoThreads) {
   Cloud c = box_cloud(14, 0.45, 9);
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  for (int k = 0; k < 6; ++k)
-    for (auto& v : c.in[k]) v = u(rng);
+  c.set_random_inputs(5);
   const int saved = omp_get_max_threads();
   for (MlsBasis basis : {MlsBasis::Linear, MlsBasis::Cubic}) {
     MlsSettings s;

@@ -1,5 +1,6 @@
 // Body shapes (scene bodies[i].box / .prism): the polygon tests, the prism's validation messages,
 // and seeding that keeps exactly the candidate points inside the prism.
+#include "scene_fixtures.hpp"
 #include "talus/core/error.hpp"
 #include "talus/core/polygon.hpp"
 #include "talus/particles/body_shape.hpp"
@@ -69,18 +70,7 @@ std::string prism_scene(const std::string& prism, double cell = 0.1, int n = 2) 
   }})", cell, prism, n);
 }
 
-std::string error_of(const std::string& text) {
-  try {
-    seed_particles(parse_scene(text, "test.json"));
-  } catch (const Error& e) {
-    EXPECT_EQ(e.exit_code(), 2);
-    const std::string what = e.what();
-    EXPECT_EQ(what.find('\n'), std::string::npos) << "one line: " << what;
-    return what;
-  }
-  ADD_FAILURE() << "no error for: " << text;
-  return "";
-}
+std::string error_of(const std::string& text) { return test::scene_error_of(text, test::SceneStage::ReadAndSeed); }
 
 TEST(PrismBody, BadPrismsAreRefusedNamingTheKey) {
   auto has = [](const std::string& what, const char* part) { return what.find(part) != std::string::npos; };

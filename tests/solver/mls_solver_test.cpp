@@ -1,5 +1,6 @@
 // MLS smoothing in the solver (seed 000 eq. 54): scene options, the off path, which particles are
 // smoothed, and determinism of whole runs.
+#include "bit_identity.hpp"
 #include "scene_fixtures.hpp"
 #include "talus/core/error.hpp"
 #include "talus/scene/scene_json.hpp"
@@ -8,7 +9,6 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
-#include <cstring>
 
 namespace talus {
 namespace {
@@ -22,23 +22,10 @@ const char* kScene = R"({
               { "name": "b", "material": "m", "box": { "min": [0.5, 0.5, 0.5], "max": [0.7, 0.7, 0.7] } } ]
 })";
 
-std::string replace(std::string s, const std::string& from, const std::string& to) {
-  const auto at = s.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  return s.replace(at, from.size(), to);
-}
+using test::replace_once;
 
-std::string error_of(const std::string& text) {
-  try {
-    parse_scene(text, "test.json");
-  } catch (const Error& e) {
-    const std::string what = e.what();
-    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
-    return what;
-  }
-  ADD_FAILURE() << "no error for: " << text;
-  return "";
-}
+// This file's messages are checked without their exit code.
+std::string error_of(const std::string& text) { return test::scene_error_of(text, test::SceneStage::Read, std::nullopt); }
 
 TEST(MlsScene, OptionsAreReadResolvedAndEchoed) {
   const Scene s = parse_scene(kScene, "t");
@@ -55,9 +42,9 @@ TEST(MlsScene, OptionsAreReadResolvedAndEchoed) {
   const Scene again = parse_scene(echo.dump(), "again");
   EXPECT_EQ(scene_to_json(again), echo);
   // Defaults: no smoothing object = off; an empty one = on, linear, radius 2 cells, all bodies.
-  const Scene off = parse_scene(replace(kScene, R"("solver": { "smoothing": { "basis": "quadratic", "radius_factor": 2.5, "axes": "xz", "bodies": ["b"] } },)", ""), "t");
+  const Scene off = parse_scene(replace_once(kScene, R"("solver": { "smoothing": { "basis": "quadratic", "radius_factor": 2.5, "axes": "xz", "bodies": ["b"] } },)", ""), "t");
   EXPECT_FALSE(off.smoothing.enabled);
-  const Scene on = parse_scene(replace(kScene, R"({ "basis": "quadratic", "radius_factor": 2.5, "axes": "xz", "bodies": ["b"] })", "{}"), "t");
+  const Scene on = parse_scene(replace_once(kScene, R"({ "basis": "quadratic", "radius_factor": 2.5, "axes": "xz", "bodies": ["b"] })", "{}"), "t");
   EXPECT_TRUE(on.smoothing.enabled);
   EXPECT_EQ(on.smoothing.mls.basis, MlsBasis::Linear);
   EXPECT_DOUBLE_EQ(on.smoothing.mls.radius_factor, 2.0);
@@ -67,19 +54,17 @@ TEST(MlsScene, OptionsAreReadResolvedAndEchoed) {
 
 TEST(MlsScene, BadOptionsNameTheKeyAndTheRange) {
   const std::string ok = kScene;
-  EXPECT_NE(error_of(replace(ok, "\"quadratic\"", "\"quartic\"")).find("solver.smoothing.basis = \"quartic\" is not one of: linear, quadratic, cubic"), std::string::npos);
-  EXPECT_NE(error_of(replace(ok, "2.5", "0.2")).find("solver.smoothing.radius_factor = 0.2 is outside the allowed range [0.5, 8]"), std::string::npos);
-  EXPECT_NE(error_of(replace(ok, "\"xz\"", "\"w\"")).find("solver.smoothing.axes = \"w\" is not one of: xyz"), std::string::npos);
-  EXPECT_NE(error_of(replace(ok, "[\"b\"]", "[\"c\"]")).find("solver.smoothing.bodies[0] = \"c\" names no body (defined: a, b)"), std::string::npos);
-  EXPECT_NE(error_of(replace(ok, "[\"b\"]", "[]")).find("solver.smoothing.bodies must be a non-empty array"), std::string::npos);
-  EXPECT_NE(error_of(replace(ok, "\"basis\"", "\"enabled\": 1, \"basis\"")).find("solver.smoothing.enabled must be true or false"), std::string::npos);
-  EXPECT_NE(error_of(replace(ok, "\"basis\"", "\"radius\": 1, \"basis\"")).find("unknown key solver.smoothing.radius"), std::string::npos);
-  EXPECT_NE(error_of(replace(ok, "\"basis\"", "\"min_rcond\": 0, \"basis\"")).find("solver.smoothing.min_rcond = 0 is outside the allowed range (0, 1)"), std::string::npos);
+  EXPECT_NE(error_of(replace_once(ok, "\"quadratic\"", "\"quartic\"")).find("solver.smoothing.basis = \"quartic\" is not one of: linear, quadratic, cubic"), std::string::npos);
+  EXPECT_NE(error_of(replace_once(ok, "2.5", "0.2")).find("solver.smoothing.radius_factor = 0.2 is outside the allowed range [0.5, 8]"), std::string::npos);
+  EXPECT_NE(error_of(replace_once(ok, "\"xz\"", "\"w\"")).find("solver.smoothing.axes = \"w\" is not one of: xyz"), std::string::npos);
+  EXPECT_NE(error_of(replace_once(ok, "[\"b\"]", "[\"c\"]")).find("solver.smoothing.bodies[0] = \"c\" names no body (defined: a, b)"), std::string::npos);
+  EXPECT_NE(error_of(replace_once(ok, "[\"b\"]", "[]")).find("solver.smoothing.bodies must be a non-empty array"), std::string::npos);
+  EXPECT_NE(error_of(replace_once(ok, "\"basis\"", "\"enabled\": 1, \"basis\"")).find("solver.smoothing.enabled must be true or false"), std::string::npos);
+  EXPECT_NE(error_of(replace_once(ok, "\"basis\"", "\"radius\": 1, \"basis\"")).find("unknown key solver.smoothing.radius"), std::string::npos);
+  EXPECT_NE(error_of(replace_once(ok, "\"basis\"", "\"min_rcond\": 0, \"basis\"")).find("solver.smoothing.min_rcond = 0 is outside the allowed range (0, 1)"), std::string::npos);
 }
 
-bool same(const std::vector<double>& x, const std::vector<double>& y) {
-  return x.size() == y.size() && (x.empty() || std::memcmp(x.data(), y.data(), x.size() * sizeof(double)) == 0);
-}
+using test::same_bits;
 
 // "enabled": false must be the unsmoothed solver exactly: no smoother, no buffers, same bits.
 TEST(MlsSolver, DisabledSmoothingIsTheUnsmoothedSolverBitForBit) {
@@ -92,7 +77,7 @@ TEST(MlsSolver, DisabledSmoothingIsTheUnsmoothedSolverBitForBit) {
   while (!b.finished()) b.step();
   EXPECT_EQ(b.smoother(), nullptr);
   EXPECT_EQ(b.phase_times()[Phase::Smooth], 0.0);
-  for (int c = 0; c < 6; ++c) EXPECT_TRUE(same(a.particles().stress[c], b.particles().stress[c]));
+  for (int c = 0; c < 6; ++c) EXPECT_TRUE(same_bits(a.particles().stress[c], b.particles().stress[c]));
   // And enabling it changes the stresses (the smoother is really in the step).
   Scene smoothed = plain;
   smoothed.smoothing.enabled = true;
@@ -100,7 +85,7 @@ TEST(MlsSolver, DisabledSmoothingIsTheUnsmoothedSolverBitForBit) {
   while (!s.finished()) s.step();
   ASSERT_NE(s.smoother(), nullptr);
   EXPECT_GT(s.phase_times()[Phase::Smooth], 0.0);
-  EXPECT_FALSE(same(a.particles().stress[0], s.particles().stress[0]));
+  EXPECT_FALSE(same_bits(a.particles().stress[0], s.particles().stress[0]));
   EXPECT_EQ(s.sort_count(), s.step_count() + 1);  // sorted at construction and every step
 }
 
@@ -162,23 +147,10 @@ TEST(MlsSolver, BitIdenticalForOneAndTwoThreads) {
       while (!solver.finished()) solver.step();
       return solver;
     };
-    const int saved = omp_get_max_threads();
-    Solver one = run(1);
-    Solver two = run(2);
-    omp_set_num_threads(saved);
-    const auto& a = one.particles();
-    const auto& b = two.particles();
-    ASSERT_EQ(a.size(), b.size());
-    EXPECT_EQ(a.id, b.id);
-    for (int d = 0; d < 3; ++d) {
-      EXPECT_TRUE(same(a.x[d], b.x[d])) << to_string(basis) << " position " << d;
-      EXPECT_TRUE(same(a.v[d], b.v[d])) << to_string(basis) << " velocity " << d;
-    }
-    for (int c = 0; c < 6; ++c) EXPECT_TRUE(same(a.stress[c], b.stress[c])) << to_string(basis) << " stress " << c;
-    EXPECT_TRUE(same(a.volume, b.volume));
+    const auto [one, two] = test::run_on_one_and_two_threads(run);
+    test::expect_same_particles_and_energies(one, two, to_string(basis));
+    EXPECT_TRUE(same_bits(one.particles().volume, two.particles().volume));
     EXPECT_EQ(one.unsmoothed_total(), two.unsmoothed_total());
-    const EnergyBudget ea = one.energies(), eb = two.energies();
-    EXPECT_EQ(std::memcmp(&ea, &eb, sizeof(EnergyBudget)), 0) << to_string(basis);
   }
 }
 

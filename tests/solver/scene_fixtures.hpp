@@ -1,12 +1,45 @@
 #pragma once
 // Small scenes shared by the solver tests, written as JSON so they read like the files in inputs/.
+#include "talus/core/error.hpp"
+#include "talus/particles/seeding.hpp"
 #include "talus/scene/scene_json.hpp"
 
 #include <fmt/core.h>
+#include <gtest/gtest.h>
 
+#include <optional>
 #include <string>
 
 namespace talus::test {
+
+/// `text` with its first `from` replaced by `to` (a test failure if there is none): for making
+/// one bad variant of a good scene text.
+inline std::string replace_once(std::string text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return text.replace(at, from.size(), to);
+}
+
+/// How far scene_error_of takes a scene text: reading it, or reading it and seeding its bodies.
+enum class SceneStage { Read, ReadAndSeed };
+
+/// The message of the talus::Error that a bad scene text throws at `stage`, expected to be one
+/// line (and, unless expected_exit_code is nullopt, to carry that exit code); a test failure if
+/// nothing is thrown. For the tests of the messages that name the bad key.
+inline std::string scene_error_of(const std::string& text, SceneStage stage = SceneStage::Read,
+                                  std::optional<int> expected_exit_code = 2) {
+  try {
+    const Scene scene = parse_scene(text, "test.json");
+    if (stage == SceneStage::ReadAndSeed) seed_particles(scene);
+  } catch (const Error& e) {
+    if (expected_exit_code) EXPECT_EQ(e.exit_code(), *expected_exit_code);
+    const std::string what = e.what();
+    EXPECT_EQ(what.find('\n'), std::string::npos) << "one line: " << what;
+    return what;
+  }
+  ADD_FAILURE() << "no error for: " << text;
+  return "";
+}
 
 /// A thin 3D bar along x (one cell across, slip side walls): the 1D problems of the papers.
 /// Fixed at x = 0; initial velocity v0 along x; nu = 0 so that the wave speed is sqrt(E / rho).

@@ -1,4 +1,5 @@
 // The scene reader: defaults, round trip, and one clear message per kind of bad input.
+#include "scene_fixtures.hpp"
 #include "talus/core/error.hpp"
 #include "talus/scene/scene_json.hpp"
 #include "talus/solver/solver.hpp"
@@ -15,24 +16,9 @@ const char* kMinimal = R"({
   "bodies": [ { "name": "b", "material": "m", "box": { "min": [0.2, 0.2, 0.2], "max": [0.5, 0.5, 0.5] } } ]
 })";
 
-std::string error_of(const std::string& text) {
-  try {
-    parse_scene(text, "test.json");
-  } catch (const Error& e) {
-    EXPECT_EQ(e.exit_code(), 2);
-    const std::string what = e.what();
-    EXPECT_EQ(what.find('\n'), std::string::npos) << "one line: " << what;
-    return what;
-  }
-  ADD_FAILURE() << "no error for: " << text;
-  return "";
-}
+using test::replace_once;
 
-std::string replace(std::string s, const std::string& from, const std::string& to) {
-  const auto at = s.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  return s.replace(at, from.size(), to);
-}
+std::string error_of(const std::string& text) { return test::scene_error_of(text); }
 
 TEST(SceneJson, DefaultsAndRoundTrip) {
   const Scene s = parse_scene(kMinimal, "t");
@@ -46,22 +32,22 @@ TEST(SceneJson, DefaultsAndRoundTrip) {
 
 TEST(SceneJson, BadInputNamesTheKeyAndTheRange) {
   const std::string ok = kMinimal;
-  EXPECT_NE(error_of(replace(ok, "\"poisson\": 0.3", "\"poisson\": 0.5")).find("materials.m.poisson = 0.5 is outside the allowed range (-1, 0.5)"), std::string::npos);
-  EXPECT_NE(error_of(replace(ok, "\"end\": 0.1", "\"end\": -1")).find("time.end"), std::string::npos);
-  EXPECT_NE(error_of(replace(ok, "\"end\": 0.1", "\"end\": 0.1, \"courant\": 1.0")).find("time.courant = 1 is outside the allowed range (0, 1)"), std::string::npos);
-  EXPECT_NE(error_of(replace(ok, "\"time\"", "\"tmie\": {}, \"time\"")).find("unknown key tmie"), std::string::npos);
-  EXPECT_NE(error_of(replace(ok, "\"density\": 1000", "\"density\": \"heavy\"")).find("materials.m.density must be a number"), std::string::npos);
-  EXPECT_NE(error_of(replace(ok, "\"material\": \"m\"", "\"material\": \"sand\"")).find("bodies[0].material = \"sand\" names no material"), std::string::npos);
-  EXPECT_NE(error_of(replace(ok, "\"max\": [0.5, 0.5, 0.5]", "\"max\": [0.5, 0.5, 1.5]")).find("lies outside the grid"), std::string::npos);
-  EXPECT_NE(error_of(replace(ok, "\"cell_size\": 0.1", "\"cell_size\": 0.3")).find("grid.size[0] = 1 must be a positive whole multiple of grid.cell_size"), std::string::npos);
-  EXPECT_NE(error_of(replace(ok, "\"young\": 1e6", "\"young\": 0")).find("materials.m.young"), std::string::npos);
+  EXPECT_NE(error_of(replace_once(ok, "\"poisson\": 0.3", "\"poisson\": 0.5")).find("materials.m.poisson = 0.5 is outside the allowed range (-1, 0.5)"), std::string::npos);
+  EXPECT_NE(error_of(replace_once(ok, "\"end\": 0.1", "\"end\": -1")).find("time.end"), std::string::npos);
+  EXPECT_NE(error_of(replace_once(ok, "\"end\": 0.1", "\"end\": 0.1, \"courant\": 1.0")).find("time.courant = 1 is outside the allowed range (0, 1)"), std::string::npos);
+  EXPECT_NE(error_of(replace_once(ok, "\"time\"", "\"tmie\": {}, \"time\"")).find("unknown key tmie"), std::string::npos);
+  EXPECT_NE(error_of(replace_once(ok, "\"density\": 1000", "\"density\": \"heavy\"")).find("materials.m.density must be a number"), std::string::npos);
+  EXPECT_NE(error_of(replace_once(ok, "\"material\": \"m\"", "\"material\": \"sand\"")).find("bodies[0].material = \"sand\" names no material"), std::string::npos);
+  EXPECT_NE(error_of(replace_once(ok, "\"max\": [0.5, 0.5, 0.5]", "\"max\": [0.5, 0.5, 1.5]")).find("lies outside the grid"), std::string::npos);
+  EXPECT_NE(error_of(replace_once(ok, "\"cell_size\": 0.1", "\"cell_size\": 0.3")).find("grid.size[0] = 1 must be a positive whole multiple of grid.cell_size"), std::string::npos);
+  EXPECT_NE(error_of(replace_once(ok, "\"young\": 1e6", "\"young\": 0")).find("materials.m.young"), std::string::npos);
   EXPECT_NE(error_of("{ \"grid\": ").find("malformed JSON"), std::string::npos);
-  EXPECT_NE(error_of(replace(ok, "\"time\"", "\"solver\": { \"scheme\": \"rk4\" }, \"time\"")).find("solver.scheme = \"rk4\" is not one of: musl, usl"), std::string::npos);
+  EXPECT_NE(error_of(replace_once(ok, "\"time\"", "\"solver\": { \"scheme\": \"rk4\" }, \"time\"")).find("solver.scheme = \"rk4\" is not one of: musl, usl"), std::string::npos);
 }
 
 TEST(SceneJson, EmptyBodyIsRefusedWhenSeeding) {
   // A box thinner than the particle spacing passes the reader but holds no particle.
-  const std::string thin = replace(kMinimal, "\"max\": [0.5, 0.5, 0.5]", "\"max\": [0.5, 0.5, 0.21]");
+  const std::string thin = replace_once(kMinimal, "\"max\": [0.5, 0.5, 0.5]", "\"max\": [0.5, 0.5, 0.21]");
   const Scene scene = parse_scene(thin, "t");
   try {
     Solver solver(scene);

@@ -1,6 +1,7 @@
 // Elastic blocks on frictional terrain (seed 001 sec. 5, eq. 21-22): the terrain-following grid
 // (eq. 19-20) with Coulomb contact at the bed nodes (eq. 14-18), against the rigid-block solutions.
 // Quasi-2D like the paper: one cell across, slip side walls. docs/verification.md "Terrain".
+#include "bit_identity.hpp"
 #include "talus/core/error.hpp"
 #include "talus/scene/scene_json.hpp"
 #include "talus/solver/solver.hpp"
@@ -10,7 +11,6 @@
 #include <omp.h>
 
 #include <cmath>
-#include <cstring>
 #include <string>
 
 namespace talus {
@@ -258,9 +258,7 @@ TEST(TerrainSlide, BlockCrossesTheTransitionWithoutJumpsOrSinking) {
   }
 }
 
-bool same(const std::vector<double>& x, const std::vector<double>& y) {
-  return x.size() == y.size() && (x.empty() || std::memcmp(x.data(), y.data(), x.size() * sizeof(double)) == 0);
-}
+using test::same_bits;
 
 // A 3D block on the transition, many colour blocks and re-sorts: bit-identical for 1 and 2 threads.
 TEST(TerrainSlide, BitIdenticalForOneAndTwoThreadsOnATerrainGrid) {
@@ -284,20 +282,9 @@ TEST(TerrainSlide, BitIdenticalForOneAndTwoThreadsOnATerrainGrid) {
       EXPECT_GT(solver.sort_count(), 1);
       return solver;
     };
-    const int saved = omp_get_max_threads();
-    const Solver one = run(1), two = run(2);
-    omp_set_num_threads(saved);
-    const ParticleStore &a = one.particles(), &b = two.particles();
-    ASSERT_EQ(a.size(), b.size());
-    EXPECT_GT(a.size(), 4000u);
-    EXPECT_EQ(a.id, b.id) << shape;
-    for (int d = 0; d < 3; ++d) {
-      EXPECT_TRUE(same(a.x[d], b.x[d])) << shape << " position " << d;
-      EXPECT_TRUE(same(a.v[d], b.v[d])) << shape << " velocity " << d;
-    }
-    for (int c = 0; c < 6; ++c) EXPECT_TRUE(same(a.stress[c], b.stress[c])) << shape << " stress " << c;
-    const EnergyBudget ea = one.energies(), eb = two.energies();
-    EXPECT_EQ(std::memcmp(&ea, &eb, sizeof(EnergyBudget)), 0) << shape;
+    const auto [one, two] = test::run_on_one_and_two_threads(run);
+    test::expect_same_particles_and_energies(one, two, shape);
+    EXPECT_GT(one.particles().size(), 4000u);
   }
 }
 
@@ -315,8 +302,8 @@ TEST(TerrainSlide, RestoreOnATerrainGridContinuesBitForBit) {
   restored.restore(saved, state);
   while (!restored.finished()) restored.step();
   for (int d = 0; d < 3; ++d) {
-    EXPECT_TRUE(same(reference.particles().x[d], restored.particles().x[d])) << d;
-    EXPECT_TRUE(same(reference.particles().v[d], restored.particles().v[d])) << d;
+    EXPECT_TRUE(same_bits(reference.particles().x[d], restored.particles().x[d])) << d;
+    EXPECT_TRUE(same_bits(reference.particles().v[d], restored.particles().v[d])) << d;
   }
 }
 
