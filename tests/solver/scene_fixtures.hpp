@@ -32,7 +32,9 @@ inline std::string scene_error_of(const std::string& text, SceneStage stage = Sc
     const Scene scene = parse_scene(text, "test.json");
     if (stage == SceneStage::ReadAndSeed) seed_particles(scene);
   } catch (const Error& e) {
-    if (expected_exit_code) EXPECT_EQ(e.exit_code(), *expected_exit_code);
+    if (expected_exit_code) {
+      EXPECT_EQ(e.exit_code(), *expected_exit_code);
+    }
     const std::string what = e.what();
     EXPECT_EQ(what.find('\n'), std::string::npos) << "one line: " << what;
     return what;
