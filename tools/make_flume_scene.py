@@ -62,7 +62,7 @@ def build(a):
         },
         "gravity": [0.0, 0.0, -9.81],
         "time": {"end": a.end, "courant": 0.3},
-        "solver": {"scheme": "musl", "shape": "linear", "pic_fraction": a.pic_fraction},
+        "solver": {"scheme": "musl", "shape": a.shape, "pic_fraction": a.pic_fraction},
         "materials": {
             "sand": {"model": "drucker_prager", "density": a.density, "young": 2.0e6, "poisson": 0.3,
                      "friction_angle": a.friction, "dilatancy_angle": 0.0, "cohesion": 10.0,
@@ -125,6 +125,9 @@ def main():
     p.add_argument("--pic-fraction", type=float, default=0.01,
                    help="PIC share of the G2P update (solver.pic_fraction): 0.01 lets the deposit come to rest")
     p.add_argument("--frame-interval", type=float, default=0.05)
+    p.add_argument("--shape", default="linear", choices=["linear", "ugimp", "cpgimp", "bspline2"],
+                   help="shape function (solver.shape); linear is the fast default, bspline2 the more accurate "
+                        "(docs/flume.md, 'Thin spots')")
     p.add_argument("--flat-slope", action="store_true",
                    help="no terrain: the slope alone in bed-aligned coordinates with gravity tilted (runs without "
                         "the terrain grid; for timing and checks)")
