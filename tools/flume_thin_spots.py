@@ -98,7 +98,7 @@ def main():
                          f"enclosed empty {row['enclosed_empty_m2'] * 1e4:.0f} cm², {row['separated']} separated",
                          fontsize=9)
         axes[-1, 0].set_xlabel("x (m)")
-        fig.colorbar(sc, ax=axes[:, 0].tolist(), label="density (kg/m³)", shrink=0.6, location="right")
+        fig.colorbar(sc, ax=axes[:, 0].tolist(), label="density (kg/m³)", shrink=0.6, location="bottom", aspect=40)
         fig.savefig(a.png, dpi=130)
         plt.close(fig)
         print(f"wrote {a.png}")
