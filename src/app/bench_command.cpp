@@ -86,53 +86,53 @@ std::string cpu_model() {
 const char* const kSand = R"("model": "drucker_prager", "density": 1600.0, "young": 2.0e6, "poisson": 0.3,
     "friction_angle": 40.0, "dilatancy_angle": 0.0, "cohesion": 10.0, "hardening_modulus": 0.0,
     "kinematic_fraction": 0.2)";
+constexpr double kBenchCell = 0.01;  // [m]
 const char* const kElastic = R"("model": "linear_elastic", "density": 2000.0, "young": 1.0e7, "poisson": 0.3)";
 
-/// The block scene: an elastic cube of about N particles (2x2x2 per cell) resting on a frictional
-/// floor under gravity, in a grid with room around it. Shear waves from the settling keep every
-/// particle's stress changing, so no phase can take a shortcut.
+/// The scene of both benches: one box body of the bench material (2x2x2 particles per 1 cm cell)
+/// on a frictional floor, open at the top, in a square grid of side `grid_xy` and height `grid_z`.
+/// `body_extra` adds keys to the body (e.g. its velocity); `mls_json` the smoothing (--mls).
+Scene bench_scene(const std::string& name, double grid_xy, double grid_z, double body_lo, double body_hi,
+                  double body_top, double floor_friction, const std::string& body_extra, const std::string& shape,
+                  const std::string& scheme, const std::string& material, const std::string& mls_json) {
+  const std::string json = fmt::format(R"({{
+    "name": "{0}",
+    "grid": {{ "origin": [0, 0, 0], "size": [{1}, {1}, {2}], "cell_size": {3} }},
+    "time": {{ "end": 1.0e9, "courant": 0.3 }},
+    "solver": {{ "shape": "{4}", "scheme": "{5}"{6} }},
+    "materials": {{ "m": {{ {7} }} }},
+    "bodies": [ {{ "name": "body", "material": "m", "box": {{ "min": [{8}, {8}, 0], "max": [{9}, {9}, {10}] }},
+                  "particles_per_cell": 2{11} }} ],
+    "boundaries": {{ "z-": {{ "type": "friction", "friction_coefficient": {12} }}, "z+": "open" }}
+  }})", name, grid_xy, grid_z, kBenchCell, shape, scheme, mls_json, material == "dp" ? kSand : kElastic, body_lo,
+                                       body_hi, body_top, body_extra, floor_friction);
+  return parse_scene(json, name);
+}
+
+/// The block scene: a cube of about N particles sliding (0.5, 0.2, 0) m/s on a floor with mu = 0.3,
+/// in a grid with room around it. Shear waves from the settling keep every particle's stress
+/// changing, so no phase can take a shortcut.
 /// --mls linear|quadratic|cubic adds MLS smoothing of the strain increments (seed 000 eq. 54) with
 /// the radius --mls-radius (cells, default 2) over all three axes.
 Scene block_scene(long long particles, const std::string& shape, const std::string& scheme, const std::string& material,
                   const std::string& mls_json) {
   const int side = std::max(2, static_cast<int>(std::lround(std::cbrt(particles / 8.0))));  // cells per edge
-  const double h = 0.01;
-  const double edge = side * h;
-  const std::string json = fmt::format(R"({{
-    "name": "bench_block",
-    "grid": {{ "origin": [0, 0, 0], "size": [{0}, {0}, {1}], "cell_size": {2} }},
-    "time": {{ "end": 1.0e9, "courant": 0.3 }},
-    "solver": {{ "shape": "{6}", "scheme": "{7}"{9} }},
-    "materials": {{ "m": {{ {8} }} }},
-    "bodies": [ {{ "name": "block", "material": "m", "box": {{ "min": [{3}, {3}, 0], "max": [{4}, {4}, {5}] }},
-                  "particles_per_cell": 2, "velocity": [0.5, 0.2, 0] }} ],
-    "boundaries": {{ "z-": {{ "type": "friction", "friction_coefficient": 0.3 }}, "z+": "open" }}
-  }})", edge + 8 * h, edge + 4 * h, h, 4 * h, 4 * h + edge, edge, shape, scheme, material == "dp" ? kSand : kElastic,
-                                       mls_json);
-  return parse_scene(json, "bench block scene");
+  const double h = kBenchCell, edge = side * h;
+  return bench_scene("bench_block", edge + 8 * h, edge + 4 * h, 4 * h, 4 * h + edge, edge, 0.3,
+                     R"(, "velocity": [0.5, 0.2, 0])", shape, scheme, material, mls_json);
 }
 
-/// The column scene: a square column of sand (height = 2 x width, about N particles, 2x2x2 per
-/// cell) released at t = 0 on a frictional floor (mu = 0.5); it collapses and spreads, so after the
-/// first steps nearly every particle is yielding (Drucker-Prager on most particles, the issue's
-/// reference measurement). The grid leaves room for the runout on every side.
+/// The column scene: a square column of sand (height = 2 x width, about N particles) released at
+/// t = 0 on a floor with mu = 0.5. It collapses and spreads, yielding more and more; in the bench's
+/// first steps only a few particles near the floor yield (the bench prints the share; the shear
+/// scene is the one with nearly all of them plastic). The grid leaves room for the runout.
 Scene column_scene(long long particles, const std::string& shape, const std::string& scheme, const std::string& material,
                    const std::string& mls_json) {
   const int side = std::max(2, static_cast<int>(std::lround(std::cbrt(particles / 16.0))));  // cells across
-  const double h = 0.01;
+  const double h = kBenchCell;
   const double width = side * h, height = 2 * side * h, room = 1.5 * width + 4 * h;
-  const std::string json = fmt::format(R"({{
-    "name": "bench_column",
-    "grid": {{ "origin": [0, 0, 0], "size": [{0}, {0}, {1}], "cell_size": {2} }},
-    "time": {{ "end": 1.0e9, "courant": 0.3 }},
-    "solver": {{ "shape": "{5}", "scheme": "{6}"{9} }},
-    "materials": {{ "m": {{ {7} }} }},
-    "bodies": [ {{ "name": "column", "material": "m", "box": {{ "min": [{3}, {3}, 0], "max": [{4}, {4}, {8}] }},
-                  "particles_per_cell": 2 }} ],
-    "boundaries": {{ "z-": {{ "type": "friction", "friction_coefficient": 0.5 }}, "z+": "open" }}
-  }})", width + 2 * room, height + 4 * h, h, room, room + width, shape, scheme,
-                                       material == "dp" ? kSand : kElastic, height, mls_json);
-  return parse_scene(json, "bench column scene");
+  return bench_scene("bench_column", width + 2 * room, height + 4 * h, room, room + width, height, 0.5, "", shape,
+                     scheme, material, mls_json);
 }
 
 void refuse_unavailable(const BenchOptions& o) {

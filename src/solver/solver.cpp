@@ -80,13 +80,9 @@ void Solver::size_scratch() {
 void Solver::remove_outflow() {
   ParticleStore& P = particles_;
   const std::size_t n = P.size();
-  const GatherOptions& f = gather_limits_;  // the faces G2P tested
   auto beyond = [&](std::size_t p) {
-    for (int d = 0; d < 3; ++d) {
-      const double c = d == 2 ? grid_.w_of(P.x[0][p], P.x[2][p]) : P.x[d][p];  // w on a terrain grid
-      if ((f.open[d][0] && c < f.lo[d]) || (f.open[d][1] && c > f.hi[d])) return true;
-    }
-    return false;
+    const double point[3] = {P.x[0][p], P.x[1][p], grid_.w_of(P.x[0][p], P.x[2][p])};  // w on a terrain grid
+    return gather_limits_.beyond_open_face(point);  // the test G2P flagged the step with
   };
   std::size_t leaving = 0;
 #pragma omp parallel for schedule(static) reduction(+ : leaving)

@@ -208,10 +208,9 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::arra
         cell[d] = static_cast<int>(std::floor(xi));
         // The support of the next step must stay inside the padded arrays.
         inside = inside && cell[d] - Shape::kReachLow >= 0 && cell[d] + Shape::kReachHigh < nodes[d];
-        // After the move x_p = x_p + displacement: exactly next[] (the same sum), in (x, y, w).
-        crossing = crossing || (options.open[d][0] && next[d] < options.lo[d]) ||
-                   (options.open[d][1] && next[d] > options.hi[d]);
       }
+      // After the move x_p = x_p + displacement: exactly next[] (the same sum), in (x, y, w).
+      crossing = crossing || options.beyond_open_face(next);
       large = large || disp[0][p] * disp[0][p] + disp[1][p] * disp[1][p] + disp[2][p] * disp[2][p] > max_d2;
       if (!finite) nonfinite = std::max(nonfinite, static_cast<long long>(p));
       if (!inside) outside = std::max(outside, static_cast<long long>(p));

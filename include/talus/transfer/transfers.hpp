@@ -55,6 +55,12 @@ struct GatherOptions {
   /// Faces where particles leave (open walls): lo/hi bounds per axis, in (x, y, w).
   std::array<std::array<bool, 2>, 3> open{};
   std::array<double, 3> lo{}, hi{};
+  /// Whether a point (x, y, w) lies beyond an open face: G2P's flag and the outflow removal.
+  bool beyond_open_face(const double point[3]) const {
+    for (int d = 0; d < 3; ++d)
+      if ((open[d][0] && point[d] < lo[d]) || (open[d][1] && point[d] > hi[d])) return true;
+    return false;
+  }
 };
 
 /// Updates v_p and writes the step's displacement dt sum N_i v_i^L into `displacement`; positions
