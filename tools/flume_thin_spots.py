@@ -69,6 +69,9 @@ def main():
 
     rows, views = [], []
     for run in a.runs:
+        for needed in ("scene.json", "particles.pvd"):
+            if not os.path.isfile(os.path.join(run, needed)):
+                sys.exit(f"{run}: no {needed}; expected the output folder of `talus run`")
         scene = json.load(open(os.path.join(run, "scene.json")))
         t, path = frame_near(run, a.time)
         pos, stress, density = read_particles(path)
