@@ -58,20 +58,14 @@ void check_step_displacement(const ParticleStore& P, const std::array<std::vecto
   const double limit = scene.guards.max_step_displacement * h;
   const double limit2 = limit * limit;
   if (displacement[0].size() != n) return;
-  int bad = 0;
-#pragma omp parallel for schedule(static) reduction(| : bad)
+  // Called when G2P flagged a displacement beyond the limit (GatherResult::large_displacement):
+  // find the first such particle and name it.
   for (std::size_t p = 0; p < n; ++p) {
     const double d2 = displacement[0][p] * displacement[0][p] + displacement[1][p] * displacement[1][p] +
                       displacement[2][p] * displacement[2][p];
-    bad |= d2 > limit2 ? 1 : 0;
-  }
-  if (!bad) return;
-  for (std::size_t p = 0; p < n; ++p) {
-    {
-      const double d = std::sqrt(displacement[0][p] * displacement[0][p] + displacement[1][p] * displacement[1][p] +
-                                 displacement[2][p] * displacement[2][p]);
-      if (d > limit)
-        throw instability_error(fmt::format(
+    if (d2 > limit2) {
+      const double d = std::sqrt(d2);
+      throw instability_error(fmt::format(
             "step {}, t = {:.6g} s: {} field displacement = {:.6g} m in one step, {:.3g} cells > "
             "guards.max_step_displacement = {} (CFL breach); {}",
             step, time, particle_label(P, scene, p), d, d / h, scene.guards.max_step_displacement, where(P, p)));

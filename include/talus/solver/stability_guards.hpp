@@ -2,7 +2,7 @@
 // Instability guards (docs/reliability.md). Each throws an instability Error (exit code 3) whose
 // message is one line: step, time, particle id and body, the field and its value.
 //
-//  - check_step_displacement (Solver::step, every step): no particle moved more than
+//  - check_step_displacement (Solver::step, in a step G2P flagged): no particle moved more than
 //    guards.max_step_displacement cells in the step (a CFL breach: the Courant condition
 //    c dt / h < 1 no longer holds for that particle). G2P itself stops at a non-finite velocity or
 //    displacement in the step it appears.
@@ -29,8 +29,9 @@ namespace talus {
 /// Solver::check_particles() runs it on demand (the run driver, before it keeps a last good state).
 void check_particle_fields(const ParticleStore& particles, const Scene& scene, std::int64_t step, double time);
 
-/// No particle moved more than guards.max_step_displacement cells in the step (CFL breach); every
-/// step, it reads only the displacement.
+/// No particle moved more than guards.max_step_displacement cells in the step (CFL breach). G2P
+/// flags a breach while it computes the displacements; the solver calls this only then, to name
+/// the particle.
 void check_step_displacement(const ParticleStore& particles, const std::array<std::vector<double>, 3>& displacement,
                              const Scene& scene, std::int64_t step, double time);
 
