@@ -23,6 +23,10 @@ void set_threads(int threads) {
   if (threads > 0) omp_set_num_threads(threads);
 }
 
+void print_warnings(const Scene& scene) {
+  for (const std::string& w : scene_warnings(scene)) fmt::print(stderr, "talus: warning: {}\n", w);
+}
+
 void print_scene_summary(const Solver& solver) {
   const Scene& s = solver.scene();
   const auto& g = s.grid;
@@ -67,6 +71,7 @@ void add_run_command(CLI::App& app) {
   cmd->callback([=]() {
     set_threads(*threads);
     Scene scene = read_scene_file(*scene_path);  // validated before anything is written
+    print_warnings(scene);
     std::string dir = out_dir->empty() ? "runs/" + scene.name : *out_dir;
     Solver solver(std::move(scene));
     std::unique_ptr<Checkpoint> checkpoint;
@@ -114,6 +119,7 @@ void add_check_command(CLI::App& app) {
   cmd->add_option("scene", *scene_path, "Scene file (JSON)")->required();
   cmd->callback([=]() {
     Solver solver(read_scene_file(*scene_path));
+    print_warnings(solver.scene());
     print_scene_summary(solver);
     fmt::print("ok\n");
   });

@@ -1,5 +1,7 @@
 #include "talus/scene/scene.hpp"
 
+#include <fmt/core.h>
+
 namespace talus {
 
 double MaterialSpec::bulk_modulus() const {
@@ -62,6 +64,17 @@ const char* to_string(WallType type) {
     case WallType::Friction: return "friction";
   }
   return "?";
+}
+
+std::vector<std::string> scene_warnings(const Scene& scene) {
+  std::vector<std::string> warnings;
+  const double radius = scene.smoothing.mls.radius_factor;
+  if (scene.smoothing.enabled && radius > kMlsStableRadiusFactor)
+    warnings.push_back(fmt::format(
+        "solver.smoothing.radius_factor = {} is above {} cells: MLS smoothing at 3 cells and more went unstable on "
+        "the column (1.2 s) and the sliding block (docs/verification.md, \"MLS radius\")",
+        radius, kMlsStableRadiusFactor));
+  return warnings;
 }
 
 }  // namespace talus

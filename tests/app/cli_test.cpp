@@ -76,6 +76,25 @@ TEST(Cli, BadSceneGivesOneLineExitTwoAndNoOutputFolder) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, CheckWarnsAboutAnMlsRadiusMeasuredUnstable) {
+  const fs::path dir = temp_dir("mls_radius");
+  fs::create_directories(dir);
+  nlohmann::json scene = nlohmann::json::parse(std::ifstream(kInputs + "elastic_block_slide.json"));
+  auto check_with_radius = [&](double radius) {
+    scene["solver"]["smoothing"] = {{"basis", "linear"}, {"radius_factor", radius}};
+    std::ofstream(dir / "scene.json") << scene.dump();
+    return run("check " + (dir / "scene.json").string());
+  };
+  const Result wide = check_with_radius(4.0);
+  EXPECT_EQ(wide.exit_code, 0) << wide.output;  // a warning, not an error
+  EXPECT_NE(wide.output.find("talus: warning: solver.smoothing.radius_factor = 4 is above 2.5 cells"), std::string::npos)
+      << wide.output;
+  const Result usual = check_with_radius(2.0);
+  EXPECT_EQ(usual.exit_code, 0) << usual.output;
+  EXPECT_EQ(usual.output.find("warning"), std::string::npos) << usual.output;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, RunWritesAParaViewSeries) {
   const fs::path dir = temp_dir("run");
   fs::create_directories(dir);

@@ -148,6 +148,14 @@ struct Scene {
   RunoutSpec runout;
 };
 
+/// Settings that are valid but were measured to misbehave (each line says what was measured and
+/// where it is documented); `talus run` and `talus check` print each as "talus: warning: ...".
+std::vector<std::string> scene_warnings(const Scene& scene);
+
+/// Largest MLS radius (cells) that stayed stable on the benchmarks (docs/verification.md, "MLS
+/// radius"): radii of 3 cells and more went unstable on the column and the sliding block.
+constexpr double kMlsStableRadiusFactor = 2.5;
+
 const char* to_string(SchemeKind scheme);
 const char* to_string(ShapeKind shape);
 const char* to_string(WallType type);
