@@ -251,6 +251,7 @@ void run_bench(const BenchOptions& o) {
     j["mls_radius"] = mls->radius();
     j["mls_terms"] = mls->term_count();
     j["mls_unsmoothed_last_step"] = solver.last_smoothing().unsmoothed;
+    j["mls_strain_change_last_step"] = solver.last_smoothing_change();
   }
   j["bytes_per_particle"] = double(rss) / n;
   j["particle_field_bytes_per_particle"] = double(solver.particles().bytes()) / n;

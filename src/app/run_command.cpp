@@ -100,6 +100,15 @@ void add_run_command(CLI::App& app) {
     fmt::print("talus: done: {} steps to t = {:.6g} s in {:.2f} s ({:.2f} M particle-updates/s)\n", summary.steps, summary.time,
                summary.wall_seconds, summary.steps * double(solver.particles().size()) / summary.wall_seconds / 1e6);
     fmt::print("talus: energy budget closes to {:.3e} of the initial energy\n", (summary.final.total() - e0) / scale);
+    if (solver.smoother() && solver.smoothing_passes() > 0) {
+      const double passes = static_cast<double>(solver.smoothing_passes());
+      fmt::print("talus: MLS smoothing: {} passes; the guard left {} particle-passes unsmoothed ({:.3g}%); the fit "
+                 "changed the strain increments by {:.2f} on average, at most {:.2f} (RMS of the change / RMS of the "
+                 "increments; near 1 means hourglass modes, docs/verification.md \"MLS radius\")\n",
+                 solver.smoothing_passes(), solver.unsmoothed_total(),
+                 100.0 * solver.unsmoothed_total() / (passes * solver.particles().size()), solver.mean_smoothing_change(),
+                 solver.max_smoothing_change());
+    }
     if (solver.outflow_particles() > 0) {
       double mass = solver.outflow_mass();
       for (double m : solver.particles().mass) mass += m;

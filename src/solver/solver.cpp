@@ -373,12 +373,43 @@ void Solver::update_stress_smoothed(const std::array<const double*, 3>& node_vel
     }
     last_smoothing_ = smoother_->smooth(P, sort_, scene_.grid, in, out, smooth_body_);
     unsmoothed_total_ += static_cast<std::int64_t>(last_smoothing_.unsmoothed);
+    measure_smoothing_change();
   }
   ScopedPhase timer(times_, Phase::Stress);
   update_material_by_chunks<Shape>(move, [&](std::size_t begin, std::size_t end, StrainIncrements& inc) {
     for (int c = 0; c < 6; ++c) std::copy_n(smooth_strain_[c].data() + begin, end - begin, inc.strain[c].data());
     for (int c = 0; c < 3; ++c) std::copy_n(raw_spin_[c].data() + begin, end - begin, inc.spin[c].data());
   });  // eq. 55-56
+}
+
+// Sums per colour block, added in block order: the same value for any thread count.
+void Solver::measure_smoothing_change() {
+  const std::size_t blocks = sort_.block_count();
+  std::vector<double> raw2(blocks, 0.0), change2(blocks, 0.0);
+#pragma omp parallel for schedule(static)
+  for (std::size_t b = 0; b < blocks; ++b) {
+    double r2 = 0.0, c2 = 0.0;
+    for (int c = 0; c < 6; ++c) {
+      const double* raw = raw_strain_[c].data();
+      const double* smooth = smooth_strain_[c].data();
+      for (std::size_t p = sort_.block_begin(b); p < sort_.block_end(b); ++p) {
+        const double d = smooth[p] - raw[p];
+        r2 += raw[p] * raw[p];
+        c2 += d * d;
+      }
+    }
+    raw2[b] = r2;
+    change2[b] = c2;
+  }
+  double r2 = 0.0, c2 = 0.0;
+  for (std::size_t b = 0; b < blocks; ++b) {
+    r2 += raw2[b];
+    c2 += change2[b];
+  }
+  last_smoothing_change_ = r2 > 0.0 ? std::sqrt(c2 / r2) : 0.0;
+  smoothing_change_sum_ += last_smoothing_change_;
+  max_smoothing_change_ = std::max(max_smoothing_change_, last_smoothing_change_);
+  ++smoothing_passes_;
 }
 
 EnergyBudget Solver::energies() const {

@@ -45,5 +45,30 @@ TEST(MlsColumn, W12500LinearMpmRoughnessDropsButTheTargetIsMissed) {
   EXPECT_LT(on.l2, 1.15 * off.l2);
 }
 
+// Wide fits go unstable (docs/verification.md "MLS radius": hourglass modes of the linear fit at
+// about 4 cells, tools/mls_soft_modes.py), and the solver's strain-change measure shows it: the fit
+// then removes nearly all of the raw increment, an hourglass pattern. cpGIMP, linear fit along x.
+TEST(MlsColumn, StrainChangeTellsTheUnstableFourCellFitFromTheTwoCellOne) {
+  const Scene s = benchmark_scene("column_w12500", ShapeKind::CpGimp, SchemeKind::Musl);
+  struct Run {
+    test::ColumnError error;
+    double mean_change, max_change;
+  };
+  auto run = [&](double radius) {
+    Solver solver(with_mls(s, MlsBasis::Linear, radius, "x"));
+    test::run_to_end(solver);
+    const Run r{test::column_error(solver, 1e6, 1.0, s.gravity[0], 50.0), solver.mean_smoothing_change(),
+                solver.max_smoothing_change()};
+    std::printf("column cpGIMP, linear x, h = %g cells: L2 %.5f, strain change mean %.3f max %.3f\n", radius,
+                r.error.l2, r.mean_change, r.max_change);
+    return r;
+  };
+  const Run stable = run(2.0), wide = run(4.0);
+  EXPECT_LT(stable.error.l2, 0.005);  // measured 0.26%
+  EXPECT_GT(wide.error.l2, 0.5);      // measured 121%: the run is wrong, and no guard stops it
+  EXPECT_LT(stable.mean_change, 0.2);  // measured 0.065
+  EXPECT_GT(wide.mean_change, 0.4);    // measured 0.62 (1.00 at most)
+}
+
 }  // namespace
 }  // namespace talus

@@ -94,6 +94,15 @@ class Solver {
   const MlsStrainSmoother* smoother() const { return smoother_ ? &*smoother_ : nullptr; }
   MlsCounts last_smoothing() const { return last_smoothing_; }
   std::int64_t unsmoothed_total() const { return unsmoothed_total_; }
+  /// How much the fit changed the strain increments in a pass: the RMS of (smoothed - raw) over
+  /// every component and particle, divided by the RMS of the raw increments (0: unchanged). Of the
+  /// last pass, and its mean and maximum over the passes of this solver. The benchmarks' stable
+  /// runs average 0.1-0.5; runs whose fit breeds hourglass modes approach 1 (docs/verification.md,
+  /// "MLS radius").
+  double last_smoothing_change() const { return last_smoothing_change_; }
+  double mean_smoothing_change() const { return smoothing_passes_ ? smoothing_change_sum_ / smoothing_passes_ : 0.0; }
+  double max_smoothing_change() const { return max_smoothing_change_; }
+  std::int64_t smoothing_passes() const { return smoothing_passes_; }
 
   /// Checkpoint/restart: the state besides the particles, and continuing from a saved one. The
   /// particles must be those of the saved solver, in its order (restore() keeps that order).
@@ -158,6 +167,9 @@ class Solver {
   std::array<std::vector<double>, 3> raw_spin_;          // the spin stays unsmoothed
   MlsCounts last_smoothing_;
   std::int64_t unsmoothed_total_ = 0;
+  std::int64_t smoothing_passes_ = 0;
+  double last_smoothing_change_ = 0.0, smoothing_change_sum_ = 0.0, max_smoothing_change_ = 0.0;
+  void measure_smoothing_change();
 };
 
 }  // namespace talus
