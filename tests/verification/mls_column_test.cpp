@@ -32,6 +32,9 @@ TEST(MlsColumn, W12500GimpRoughnessDropsAtLeastFiveFoldAndL2DoesNotGrow) {
   EXPECT_LE(on.l2, off.l2);
 }
 
+// inputs/benchmarks/column_w12500_mls.json reproduces the cpGIMP run above with a plain `talus run`.
+TEST(MlsColumn, ShippedInputIsTheVerifiedConfiguration) { test::expect_shipped_mls_input("column_w12500", ShapeKind::CpGimp); }
+
 // Linear MPM: target missed. The column's linear-MPM error is the cell-crossing error of the
 // internal force (a particle crossing a cell face changes its nodal force stencil abruptly,
 // seed 000 Fig. 6); smoothing the strain increment removes the particle-to-particle jumps it

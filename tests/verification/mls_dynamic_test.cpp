@@ -47,6 +47,13 @@ TEST(MlsDynamicBar, EnergyOverTwelveTransitsMatchesTheUnsmoothedRun) {
 // smoothing changes the energy of one impact by less than 2% of E0. Measured through t = 15 s:
 //   without main's wall fix (5260c4c): final +15.1% without MLS, +13.7% with (gain at the wall);
 //   with it:                           final  -9.4% without MLS, -10.6% with (loss at the wall).
+// inputs/benchmarks/dynamic_bar_mls.json and block_between_walls_mls.json: the runs above (cpGIMP bar,
+// uGIMP block) with a plain `talus run`.
+TEST(MlsDynamicBar, ShippedInputIsTheVerifiedConfiguration) { test::expect_shipped_mls_input("dynamic_bar", ShapeKind::CpGimp); }
+TEST(MlsBlockBetweenWalls, ShippedInputIsTheVerifiedConfiguration) {
+  test::expect_shipped_mls_input("block_between_walls", ShapeKind::UGimp);
+}
+
 TEST(MlsBlockBetweenWalls, SmoothingChangesTheEnergyOfOneImpactByLessThanTwoPercent) {
   Scene s = benchmark_scene("block_between_walls", ShapeKind::CpGimp, SchemeKind::Musl);
   s.end_time = 15.0;

@@ -3,6 +3,8 @@
 // the MLS verification tests; each prints its measures so the test log carries the numbers.
 #include "benchmark_metrics.hpp"
 
+#include <gtest/gtest.h>
+
 #include <cstdio>
 #include <string>
 
@@ -14,6 +16,31 @@ inline Scene with_mls(Scene s, MlsBasis basis, double radius_factor, const char*
   s.smoothing.mls.radius_factor = radius_factor;
   for (int d = 0; d < 3; ++d) s.smoothing.mls.axes[d] = std::string(axes).find(char('x' + d)) != std::string::npos;
   return s;
+}
+
+/// The shipped MLS input inputs/benchmarks/<name>_mls.json is the benchmark <name> with `shape` and
+/// the paper's fit (cubic along x, radius 2 cells) that the tests verify: the same scene otherwise.
+inline void expect_shipped_mls_input(const std::string& name, ShapeKind shape) {
+  const Scene shipped = read_scene_file(std::string(TALUS_SOURCE_DIR) + "/inputs/benchmarks/" + name + "_mls.json");
+  const Scene verified = with_mls(benchmark_scene(name, shape, SchemeKind::Musl), MlsBasis::Cubic, 2.0, "x");
+  EXPECT_EQ(shipped.shape, verified.shape) << name;
+  EXPECT_EQ(shipped.scheme, verified.scheme) << name;
+  EXPECT_TRUE(shipped.smoothing.enabled) << name;
+  EXPECT_EQ(shipped.smoothing.mls.basis, verified.smoothing.mls.basis) << name;
+  EXPECT_EQ(shipped.smoothing.mls.radius_factor, verified.smoothing.mls.radius_factor) << name;
+  EXPECT_EQ(shipped.smoothing.mls.axes, verified.smoothing.mls.axes) << name;
+  EXPECT_TRUE(shipped.smoothing.bodies.empty()) << name;
+  EXPECT_EQ(shipped.end_time, verified.end_time) << name;
+  EXPECT_EQ(shipped.courant, verified.courant) << name;
+  EXPECT_EQ(shipped.gravity, verified.gravity) << name;
+  EXPECT_EQ(shipped.gravity_ramp_time, verified.gravity_ramp_time) << name;
+  EXPECT_EQ(shipped.grid.h, verified.grid.h) << name;
+  EXPECT_EQ(shipped.grid.cells, verified.grid.cells) << name;
+  ASSERT_EQ(shipped.bodies.size(), verified.bodies.size()) << name;
+  for (std::size_t b = 0; b < shipped.bodies.size(); ++b) {
+    EXPECT_EQ(shipped.bodies[b].velocity, verified.bodies[b].velocity) << name;
+    EXPECT_EQ(shipped.bodies[b].particles_per_cell, verified.bodies[b].particles_per_cell) << name;
+  }
 }
 
 inline ColumnError column(const Scene& s, const char* label) {
