@@ -168,15 +168,18 @@ MlsCounts MlsStrainSmoother::smooth_with(const ParticleStore& P, const CellSort&
         // box, not the cell, bounds the search, so a particle off its sorted cell still finds all
         // its neighbours.
         double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+        double xlo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, xhi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};  // [m]
         for (std::uint32_t p = p_begin; p < p_end; ++p) {
           if (!smooth_body[P.body[p]]) {
             for (int c = 0; c < 6; ++c) out[c][p] = in[c][p];
             continue;
           }
           for (int d = 0; d < 3; ++d) {
-            const double xg = grid.to_grid(d, P.x[d][p]);
+            const double x = P.x[d][p], xg = grid.to_grid(d, x);
             lo[d] = xg < lo[d] ? xg : lo[d];
             hi[d] = xg > hi[d] ? xg : hi[d];
+            xlo[d] = x < xlo[d] ? x : xlo[d];
+            xhi[d] = x > xhi[d] ? x : xhi[d];
           }
         }
         if (!(lo[0] <= hi[0])) continue;  // nothing to smooth in this cell
@@ -224,6 +227,29 @@ MlsCounts MlsStrainSmoother::smooth_with(const ParticleStore& P, const CellSort&
               k = k_end + 1;
             }
           }
+        }
+        // Keep only the candidates within the radius of the particles' box [xlo, xhi]: the others
+        // are nobody's neighbour here. The cells gathered hold about twice as many as the ball
+        // around the box (radius 1 cell), and every particle would test them all. The margin keeps
+        // a candidate at the radius within round-off; the exact test per particle decides, so the
+        // neighbours (and their order) are unchanged.
+        {
+          const double keep2 = radius_ * radius_ * (1.0 + 1e-9);
+          std::size_t kept = 0;
+          for (std::size_t I = 0; I < nc; ++I) {
+            double g2 = 0.0;
+            for (int d = 0; d < 3; ++d) {
+              const double x = S.cx[d][I];
+              const double below = xlo[d] - x, above = x - xhi[d];
+              const double gap = below > above ? below : above;
+              g2 += gap > 0.0 ? gap * gap : 0.0;
+            }
+            for (int d = 0; d < 3; ++d) S.cx[d][kept] = S.cx[d][I];
+            S.cbody[kept] = S.cbody[I];
+            S.cq[kept] = S.cq[I];
+            kept += g2 < keep2 ? 1 : 0;
+          }
+          nc = kept;
         }
         bool one_body = true;
         for (std::size_t I = 1; I < nc; ++I) one_body = one_body && S.cbody[I] == S.cbody[0];
