@@ -382,31 +382,16 @@ void Solver::update_stress_smoothed(const std::array<const double*, 3>& node_vel
   });  // eq. 55-56
 }
 
-// Sums per colour block, added in block order: the same value for any thread count.
+// deterministic_sum: the same value for any thread count.
 void Solver::measure_smoothing_change() {
-  const std::size_t blocks = sort_.block_count();
-  std::vector<double> raw2(blocks, 0.0), change2(blocks, 0.0);
-#pragma omp parallel for schedule(static)
-  for (std::size_t b = 0; b < blocks; ++b) {
-    double r2 = 0.0, c2 = 0.0;
+  const auto sums = deterministic_sum<2>(particles_.size(), [&](std::size_t p, std::array<double, 2>& acc) {
     for (int c = 0; c < 6; ++c) {
-      const double* raw = raw_strain_[c].data();
-      const double* smooth = smooth_strain_[c].data();
-      for (std::size_t p = sort_.block_begin(b); p < sort_.block_end(b); ++p) {
-        const double d = smooth[p] - raw[p];
-        r2 += raw[p] * raw[p];
-        c2 += d * d;
-      }
+      const double raw = raw_strain_[c][p], change = smooth_strain_[c][p] - raw;
+      acc[0] += raw * raw;
+      acc[1] += change * change;
     }
-    raw2[b] = r2;
-    change2[b] = c2;
-  }
-  double r2 = 0.0, c2 = 0.0;
-  for (std::size_t b = 0; b < blocks; ++b) {
-    r2 += raw2[b];
-    c2 += change2[b];
-  }
-  last_smoothing_change_ = r2 > 0.0 ? std::sqrt(c2 / r2) : 0.0;
+  });
+  last_smoothing_change_ = sums[0] > 0.0 ? std::sqrt(sums[1] / sums[0]) : 0.0;
   smoothing_change_sum_ += last_smoothing_change_;
   max_smoothing_change_ = std::max(max_smoothing_change_, last_smoothing_change_);
   ++smoothing_passes_;

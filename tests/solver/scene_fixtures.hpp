@@ -43,6 +43,14 @@ inline std::string scene_error_of(const std::string& text, SceneStage stage = Sc
   return "";
 }
 
+/// Reading `good` with its first `from` replaced by `to` must fail with a message that contains
+/// `expected` (and is one line, with exit code `exit_code` unless that is nullopt).
+inline void expect_variant_error(const std::string& good, const std::string& from, const std::string& to,
+                                 const std::string& expected, std::optional<int> exit_code = 2) {
+  const std::string what = scene_error_of(replace_once(good, from, to), SceneStage::Read, exit_code);
+  EXPECT_NE(what.find(expected), std::string::npos) << "with " << to << " for " << from << ": " << what;
+}
+
 /// A thin 3D bar along x (one cell across, slip side walls): the 1D problems of the papers.
 /// Fixed at x = 0; initial velocity v0 along x; nu = 0 so that the wave speed is sqrt(E / rho).
 inline Scene bar_scene(double length, double v0, int particles_per_cell = 2, double end_time = 0.04) {
