@@ -82,7 +82,8 @@ void add_run_command(CLI::App& app) {
       if (dir.empty()) dir = ".";
       fmt::print("talus: restart from {} at step {}, t = {:.6g} s\n", *restart, solver.step_count(), solver.time());
     }
-    fmt::print("talus: {} particles, {} threads, output in {}\n", solver.particles().size(), omp_get_max_threads(), dir);
+    const int threads = omp_get_max_threads();
+    fmt::print("talus: {} particles, {} thread{}, output in {}\n", solver.particles().size(), threads, threads == 1 ? "" : "s", dir);
     RunOptions options;
     options.out_dir = dir;
     options.progress = !*quiet;
