@@ -33,7 +33,7 @@ void print_scene_summary(const Solver& solver) {
   fmt::print("scene      {}{}\n", s.name, s.description.empty() ? "" : " - " + s.description);
   fmt::print("grid       {} x {} x {} cells of {} m, origin ({}, {}, {})\n", g.cells[0], g.cells[1], g.cells[2], g.h,
              g.origin[0], g.origin[1], g.origin[2]);
-  fmt::print("particles  {} in {} bodies\n", solver.particles().size(), s.bodies.size());
+  fmt::print("particles  {} in {} bod{}\n", solver.particles().size(), s.bodies.size(), s.bodies.size() == 1 ? "y" : "ies");
   fmt::print("method     {} with {} shape functions, Courant {}\n", to_string(s.scheme), to_string(s.shape), s.courant);
   const double dt = solver.stable_time_step();
   fmt::print("time       end {} s, initial dt {:.3e} s (~{:.0f} steps if speeds stay low)\n", s.end_time, dt, s.end_time / dt);
