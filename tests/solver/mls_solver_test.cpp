@@ -152,7 +152,7 @@ TEST(MlsSolver, BitIdenticalForOneAndTwoThreads) {
     EXPECT_EQ(one.unsmoothed_total(), two.unsmoothed_total());
     EXPECT_GT(one.smoothing_passes(), 0);
     EXPECT_EQ(one.smoothing_passes(), two.smoothing_passes());
-    EXPECT_EQ(one.last_smoothing_change(), two.last_smoothing_change());  // block sums in block order
+    EXPECT_EQ(one.last_smoothing_change(), two.last_smoothing_change());  // deterministic_sum: fixed chunks
     EXPECT_EQ(one.max_smoothing_change(), two.max_smoothing_change());
     EXPECT_GT(one.max_smoothing_change(), 0.0);
   }
