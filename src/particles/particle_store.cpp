@@ -30,6 +30,22 @@ std::size_t ParticleStore::add(std::int64_t particle_id, const Vec3& position, c
   return id.size() - 1;
 }
 
+void ParticleStore::reserve(std::size_t n) {
+  id.reserve(n);
+  for (int d = 0; d < 3; ++d) {
+    x[d].reserve(n);
+    v[d].reserve(n);
+  }
+  mass.reserve(n);
+  volume.reserve(n);
+  volume0.reserve(n);
+  for (int c = 0; c < 6; ++c) {
+    stress[c].reserve(n);
+    strain[c].reserve(n);
+  }
+  body.reserve(n);
+}
+
 void ParticleStore::enable_plastic_state(bool with_back_stress) {
   plastic_enabled_ = true;
   plastic_strain.assign(size(), 0.0);

@@ -2,6 +2,9 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
+#include <cmath>
+
 namespace talus {
 
 double MaterialSpec::bulk_modulus() const {
@@ -9,6 +12,15 @@ double MaterialSpec::bulk_modulus() const {
 }
 double MaterialSpec::shear_modulus() const { return elastic.young / (2.0 * (1.0 + elastic.poisson)); }
 double MaterialSpec::p_wave_modulus() const { return bulk_modulus() + 4.0 / 3.0 * shear_modulus(); }
+
+double Scene::initial_time_step() const {
+  double max_rate = 0.0;
+  for (const BodySpec& body : bodies) {
+    const MaterialSpec& m = materials[body.material];
+    max_rate = std::max(max_rate, std::sqrt(m.p_wave_modulus() / m.density) + body.velocity.norm());
+  }
+  return courant * grid.h / max_rate;
+}
 
 const char* to_string(SchemeKind scheme) {
   switch (scheme) {

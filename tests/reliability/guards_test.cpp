@@ -5,7 +5,7 @@
 #include "reliability_fixtures.hpp"
 #include "talus/core/error.hpp"
 #include "talus/io/checkpoint.hpp"
-#include "talus/io/run_driver.hpp"
+#include "talus/driver/run_driver.hpp"
 #include "talus/solver/solver.hpp"
 #include "talus/solver/stability_guards.hpp"
 

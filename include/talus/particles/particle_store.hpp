@@ -39,6 +39,9 @@ struct ParticleStore {
   std::size_t add(std::int64_t particle_id, const Vec3& position, const Vec3& velocity,
                   double particle_mass, double particle_volume, std::uint16_t body_index);
 
+  /// Reserve room for n particles in the arrays add() fills, so seeding grows none of them.
+  void reserve(std::size_t n);
+
   /// Allocate (zeroed) the plastic state arrays for all particles.
   /// The back stress only with `with_back_stress`: it stays zero unless some body has kinematic
   /// hardening (H > 0 and kinematic_fraction > 0), and then costs 48 B per particle for nothing.

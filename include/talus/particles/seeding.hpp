@@ -10,4 +10,8 @@ namespace talus {
 /// Seed every body of the scene. Throws input_error for a body that holds no particle.
 ParticleStore seed_particles(const Scene& scene);
 
+/// The number of particles seed_particles would make, with the same input errors, without
+/// allocating them: a scene's size is known before its memory is (solver/memory_estimate.hpp).
+std::size_t count_particles(const Scene& scene);
+
 }  // namespace talus

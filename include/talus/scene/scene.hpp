@@ -146,6 +146,10 @@ struct Scene {
   OutputSpec output;
   GuardSpec guards;
   RunoutSpec runout;
+
+  /// The first step's Courant time step, courant h / max over bodies of (c + |v0|), c = sqrt(M / rho):
+  /// what Solver::stable_time_step gives for the freshly seeded particles, known before seeding.
+  double initial_time_step() const;
 };
 
 /// Settings that are valid but were measured to misbehave (each line says what was measured and
