@@ -1,5 +1,5 @@
 // The scene reader: defaults, round trip, and one clear message per kind of bad input.
-#include "scene_fixtures.hpp"
+#include "../solver/scene_fixtures.hpp"
 #include "talus/core/error.hpp"
 #include "talus/scene/scene_json.hpp"
 #include "talus/solver/solver.hpp"
