@@ -30,10 +30,8 @@ std::vector<double> axis_points(double origin, double h, int n, double lo, doubl
 /// each still carries the volume (h/n)^3. A physical box keeps the points inside it: the bed clips a
 /// box that reaches below it (candidates exist only above the bed), and a box with no point above
 /// the bed is an input error. A terrain-frame box reads its third coordinate as w directly.
-void seed_on_terrain(const Scene& scene, std::size_t b, const ProfileTerrain& bed, ParticleStore& store,
-                     std::int64_t& next_id) {
-  const BodySpec& body = scene.bodies[b];
-  const GridGeometry& g = scene.grid;
+void seed_on_terrain(const GridGeometry& g, const BodySpec& body, std::size_t b, double density,
+                     const ProfileTerrain& bed, ParticleStore& store, std::int64_t& next_id) {
   const double h = g.h;
   const int n = body.particles_per_cell;
   const double w_top = g.origin[2] + g.cells[2] * h;
@@ -43,7 +41,7 @@ void seed_on_terrain(const Scene& scene, std::size_t b, const ProfileTerrain& be
   // one of those reaches above the grid
   const std::vector<double> ws = axis_points(g.origin[2], h, n, g.origin[2], w_top + h);
   const double volume = std::pow(h / n, 3);
-  const double mass = scene.materials[body.material].density * volume;
+  const double mass = density * volume;
   const bool terrain_frame = body.frame == BoxFrame::Terrain;
   // Whether a candidate lies in the body (the box's x and y ranges are those of xs and ys): a
   // terrain-frame box by its w range, any physical body by its own inside test at (x, y, z).
@@ -80,22 +78,23 @@ void seed_on_terrain(const Scene& scene, std::size_t b, const ProfileTerrain& be
 
 }  // namespace
 
-ParticleStore seed_particles(const Scene& scene) {
+ParticleStore seed_particles(const GridGeometry& grid, const std::vector<BodySpec>& bodies,
+                             const std::vector<double>& material_density) {
   ParticleStore store;
-  const double h = scene.grid.h;
+  const double h = grid.h;
   std::int64_t next_id = 0;
-  const ProfileTerrain bed = grid_bed(scene.grid);
-  for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
-    const BodySpec& body = scene.bodies[b];
-    const MaterialSpec& material = scene.materials[body.material];
+  const ProfileTerrain bed = grid_bed(grid);
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    const BodySpec& body = bodies[b];
+    const double density = material_density.at(body.material);
     const int n = body.particles_per_cell;
-    if (scene.grid.has_terrain()) {
-      seed_on_terrain(scene, b, bed, store, next_id);
+    if (grid.has_terrain()) {
+      seed_on_terrain(grid, body, b, density, bed, store, next_id);
       continue;
     }
     std::array<std::vector<double>, 3> axes;
     for (int d = 0; d < 3; ++d)
-      axes[d] = axis_points(scene.grid.origin[d], h, n, body.box_min[d], body.box_max[d]);
+      axes[d] = axis_points(grid.origin[d], h, n, body.box_min[d], body.box_max[d]);
     const bool box = body.shape == BodyShapeKind::Box;
     const std::string key = box ? fmt::format("bodies[{}]", b) : fmt::format("bodies[{}].{}", b, to_string(body.shape));
     if (axes[0].empty() || axes[1].empty() || axes[2].empty())
@@ -103,7 +102,7 @@ ParticleStore seed_particles(const Scene& scene) {
           "{} (\"{}\") holds no particle: its {} is thinner than the particle spacing h/n = {} "
           "along some axis", key, body.name, box ? "box" : "bounding box", h / n));
     const double volume = std::pow(h / n, 3);
-    const double mass = material.density * volume;
+    const double mass = density * volume;
     const std::int64_t first_id = next_id;
     // The candidates span the bounding box; a box keeps them all, other shapes keep those inside.
     for (double px : axes[0])
