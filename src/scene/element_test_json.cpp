@@ -5,8 +5,6 @@
 #include "scene_fields.hpp"
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
 namespace talus {
 
@@ -91,7 +89,7 @@ const Table<SpecDraft>& spec_table() {
     Table<SpecDraft> t;
     t.fields = {
         string<SpecDraft>("description", TALUS_AT(description), "free text"),
-        object<SpecDraft>(
+        custom_object<SpecDraft>(
             "material", drucker_prager_table(), "required", "the Drucker-Prager constants (as a scene material's)",
             [](ObjectReader& r, SpecDraft& d) {
               ObjectReader material = r.object("material");
@@ -99,7 +97,7 @@ const Table<SpecDraft>& spec_table() {
             },
             [](const SpecDraft& d, Json& j) { j["material"] = write_fields(d.spec.material, drucker_prager_table()); },
             {.required = true}),
-        object<SpecDraft>(
+        custom_object<SpecDraft>(
             "path", path_table(), "required", "the strain or mixed path",
             [](ObjectReader& r, SpecDraft& d) {
               ObjectReader path = r.object("path");
@@ -123,11 +121,9 @@ ElementTestSpec parse_element_test(const std::string& text, const std::string& s
 }
 
 ElementTestSpec read_element_test_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw io_error(fmt::format("cannot read spec file {}", path));
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse_element_test(text.str(), path);
+  const auto text = read_text_file(path);
+  if (!text) throw io_error(fmt::format("cannot read spec file {}", path));
+  return parse_element_test(*text, path);
 }
 
 nlohmann::json element_test_json_schema() {

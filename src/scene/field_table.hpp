@@ -390,16 +390,55 @@ std::vector<std::vector<std::string>> doc_rows(const Table<S>& t, const std::str
   return rows;
 }
 
-/// An object-valued key whose members come from another table: its schema and docs rows are that
-/// table's; `read` and `write` say when it is present.
+/// An object-valued key whose members another table reads (a different type M: the element
+/// test's material); `read` and `write` say when it is present.
 template <class S, class M>
-Field<S> object(std::string key, const Table<M>& members, std::string fallback, std::string doc,
-                std::function<void(ObjectReader&, S&)> read, std::function<void(const S&, Json&)> write,
-                FieldOptions o = {}, bool row = true) {
+Field<S> custom_object(std::string key, const Table<M>& members, std::string fallback, std::string doc,
+                       std::function<void(ObjectReader&, S&)> read, std::function<void(const S&, Json&)> write,
+                       FieldOptions o = {}) {
   Field<S> f = custom<S>(std::move(key), "object", std::move(fallback), "", doc, schema_of(members, doc), std::move(read),
                          std::move(write), o);
-  f.info.row = row;
   f.info.member_rows = doc_rows(members, "");
+  return f;
+}
+
+/// A table built once (with its schema and docs rows), however often it is read.
+template <class S, Table<S> (*make)()>
+const Table<S>& table_of() {
+  static const Table<S> table = make();
+  return table;
+}
+
+template <class S>
+struct ObjectHooks {
+  std::function<void(S&)> begin;               // before the members are read (e.g. "present = on")
+  std::function<void(ObjectReader&, S&)> end;  // after them: checks across the members
+  std::function<bool(const S&)> present;       // whether the writer includes the key (null: when it has members)
+};
+
+/// An object-valued key whose members the table `members` reads into the same S, when the key is
+/// there (always, with .required); its schema and docs rows are that table's.
+template <class S>
+Field<S> object(std::string key, const Table<S>& (*members)(), std::string fallback, std::string doc,
+                ObjectHooks<S> hooks = {}, FieldOptions o = {}, bool row = true) {
+  const bool required = o.required;
+  Field<S> f = custom<S>(
+      key, "object", std::move(fallback), "", doc, schema_of(members(), doc),
+      [key, members, hooks, required](ObjectReader& r, S& s) {
+        if (!required && !r.has(key)) return;
+        if (hooks.begin) hooks.begin(s);
+        ObjectReader inner = r.object(key);
+        read_fields(inner, s, members());
+        if (hooks.end) hooks.end(inner, s);
+      },
+      [key, members, hooks](const S& s, Json& j) {
+        if (hooks.present && !hooks.present(s)) return;
+        Json inner = write_fields(s, members());
+        if (hooks.present || !inner.empty()) j[key] = std::move(inner);
+      },
+      o);
+  f.info.row = row;
+  f.info.member_rows = doc_rows(members(), "");
   return f;
 }
 

@@ -9,8 +9,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
+#include <optional>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -147,6 +150,15 @@ class ObjectReader {
   std::string path_;
   std::set<std::string> used_;
 };
+
+/// The whole text of a file; nothing when it cannot be opened (the caller names the file's role).
+inline std::optional<std::string> read_text_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) return std::nullopt;
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
 
 /// Parse a whole input file; a syntax error is an input error naming `source`, the line and column.
 inline Json parse_json(const std::string& text, const std::string& source) {

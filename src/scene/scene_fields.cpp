@@ -19,6 +19,14 @@ namespace {
 
 const char* const kFaceNames[3][2] = {{"x-", "x+"}, {"y-", "y+"}, {"z-", "z+"}};
 
+/// The words of a choice: each value's to_string (scene.hpp), so an enum's names are written once.
+template <class E>
+std::vector<std::pair<std::string, E>> named(std::initializer_list<E> values) {
+  std::vector<std::pair<std::string, E>> out;
+  for (E v : values) out.emplace_back(to_string(v), v);
+  return out;
+}
+
 Json point_pairs_schema(std::size_t min_items) {
   return {{"type", "array"},
           {"minItems", min_items},
@@ -48,9 +56,8 @@ Json point_pairs_json(const PolygonPoints& points) {
 
 // grid.terrain: the bed z_b(x) (Abe, Johansson & Konagai 2005, eq. 19-20); TerrainProfile checks
 // that it is a graph and that the transitions fit, naming the key.
-Table<SceneDraft> terrain_table() {
-  Table<SceneDraft> t;
-  t.fields = {
+Table<SceneDraft> make_terrain_table() {
+  return {{
       custom<SceneDraft>(
           "points", "[[x, z], …]", "none (flat grid)", "≥ 2 points, finite, x strictly increasing",
           "bed profile z_b(x), piecewise linear, uniform across y; beyond the end points the end segments continue. "
@@ -87,13 +94,12 @@ Table<SceneDraft> terrain_table() {
             for (std::size_t i = 0; i < t.points.size(); ++i) radii.push_back(t.radii.empty() ? 0.0 : t.radii[i]);
             j["radii"] = radii;
           }),
-  };
-  return t;
+  }};
 }
+constexpr auto terrain_table = &table_of<SceneDraft, make_terrain_table>;
 
-Table<SceneDraft> grid_table() {
-  Table<SceneDraft> t;
-  t.fields = {
+Table<SceneDraft> make_grid_table() {
+  return {{
       vec3<SceneDraft>("origin", TALUS_AT(scene.grid.origin), "corner of the domain"),
       number<SceneDraft>("cell_size", TALUS_AT(scene.grid.h), {0.0, kHuge, true}, "cell size h (cubic cells)",
                          {.required = true}),
@@ -122,48 +128,40 @@ Table<SceneDraft> grid_table() {
           },
           {.required = true}),
       object<SceneDraft>(
-          "terrain", terrain_table(), "none (flat grid)", "the bed of a terrain-following grid",
-          [](ObjectReader& r, SceneDraft& d) {
-            if (!r.has("terrain")) return;
-            ObjectReader terrain = r.object("terrain");
-            read_fields(terrain, d, terrain_table());
-            (void)TerrainProfile(d.scene.grid.terrain);  // validates: a graph z_b(x), transitions that fit
-          },
-          [](const SceneDraft& d, Json& j) {
-            if (d.scene.grid.has_terrain()) j["terrain"] = write_fields(d, terrain_table());
-          },
+          "terrain", terrain_table, "none (flat grid)", "the bed of a terrain-following grid",
+          {.end = [](ObjectReader&, SceneDraft& d) {
+             (void)TerrainProfile(d.scene.grid.terrain);  // validates: a graph z_b(x), transitions that fit
+           },
+           .present = [](const SceneDraft& d) { return d.scene.grid.has_terrain(); }},
           {}, false),
-  };
-  return t;
+  }};
 }
+constexpr auto grid_table = &table_of<SceneDraft, make_grid_table>;
 
-Table<SceneDraft> time_table() {
-  Table<SceneDraft> t;
-  t.fields = {
+Table<SceneDraft> make_time_table() {
+  return {{
       number<SceneDraft>("end", TALUS_AT(scene.end_time), {0.0, kHuge, true}, "simulated end time [s]",
                          {.required = true}),
       number<SceneDraft>("courant", TALUS_AT(scene.courant), {0.0, 1.0, true, true},
                          "α in dt = α h / max(c + \\|v\\|) (Edo & Matsubara 2015, eq. 60)"),
       integer<SceneDraft>("max_steps", TALUS_AT(scene.max_steps), 0, 2000000000,
                           "stop after this many steps (0: no limit)"),
-  };
-  return t;
+  }};
 }
+constexpr auto time_table = &table_of<SceneDraft, make_time_table>;
 
 // ---- solver --------------------------------------------------------------------------------------
 
 // MLS smoothing (Edo & Matsubara 2015, eq. 38-46, 54). Body names are resolved once the bodies are read.
-Table<SceneDraft> smoothing_table() {
-  Table<SceneDraft> t;
-  t.fields = {
+Table<SceneDraft> make_smoothing_table() {
+  return {{
       custom<SceneDraft>(
           "enabled", "boolean", "true", "", "switch it off without deleting the settings",
           {{"type", "boolean"}, {"default", true}},
           [](ObjectReader& r, SceneDraft& d) { d.scene.smoothing.enabled = r.boolean_or("enabled", true); },
           [](const SceneDraft& d, Json& j) { j["enabled"] = d.scene.smoothing.enabled; }),
       choice<SceneDraft>("basis", TALUS_AT(scene.smoothing.mls.basis),
-                         std::vector<std::pair<std::string, MlsBasis>>{
-                             {"linear", MlsBasis::Linear}, {"quadratic", MlsBasis::Quadratic}, {"cubic", MlsBasis::Cubic}},
+                         named({MlsBasis::Linear, MlsBasis::Quadratic, MlsBasis::Cubic}),
                          "polynomial basis: 4 / 10 / 20 terms in 3D (2 / 3 / 4 along one axis)"),
       number<SceneDraft>("radius_factor", TALUS_AT(scene.smoothing.mls.radius_factor), {0.5, 8.0},
                          "support radius h = factor × cell size (eq. 39). Above 2.5, `run` and `check` warn: 3 cells "
@@ -210,26 +208,19 @@ Table<SceneDraft> smoothing_table() {
                 names.push_back(s.bodies[b].name);
             j["bodies"] = names;
           }),
-  };
-  return t;
+  }};
 }
+constexpr auto smoothing_table = &table_of<SceneDraft, make_smoothing_table>;
 
-Table<SceneDraft> solver_table() {
-  Table<SceneDraft> t;
-  t.fields = {
+Table<SceneDraft> make_solver_table() {
+  return {{
       choice<SceneDraft>("scheme", TALUS_AT(scene.scheme),
-                         std::vector<std::pair<std::string, SchemeKind>>{{"musl", SchemeKind::Musl},
-                                                                         {"usl", SchemeKind::Usl},
-                                                                         {"usf", SchemeKind::Usf},
-                                                                         {"usavg", SchemeKind::Usavg}},
+                         named({SchemeKind::Musl, SchemeKind::Usl, SchemeKind::Usf, SchemeKind::Usavg}),
                          "update scheme: MUSL (Edo & Matsubara 2015, eq. 47–56), USL (no remap), USF (stress first, "
                          "Bardenhagen 2002), USAVG (half step each, Nairn 2003; Abe, Johansson & Konagai 2005, "
                          "sec. 4(1)); docs/theory.md"),
       choice<SceneDraft>("shape", TALUS_AT(scene.shape),
-                         std::vector<std::pair<std::string, ShapeKind>>{{"linear", ShapeKind::Linear},
-                                                                        {"ugimp", ShapeKind::UGimp},
-                                                                        {"cpgimp", ShapeKind::CpGimp},
-                                                                        {"bspline2", ShapeKind::BSpline2}},
+                         named({ShapeKind::Linear, ShapeKind::UGimp, ShapeKind::CpGimp, ShapeKind::BSpline2}),
                          "shape functions: linear MPM (Edo & Matsubara 2015, eq. 28–29), uGIMP (eq. 30–31, 59), "
                          "cpGIMP (eq. 30–31, 57–58), quadratic B-spline; docs/theory.md"),
       integer<SceneDraft>("sort_interval", TALUS_AT(scene.sort_interval), 1, 1000000,
@@ -245,18 +236,13 @@ Table<SceneDraft> solver_table() {
                          "noise that otherwise keeps a granular deposit jittering (the flume uses 0.01, docs/flume.md); "
                          "the kinetic energy it removes is the `damping` column of energy.csv, so the budget still closes"),
       object<SceneDraft>(
-          "smoothing", smoothing_table(), "absent (off)",
+          "smoothing", smoothing_table, "absent (off)",
           "MLS smoothing of the strain increments between the strain pass and the material update (Edo & Matsubara "
           "2015, eq. 38–46, 54; docs/theory.md \"MLS strain smoothing\"). Present = on unless `enabled` is false",
-          [](ObjectReader& r, SceneDraft& d) {
-            if (!r.has("smoothing")) return;
-            ObjectReader smoothing = r.object("smoothing");
-            read_fields(smoothing, d, smoothing_table());
-          },
-          [](const SceneDraft& d, Json& j) { j["smoothing"] = write_fields(d, smoothing_table()); }),
-  };
-  return t;
+          {.present = [](const SceneDraft&) { return true; }}),
+  }};
 }
+constexpr auto solver_table = &table_of<SceneDraft, make_solver_table>;
 
 // ---- materials -----------------------------------------------------------------------------------
 
@@ -295,26 +281,24 @@ Fields<DruckerPragerParameters> drucker_prager_strength_fields() {
             if (std::isfinite(p.tension_cutoff)) j["tension_cutoff"] = p.tension_cutoff;
           }),
       choice<P>("cone", TALUS_AT(cone),
-                std::vector<std::pair<std::string, ConeFit>>{{"plane_strain", ConeFit::PlaneStrain},
-                                                             {"compression", ConeFit::Compression},
-                                                             {"extension", ConeFit::Extension},
-                                                             {"inscribed", ConeFit::Inscribed}},
+                named({ConeFit::PlaneStrain, ConeFit::Compression, ConeFit::Extension, ConeFit::Inscribed}),
                 "how the cone matches Mohr–Coulomb"),
   };
 }
 
-Table<MaterialSpec> material_table() {
+Table<MaterialSpec> make_material_table() {
+  // The models, the default first; a model's keys are the fields with .when = {its name}.
+  const auto models = named({MaterialModel::LinearElastic, MaterialModel::DruckerPrager});
   using M = MaterialSpec;
   const std::vector<std::string> dp = {"drucker_prager"};
   const std::vector<std::string> elastic = {"linear_elastic"};
   Table<M> t;
   t.selector = "model";
-  t.values = {"linear_elastic", "drucker_prager"};
+  for (const auto& [word, model] : models) t.values.push_back(word);
   t.selected = [](const M& m) { return std::string(to_string(m.model)); };
   t.fields = join<M>({
       {choice<M>("model", TALUS_AT(model),
-                 std::vector<std::pair<std::string, MaterialModel>>{{"linear_elastic", MaterialModel::LinearElastic},
-                                                                    {"drucker_prager", MaterialModel::DruckerPrager}},
+                 models,
                  "constitutive model (Drucker–Prager: Abe, Johansson & Konagai 2005, eq. 23–25; docs/drucker-prager.md)"),
        number<M>("density", TALUS_AT(density), {0.0, kHuge, true}, "initial density [kg/m³]", {.required = true}),
        number<M>("young", TALUS_AT(elastic.young), {0.0, kHuge, true}, "Young's modulus E [Pa]", {.required = true}),
@@ -360,6 +344,7 @@ Table<MaterialSpec> material_table() {
   });
   return t;
 }
+constexpr auto material_table = &table_of<MaterialSpec, make_material_table>;
 
 // ---- bodies --------------------------------------------------------------------------------------
 
@@ -384,9 +369,8 @@ void check_inside_grid(const BodySpec& b, const std::string& path, const Scene& 
   }
 }
 
-Table<BodyDraft> box_table() {
-  Table<BodyDraft> t;
-  t.fields = {
+Table<BodyDraft> make_box_table() {
+  return {{
       vec3<BodyDraft>("min", TALUS_AT(body.box_min), "lower corner of the box filled with particles",
                       {.required = true, .allowed = "inside the grid, min < max"}),
       vec3<BodyDraft>("max", TALUS_AT(body.box_max), "upper corner of the box filled with particles",
@@ -415,14 +399,13 @@ Table<BodyDraft> box_table() {
                 fmt::format("{}.min[{}] = {} must be below max[{}] = {}", r.path(), a, b.box_min[a], a, b.box_max[a]));
         check_inside_grid(b, r.path(), d.scene->scene);
       }),
-  };
-  return t;
+  }};
 }
+constexpr auto box_table = &table_of<BodyDraft, make_box_table>;
 
 // "prism": {"points": [[x, z], ...], "y": [y0, y1]}: a simple polygon in the x-z plane, extruded.
-Table<BodyDraft> prism_table() {
-  Table<BodyDraft> t;
-  t.fields = {
+Table<BodyDraft> make_prism_table() {
+  return {{
       custom<BodyDraft>(
           "points", "[[x, z], ...]", "required with `prism`",
           "≥ 3 points, a simple polygon (no crossing or touching edges, non-zero area), inside the grid",
@@ -475,13 +458,12 @@ Table<BodyDraft> prism_table() {
           b.box_max[2] = std::max(b.box_max[2], p[1]);
         }
       }),
-  };
-  return t;
+  }};
 }
+constexpr auto prism_table = &table_of<BodyDraft, make_prism_table>;
 
-Table<BodyDraft> body_table() {
-  Table<BodyDraft> t;
-  t.fields = {
+Table<BodyDraft> make_body_table() {
+  return {{
       string<BodyDraft>("name", TALUS_AT(body.name), "body name (shown in diagnostics)", {.required = true}),
       custom<BodyDraft>(
           "material", "string", "required", "a key of `materials`", "the body's material", {{"type", "string"}},
@@ -503,35 +485,18 @@ Table<BodyDraft> body_table() {
         if (r.has("box") == r.has("prism"))
           throw input_error(fmt::format("{} needs exactly one shape: \"box\" or \"prism\"", r.path()));
       }),
+      object<BodyDraft>("box", box_table, "one of `box`, `prism`", "box filled with particles",
+                        {.present = [](const BodyDraft& d) { return d.body.shape == BodyShapeKind::Box; }}),
       object<BodyDraft>(
-          "box", box_table(), "one of `box`, `prism`", "box filled with particles",
-          [](ObjectReader& r, BodyDraft& d) {
-            if (!r.has("box")) return;
-            ObjectReader box = r.object("box");
-            read_fields(box, d, box_table());
-          },
-          [](const BodyDraft& d, Json& j) {
-            if (d.body.shape == BodyShapeKind::Box) j["box"] = write_fields(d, box_table());
-          },
-          {}, true),
-      object<BodyDraft>(
-          "prism", prism_table(), "one of `box`, `prism`", "a prism body: a polygon in the x-z plane extruded over y",
-          [](ObjectReader& r, BodyDraft& d) {
-            if (!r.has("prism")) return;
-            d.body.shape = BodyShapeKind::Prism;
-            ObjectReader prism = r.object("prism");
-            read_fields(prism, d, prism_table());
-            check_inside_grid(d.body, r.key_path("prism"), d.scene->scene);
-          },
-          [](const BodyDraft& d, Json& j) {
-            if (d.body.shape == BodyShapeKind::Prism) j["prism"] = write_fields(d, prism_table());
-          },
-          {}, true),
+          "prism", prism_table, "one of `box`, `prism`", "a prism body: a polygon in the x-z plane extruded over y",
+          {.begin = [](BodyDraft& d) { d.body.shape = BodyShapeKind::Prism; },
+           .end = [](ObjectReader& prism, BodyDraft& d) { check_inside_grid(d.body, prism.path(), d.scene->scene); },
+           .present = [](const BodyDraft& d) { return d.body.shape == BodyShapeKind::Prism; }}),
       integer<BodyDraft>("particles_per_cell", TALUS_AT(body.particles_per_cell), 1, 8, "n: n×n×n particles per cell"),
       vec3<BodyDraft>("velocity", TALUS_AT(body.velocity), "initial velocity", {.type = "[vx, vy, vz]"}),
-  };
-  return t;
+  }};
 }
+constexpr auto body_table = &table_of<BodyDraft, make_body_table>;
 
 // ---- boundaries, output, guards, diagnostics ----------------------------------------------------
 
@@ -558,7 +523,7 @@ WallSpec read_wall(const Json& j, const std::string& path) {
   return w;
 }
 
-Table<SceneDraft> boundaries_table() {
+Table<SceneDraft> make_boundaries_table() {
   const Json wall_schema = {
       {"oneOf",
        Json::array({{{"type", "string"}, {"enum", {"open", "slip", "fixed"}}},
@@ -592,10 +557,10 @@ Table<SceneDraft> boundaries_table() {
     }
   return t;
 }
+constexpr auto boundaries_table = &table_of<SceneDraft, make_boundaries_table>;
 
-Table<SceneDraft> output_table() {
-  Table<SceneDraft> t;
-  t.fields = {
+Table<SceneDraft> make_output_table() {
+  return {{
       number<SceneDraft>("frame_interval", TALUS_AT(scene.output.frame_interval), {0.0, kHuge},
                          "seconds between particle frames (0: first and last only)"),
       number<SceneDraft>("history_interval", TALUS_AT(scene.output.history_interval), {0.0, kHuge},
@@ -606,14 +571,13 @@ Table<SceneDraft> output_table() {
       number<SceneDraft>("checkpoint_interval", TALUS_AT(scene.output.checkpoint_interval), {0.0, kHuge},
                          "seconds between checkpoints (`checkpoint.h5`, 0: none; SIGINT/SIGTERM and instabilities still "
                          "write one); resume with `talus run SCENE --restart FILE` (docs/reliability.md)"),
-  };
-  return t;
+  }};
 }
+constexpr auto output_table = &table_of<SceneDraft, make_output_table>;
 
 // Instability guards (docs/reliability.md).
-Table<SceneDraft> guards_table() {
-  Table<SceneDraft> t;
-  t.fields = {
+Table<SceneDraft> make_guards_table() {
+  return {{
       number<SceneDraft>("max_step_displacement", TALUS_AT(scene.guards.max_step_displacement), {0.0, 2.0, true},
                          "cells a particle may move in one step; more stops the run as a CFL breach"),
       number<SceneDraft>("energy_growth_factor", TALUS_AT(scene.guards.energy_growth_factor), {0.0, kHuge, true},
@@ -622,9 +586,9 @@ Table<SceneDraft> guards_table() {
       integer<SceneDraft>("snapshot_interval", TALUS_AT(scene.guards.snapshot_interval), 0, 1000000,
                           "steps between in-memory copies of the last good state, written as a frame and checkpoint "
                           "when a guard trips (0: none)"),
-  };
-  return t;
+  }};
 }
+constexpr auto guards_table = &table_of<SceneDraft, make_guards_table>;
 
 /// An optional number whose absence means something (RunoutSpec::has_gate, has_runout_plane).
 Field<SceneDraft> present_number(const char* key, double RunoutSpec::*value, bool RunoutSpec::*given,
@@ -641,9 +605,8 @@ Field<SceneDraft> present_number(const char* key, double RunoutSpec::*value, boo
       });
 }
 
-Table<SceneDraft> runout_table() {
-  Table<SceneDraft> t;
-  t.fields = {
+Table<SceneDraft> make_runout_table() {
+  return {{
       number<SceneDraft>("front_quantile", TALUS_AT(scene.runout.front_quantile), {0.5, 1.0},
                          "front = the s below which this share of the mass lies"),
       number<SceneDraft>("tail_quantile", TALUS_AT(scene.runout.tail_quantile), {0.0, 0.5},
@@ -666,47 +629,28 @@ Table<SceneDraft> runout_table() {
                                             r.key_path("deposit_cell"), rs.deposit_cell, raster_cells));
           },
           [](const SceneDraft& d, Json& j) { j["deposit_cell"] = d.scene.runout.deposit_cell; }),
-  };
-  return t;
+  }};
 }
+constexpr auto runout_table = &table_of<SceneDraft, make_runout_table>;
 
 // "diagnostics": {"runout": {...}} (docs/flume.md "Runout diagnostics").
-Table<SceneDraft> diagnostics_table() {
-  Table<SceneDraft> t;
-  t.fields = {
+Table<SceneDraft> make_diagnostics_table() {
+  return {{
       object<SceneDraft>(
-          "runout", runout_table(), "absent (off)",
+          "runout", runout_table, "absent (off)",
           "runout diagnostics along the flume coordinate s (arc length of the terrain, x when flat): `runout.csv`, "
           "`runout.json`, `deposit.csv` (docs/flume.md §4)",
-          [](ObjectReader& r, SceneDraft& d) {
-            if (!r.has("runout")) return;
-            d.scene.runout.enabled = true;
-            ObjectReader runout = r.object("runout");
-            read_fields(runout, d, runout_table());
-          },
-          [](const SceneDraft& d, Json& j) {
-            if (d.scene.runout.enabled) j["runout"] = write_fields(d, runout_table());
-          }),
-  };
-  return t;
+          {.begin = [](SceneDraft& d) { d.scene.runout.enabled = true; },
+           .present = [](const SceneDraft& d) { return d.scene.runout.enabled; }}),
+  }};
 }
+constexpr auto diagnostics_table = &table_of<SceneDraft, make_diagnostics_table>;
 
 // ---- the top level -------------------------------------------------------------------------------
 
 /// A section read with its own table; `optional`: the section may be left out.
-Field<SceneDraft> section(const char* key, Table<SceneDraft> (*table)(), bool optional, const std::string& doc) {
-  return object<SceneDraft>(
-      key, table(), optional ? "" : "required", doc,
-      [key, table, optional](ObjectReader& r, SceneDraft& d) {
-        if (optional && !r.has(key)) return;
-        ObjectReader section = r.object(key);
-        read_fields(section, d, table());
-      },
-      [key, table](const SceneDraft& d, Json& j) {
-        Json members = write_fields(d, table());
-        if (!members.empty()) j[key] = members;
-      },
-      {.required = !optional}, false);
+Field<SceneDraft> section(const char* key, const Table<SceneDraft>& (*table)(), bool optional, const std::string& doc) {
+  return object<SceneDraft>(key, table, optional ? "" : "required", doc, {}, {.required = !optional}, false);
 }
 
 void resolve_smoothing_bodies(SceneDraft& d) {
@@ -727,8 +671,19 @@ void resolve_smoothing_bodies(SceneDraft& d) {
   }
 }
 
+/// A required key that holds many entries of one table (materials by name, bodies in a list): no
+/// docs row of its own; the entries' rows appear under `entry` ("<name>", "[i]").
+template <class M>
+Field<SceneDraft> entries(Field<SceneDraft> f, const Table<M>& table, const std::string& entry) {
+  f.info.required = true;
+  f.info.fallback = "required";
+  f.info.row = false;
+  f.info.member_rows = doc_rows(table, entry);
+  return f;
+}
+
 Field<SceneDraft> materials_field() {
-  const Table<MaterialSpec> materials = material_table();
+  const Table<MaterialSpec>& materials = material_table();
   Field<SceneDraft> f = custom<SceneDraft>(
       "materials", "object", "required", "at least one", "the materials, by name",
       {{"type", "object"}, {"minProperties", 1}, {"additionalProperties", schema_of(materials)}},
@@ -747,18 +702,14 @@ Field<SceneDraft> materials_field() {
         if (d.scene.materials.empty()) throw input_error("materials must define at least one material");
       },
       [](const SceneDraft& d, Json& j) {
-        Json mats = Json::object();
-        for (const MaterialSpec& m : d.scene.materials) mats[m.name] = write_fields(m, material_table());
-        j["materials"] = mats;
-      },
-      {.required = true});
-  f.info.row = false;
-  f.info.member_rows = doc_rows(materials, "<name>");
-  return f;
+        j["materials"] = Json::object();
+        for (const MaterialSpec& m : d.scene.materials) j["materials"][m.name] = write_fields(m, material_table());
+      });
+  return entries(std::move(f), materials, "<name>");
 }
 
 Field<SceneDraft> bodies_field() {
-  const Table<BodyDraft> bodies = body_table();
+  const Table<BodyDraft>& bodies = body_table();
   Json body_schema = schema_of(bodies);
   body_schema["oneOf"] = Json::array({{{"required", {"box"}}}, {{"required", {"prism"}}}});
   Field<SceneDraft> f = custom<SceneDraft>(
@@ -778,19 +729,14 @@ Field<SceneDraft> bodies_field() {
         resolve_smoothing_bodies(d);
       },
       [](const SceneDraft& d, Json& j) {
-        Json bodies = Json::array();
-        for (const BodySpec& body : d.scene.bodies) bodies.push_back(write_fields(BodyDraft{body, &d}, body_table()));
-        j["bodies"] = bodies;
-      },
-      {.required = true});
-  f.info.row = false;
-  f.info.member_rows = doc_rows(bodies, "[i]");
-  return f;
+        j["bodies"] = Json::array();
+        for (const BodySpec& b : d.scene.bodies) j["bodies"].push_back(write_fields(BodyDraft{b, &d}, body_table()));
+      });
+  return entries(std::move(f), bodies, "[i]");
 }
 
 Table<SceneDraft> make_scene_table() {
-  Table<SceneDraft> t;
-  t.fields = {
+  return {{
       custom<SceneDraft>(
           "comment", "any", "", "", "a note; ignored", Json::object(), [](ObjectReader& r, SceneDraft&) { r.allow("comment"); },
           [](const SceneDraft&, Json&) {}),
@@ -810,8 +756,7 @@ Table<SceneDraft> make_scene_table() {
       section("output", output_table, true, "what a run writes, and how often"),
       section("guards", guards_table, true, "instability guards (docs/reliability.md)"),
       section("diagnostics", diagnostics_table, true, "diagnostics written beside the frames"),
-  };
-  return t;
+  }};
 }
 
 }  // namespace

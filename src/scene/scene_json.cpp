@@ -3,8 +3,6 @@
 #include "scene_fields.hpp"
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
 namespace talus {
 
@@ -49,11 +47,9 @@ double particle_count_bound(const Scene& s) {
 }
 
 Scene read_scene_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw input_error(fmt::format("cannot open scene file {}", path));
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse_scene(text.str(), path);
+  const auto text = scene_detail::read_text_file(path);
+  if (!text) throw input_error(fmt::format("cannot open scene file {}", path));
+  return parse_scene(*text, path);
 }
 
 nlohmann::json scene_to_json(const Scene& s) {
