@@ -35,9 +35,9 @@ std::vector<double> axis_points(double origin, double h, int n, double lo, doubl
 /// the body's, so the test does not depend on y: counting can multiply by the number of ys.
 class BodyCandidates {
  public:
-  BodyCandidates(const Scene& scene, std::size_t b, const ProfileTerrain& bed)
-      : scene_(scene), b_(b), body_(scene.bodies[b]), bed_(bed), terrain_(scene.grid.has_terrain()) {
-    const GridGeometry& g = scene.grid;
+  BodyCandidates(const GridGeometry& grid, const BodySpec& body, std::size_t b, const ProfileTerrain& bed)
+      : grid_(grid), b_(b), body_(body), bed_(bed), terrain_(grid.has_terrain()) {
+    const GridGeometry& g = grid;
     const int n = body_.particles_per_cell;
     xs_ = axis_points(g.origin[0], g.h, n, body_.box_min[0], body_.box_max[0]);
     ys_ = axis_points(g.origin[1], g.h, n, body_.box_min[1], body_.box_max[1]);
@@ -73,7 +73,7 @@ class BodyCandidates {
           else ++in_xz;
         }
       }
-    const double spacing = scene_.grid.h / body_.particles_per_cell;
+    const double spacing = grid_.h / body_.particles_per_cell;
     const bool box = body_.shape == BodyShapeKind::Box;
     if (above_top)
       throw input_error(fmt::format(
@@ -109,7 +109,7 @@ class BodyCandidates {
     return inside(px, py, third, zb) && !(terrain_ && third >= w_top_);
   }
 
-  const Scene& scene_;
+  const GridGeometry& grid_;
   std::size_t b_;
   const BodySpec& body_;
   const ProfileTerrain& bed_;
@@ -120,26 +120,24 @@ class BodyCandidates {
 
 }  // namespace
 
-std::size_t count_particles(const Scene& scene) {
-  const ProfileTerrain bed = grid_bed(scene.grid);
+std::size_t count_particles(const GridGeometry& grid, const std::vector<BodySpec>& bodies) {
+  const ProfileTerrain bed = grid_bed(grid);
   std::size_t total = 0;
-  for (std::size_t b = 0; b < scene.bodies.size(); ++b) total += BodyCandidates(scene, b, bed).count();
+  for (std::size_t b = 0; b < bodies.size(); ++b) total += BodyCandidates(grid, bodies[b], b, bed).count();
   return total;
 }
 
-ParticleStore seed_particles(const Scene& scene) {
-  const ProfileTerrain bed = grid_bed(scene.grid);
-  std::vector<std::size_t> counts;
-  std::size_t total = 0;
-  for (std::size_t b = 0; b < scene.bodies.size(); ++b) total += counts.emplace_back(BodyCandidates(scene, b, bed).count());
+ParticleStore seed_particles(const GridGeometry& grid, const std::vector<BodySpec>& bodies,
+                             const std::vector<double>& material_density) {
   ParticleStore store;
-  store.reserve(total);  // exact: no array grows past its final size while seeding
+  store.reserve(count_particles(grid, bodies));  // exact: no array grows past its final size while seeding
+  const ProfileTerrain bed = grid_bed(grid);
   std::int64_t next_id = 0;
-  for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
-    const BodySpec& body = scene.bodies[b];
-    const double volume = std::pow(scene.grid.h / body.particles_per_cell, 3);
-    const double mass = scene.materials[body.material].density * volume;
-    BodyCandidates(scene, b, bed).for_each_point([&](const Vec3& position) {
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    const BodySpec& body = bodies[b];
+    const double volume = std::pow(grid.h / body.particles_per_cell, 3);
+    const double mass = material_density[body.material] * volume;
+    BodyCandidates(grid, body, b, bed).for_each_point([&](const Vec3& position) {
       store.add(next_id++, position, body.velocity, mass, volume, static_cast<std::uint16_t>(b));
     });
   }

@@ -1,5 +1,7 @@
 #include "talus/scene/scene.hpp"
 
+#include "talus/particles/seeding.hpp"
+
 #include <fmt/core.h>
 
 #include <algorithm>
@@ -60,23 +62,13 @@ const char* to_string(ConeFit cone) {
   return "?";
 }
 
-const char* to_string(BodyShapeKind shape) {
-  switch (shape) {
-    case BodyShapeKind::Box: return "box";
-    case BodyShapeKind::Prism: return "prism";
-  }
-  return "?";
+ParticleStore seed_particles(const Scene& scene) {
+  std::vector<double> densities;
+  for (const MaterialSpec& m : scene.materials) densities.push_back(m.density);
+  return seed_particles(scene.grid, scene.bodies, densities);
 }
 
-const char* to_string(WallType type) {
-  switch (type) {
-    case WallType::Open: return "open";
-    case WallType::Slip: return "slip";
-    case WallType::Fixed: return "fixed";
-    case WallType::Friction: return "friction";
-  }
-  return "?";
-}
+std::size_t count_particles(const Scene& scene) { return count_particles(scene.grid, scene.bodies); }
 
 std::vector<std::string> scene_warnings(const Scene& scene) {
   std::vector<std::string> warnings;

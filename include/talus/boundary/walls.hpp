@@ -17,8 +17,8 @@
 // slip removes the normal component, fixed all. The z+ face follows the terrain too (normal -n).
 // The x and y faces are vertical planes on any grid (cells keep vertical sides), so they stay
 // axis-aligned.
+#include "talus/boundary/wall_spec.hpp"
 #include "talus/grid/grid.hpp"
-#include "talus/scene/scene.hpp"
 
 #include <array>
 #include <cmath>
