@@ -63,7 +63,7 @@ struct ParticleStore {
   /// Arrays a scene does not use are visited too, empty; callers skip those.
   /// The checkpoint (io/checkpoint.cpp) and the finite-value guard (solver/stability_guards.cpp)
   /// walk the particles through this visitor only: A NEW PER-PARTICLE ARRAY IS CHECKPOINTED AND
-  /// GUARDED BY ADDING ONE LINE HERE (and to permute() and bytes()).
+  /// GUARDED BY ADDING ONE LINE HERE (permute() and bytes() walk it too).
   template <class F>
   void for_each_double_array(F&& f) {
     visit_double_arrays(*this, f);
