@@ -30,8 +30,8 @@ std::vector<double> axis_points(double origin, double h, int n, double lo, doubl
 /// each still carries the volume (h/n)^3. A physical box keeps the points inside it: the bed clips a
 /// box that reaches below it (candidates exist only above the bed), and a box with no point above
 /// the bed is an input error. A terrain-frame box reads its third coordinate as w directly.
-void seed_on_terrain(const GridGeometry& g, const BodySpec& body, std::size_t b, double density,
-                     const ProfileTerrain& bed, ParticleStore& store, std::int64_t& next_id) {
+void seed_on_terrain(const GridGeometry& g, const BodySpec& body, std::size_t b, const std::string& label,
+                     double density, const ProfileTerrain& bed, ParticleStore& store, std::int64_t& next_id) {
   const double h = g.h;
   const int n = body.particles_per_cell;
   const double w_top = g.origin[2] + g.cells[2] * h;
@@ -66,20 +66,20 @@ void seed_on_terrain(const GridGeometry& g, const BodySpec& body, std::size_t b,
   }
   if (above_top)
     throw input_error(fmt::format(
-        "bodies[{}] (\"{}\") reaches above the grid's top (w = {} above the bed: grid.origin[2] + grid.size[2] with "
+        "{} (\"{}\") reaches above the grid's top (w = {} above the bed: grid.origin[2] + grid.size[2] with "
         "grid.terrain) over part of its x range",
-        b, body.name, w_top));
+        label, body.name, w_top));
   if (store.size() == first)
     throw input_error(fmt::format(
-        "bodies[{}]{} (\"{}\") holds no particle: it lies below the bed (grid.terrain) or is thinner than the "
+        "{} (\"{}\") holds no particle: it lies below the bed (grid.terrain) or is thinner than the "
         "particle spacing h/n = {}",
-        b, body.shape == BodyShapeKind::Prism ? ".prism" : "", body.name, h / n));
+        label, body.name, h / n));
 }
 
 }  // namespace
 
 ParticleStore seed_particles(const GridGeometry& grid, const std::vector<BodySpec>& bodies,
-                             const std::vector<double>& material_density) {
+                             const std::vector<double>& material_density, const BodyLabel& label) {
   ParticleStore store;
   const double h = grid.h;
   std::int64_t next_id = 0;
@@ -88,19 +88,19 @@ ParticleStore seed_particles(const GridGeometry& grid, const std::vector<BodySpe
     const BodySpec& body = bodies[b];
     const double density = material_density.at(body.material);
     const int n = body.particles_per_cell;
+    const std::string name = label ? label(b) : fmt::format("body {}", b);
     if (grid.has_terrain()) {
-      seed_on_terrain(grid, body, b, density, bed, store, next_id);
+      seed_on_terrain(grid, body, b, name, density, bed, store, next_id);
       continue;
     }
     std::array<std::vector<double>, 3> axes;
     for (int d = 0; d < 3; ++d)
       axes[d] = axis_points(grid.origin[d], h, n, body.box_min[d], body.box_max[d]);
     const bool box = body.shape == BodyShapeKind::Box;
-    const std::string key = box ? fmt::format("bodies[{}]", b) : fmt::format("bodies[{}].{}", b, to_string(body.shape));
     if (axes[0].empty() || axes[1].empty() || axes[2].empty())
       throw input_error(fmt::format(
           "{} (\"{}\") holds no particle: its {} is thinner than the particle spacing h/n = {} "
-          "along some axis", key, body.name, box ? "box" : "bounding box", h / n));
+          "along some axis", name, body.name, box ? "box" : "bounding box", h / n));
     const double volume = std::pow(h / n, 3);
     const double mass = density * volume;
     const std::int64_t first_id = next_id;
@@ -114,7 +114,7 @@ ParticleStore seed_particles(const GridGeometry& grid, const std::vector<BodySpe
         }
     if (next_id == first_id)
       throw input_error(fmt::format("{} (\"{}\") holds no particle: no particle point (spacing h/n = {}) "
-                                    "lies inside it", key, body.name, h / n));
+                                    "lies inside it", name, body.name, h / n));
   }
   return store;
 }

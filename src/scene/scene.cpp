@@ -53,7 +53,11 @@ const char* to_string(ConeFit cone) {
 ParticleStore seed_particles(const Scene& scene) {
   std::vector<double> densities;
   for (const MaterialSpec& m : scene.materials) densities.push_back(m.density);
-  return seed_particles(scene.grid, scene.bodies, densities);
+  // the body's key path: bodies[i], or bodies[i].prism for a prism
+  return seed_particles(scene.grid, scene.bodies, densities, [&scene](std::size_t b) {
+    const BodySpec& body = scene.bodies[b];
+    return fmt::format("bodies[{}]{}", b, body.shape == BodyShapeKind::Box ? "" : std::string(".") + to_string(body.shape));
+  });
 }
 
 std::vector<std::string> scene_warnings(const Scene& scene) {
