@@ -50,14 +50,22 @@ const char* to_string(ConeFit cone) {
   return "?";
 }
 
+namespace {
+
+// How seeding names a body in its errors: its key path, bodies[i] or bodies[i].prism.
+BodyLabel body_label(const Scene& scene) {
+  return [&scene](std::size_t b) {
+    const BodySpec& body = scene.bodies[b];
+    return fmt::format("bodies[{}]{}", b, body.shape == BodyShapeKind::Box ? "" : std::string(".") + to_string(body.shape));
+  };
+}
+
+}  // namespace
+
 ParticleStore seed_particles(const Scene& scene) {
   std::vector<double> densities;
   for (const MaterialSpec& m : scene.materials) densities.push_back(m.density);
-  // the body's key path: bodies[i], or bodies[i].prism for a prism
-  return seed_particles(scene.grid, scene.bodies, densities, [&scene](std::size_t b) {
-    const BodySpec& body = scene.bodies[b];
-    return fmt::format("bodies[{}]{}", b, body.shape == BodyShapeKind::Box ? "" : std::string(".") + to_string(body.shape));
-  });
+  return seed_particles(scene.grid, scene.bodies, densities, body_label(scene));
 }
 
 std::vector<std::string> scene_warnings(const Scene& scene) {
