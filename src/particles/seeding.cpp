@@ -35,8 +35,8 @@ std::vector<double> axis_points(double origin, double h, int n, double lo, doubl
 /// the body's, so the test does not depend on y: counting can multiply by the number of ys.
 class BodyCandidates {
  public:
-  BodyCandidates(const GridGeometry& grid, const BodySpec& body, std::size_t b, const ProfileTerrain& bed)
-      : grid_(grid), b_(b), body_(body), bed_(bed), terrain_(grid.has_terrain()) {
+  BodyCandidates(const GridGeometry& grid, const BodySpec& body, std::string label, const ProfileTerrain& bed)
+      : grid_(grid), label_(std::move(label)), body_(body), bed_(bed), terrain_(grid.has_terrain()) {
     const GridGeometry& g = grid;
     const int n = body_.particles_per_cell;
     xs_ = axis_points(g.origin[0], g.h, n, body_.box_min[0], body_.box_max[0]);
@@ -60,7 +60,7 @@ class BodyCandidates {
   }
 
   /// The number of points the body holds. Throws the input errors of a body that reaches above a
-  /// terrain grid or holds no particle, naming the body.
+  /// terrain grid or holds no particle, naming the body by its label.
   std::size_t count() const {
     std::size_t in_xz = 0;
     bool above_top = false;
@@ -77,22 +77,21 @@ class BodyCandidates {
     const bool box = body_.shape == BodyShapeKind::Box;
     if (above_top)
       throw input_error(fmt::format(
-          "bodies[{}] (\"{}\") reaches above the grid's top (w = {} above the bed: grid.origin[2] + grid.size[2] with "
+          "{} (\"{}\") reaches above the grid's top (w = {} above the bed: grid.origin[2] + grid.size[2] with "
           "grid.terrain) over part of its x range",
-          b_, body_.name, w_top_));
+          label_, body_.name, w_top_));
     if (terrain_ && in_xz == 0)
       throw input_error(fmt::format(
-          "bodies[{}]{} (\"{}\") holds no particle: it lies below the bed (grid.terrain) or is thinner than the "
+          "{} (\"{}\") holds no particle: it lies below the bed (grid.terrain) or is thinner than the "
           "particle spacing h/n = {}",
-          b_, box ? "" : ".prism", body_.name, spacing));
-    const std::string key = box ? fmt::format("bodies[{}]", b_) : fmt::format("bodies[{}].{}", b_, to_string(body_.shape));
+          label_, body_.name, spacing));
     if (xs_.empty() || ys_.empty() || third_.empty())
       throw input_error(fmt::format(
           "{} (\"{}\") holds no particle: its {} is thinner than the particle spacing h/n = {} "
-          "along some axis", key, body_.name, box ? "box" : "bounding box", spacing));
+          "along some axis", label_, body_.name, box ? "box" : "bounding box", spacing));
     if (in_xz == 0)
       throw input_error(fmt::format("{} (\"{}\") holds no particle: no particle point (spacing h/n = {}) "
-                                    "lies inside it", key, body_.name, spacing));
+                                    "lies inside it", label_, body_.name, spacing));
     return in_xz * ys_.size();
   }
 
@@ -110,7 +109,7 @@ class BodyCandidates {
   }
 
   const GridGeometry& grid_;
-  std::size_t b_;
+  std::string label_;
   const BodySpec& body_;
   const ProfileTerrain& bed_;
   bool terrain_;
@@ -118,26 +117,29 @@ class BodyCandidates {
   std::vector<double> xs_, ys_, third_;
 };
 
+
+std::string name_of(const BodyLabel& label, std::size_t b) { return label ? label(b) : fmt::format("body {}", b); }
+
 }  // namespace
 
-std::size_t count_particles(const GridGeometry& grid, const std::vector<BodySpec>& bodies) {
+std::size_t count_particles(const GridGeometry& grid, const std::vector<BodySpec>& bodies, const BodyLabel& label) {
   const ProfileTerrain bed = grid_bed(grid);
   std::size_t total = 0;
-  for (std::size_t b = 0; b < bodies.size(); ++b) total += BodyCandidates(grid, bodies[b], b, bed).count();
+  for (std::size_t b = 0; b < bodies.size(); ++b) total += BodyCandidates(grid, bodies[b], name_of(label, b), bed).count();
   return total;
 }
 
 ParticleStore seed_particles(const GridGeometry& grid, const std::vector<BodySpec>& bodies,
-                             const std::vector<double>& material_density) {
+                             const std::vector<double>& material_density, const BodyLabel& label) {
   ParticleStore store;
-  store.reserve(count_particles(grid, bodies));  // exact: no array grows past its final size while seeding
+  store.reserve(count_particles(grid, bodies, label));  // exact: no array grows past its final size while seeding
   const ProfileTerrain bed = grid_bed(grid);
   std::int64_t next_id = 0;
   for (std::size_t b = 0; b < bodies.size(); ++b) {
     const BodySpec& body = bodies[b];
     const double volume = std::pow(grid.h / body.particles_per_cell, 3);
-    const double mass = material_density[body.material] * volume;
-    BodyCandidates(grid, body, b, bed).for_each_point([&](const Vec3& position) {
+    const double mass = material_density.at(body.material) * volume;
+    BodyCandidates(grid, body, name_of(label, b), bed).for_each_point([&](const Vec3& position) {
       store.add(next_id++, position, body.velocity, mass, volume, static_cast<std::uint16_t>(b));
     });
   }

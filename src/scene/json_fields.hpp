@@ -151,6 +151,19 @@ class ObjectReader {
   std::set<std::string> used_;
 };
 
+/// Runs a lower layer's check. Its domain error names the value as that layer knows it
+/// ("points[1]: ...", "friction_angle = 95 ..."); here the key path goes in front
+/// ("grid.terrain.points[1]: ..."), so only the scene layer knows the file's key paths.
+template <class Check>
+void with_key_path(const std::string& prefix, Check&& check) {
+  try {
+    check();
+  } catch (const Error& e) {
+    if (e.kind() != Error::Kind::Input) throw;
+    throw input_error(prefix + e.what());
+  }
+}
+
 /// The whole text of a file; nothing when it cannot be opened (the caller names the file's role).
 inline std::optional<std::string> read_text_file(const std::string& path) {
   std::ifstream in(path);

@@ -62,13 +62,25 @@ const char* to_string(ConeFit cone) {
   return "?";
 }
 
+namespace {
+
+// How seeding names a body in its errors: its key path, bodies[i] or bodies[i].prism.
+BodyLabel body_label(const Scene& scene) {
+  return [&scene](std::size_t b) {
+    const BodySpec& body = scene.bodies[b];
+    return fmt::format("bodies[{}]{}", b, body.shape == BodyShapeKind::Box ? "" : std::string(".") + to_string(body.shape));
+  };
+}
+
+}  // namespace
+
 ParticleStore seed_particles(const Scene& scene) {
   std::vector<double> densities;
   for (const MaterialSpec& m : scene.materials) densities.push_back(m.density);
-  return seed_particles(scene.grid, scene.bodies, densities);
+  return seed_particles(scene.grid, scene.bodies, densities, body_label(scene));
 }
 
-std::size_t count_particles(const Scene& scene) { return count_particles(scene.grid, scene.bodies); }
+std::size_t count_particles(const Scene& scene) { return count_particles(scene.grid, scene.bodies, body_label(scene)); }
 
 std::vector<std::string> scene_warnings(const Scene& scene) {
   std::vector<std::string> warnings;

@@ -129,8 +129,9 @@ Table<SceneDraft> make_grid_table() {
           {.required = true}),
       object<SceneDraft>(
           "terrain", terrain_table, "none (flat grid)", "the bed of a terrain-following grid",
-          {.end = [](ObjectReader&, SceneDraft& d) {
-             (void)TerrainProfile(d.scene.grid.terrain);  // validates: a graph z_b(x), transitions that fit
+          {.end = [](ObjectReader& terrain, SceneDraft& d) {
+             // validates: a graph z_b(x), transitions that fit
+             with_key_path(terrain.path() + ".", [&] { (void)TerrainProfile(d.scene.grid.terrain); });
            },
            .present = [](const SceneDraft& d) { return d.scene.grid.has_terrain(); }},
           {}, false),
@@ -311,7 +312,7 @@ Table<MaterialSpec> make_material_table() {
            [](ObjectReader& r, M& m) {
              m.drucker_prager.young = m.elastic.young;
              m.drucker_prager.poisson = m.elastic.poisson;
-             (void)DruckerPrager(m.drucker_prager, r.path() + ".");  // throws with the key path and the range
+             with_key_path(r.path() + ".", [&] { (void)DruckerPrager(m.drucker_prager); });
            },
            dp),
        number<M>("flowing_plastic_strain", TALUS_AT(granular.flowing_plastic_strain), {0.0, kHuge},
@@ -774,7 +775,7 @@ const Table<DruckerPragerParameters>& drucker_prager_table() {
         {number<P>("young", TALUS_AT(young), {0.0, kHuge, true}, "Young's modulus E [Pa]", {.required = true}),
          number<P>("poisson", TALUS_AT(poisson), {0.0, 0.5, false, true}, "Poisson's ratio ν", {.required = true})},
         drucker_prager_strength_fields(),
-        {check<P>([](ObjectReader& r, P& p) { (void)DruckerPrager(p, r.path() + "."); })},
+        {check<P>([](ObjectReader& r, P& p) { with_key_path(r.path() + ".", [&] { (void)DruckerPrager(p); }); })},
     });
     return t;
   }();

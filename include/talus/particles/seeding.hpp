@@ -6,17 +6,23 @@
 #include "talus/particles/body_spec.hpp"
 #include "talus/particles/particle_store.hpp"
 
+#include <cstddef>
+#include <functional>
+#include <string>
 #include <vector>
 
 namespace talus {
 
+/// How an error names body b (default "body b"; the scene gives its key path, "bodies[b]").
+using BodyLabel = std::function<std::string(std::size_t body)>;
+
 /// Seed every body on the grid; `material_density[body.material]` is the body's initial density.
-/// Throws input_error for a body that holds no particle, naming it as bodies[i].
+/// Throws input_error for a body that holds no particle, naming it by `label`.
 ParticleStore seed_particles(const GridGeometry& grid, const std::vector<BodySpec>& bodies,
-                             const std::vector<double>& material_density);
+                             const std::vector<double>& material_density, const BodyLabel& label = {});
 
 /// The number of particles seed_particles would make, with the same input errors, without
 /// allocating them: a scene's size is known before its memory is (solver/memory_estimate.hpp).
-std::size_t count_particles(const GridGeometry& grid, const std::vector<BodySpec>& bodies);
+std::size_t count_particles(const GridGeometry& grid, const std::vector<BodySpec>& bodies, const BodyLabel& label = {});
 
 }  // namespace talus
