@@ -35,6 +35,8 @@ struct BenchOptions {
   int steps = 20;
   bool stream = false;  // also measure the STREAM triad bandwidth at the same thread count
   std::string json_path;
+  std::string record_path;  // --record-work: the work-distribution record of extra steps
+  int record_steps = 3;
 };
 
 /// The STREAM triad a[i] = b[i] + s c[i] (McCalpin) over three arrays of 2^24 doubles (128 MiB
@@ -183,6 +185,8 @@ void start_in_simple_shear(Solver& solver) {
   }
 }
 
+void record_work(Solver& solver, const BenchOptions& o, const nlohmann::json& bench);
+
 void run_bench(const BenchOptions& o) {
   refuse_unavailable(o);
   if (o.threads > 0) omp_set_num_threads(o.threads);
@@ -275,6 +279,30 @@ void run_bench(const BenchOptions& o) {
     if (!out) throw io_error(fmt::format("cannot write {}", o.json_path));
     out << j.dump(2) << "\n";
   }
+  if (!o.record_path.empty()) record_work(solver, o, j);
+}
+
+/// --record-work: `record_steps` more steps after the timed ones, recorded region by region and
+/// block by block (solver/work_recorder.hpp), and the fork/join cost of an empty parallel loop at
+/// 1..max(threads, cores) threads; written as JSON for tools/scaling_model.py. The timed figures
+/// above come from the unrecorded steps.
+void record_work(Solver& solver, const BenchOptions& o, const nlohmann::json& bench) {
+  WorkRecorder recorder(o.record_steps);
+  solver.record_work(&recorder);
+  for (int s = 0; s < o.record_steps; ++s) solver.step();
+  solver.record_work(nullptr);
+  const std::vector<double> fork_join = WorkRecorder::measure_fork_join(std::max(omp_get_max_threads(), omp_get_num_procs()));
+  nlohmann::json meta;
+  meta["source"] = "talus bench";
+  meta["bench"] = bench;
+  meta["threads"] = omp_get_max_threads();
+  meta["cpu"] = cpu_model();
+  meta["block_cells"] = solver.cell_sort().block_cells();
+  meta["fork_join_seconds"] = fork_join;  // index = thread count (0 unused)
+  std::ofstream out(o.record_path);
+  if (!out) throw io_error(fmt::format("cannot write {}", o.record_path));
+  out << recorder.to_json(meta).dump() << "\n";
+  fmt::print("  work record: {} steps, {}\n", recorder.steps().size(), o.record_path);
 }
 
 }  // namespace
@@ -296,6 +324,12 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("--threads", o->threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)")->check(CLI::Range(1, 4096));
   cmd->add_option("--steps", o->steps, "Timed steps (after one untimed step)")->check(CLI::Range(1, 1000000))->capture_default_str();
   cmd->add_option("--json", o->json_path, "Also write the results as JSON to this file");
+  cmd->add_option("--record-work", o->record_path,
+                  "Also record the work of every block and parallel region for --record-steps more steps, as JSON "
+                  "(tools/scaling_model.py)");
+  cmd->add_option("--record-steps", o->record_steps, "Steps recorded by --record-work")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
   cmd->add_flag("--stream", o->stream, "Also measure the STREAM triad memory bandwidth at the same thread count");
   cmd->callback([o]() { run_bench(*o); });
 }

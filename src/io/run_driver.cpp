@@ -300,10 +300,16 @@ RunSummary run_scene(Solver& solver, const RunOptions& options) {
   auto elapsed = [&]() { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   SignalCatcher signals(options.handle_signals);
 
+  solver.record_work(options.recorder);
+  double solver_seconds = 0.0;  // with a recorder: the steps' time, the rest of the loop apart
   while (!solver.finished()) {
     bool wrote = false, snapshot_due = false;
+    const std::size_t recorded_before = options.recorder ? options.recorder->steps().size() : 0;
+    const auto step_start = std::chrono::steady_clock::now();
+    auto step_end = step_start;
     try {
       solver.step();
+      step_end = std::chrono::steady_clock::now();
       const bool last = solver.finished();
       if (scene.output.history_interval <= 0.0 || solver.time() >= progress.next_history || last) {
         ScopedPhase timer(solver.phase_times(), Phase::Output);
@@ -345,6 +351,11 @@ RunSummary run_scene(Solver& solver, const RunOptions& options) {
       break;
     }
     const auto now = std::chrono::steady_clock::now();
+    if (options.recorder) {
+      solver_seconds += std::chrono::duration<double>(step_end - step_start).count();
+      if (options.recorder->steps().size() > recorded_before)
+        options.recorder->add_after_step("output and guards", std::chrono::duration<double>(now - step_end).count());
+    }
     const bool last = solver.finished();
     if (options.progress && (std::chrono::duration<double>(now - last_progress).count() >= options.progress_seconds || last)) {
       last_progress = now;
@@ -378,6 +389,10 @@ RunSummary run_scene(Solver& solver, const RunOptions& options) {
   summary.steps = solver.step_count();
   summary.time = solver.time();
   summary.wall_seconds = elapsed();
+  if (options.recorder) {
+    options.recorder->set_totals(solver.step_count() - first_step, solver_seconds, summary.wall_seconds - solver_seconds);
+    solver.record_work(nullptr);
+  }
   summary.final = solver.energies();
   return summary;
 }
