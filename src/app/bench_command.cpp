@@ -37,6 +37,7 @@ struct BenchOptions {
   std::string json_path;
   std::string record_path;  // --record-work: the work-distribution record of extra steps
   int record_steps = 3;
+  int block_cells = 0;  // solver.block_cells (0: automatic)
 };
 
 /// The STREAM triad a[i] = b[i] + s c[i] (McCalpin) over three arrays of 2^24 doubles (128 MiB
@@ -89,6 +90,7 @@ const char* const kSand = R"("model": "drucker_prager", "density": 1600.0, "youn
     "friction_angle": 40.0, "dilatancy_angle": 0.0, "cohesion": 10.0, "hardening_modulus": 0.0,
     "kinematic_fraction": 0.2)";
 constexpr double kBenchCell = 0.01;  // [m]
+int g_block_cells = 0;               // --block-cells, for every bench scene
 const char* const kElastic = R"("model": "linear_elastic", "density": 2000.0, "young": 1.0e7, "poisson": 0.3)";
 
 /// The scene of both benches: one box body of the bench material (2x2x2 particles per 1 cm cell)
@@ -101,13 +103,13 @@ Scene bench_scene(const std::string& name, double grid_xy, double grid_z, double
     "name": "{0}",
     "grid": {{ "origin": [0, 0, 0], "size": [{1}, {1}, {2}], "cell_size": {3} }},
     "time": {{ "end": 1.0e9, "courant": 0.3 }},
-    "solver": {{ "shape": "{4}", "scheme": "{5}"{6} }},
+    "solver": {{ "shape": "{4}", "scheme": "{5}", "block_cells": {13}{6} }},
     "materials": {{ "m": {{ {7} }} }},
     "bodies": [ {{ "name": "body", "material": "m", "box": {{ "min": [{8}, {8}, 0], "max": [{9}, {9}, {10}] }},
                   "particles_per_cell": 2{11} }} ],
     "boundaries": {{ "z-": {{ "type": "friction", "friction_coefficient": {12} }}, "z+": "open" }}
   }})", name, grid_xy, grid_z, kBenchCell, shape, scheme, mls_json, material == "dp" ? kSand : kElastic, body_lo,
-                                       body_hi, body_top, body_extra, floor_friction);
+                                       body_hi, body_top, body_extra, floor_friction, g_block_cells);
   return parse_scene(json, name);
 }
 
@@ -190,6 +192,7 @@ void record_work(Solver& solver, const BenchOptions& o, const nlohmann::json& be
 void run_bench(const BenchOptions& o) {
   refuse_unavailable(o);
   if (o.threads > 0) omp_set_num_threads(o.threads);
+  g_block_cells = o.block_cells;
   const std::string mls_json =
       o.mls == "off" ? std::string()
                      : fmt::format(R"(, "smoothing": {{ "basis": "{}", "radius_factor": {} }})", o.mls, o.mls_radius);
@@ -241,6 +244,7 @@ void run_bench(const BenchOptions& o) {
   if (o.mls != "off") j["mls_radius_factor"] = o.mls_radius;
   j["scheme"] = to_string(solver.scene().scheme);
   j["particles"] = n;
+  j["block_cells"] = solver.cell_sort().block_cells();
   j["steps"] = o.steps;
   j["threads"] = omp_get_max_threads();
   j["cpu"] = cpu_model();
@@ -327,6 +331,9 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("--record-work", o->record_path,
                   "Also record the work of every block and parallel region for --record-steps more steps, as JSON "
                   "(tools/scaling_model.py)");
+  cmd->add_option("--block-cells", o->block_cells, "solver.block_cells: colour-block edge in cells (0: automatic)")
+      ->check(CLI::Range(0, 64))
+      ->capture_default_str();
   cmd->add_option("--record-steps", o->record_steps, "Steps recorded by --record-work")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();

@@ -73,7 +73,7 @@ void add_run_command(CLI::App& app) {
                   "Continue from a checkpoint (e.g. runs/<name>/checkpoint.h5) of this same scene; output goes to the "
                   "checkpoint's folder unless --out is given");
   auto record_path = std::make_shared<std::string>();
-  auto record_interval = std::make_shared<int>(50);
+  auto record_interval = std::make_shared<int>(37);  // prime: does not alias with sort_interval (20) or output cadences
   cmd->add_option("--record-work", *record_path,
                   "Record the work of every block and parallel region of every --record-interval-th step, as JSON "
                   "(tools/scaling_model.py, docs/performance.md \"Scaling\")");

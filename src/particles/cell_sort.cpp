@@ -9,12 +9,18 @@
 
 namespace talus {
 
-CellSort::CellSort(const Grid& grid, int reach_low, int reach_high)
+CellSort::CellSort(const Grid& grid, int reach_low, int reach_high, int block_cells)
     : reach_low_(reach_low), reach_high_(reach_high) {
-  // Smallest block (a multiple of the 4-node tile) that leaves each particle at least one cell of
-  // drift between sorts.
+  // Automatic: the smallest block (a multiple of the 4-node tile) that leaves each particle at
+  // least one cell of drift between sorts. A requested size must leave that cell as well.
   block_cells_ = kTileEdge;
   while ((block_cells_ - reach_low - reach_high) / 2 < 1) block_cells_ += kTileEdge;
+  if (block_cells > 0) {
+    if ((block_cells - reach_low - reach_high) / 2 < 1)
+      throw input_error(fmt::format("colour blocks of {} cells leave no cell of slack for a support reaching {} + {} cells",
+                                    block_cells, reach_low, reach_high));
+    block_cells_ = block_cells;
+  }
   slack_ = (block_cells_ - reach_low - reach_high) / 2;
   const auto& g = grid.geometry();
   for (int d = 0; d < 3; ++d) {

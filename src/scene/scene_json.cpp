@@ -128,6 +128,12 @@ void read_solver(ObjectReader r, Scene& s, std::vector<std::string>& smoothing_b
             : shape == "bspline2" ? ShapeKind::BSpline2
                                   : ShapeKind::Linear;
   s.sort_interval = r.integer_or("sort_interval", s.sort_interval, 1, 1000000);
+  s.block_cells = r.integer_or("block_cells", s.block_cells, 0, 64);
+  // 2 x one cell of slack + the support's reach (linear: 0 below, 1 above; the others 1 and 2)
+  const int smallest_block = s.shape == ShapeKind::Linear ? 3 : 5;
+  if (s.block_cells != 0 && s.block_cells < smallest_block)
+    throw input_error(fmt::format("{} = {}: must be 0 (automatic) or {}..64 for the {} shape (two cells of slack + its reach)",
+                                  r.key_path("block_cells"), s.block_cells, smallest_block, shape));
   s.gravity_ramp_time = r.number_or("gravity_ramp_time", s.gravity_ramp_time, 0.0, kHuge);
   s.pic_fraction = r.number_or("pic_fraction", s.pic_fraction, 0.0, 1.0);
   if (r.has("smoothing")) read_smoothing(r.object("smoothing"), s, smoothing_bodies);
@@ -455,6 +461,7 @@ nlohmann::json scene_to_json(const Scene& s) {
   j["solver"] = {{"scheme", to_string(s.scheme)},
                  {"shape", to_string(s.shape)},
                  {"sort_interval", s.sort_interval},
+                 {"block_cells", s.block_cells},
                  {"gravity_ramp_time", s.gravity_ramp_time}, {"pic_fraction", s.pic_fraction}};
   {
     Json names = Json::array();

@@ -23,14 +23,15 @@ namespace talus {
 namespace {
 
 // The colour blocks must hold the widest support of the scene's shape function (cell_sort.hpp).
-CellSort make_cell_sort(const Grid& grid, ShapeKind shape) {
+CellSort make_cell_sort(const Grid& grid, ShapeKind shape, int block_cells) {
   switch (shape) {
-    case ShapeKind::Linear: return CellSort(grid, LinearShape::kReachLow, LinearShape::kReachHigh);
-    case ShapeKind::UGimp: return CellSort(grid, UGimpShape::kReachLow, UGimpShape::kReachHigh);
-    case ShapeKind::CpGimp: return CellSort(grid, CpGimpShape::kReachLow, CpGimpShape::kReachHigh);
-    case ShapeKind::BSpline2: return CellSort(grid, QuadraticBSplineShape::kReachLow, QuadraticBSplineShape::kReachHigh);
+    case ShapeKind::Linear: return CellSort(grid, LinearShape::kReachLow, LinearShape::kReachHigh, block_cells);
+    case ShapeKind::UGimp: return CellSort(grid, UGimpShape::kReachLow, UGimpShape::kReachHigh, block_cells);
+    case ShapeKind::CpGimp: return CellSort(grid, CpGimpShape::kReachLow, CpGimpShape::kReachHigh, block_cells);
+    case ShapeKind::BSpline2:
+      return CellSort(grid, QuadraticBSplineShape::kReachLow, QuadraticBSplineShape::kReachHigh, block_cells);
   }
-  return CellSort(grid, LinearShape::kReachLow, LinearShape::kReachHigh);
+  return CellSort(grid, LinearShape::kReachLow, LinearShape::kReachHigh, block_cells);
 }
 
 // Runs f(); when `recorder` is recording this step, adds it as a region of the given schedule
@@ -56,7 +57,7 @@ Solver::Solver(Scene scene) : scene_(std::move(scene)) {
   particles_ = seed_particles(scene_);
   seeded_particles_ = static_cast<std::int64_t>(particles_.size());
   grid_ = Grid(scene_.grid);
-  sort_ = make_cell_sort(grid_, scene_.shape);
+  sort_ = make_cell_sort(grid_, scene_.shape, scene_.block_cells);
   if (scene_.shape == ShapeKind::CpGimp) particles_.enable_domain_state();  // seed 000 eq. 57-58
   walls_ = Walls(scene_.walls, scene_.grid, grid_.profile_terrain());
   materials_ = BodyMaterials(scene_, particles_);

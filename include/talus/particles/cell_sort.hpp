@@ -24,15 +24,16 @@ namespace talus {
 
 /// The order in which a pass over blocks hands them out (the results do not depend on it).
 enum class BlockOrder {
-  LargestFirst,  // by decreasing particle count: load balance by work
-  Index,         // by block index (bounding-box order; the default)
+  LargestFirst,  // by decreasing particle count: load balance by work (the default)
+  Index,         // by block index (bounding-box order; talus before the scaling model)
 };
 
 class CellSort {
  public:
   CellSort() = default;
-  /// reach_low/high: the shape function's support in cells around the particle's cell.
-  CellSort(const Grid& grid, int reach_low, int reach_high);
+  /// reach_low/high: the shape function's support in cells around the particle's cell;
+  /// block_cells: the block edge (0: automatic, the smallest multiple of 4 with one cell of slack).
+  CellSort(const Grid& grid, int reach_low, int reach_high, int block_cells = 0);
 
   /// Sort the store by (block, cell), rebuild offsets and colour lists, and activate the grid tiles
   /// the blocks may write until the next sort.
@@ -80,7 +81,7 @@ class CellSort {
   std::vector<std::uint32_t> cell_start_;   // particle offsets per cell of active blocks (+1 end)
   std::array<std::vector<std::uint32_t>, 8> colour_blocks_;
   std::vector<std::uint32_t> work_order_;  // all blocks in hand-out order
-  BlockOrder block_order_ = BlockOrder::Index;
+  BlockOrder block_order_ = BlockOrder::LargestFirst;
   // Scratch reused between sorts.
   std::vector<std::uint32_t> bbox_block_index_;   // per bounding-box block: count, then compact index + 1
   std::vector<std::uint32_t> particle_block_, particle_cell_, order_;

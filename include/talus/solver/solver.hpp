@@ -113,6 +113,9 @@ class Solver {
   /// Attach a work recorder (solver/work_recorder.hpp) or detach it (null, the default): the
   /// steps it asks for are timed region by region and block by block. Results are unchanged.
   void record_work(WorkRecorder* recorder) { recorder_ = recorder; }
+  /// The order in which the passes over blocks hand them out (CellSort::set_block_order); the
+  /// results are the same for either (tested), only the load balance differs.
+  void set_block_order(BlockOrder order) { sort_.set_block_order(order); }
 
  private:
   template <class Terrain>
