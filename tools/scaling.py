@@ -60,7 +60,7 @@ def model_speedups(record_path, counts):
     import scaling_model
     record = json.load(open(record_path))
     barrier = scaling_model.Barrier(record["fork_join_seconds"], 1e-6)
-    rows = scaling_model.model(record, counts, barrier, "recorded", "seconds")
+    rows = scaling_model.model(record, counts, barrier, "recorded", "robust")
     return {r["threads"]: r for r in rows}
 
 

@@ -31,12 +31,18 @@ to be replaced by the measurement on a many-core node (the recorder measures b u
 Optionally a memory-bandwidth floor: --bytes-per-update B --stream "1:14.8,2:29.1" (GB/s per thread
 count) bounds a step below by particles * B / STREAM(T).
 
+--contention 2:1.16 multiplies the parallel work at T >= 2 by the per-core slowdown c(T) measured when
+T cores work (--measure-contention REC1 REC2: block seconds per particle of a 2-thread record over those
+of a 1-thread record of the same scene); beyond the largest T given c keeps that value (an assumption).
 The time at T is split into terms: ideal (parallel work / T), imbalance (critical paths above
 work / T), synchronisation (fork/join + barriers), serial (serial parts, glue, region overheads).
 The limiting term at T is the largest loss among imbalance, synchronisation, serial (and bandwidth).
 --schedule lpt replays the dynamic regions with the blocks handed out largest first (what the
 work-sorted colour lists do); static replays them as `schedule(static)`. --work particles uses the
-particle counts (scaled to the region's time) instead of the measured block seconds.
+particle counts (scaled to the region's time) instead of the measured block seconds; --work robust
+(the default) caps each block's seconds at 4x the region's median seconds per particle times its
+particles (+2 us): a block timed across an interruption of its thread (27 ms against 0.03 ms for its
+peers, seen in the 8 M record) would otherwise pose as a critical path at 64 threads.
 """
 import argparse
 import heapq
@@ -101,6 +107,16 @@ def static_makespan(times, threads):
 
 def region_items(region, work):
     secs = region["block_seconds"]
+    if work == "robust":
+        # A block timed while its thread was interrupted (a timer tick, a page fault, another process)
+        # shows up as 10-1000x its peers; such a delay is not the block's work and does not recur with
+        # it. Each block's seconds are capped at 4x the region's median seconds per particle times its
+        # particles (plus 2 us).
+        rates = sorted(t / p for t, p in zip(secs, region["block_particles"]) if p > 0)
+        if not rates:
+            return secs
+        rate = rates[len(rates) // 2]
+        return [min(t, 4.0 * rate * p + 2e-6) for t, p in zip(secs, region["block_particles"])]
     if work == "particles":
         parts = region["block_particles"]
         total_p = sum(parts)
@@ -109,8 +125,29 @@ def region_items(region, work):
     return secs
 
 
-def predict_step(step, threads, barrier, t_rec, schedule, work):
-    """Terms of the predicted step time at `threads`: ideal, imbalance, sync, serial (seconds)."""
+def block_seconds_per_particle(record):
+    """Seconds per particle in the recorded block loops: the speed of one core at the record's thread count."""
+    secs = parts = 0.0
+    for step in record["steps"]:
+        for r in step["regions"]:
+            if r["schedule"] == "dynamic":
+                secs += sum(r["block_seconds"])
+                parts += sum(r["block_particles"])
+    return secs / parts
+
+
+def contention_factor(contention, threads):
+    """c(T): how much slower a core works when T cores work (1 at T = 1; beyond the largest given T, its value)."""
+    if threads == 1 or not contention:
+        return 1.0
+    known = sorted(contention)
+    below = [t for t in known if t <= threads]
+    return contention[below[-1]] if below else 1.0
+
+
+def predict_step(step, threads, barrier, t_rec, schedule, work, contention=1.0):
+    """Terms of the predicted step time at `threads`: ideal, imbalance, sync, serial (seconds).
+    `contention` multiplies the parallel work (the per-core slowdown when `threads` cores work)."""
     terms = {"ideal": 0.0, "imbalance": 0.0, "sync": 0.0, "serial": 0.0}
     listed = 0.0
     for r in step["regions"]:
@@ -125,15 +162,15 @@ def predict_step(step, threads, barrier, t_rec, schedule, work):
             overhead = max(r["seconds"] - critical_rec - k * barrier(t_rec), 0.0)
             if schedule == "lpt":
                 items = sorted(items, reverse=True)
-            span = static_makespan(items, threads) if schedule == "static" else greedy_makespan(items, threads)
-            total = sum(items)
+            span = (static_makespan(items, threads) if schedule == "static" else greedy_makespan(items, threads)) * contention
+            total = sum(items) * contention
             terms["ideal"] += total / threads
             terms["imbalance"] += max(span - total / threads, 0.0)
             terms["sync"] += k * barrier(threads)
             terms["serial"] += overhead
         else:  # static
             n = max(int(r["items"]), 1)
-            w = max(r["seconds"] - k * barrier(t_rec), 0.0) * min(t_rec, n)
+            w = max(r["seconds"] - k * barrier(t_rec), 0.0) * min(t_rec, n) * contention
             span = w * math.ceil(n / threads) / n
             terms["ideal"] += w / threads
             terms["imbalance"] += span - w / threads
@@ -142,11 +179,12 @@ def predict_step(step, threads, barrier, t_rec, schedule, work):
     return terms
 
 
-def predict(record, threads, barrier, schedule, work, bandwidth=None):
+def predict(record, threads, barrier, schedule, work, bandwidth=None, contention=None):
     t_rec = int(record["threads"])
     total = {"ideal": 0.0, "imbalance": 0.0, "sync": 0.0, "serial": 0.0, "bandwidth": 0.0}
+    c = contention_factor(contention, threads) / contention_factor(contention, t_rec)
     for step in record["steps"]:
-        terms = predict_step(step, threads, barrier, t_rec, schedule, work)
+        terms = predict_step(step, threads, barrier, t_rec, schedule, work, c)
         compute = sum(terms.values())
         floor = bandwidth(step["particles"], threads) if bandwidth else 0.0
         for k, v in terms.items():
@@ -155,14 +193,17 @@ def predict(record, threads, barrier, schedule, work, bandwidth=None):
     return total
 
 
-def model(record, counts, barrier, schedule, work, bandwidth=None):
+def model(record, counts, barrier, schedule, work, bandwidth=None, contention=None):
     """Per thread count: predicted seconds (over the recorded steps), speed-up, efficiency, terms."""
-    base = sum(predict(record, 1, barrier, schedule, work, bandwidth).values())
+    base = sum(predict(record, 1, barrier, schedule, work, bandwidth, contention).values())
     rows = []
     for t in counts:
-        terms = predict(record, t, barrier, schedule, work, bandwidth)
+        terms = predict(record, t, barrier, schedule, work, bandwidth, contention)
         seconds = sum(terms.values())
         losses = {k: terms[k] for k in ("imbalance", "sync", "serial", "bandwidth")}
+        if contention:  # the contention's share of the parallel work
+            c = contention_factor(contention, t)
+            losses["contention"] = (terms["ideal"] + terms["imbalance"]) * (1.0 - 1.0 / c)
         rows.append({"threads": t, "seconds": seconds, "speedup": base / seconds, "efficiency": base / seconds / t,
                      "terms": {k: v / seconds for k, v in terms.items()},
                      "limit": max(losses, key=losses.get) if t > 1 else "none"})
@@ -186,19 +227,30 @@ def summary(record):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("records", nargs="+", help="work records (talus bench/run --record-work)")
+    ap.add_argument("records", nargs="*", help="work records (talus bench/run --record-work)")
     ap.add_argument("--threads", default="1,2,4,8,16,32,64,128")
     ap.add_argument("--schedule", default="recorded", choices=["recorded", "lpt", "static"],
                     help="how the dynamic regions hand out blocks (recorded: dynamic,1 in the recorded order)")
-    ap.add_argument("--work", default="seconds", choices=["seconds", "particles"])
+    ap.add_argument("--work", default="robust", choices=["robust", "seconds", "particles"],
+                    help="block work: measured seconds with interruptions capped (robust), as measured, or particles")
     ap.add_argument("--barrier-per-doubling", type=float, default=1e-6,
                     help="seconds b(T) grows per doubling of T beyond the measured thread counts")
     ap.add_argument("--bytes-per-update", type=float, default=0.0, help="DRAM bytes per particle-update (bandwidth floor)")
     ap.add_argument("--stream", default="", help="STREAM triad GB/s per thread count, e.g. 1:14.8,2:29.1")
+    ap.add_argument("--contention", default="",
+                    help="per-core slowdown c(T) when T cores work, e.g. 2:1.16 (kept at the largest given T beyond it)")
+    ap.add_argument("--measure-contention", nargs=2, metavar=("REC1", "RECT"),
+                    help="print c(T) = block seconds per particle of a T-thread record / of a 1-thread record, and exit")
     ap.add_argument("--labels", default="", help="comma-separated labels for the records")
     ap.add_argument("--out", default="", help="write OUT.json and OUT.png")
     a = ap.parse_args()
+    if a.measure_contention:
+        r1, rt = (json.load(open(p)) for p in a.measure_contention)
+        c = block_seconds_per_particle(rt) / block_seconds_per_particle(r1)
+        print(f"c({rt['threads']}) = {c:.4f}")
+        return
     counts = parse_counts(a.threads)
+    contention = parse_pairs(a.contention) if a.contention else None
     labels = a.labels.split(",") if a.labels else [os.path.basename(r) for r in a.records]
     stream = parse_pairs(a.stream) if a.stream else {}
     bandwidth = None
@@ -209,16 +261,18 @@ def main():
     for path, label in zip(a.records, labels):
         record = json.load(open(path))
         barrier = Barrier(record["fork_join_seconds"], a.barrier_per_doubling)
-        rows = model(record, counts, barrier, a.schedule, a.work, bandwidth)
+        rows = model(record, counts, barrier, a.schedule, a.work, bandwidth, contention)
         info = summary(record)
         results.append({"label": label, "record": path, "source": record.get("source"), "threads_recorded": record["threads"],
+                        "contention": contention,
                         "block_cells": record.get("block_cells"), "schedule": a.schedule, "work": a.work,
                         "fork_join_seconds": record["fork_join_seconds"], **info, "prediction": rows})
         print(f"{label}: {info['recorded_steps']} steps recorded at {record['threads']} thread(s), "
               f"{info['particles'][1]} particles, {info['blocks'][1]} blocks, "
               f"{info['blocks_per_colour_pass_mean']:.1f} blocks per colour pass (min {info['blocks_per_colour_pass_min']}); "
               f"schedule {a.schedule}, work {a.work}")
-        print(f"  {'T':>4} {'speed-up':>9} {'eff.':>6} {'ideal':>6} {'imbal.':>6} {'sync':>6} {'serial':>6} {'bw':>6}  limit")
+        print(f"  {'T':>4} {'speed-up':>9} {'eff.':>6} {'ideal':>6} {'imbal.':>6} {'sync':>6} {'serial':>6} {'bw':>6}  limit"
+              + ("  (ideal and imbalance include the contention)" if contention else ""))
         for r in rows:
             t = r["terms"]
             print(f"  {r['threads']:4} {r['speedup']:9.2f} {100 * r['efficiency']:5.1f}% {100 * t['ideal']:5.1f}% "

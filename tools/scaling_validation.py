@@ -67,9 +67,32 @@ def run(talus, scene, threads, out, record=None):
 def predicted_speedup(record_path, threads, schedule="recorded"):
     record = json.load(open(record_path))
     barrier = scaling_model.Barrier(record["fork_join_seconds"], 1e-6)
-    one = sum(scaling_model.predict(record, 1, barrier, schedule, "seconds").values())
-    many = sum(scaling_model.predict(record, threads, barrier, schedule, "seconds").values())
+    one = sum(scaling_model.predict(record, 1, barrier, schedule, "robust").values())
+    many = sum(scaling_model.predict(record, threads, barrier, schedule, "robust").values())
     return one / many, record
+
+
+def plot(results, path):
+    """Measured speed-ups (every run) beside the model's, per case."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return
+    fig, ax = plt.subplots(figsize=(6, 3.5))
+    for i, e in enumerate(results):
+        ax.plot([i - 0.1] * len(e["measured_speedup"]), e["measured_speedup"], "o", color="C0",
+                label="measured" if i == 0 else None)
+        ax.plot([i + 0.1], [e["predicted_speedup"]], "x", color="C3", ms=9, label="model" if i == 0 else None)
+    ax.set_xticks(range(len(results)))
+    ax.set_xticklabels([e["case"] for e in results])
+    ax.set(ylabel=f"speed-up at {results[0]['threads']} threads", xlim=(-0.5, len(results) - 0.5))
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    print("wrote", path)
 
 
 def main():
@@ -129,6 +152,7 @@ def main():
               f"model x{speedup:.2f} -> {base * speedup / 1e6:.3f} M/s, error {', '.join(f'{100 * e:+.1f}%' for e in err)}; "
               f"load {entry['load_before']:.2f} -> {entry['load_after']:.2f}", flush=True)
     if a.out:
+        plot(results, a.out.rsplit(".", 1)[0] + ".png")
         with open(a.out, "w") as f:
             json.dump({"cpu": open("/proc/cpuinfo").read().split("model name")[1].split("\n")[0].strip(": "),
                        "results": results}, f, indent=1)
