@@ -1,13 +1,21 @@
 #!/usr/bin/env python3
-"""Strong and weak scaling of talus: runs `talus bench` over thread counts, writes CSV and plots.
+"""Strong and weak scaling of talus: runs `talus bench` over thread counts, writes CSV, JSON and plots,
+with the scaling model's prediction (tools/scaling_model.py) drawn beside the measurement.
 
     tools/scaling.py [--talus build/talus] [--particles 1000000] [--steps 10] [--max-threads N]
-                     [--out docs/performance]
+                     [--out docs/performance] [--name scaling] [-- extra talus bench arguments]
 
 Strong scaling: fixed particle count, threads 1..N (powers of two and N).
 Weak scaling: particles proportional to the thread count.
-Threads are pinned with OMP_PROC_BIND=close and OMP_PLACES=cores (set them yourself to override);
-on a multi-socket node, compare with OMP_PROC_BIND=spread. Runs unchanged on 2 to 64+ cores.
+Threads are pinned with OMP_PROC_BIND=close and OMP_PLACES=cores (set them yourself to override; the
+values used are written to the JSON): `close` keeps thread t on core t, so 1..N threads fill the first
+socket before the second, and STREAM and talus see the same cores. On a multi-socket node, compare
+with OMP_PROC_BIND=spread (threads spread over the sockets: more bandwidth at low counts; particle
+arrays are first touched by the threads of the seeding loop, so their pages follow that placement).
+Runs unchanged on 2 to 128 cores; thread counts are 1, 2, 4, ... and nproc.
+The model: `talus bench --record-work` at 1 thread (strong scaling size) records the work of every
+block and region; tools/scaling_model.py replays it for each thread count (its fork/join costs are
+measured in the same run up to nproc). The prediction is the 1-thread rate times the model's speed-up.
 Each bench also measures the STREAM triad at the same thread count (`talus bench --stream`), so the
 CSV shows the MPM speed-up next to the memory-bandwidth speed-up of the same machine in the same run:
 `speedup_vs_stream` = (MPM speed-up) / (STREAM speed-up), the issue's target being >= 0.9 at 2 threads.
@@ -30,15 +38,30 @@ def thread_counts(max_threads):
     return counts
 
 
-def bench(talus, particles, threads, steps, extra):
+def pinned_env():
+    env = dict(os.environ)
+    env.setdefault("OMP_PROC_BIND", "close")
+    env.setdefault("OMP_PLACES", "cores")
+    return env
+
+
+def bench(talus, particles, threads, steps, extra, record=None):
     with tempfile.NamedTemporaryFile(suffix=".json") as f:
-        env = dict(os.environ)
-        env.setdefault("OMP_PROC_BIND", "close")
-        env.setdefault("OMP_PLACES", "cores")
         cmd = [talus, "bench", "--particles", str(particles), "--threads", str(threads), "--steps", str(steps),
                "--json", f.name, "--stream"] + extra
-        subprocess.run(cmd, check=True, env=env, stdout=subprocess.DEVNULL)
+        if record:
+            cmd += ["--record-work", record, "--record-steps", "3"]
+        subprocess.run(cmd, check=True, env=pinned_env(), stdout=subprocess.DEVNULL)
         return json.load(open(f.name))
+
+
+def model_speedups(record_path, counts):
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import scaling_model
+    record = json.load(open(record_path))
+    barrier = scaling_model.Barrier(record["fork_join_seconds"], 1e-6)
+    rows = scaling_model.model(record, counts, barrier, "recorded", "robust")
+    return {r["threads"]: r for r in rows}
 
 
 def main():
@@ -48,16 +71,26 @@ def main():
     ap.add_argument("--steps", type=int, default=10)
     ap.add_argument("--max-threads", type=int, default=os.cpu_count())
     ap.add_argument("--out", default="docs/performance")
+    ap.add_argument("--name", default="scaling", help="file stem of the CSV, JSON and PNG")
+    ap.add_argument("--repeat", type=int, default=1, help="runs per point (the best is kept; all are in the JSON)")
     ap.add_argument("bench_args", nargs="*", help="extra arguments for talus bench (after --)")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
+    counts = thread_counts(a.max_threads)
+    record_path = os.path.join(a.out, a.name + "_record.json")
     rows = []
+    predicted = {}
     for kind in ("strong", "weak"):
-        for t in thread_counts(a.max_threads):
+        for t in counts:
             n = a.particles if kind == "strong" else a.particles * t
-            r = bench(a.talus, n, t, a.steps, a.bench_args)
+            runs = [bench(a.talus, n, t, a.steps, a.bench_args,
+                          record_path if (kind == "strong" and t == 1 and i == 0) else None) for i in range(a.repeat)]
+            if kind == "strong" and t == 1:
+                predicted = model_speedups(record_path, counts)
+            r = max(runs, key=lambda x: x["particle_updates_per_second"])
             rows.append({"kind": kind, "threads": t, "particles": r["particles"],
                          "updates_per_second": r["particle_updates_per_second"],
+                         "all_updates_per_second": [x["particle_updates_per_second"] for x in runs],
                          "stream_triad_gb_per_s": r["stream_triad_bytes_per_second"] / 1e9, "cpu": r["cpu"]})
             base = [x for x in rows if x["kind"] == kind][0]
             mpm_speedup = rows[-1]["updates_per_second"] / base["updates_per_second"]
@@ -65,15 +98,27 @@ def main():
             rows[-1]["speedup"] = mpm_speedup
             rows[-1]["stream_speedup"] = stream_speedup
             rows[-1]["speedup_vs_stream"] = mpm_speedup / stream_speedup
+            if kind == "strong":
+                rows[-1]["model_speedup"] = predicted[t]["speedup"]
+                rows[-1]["model_limit"] = predicted[t]["limit"]
             print(f"{kind:6} threads={t:3} particles={r['particles']:9} {r['particle_updates_per_second'] / 1e6:8.3f} M/s"
                   f"  speed-up {mpm_speedup:5.2f}  STREAM {rows[-1]['stream_triad_gb_per_s']:6.2f} GB/s"
                   f" (speed-up {stream_speedup:5.2f})  ratio {mpm_speedup / stream_speedup:5.2f}", flush=True)
-    path = os.path.join(a.out, "scaling.csv")
+    path = os.path.join(a.out, a.name + ".csv")
+    fields = []
+    for r in rows:
+        fields += [k for k in r if k not in fields and k != "all_updates_per_second"]
     with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
         w.writeheader()
         w.writerows(rows)
     print("wrote", path)
+    env = pinned_env()
+    with open(os.path.join(a.out, a.name + ".json"), "w") as f:
+        json.dump({"omp_proc_bind": env["OMP_PROC_BIND"], "omp_places": env["OMP_PLACES"], "nproc": os.cpu_count(),
+                   "bench_args": a.bench_args, "particles": a.particles, "steps": a.steps, "rows": rows,
+                   "model": {str(t): v for t, v in predicted.items()}}, f, indent=1)
+    print("wrote", os.path.join(a.out, a.name + ".json"))
     try:
         import matplotlib
         matplotlib.use("Agg")
@@ -89,16 +134,23 @@ def main():
         speedup = [r["updates_per_second"] / base for r in rs]
         ax1.plot(threads, speedup, marker=marker, label=kind)
         ax2.plot(threads, [s / t for s, t in zip(speedup, threads)], marker=marker, label=kind)
+        stream = [r["stream_speedup"] for r in rs]
+        ax1.plot(threads, stream, marker=marker, ls=":", lw=0.9, label=f"STREAM ({kind})")
+    threads = counts
+    model = [predicted[t]["speedup"] for t in threads]
+    ax1.plot(threads, model, "x--", color="C3", label="model (strong)")
+    ax2.plot(threads, [m / t for m, t in zip(model, threads)], "x--", color="C3", label="model (strong)")
     ax1.plot(threads, threads, "k--", lw=0.8, label="ideal")
     ax1.set(xlabel="threads", ylabel="speed-up (particle-updates/s)", title="talus scaling")
     ax2.set(xlabel="threads", ylabel="efficiency", ylim=(0, 1.1))
     for ax in (ax1, ax2):
         ax.legend()
         ax.grid(alpha=0.3)
-    fig.suptitle(rows[0]["cpu"], fontsize=8)
+    fig.suptitle(f"{rows[0]['cpu']}, OMP_PROC_BIND={env['OMP_PROC_BIND']} OMP_PLACES={env['OMP_PLACES']}, "
+                 f"{' '.join(a.bench_args) or 'block, linear, elastic'}", fontsize=8)
     fig.tight_layout()
-    fig.savefig(os.path.join(a.out, "scaling.png"), dpi=120)
-    print("wrote", os.path.join(a.out, "scaling.png"))
+    fig.savefig(os.path.join(a.out, a.name + ".png"), dpi=120)
+    print("wrote", os.path.join(a.out, a.name + ".png"))
 
 
 if __name__ == "__main__":

@@ -35,6 +35,9 @@ struct BenchOptions {
   int steps = 20;
   bool stream = false;  // also measure the STREAM triad bandwidth at the same thread count
   std::string json_path;
+  std::string record_path;  // --record-work: the work-distribution record of extra steps
+  int record_steps = 3;
+  int block_cells = 0;  // solver.block_cells (0: automatic)
 };
 
 /// The STREAM triad a[i] = b[i] + s c[i] (McCalpin) over three arrays of 2^24 doubles (128 MiB
@@ -87,6 +90,7 @@ const char* const kSand = R"("model": "drucker_prager", "density": 1600.0, "youn
     "friction_angle": 40.0, "dilatancy_angle": 0.0, "cohesion": 10.0, "hardening_modulus": 0.0,
     "kinematic_fraction": 0.2)";
 constexpr double kBenchCell = 0.01;  // [m]
+int g_block_cells = 0;               // --block-cells, for every bench scene
 const char* const kElastic = R"("model": "linear_elastic", "density": 2000.0, "young": 1.0e7, "poisson": 0.3)";
 
 /// The scene of both benches: one box body of the bench material (2x2x2 particles per 1 cm cell)
@@ -99,13 +103,13 @@ Scene bench_scene(const std::string& name, double grid_xy, double grid_z, double
     "name": "{0}",
     "grid": {{ "origin": [0, 0, 0], "size": [{1}, {1}, {2}], "cell_size": {3} }},
     "time": {{ "end": 1.0e9, "courant": 0.3 }},
-    "solver": {{ "shape": "{4}", "scheme": "{5}"{6} }},
+    "solver": {{ "shape": "{4}", "scheme": "{5}", "block_cells": {13}{6} }},
     "materials": {{ "m": {{ {7} }} }},
     "bodies": [ {{ "name": "body", "material": "m", "box": {{ "min": [{8}, {8}, 0], "max": [{9}, {9}, {10}] }},
                   "particles_per_cell": 2{11} }} ],
     "boundaries": {{ "z-": {{ "type": "friction", "friction_coefficient": {12} }}, "z+": "open" }}
   }})", name, grid_xy, grid_z, kBenchCell, shape, scheme, mls_json, material == "dp" ? kSand : kElastic, body_lo,
-                                       body_hi, body_top, body_extra, floor_friction);
+                                       body_hi, body_top, body_extra, floor_friction, g_block_cells);
   return parse_scene(json, name);
 }
 
@@ -183,9 +187,12 @@ void start_in_simple_shear(Solver& solver) {
   }
 }
 
+void record_work(Solver& solver, const BenchOptions& o, const nlohmann::json& bench);
+
 void run_bench(const BenchOptions& o) {
   refuse_unavailable(o);
   if (o.threads > 0) omp_set_num_threads(o.threads);
+  g_block_cells = o.block_cells;
   const std::string mls_json =
       o.mls == "off" ? std::string()
                      : fmt::format(R"(, "smoothing": {{ "basis": "{}", "radius_factor": {} }})", o.mls, o.mls_radius);
@@ -237,6 +244,7 @@ void run_bench(const BenchOptions& o) {
   if (o.mls != "off") j["mls_radius_factor"] = o.mls_radius;
   j["scheme"] = to_string(solver.scene().scheme);
   j["particles"] = n;
+  j["block_cells"] = solver.cell_sort().block_cells();
   j["steps"] = o.steps;
   j["threads"] = omp_get_max_threads();
   j["cpu"] = cpu_model();
@@ -275,6 +283,30 @@ void run_bench(const BenchOptions& o) {
     if (!out) throw io_error(fmt::format("cannot write {}", o.json_path));
     out << j.dump(2) << "\n";
   }
+  if (!o.record_path.empty()) record_work(solver, o, j);
+}
+
+/// --record-work: `record_steps` more steps after the timed ones, recorded region by region and
+/// block by block (solver/work_recorder.hpp), and the fork/join cost of an empty parallel loop at
+/// 1..max(threads, cores) threads; written as JSON for tools/scaling_model.py. The timed figures
+/// above come from the unrecorded steps.
+void record_work(Solver& solver, const BenchOptions& o, const nlohmann::json& bench) {
+  WorkRecorder recorder(o.record_steps);
+  solver.record_work(&recorder);
+  for (int s = 0; s < o.record_steps; ++s) solver.step();
+  solver.record_work(nullptr);
+  const std::vector<double> fork_join = WorkRecorder::measure_fork_join(std::max(omp_get_max_threads(), omp_get_num_procs()));
+  nlohmann::json meta;
+  meta["source"] = "talus bench";
+  meta["bench"] = bench;
+  meta["threads"] = omp_get_max_threads();
+  meta["cpu"] = cpu_model();
+  meta["block_cells"] = solver.cell_sort().block_cells();
+  meta["fork_join_seconds"] = fork_join;  // index = thread count (0 unused)
+  std::ofstream out(o.record_path);
+  if (!out) throw io_error(fmt::format("cannot write {}", o.record_path));
+  out << recorder.to_json(meta).dump() << "\n";
+  fmt::print("  work record: {} steps, {}\n", recorder.steps().size(), o.record_path);
 }
 
 }  // namespace
@@ -296,6 +328,15 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("--threads", o->threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)")->check(CLI::Range(1, 4096));
   cmd->add_option("--steps", o->steps, "Timed steps (after one untimed step)")->check(CLI::Range(1, 1000000))->capture_default_str();
   cmd->add_option("--json", o->json_path, "Also write the results as JSON to this file");
+  cmd->add_option("--record-work", o->record_path,
+                  "Also record the work of every block and parallel region for --record-steps more steps, as JSON "
+                  "(tools/scaling_model.py)");
+  cmd->add_option("--block-cells", o->block_cells, "solver.block_cells: colour-block edge in cells (0: automatic)")
+      ->check(CLI::Range(0, 64))
+      ->capture_default_str();
+  cmd->add_option("--record-steps", o->record_steps, "Steps recorded by --record-work")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
   cmd->add_flag("--stream", o->stream, "Also measure the STREAM triad memory bandwidth at the same thread count");
   cmd->callback([o]() { run_bench(*o); });
 }

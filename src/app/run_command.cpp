@@ -11,7 +11,11 @@
 #include <fmt/core.h>
 #include <omp.h>
 
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
 #include <cstdio>
+#include <fstream>
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
@@ -75,6 +79,14 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--restart", *restart,
                   "Continue from a checkpoint (e.g. runs/<name>/checkpoint.h5) of this same scene; output goes to the "
                   "checkpoint's folder unless --out is given");
+  auto record_path = std::make_shared<std::string>();
+  auto record_interval = std::make_shared<int>(37);  // prime: does not alias with sort_interval (20) or output cadences
+  cmd->add_option("--record-work", *record_path,
+                  "Record the work of every block and parallel region of every --record-interval-th step, as JSON "
+                  "(tools/scaling_model.py, docs/performance.md \"Scaling\")");
+  cmd->add_option("--record-interval", *record_interval, "Steps between the steps --record-work records")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
   cmd->callback([=]() {
     set_threads(*threads);
     Scene scene = read_scene_file(*scene_path);  // validated before anything is written
@@ -98,7 +110,26 @@ void add_run_command(CLI::App& app) {
     options.out_dir = dir;
     options.progress = !*quiet;
     if (checkpoint) options.resume = &checkpoint->run;
+    std::unique_ptr<WorkRecorder> recorder;
+    if (!record_path->empty()) {
+      recorder = std::make_unique<WorkRecorder>(1000, *record_interval);
+      options.recorder = recorder.get();
+    }
     const RunSummary summary = run_scene(solver, options);
+    if (recorder) {
+      nlohmann::json meta;
+      meta["source"] = "talus run";
+      meta["scene"] = solver.scene().name;
+      meta["threads"] = omp_get_max_threads();
+      meta["block_cells"] = solver.cell_sort().block_cells();
+      meta["run_wall_seconds"] = summary.wall_seconds;
+      meta["run_particles_end"] = solver.particles().size();
+      meta["fork_join_seconds"] = WorkRecorder::measure_fork_join(std::max(omp_get_max_threads(), omp_get_num_procs()));
+      std::ofstream out(*record_path);
+      if (!out) throw io_error(fmt::format("cannot write {}", *record_path));
+      out << recorder->to_json(meta).dump() << "\n";
+      fmt::print("talus: work record: {} steps, {}\n", recorder->steps().size(), *record_path);
+    }
     if (summary.interrupted_signal) {
       fmt::print("talus: stopped by signal {} at step {}, t = {:.6g} s; checkpoint {}\n", summary.interrupted_signal,
                  summary.steps, summary.time, summary.checkpoint_path);

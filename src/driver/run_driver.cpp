@@ -98,6 +98,53 @@ class ProgressLine {
   bool tty_;
 };
 
+/// With a work recorder (talus run --record-work): the solver's steps timed apart from the rest of
+/// the loop (outputs, guards, snapshot), which is added to each recorded step as serial time, and
+/// both totals over the run for the model's run prediction (solver/work_recorder.hpp).
+class LoopRecording {
+ public:
+  LoopRecording(Solver& solver, WorkRecorder* recorder)
+      : solver_(solver), recorder_(recorder), first_step_(solver.step_count()) {
+    solver_.record_work(recorder_);
+  }
+  ~LoopRecording() {
+    if (recorder_) solver_.record_work(nullptr);
+  }
+  LoopRecording(const LoopRecording&) = delete;
+  LoopRecording& operator=(const LoopRecording&) = delete;
+
+  void step_begins() {
+    if (!recorder_) return;
+    recorded_before_ = recorder_->steps().size();
+    step_start_ = step_end_ = Clock::now();
+  }
+  void step_done() {
+    if (recorder_) step_end_ = Clock::now();
+  }
+  /// The loop's work after the step (outputs, guards, snapshot) is done.
+  void loop_done() {
+    if (!recorder_) return;
+    solver_seconds_ += seconds(step_start_, step_end_);
+    if (recorder_->steps().size() > recorded_before_)
+      recorder_->add_after_step("output and guards", seconds(step_end_, Clock::now()));
+  }
+  void finish(double wall_seconds) {
+    if (recorder_)
+      recorder_->set_totals(solver_.step_count() - first_step_, solver_seconds_, wall_seconds - solver_seconds_);
+  }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  static double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+
+  Solver& solver_;
+  WorkRecorder* recorder_;
+  std::int64_t first_step_;
+  std::size_t recorded_before_ = 0;
+  Clock::time_point step_start_, step_end_;
+  double solver_seconds_ = 0.0;
+};
+
 /// The last state that passed every guard, kept in memory to be written when a later step fails.
 struct Snapshot {
   bool valid = false;
@@ -118,7 +165,7 @@ class RunLoop {
         history_schedule_{scene_.output.history_interval, progress_.next_history},
         frame_schedule_{scene_.output.frame_interval, progress_.next_frame},
         checkpoint_schedule_{scene_.output.checkpoint_interval, progress_.next_checkpoint},
-        progress_line_(solver, options), signals_(options.handle_signals) {}
+        progress_line_(solver, options), signals_(options.handle_signals), recording_(solver, options.recorder) {}
 
   RunSummary run();
 
@@ -158,6 +205,7 @@ class RunLoop {
   Snapshot snapshot_;
   ProgressLine progress_line_;
   SignalCatcher signals_;
+  LoopRecording recording_;
   RunSummary summary_;
 };
 
@@ -165,6 +213,7 @@ RunSummary RunLoop::run() {
   start();
   while (!solver_.finished()) {
     bool keep = false;
+    recording_.step_begins();
     try {
       keep = step_and_write();
     } catch (const Error& e) {
@@ -173,6 +222,7 @@ RunSummary RunLoop::run() {
     }
     // The snapshot never predates a frame or checkpoint, so the failure path writes in order.
     if (keep) take_snapshot();
+    recording_.loop_done();
     if (const int sig = signals_.caught(); sig != 0 && !solver_.finished()) {
       write_checkpoint();
       summary_.interrupted_signal = sig;
@@ -221,6 +271,7 @@ void RunLoop::write_terrain() {
 
 bool RunLoop::step_and_write() {
   solver_.step();
+  recording_.step_done();
   const double t = solver_.time();
   const bool last = solver_.finished();
   // The history (and the energy guard that reads it): every step when it has no interval.
@@ -297,6 +348,7 @@ void RunLoop::finish() {
   summary_.steps = solver_.step_count();
   summary_.time = solver_.time();
   summary_.wall_seconds = progress_line_.elapsed();
+  recording_.finish(summary_.wall_seconds);
   summary_.final = solver_.energies();
 }
 

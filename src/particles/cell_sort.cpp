@@ -9,12 +9,18 @@
 
 namespace talus {
 
-CellSort::CellSort(const Grid& grid, int reach_low, int reach_high)
+CellSort::CellSort(const Grid& grid, int reach_low, int reach_high, int block_cells)
     : reach_low_(reach_low), reach_high_(reach_high) {
-  // Smallest block (a multiple of the 4-node tile) that leaves each particle at least one cell of
-  // drift between sorts.
+  // Automatic: the smallest block (a multiple of the 4-node tile) that leaves each particle at
+  // least one cell of drift between sorts. A requested size must leave that cell as well.
   block_cells_ = kTileEdge;
   while ((block_cells_ - reach_low - reach_high) / 2 < 1) block_cells_ += kTileEdge;
+  if (block_cells > 0) {
+    if ((block_cells - reach_low - reach_high) / 2 < 1)
+      throw input_error(fmt::format("colour blocks of {} cells leave no cell of slack for a support reaching {} + {} cells",
+                                    block_cells, reach_low, reach_high));
+    block_cells_ = block_cells;
+  }
   slack_ = (block_cells_ - reach_low - reach_high) / 2;
   const auto& g = grid.geometry();
   for (int d = 0; d < 3; ++d) {
@@ -120,7 +126,32 @@ void CellSort::sort(ParticleStore& particles, Grid& grid) {
     const int colour = ((o[0] / bc) & 1) * 4 + ((o[1] / bc) & 1) * 2 + ((o[2] / bc) & 1);
     colour_blocks_[colour].push_back(static_cast<std::uint32_t>(b));
   }
+  order_blocks();
   activate_tiles(grid);
+}
+
+void CellSort::set_block_order(BlockOrder order) {
+  block_order_ = order;
+  if (!blocks_.empty()) order_blocks();
+}
+
+// The blocks of one colour write disjoint nodes, so the order in which a pass visits them changes
+// no sum: every node still receives its contributions colour by colour, each block's particles in
+// sort order. Handing out the heaviest blocks first (schedule(dynamic, 1) over a list sorted by
+// decreasing particle count) is the longest-processing-time rule (Graham 1969): the pass ends with
+// the small blocks, and its critical path is at most 4/3 of the best, against up to 2x in index
+// order, where a heavy block handed out last keeps one thread busy while the others wait.
+void CellSort::order_blocks() {
+  auto count = [this](std::uint32_t b) { return block_start_[b + 1] - block_start_[b]; };
+  auto heavier = [&](std::uint32_t a, std::uint32_t b) { return count(a) > count(b) || (count(a) == count(b) && a < b); };
+  work_order_.resize(blocks_.size());
+  for (std::size_t b = 0; b < blocks_.size(); ++b) work_order_[b] = static_cast<std::uint32_t>(b);
+  if (block_order_ == BlockOrder::Index) {
+    for (auto& c : colour_blocks_) std::sort(c.begin(), c.end());
+    return;
+  }
+  for (auto& c : colour_blocks_) std::sort(c.begin(), c.end(), heavier);
+  std::sort(work_order_.begin(), work_order_.end(), heavier);
 }
 
 void CellSort::activate_tiles(Grid& grid) {

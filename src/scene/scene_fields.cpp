@@ -226,6 +226,21 @@ Table<SceneDraft> make_solver_table() {
                          "cpGIMP (eq. 30–31, 57–58), quadratic B-spline; docs/theory.md"),
       integer<SceneDraft>("sort_interval", TALUS_AT(scene.sort_interval), 1, 1000000,
                           "re-sort particles by cell at least this often"),
+      integer<SceneDraft>("block_cells", TALUS_AT(scene.block_cells), 0, 64,
+                          "edge of the colour blocks in cells; 0 = automatic (4 for linear, 8 for the others). Smaller "
+                          "blocks share small scenes better among many threads (docs/performance.md \"Scaling\"); "
+                          "results stay the same for any thread count but differ at round-off from another block size",
+                          {.allowed = "0, or 3..64 (linear), 5..64 (other shapes)"}),
+      // The smallest block: 2 x one cell of slack + the support's reach (linear: 0 below, 1 above;
+      // the others 1 and 2). The shape is read above, so the message can name it.
+      check<SceneDraft>([](ObjectReader& r, SceneDraft& d) {
+        const Scene& s = d.scene;
+        const int smallest_block = s.shape == ShapeKind::Linear ? 3 : 5;
+        if (s.block_cells != 0 && s.block_cells < smallest_block)
+          throw input_error(
+              fmt::format("{} = {}: must be 0 (automatic) or {}..64 for the {} shape (two cells of slack + its reach)",
+                          r.key_path("block_cells"), s.block_cells, smallest_block, to_string(s.shape)));
+      }),
       number<SceneDraft>("gravity_ramp_time", TALUS_AT(scene.gravity_ramp_time), {0.0, kHuge},
                          "gravity grows linearly from 0 to its full value over this time (0: applied at once); for "
                          "quasi-static loading such as the column benchmark. While it ramps, the energy budget's "

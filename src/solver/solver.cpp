@@ -13,6 +13,7 @@
 #include "talus/transfer/transfers.hpp"
 
 #include <fmt/core.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -23,14 +24,32 @@ namespace talus {
 namespace {
 
 // The colour blocks must hold the widest support of the scene's shape function (cell_sort.hpp).
-CellSort make_cell_sort(const Grid& grid, ShapeKind shape) {
+CellSort make_cell_sort(const Grid& grid, ShapeKind shape, int block_cells) {
   switch (shape) {
-    case ShapeKind::Linear: return CellSort(grid, LinearShape::kReachLow, LinearShape::kReachHigh);
-    case ShapeKind::UGimp: return CellSort(grid, UGimpShape::kReachLow, UGimpShape::kReachHigh);
-    case ShapeKind::CpGimp: return CellSort(grid, CpGimpShape::kReachLow, CpGimpShape::kReachHigh);
-    case ShapeKind::BSpline2: return CellSort(grid, QuadraticBSplineShape::kReachLow, QuadraticBSplineShape::kReachHigh);
+    case ShapeKind::Linear: return CellSort(grid, LinearShape::kReachLow, LinearShape::kReachHigh, block_cells);
+    case ShapeKind::UGimp: return CellSort(grid, UGimpShape::kReachLow, UGimpShape::kReachHigh, block_cells);
+    case ShapeKind::CpGimp: return CellSort(grid, CpGimpShape::kReachLow, CpGimpShape::kReachHigh, block_cells);
+    case ShapeKind::BSpline2:
+      return CellSort(grid, QuadraticBSplineShape::kReachLow, QuadraticBSplineShape::kReachHigh, block_cells);
   }
-  return CellSort(grid, LinearShape::kReachLow, LinearShape::kReachHigh);
+  return CellSort(grid, LinearShape::kReachLow, LinearShape::kReachHigh, block_cells);
+}
+
+// Runs f(); when `recorder` is recording this step, adds it as a region of the given schedule
+// (items: the loop length of a static region; regions: its parallel regions).
+template <class F>
+void recorded(WorkRecorder* recorder, RegionSchedule schedule, const char* name, std::size_t items, int regions, F&& f) {
+  if (!recorder) {
+    f();
+    return;
+  }
+  const double start = omp_get_wtime();
+  f();
+  const double seconds = omp_get_wtime() - start;
+  if (schedule == RegionSchedule::Serial)
+    recorder->add_serial(name, seconds);
+  else
+    recorder->add_static(name, items, regions, seconds);
 }
 
 }  // namespace
@@ -39,7 +58,7 @@ Solver::Solver(Scene scene) : scene_(std::move(scene)) {
   particles_ = seed_particles(scene_);
   seeded_particles_ = static_cast<std::int64_t>(particles_.size());
   grid_ = Grid(scene_.grid);
-  sort_ = make_cell_sort(grid_, scene_.shape);
+  sort_ = make_cell_sort(grid_, scene_.shape, scene_.block_cells);
   if (scene_.shape == ShapeKind::CpGimp) particles_.enable_domain_state();  // seed 000 eq. 57-58
   walls_ = Walls(scene_.walls, scene_.grid, grid_.profile_terrain());
   materials_ = BodyMaterials(scene_, particles_);
@@ -140,7 +159,10 @@ double Solver::stable_time_step() const {
 }
 
 void Solver::step() {
-  double dt = stable_time_step();
+  const bool recorded_step = recorder_ && recorder_->begin_step(step_, particles_.size(), sort_.block_count());
+  const double step_start = recorded_step ? omp_get_wtime() : 0.0;
+  double dt = 0.0;
+  recorded(recording(), RegionSchedule::Static, "time step", particles_.size(), 1, [&] { dt = stable_time_step(); });
   if (!std::isfinite(dt) || dt <= 0.0)
     throw instability_error(fmt::format("step {}, t = {:.6g} s: time step {} is not positive and finite", step_, time_, dt));
   const double remaining = scene_.end_time - time_;
@@ -154,11 +176,19 @@ void Solver::step() {
   // G2P flagged these while it computed the displacements and the new positions; the scans that
   // name the particle (CFL guard) or remove the leaving ones run only when flagged.
   if (large_displacement_) check_step_displacement(particles_, displacement_, scene_, step_, time_);  // stability_guards.hpp
-  if (crosses_open_face_) remove_outflow();
-  if ((step_ + 1) % kFieldCheckInterval == 0) check_particle_fields(particles_, scene_, step_, time_);
+  // the outflow: a parallel count, then a serial rebuild and a sort (recorded as serial)
+  if (crosses_open_face_) recorded(recording(), RegionSchedule::Serial, "outflow", 0, 0, [&] { remove_outflow(); });
+  if ((step_ + 1) % kFieldCheckInterval == 0) {
+    int loops = 1;  // one parallel scan per particle array in use, and the volume test
+    if (recording())
+      particles_.for_each_double_array([&](const char*, const std::vector<double>& a) { loops += a.size() == particles_.size(); });
+    recorded(recording(), RegionSchedule::Static, "field check", particles_.size(), loops,
+             [&] { check_particle_fields(particles_, scene_, step_, time_); });
+  }
   time_ += dt;
   ++step_;
   last_dt_ = dt;
+  if (recorded_step) recorder_->end_step(omp_get_wtime() - step_start);
 }
 
 template <class Terrain>
@@ -181,48 +211,65 @@ void Solver::step_with(double dt) {
   // 1. sort: when a particle has drifted beyond its block's slack, and every sort_interval steps
   //    to keep the memory order close to the cell order. With MLS smoothing, every step: the
   //    neighbour search reads the cell offsets, which must be those of the current positions.
-  if (smoother_ || needs_sort_ || steps_since_sort_ >= scene_.sort_interval) sort_particles();
+  // (recorded as serial: only its first loop, the cell of each particle, is parallel)
+  if (smoother_ || needs_sort_ || steps_since_sort_ >= scene_.sort_interval)
+    recorded(recording(), RegionSchedule::Serial, "sort", 0, 0, [&] { sort_particles(); });
   ++steps_since_sort_;
+  WorkRecorder* const rec = recording();
+  ColourPassTiming* const timing = rec ? &pass_timing_ : nullptr;
+  const std::size_t tiles = grid_.active_tiles().size();
+  const int mirrored = walls_.has_mirrored_walls() ? 1 : 0;
 
   // 2. P2G: nodal mass, momentum and internal force. USF / USAVG update the stress in between,
   //    from the start-of-step nodal velocities (walls applied), before scattering the force.
   if (!scheme.stress_first) {
     ScopedPhase timer(times_, Phase::P2G);
-    grid_.clear_active();
-    scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentumForce);
-    fold_ghost_nodes(grid_, walls_, {.mass = true, .momentum = true, .force = true}, gravity);
+    recorded(rec, RegionSchedule::Static, "grid clear", tiles, 1, [&] { grid_.clear_active(); });
+    scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentumForce, timing);
+    if (rec) rec->add_colour_passes("p2g", pass_timing_, sort_, false);
+    recorded(rec, RegionSchedule::Static, "fold ghosts", tiles, mirrored,
+             [&] { fold_ghost_nodes(grid_, walls_, {.mass = true, .momentum = true, .force = true}, gravity); });
   } else {
     {
       ScopedPhase timer(times_, Phase::P2G);
-      grid_.clear_active();
-      scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentum);
-      fold_ghost_nodes(grid_, walls_, {.mass = true, .momentum = true}, gravity);
-      start_velocities(grid_, walls_, mass_floor_);
-      mirror_ghost_nodes(grid_, walls_, GhostFields::Start);
+      recorded(rec, RegionSchedule::Static, "grid clear", tiles, 1, [&] { grid_.clear_active(); });
+      scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentum, timing);
+      if (rec) rec->add_colour_passes("p2g mass momentum", pass_timing_, sort_, false);
+      recorded(rec, RegionSchedule::Static, "start velocities", tiles, 1 + 2 * mirrored, [&] {
+        fold_ghost_nodes(grid_, walls_, {.mass = true, .momentum = true}, gravity);
+        start_velocities(grid_, walls_, mass_floor_);
+        mirror_ghost_nodes(grid_, walls_, GhostFields::Start);
+      });
     }
     update_stress<Shape, Terrain>(grid_.start_velocity(), stress_dt, false);
     ScopedPhase timer(times_, Phase::P2G);
-    scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Force);
-    fold_ghost_nodes(grid_, walls_, {.force = true}, gravity);
+    scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Force, timing);
+    if (rec) rec->add_colour_passes("p2g force", pass_timing_, sort_, false);
+    recorded(rec, RegionSchedule::Static, "fold ghosts", tiles, mirrored,
+             [&] { fold_ghost_nodes(grid_, walls_, {.force = true}, gravity); });
   }
   // 3. grid: velocities, accelerations with gravity, walls.
   {
     ScopedPhase timer(times_, Phase::Grid);
-    work_.friction_work += update_grid(grid_, walls_, gravity, dt, mass_floor_);
-    mirror_ghost_nodes(grid_, walls_, GhostFields::AfterGridUpdate);
+    recorded(rec, RegionSchedule::Static, "grid update", tiles, 1 + mirrored, [&] {
+      work_.friction_work += update_grid(grid_, walls_, gravity, dt, mass_floor_);
+      mirror_ghost_nodes(grid_, walls_, GhostFields::AfterGridUpdate);
+    });
   }
   // 4. G2P: particle velocities and this step's displacement. MUSL and USAVG scatter the new
   //    momentum for the remap in the same pass (the weights are those of x_p^k in both).
   const bool remap = scheme.remap;
   {
     ScopedPhase timer(times_, Phase::G2P);
-    if (remap) grid_.clear_momentum();
+    if (remap) recorded(rec, RegionSchedule::Static, "momentum clear", tiles, 1, [&] { grid_.clear_momentum(); });
     GatherOptions options = gather_limits_;
     options.dt = dt;
     options.pic_fraction = scene_.pic_fraction;
     options.remap = remap;
     if (options.pic_fraction > 0.0) block_damping_.assign(sort_.block_count(), 0.0);
-    const GatherResult r = gather_from_grid<Shape, Terrain>(particles_, sort_, grid_, displacement_, block_damping_, options);
+    const GatherResult r =
+        gather_from_grid<Shape, Terrain>(particles_, sort_, grid_, displacement_, block_damping_, options, timing);
+    if (rec) rec->add_colour_passes("g2p", pass_timing_, sort_, !remap);
     if (options.pic_fraction > 0.0)
       for (double d : block_damping_) work_.damping += d;  // in block order: thread-independent
     if (r.nonfinite >= 0) report_bad_particle(r.nonfinite, "velocity is not finite");
@@ -236,9 +283,11 @@ void Solver::step_with(double dt) {
   NodeVectors node_velocity = grid_.lagrangian_velocity();
   if (remap) {
     ScopedPhase timer(times_, Phase::Remap);
-    fold_ghost_nodes(grid_, walls_, {.momentum = true}, gravity);
-    velocities_from_momentum(grid_, walls_, mass_floor_);
-    mirror_ghost_nodes(grid_, walls_, GhostFields::Remapped);
+    recorded(rec, RegionSchedule::Static, "remap grid", tiles, 1 + 2 * mirrored, [&] {
+      fold_ghost_nodes(grid_, walls_, {.momentum = true}, gravity);
+      velocities_from_momentum(grid_, walls_, mass_floor_);
+      mirror_ghost_nodes(grid_, walls_, GhostFields::Remapped);
+    });
     node_velocity = grid_.velocity();
   }
   // 6. strain (and its MLS smoothing when enabled) and stress, then move the particles (USF: only
@@ -247,7 +296,7 @@ void Solver::step_with(double dt) {
     update_stress<Shape, Terrain>(node_velocity, stress_dt, true);
   } else {
     ScopedPhase timer(times_, Phase::Stress);
-    move_particles();
+    recorded(rec, RegionSchedule::Static, "move", particles_.size(), 1, [&] { move_particles(); });
   }
 }
 
@@ -291,11 +340,18 @@ template <class Shape, class FillChunk>
 void Solver::update_material_by_chunks(bool move, FillChunk fill) {
   const std::size_t blocks = sort_.block_count();
   block_dissipation_.assign(blocks, 0.0);
+  WorkRecorder* const rec = recording();
+  std::vector<double>* const block_seconds = rec ? &stress_block_seconds_ : nullptr;
+  if (block_seconds) block_seconds->assign(blocks, 0.0);
+  const double pass_start = rec ? omp_get_wtime() : 0.0;
 #pragma omp parallel
   {
     StrainIncrements inc;
+    const std::vector<std::uint32_t>& order = sort_.blocks_in_work_order();  // heaviest first
 #pragma omp for schedule(dynamic, 1)
-    for (std::size_t b = 0; b < blocks; ++b) {
+    for (std::size_t bi = 0; bi < blocks; ++bi) {
+      const std::size_t b = order[bi];
+      const double block_start = block_seconds ? omp_get_wtime() : 0.0;
       double dissipated = 0.0;
       for (std::size_t begin = sort_.block_begin(b); begin < sort_.block_end(b); begin += StrainIncrements::kCapacity) {
         const std::size_t end = std::min<std::size_t>(begin + StrainIncrements::kCapacity, sort_.block_end(b));
@@ -303,8 +359,10 @@ void Solver::update_material_by_chunks(bool move, FillChunk fill) {
         dissipated += update_chunk<Shape>(begin, end, inc, move);
       }
       block_dissipation_[b] = dissipated;
+      if (block_seconds) (*block_seconds)[bi] = omp_get_wtime() - block_start;
     }
   }
+  if (rec) rec->add_block_loop("stress", stress_block_seconds_, omp_get_wtime() - pass_start, sort_);
   for (double d : block_dissipation_) work_.plastic_work += d;
 }
 
@@ -358,7 +416,9 @@ void Solver::update_stress_smoothed(const NodeVectors& node_velocity, double dt,
       in[c] = raw_strain_[c].data();
       out[c] = smooth_strain_[c].data();
     }
-    last_smoothing_ = smoother_->smooth(P, sort_, scene_.grid, in, out, smooth_body_);
+    // recorded as a static region: the smoother's own per-block times are not kept
+    recorded(recording(), RegionSchedule::Static, "mls smooth", P.size(), 1,
+             [&] { last_smoothing_ = smoother_->smooth(P, sort_, scene_.grid, in, out, smooth_body_); });
     unsmoothed_total_ += static_cast<std::int64_t>(last_smoothing_.unsmoothed);
     measure_smoothing_change();
   }

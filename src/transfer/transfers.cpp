@@ -6,6 +6,8 @@
 #include "talus/shape/linear.hpp"
 #include "talus/transfer/stencil.hpp"
 
+#include <omp.h>
+
 #include <cmath>
 #include <type_traits>
 
@@ -34,7 +36,7 @@ namespace {
 // The fields to scatter are template parameters, so each combination compiles to a loop without
 // the tests (the innermost loop runs 8-64 times per particle).
 template <class Shape, class Terrain, bool with_mass, bool with_momentum, bool with_force>
-void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid) {
+void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid, ColourPassTiming* timing) {
   const Terrain& terrain = grid.template terrain<Terrain>();
   const double inv_h = 1.0 / grid.geometry().h;
   double* mass = grid.mass.data();
@@ -44,9 +46,12 @@ void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid) {
   for (int colour = 0; colour < 8; ++colour) {
     const auto& blocks = sort.colour(colour);
     const std::size_t count = blocks.size();
+    const double pass_start = timing ? omp_get_wtime() : 0.0;
+    if (timing) timing->block_seconds[colour].assign(count, 0.0);
 #pragma omp parallel for schedule(dynamic, 1)
     for (std::size_t bi = 0; bi < count; ++bi) {
       const std::size_t b = blocks[bi];
+      const double block_start = timing ? omp_get_wtime() : 0.0;
       ParticleStencil<Shape> stencil;
       for (std::size_t p = sort.block_begin(b); p < sort.block_end(b); ++p) {
         double hw[3];
@@ -95,19 +100,22 @@ void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid) {
             }
         });
       }
+      if (timing) timing->block_seconds[colour][bi] = omp_get_wtime() - block_start;
     }
+    if (timing) timing->wall[colour] = omp_get_wtime() - pass_start;
   }
 }
 
 }  // namespace
 
 template <class Shape, class Terrain>
-void scatter_to_grid(const ParticleStore& P, const CellSort& sort, Grid& grid, ScatterFields fields) {
+void scatter_to_grid(const ParticleStore& P, const CellSort& sort, Grid& grid, ScatterFields fields,
+                     ColourPassTiming* timing) {
   switch (fields) {
-    case ScatterFields::MassMomentumForce: scatter_fields<Shape, Terrain, true, true, true>(P, sort, grid); break;
-    case ScatterFields::Momentum: scatter_fields<Shape, Terrain, false, true, false>(P, sort, grid); break;
-    case ScatterFields::MassMomentum: scatter_fields<Shape, Terrain, true, true, false>(P, sort, grid); break;
-    case ScatterFields::Force: scatter_fields<Shape, Terrain, false, false, true>(P, sort, grid); break;
+    case ScatterFields::MassMomentumForce: scatter_fields<Shape, Terrain, true, true, true>(P, sort, grid, timing); break;
+    case ScatterFields::Momentum: scatter_fields<Shape, Terrain, false, true, false>(P, sort, grid, timing); break;
+    case ScatterFields::MassMomentum: scatter_fields<Shape, Terrain, true, true, false>(P, sort, grid, timing); break;
+    case ScatterFields::Force: scatter_fields<Shape, Terrain, false, false, true>(P, sort, grid, timing); break;
   }
 }
 
@@ -120,7 +128,7 @@ namespace {
 template <class Shape, class Terrain, bool remap, class BlockList>
 void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::array<std::vector<double>, 3>& displacement,
                    std::vector<double>& block_damping, const GatherOptions& options, std::size_t count,
-                   BlockList block_list, GatherResult& result) {
+                   BlockList block_list, GatherResult& result, std::vector<double>* block_seconds) {
   const double dt = options.dt, pic_fraction = options.pic_fraction;
   const double max_d2 = options.max_displacement * options.max_displacement;
   const Terrain& terrain = grid.template terrain<Terrain>();
@@ -135,6 +143,7 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::arra
     reduction(max : nonfinite, outside)
   for (std::size_t bi = 0; bi < count; ++bi) {
     const std::size_t b = block_list(bi);
+    const double block_start = block_seconds ? omp_get_wtime() : 0.0;
     ParticleStencil<Shape> stencil;
     const auto origin = sort.block_origin(b);
     double damped = 0.0;  // kinetic energy the PIC share removed in this block
@@ -216,6 +225,7 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::arra
       if (!sort.within_slack_of(origin, cell[0], cell[1], cell[2])) needs_sort = true;
     }
     if (pic_fraction > 0.0) block_damping[b] = damped;
+    if (block_seconds) (*block_seconds)[bi] = omp_get_wtime() - block_start;
   }
   result = {needs_sort, nonfinite, outside, large, crossing};
 }
@@ -225,20 +235,29 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::arra
 template <class Shape, class Terrain>
 GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, Grid& grid,
                               std::array<std::vector<double>, 3>& displacement, std::vector<double>& block_damping,
-                              const GatherOptions& options) {
+                              const GatherOptions& options, ColourPassTiming* timing) {
   GatherResult result;
   if (!options.remap) {
+    // one pass over all blocks; a timing record lists it as colour 0
+    const double pass_start = timing ? omp_get_wtime() : 0.0;
+    if (timing) timing->block_seconds[0].assign(sort.block_count(), 0.0);
+    const std::vector<std::uint32_t>& order = sort.blocks_in_work_order();  // pure gather: any order
     gather_blocks<Shape, Terrain, false>(P, sort, grid, displacement, block_damping, options, sort.block_count(),
-                                         [](std::size_t b) { return b; }, result);
+                                         [&order](std::size_t bi) { return static_cast<std::size_t>(order[bi]); }, result,
+                                         timing ? &timing->block_seconds[0] : nullptr);
+    if (timing) timing->wall[0] = omp_get_wtime() - pass_start;
     return result;
   }
   // The remap scatters, so the blocks go colour by colour as in scatter_to_grid: each node sums
   // its particles in the same order for any thread count.
   for (int colour = 0; colour < 8; ++colour) {
     const auto& blocks = sort.colour(colour);
+    const double pass_start = timing ? omp_get_wtime() : 0.0;
+    if (timing) timing->block_seconds[colour].assign(blocks.size(), 0.0);
     gather_blocks<Shape, Terrain, true>(P, sort, grid, displacement, block_damping, options, blocks.size(),
                                         [&blocks](std::size_t bi) { return static_cast<std::size_t>(blocks[bi]); },
-                                        result);
+                                        result, timing ? &timing->block_seconds[colour] : nullptr);
+    if (timing) timing->wall[colour] = omp_get_wtime() - pass_start;
   }
   return result;
 }
@@ -295,10 +314,11 @@ void strain_increments(const ParticleStore& P, const Grid& grid, const NodeVecto
 }
 
 #define TALUS_INSTANTIATE_TRANSFERS(SHAPE, TERRAIN)                                                          \
-  template void scatter_to_grid<SHAPE, TERRAIN>(const ParticleStore&, const CellSort&, Grid&, ScatterFields); \
+  template void scatter_to_grid<SHAPE, TERRAIN>(const ParticleStore&, const CellSort&, Grid&, ScatterFields,  \
+                                                ColourPassTiming*);                                           \
   template GatherResult gather_from_grid<SHAPE, TERRAIN>(ParticleStore&, const CellSort&, Grid&,                \
                                                          std::array<std::vector<double>, 3>&, std::vector<double>&, \
-                                                         const GatherOptions&);                                     \
+                                                         const GatherOptions&, ColourPassTiming*);                  \
   template void strain_increments<SHAPE, TERRAIN>(const ParticleStore&, const Grid&,                          \
                                                   const NodeVectors&, double, std::size_t,    \
                                                   std::size_t, StrainIncrements&);

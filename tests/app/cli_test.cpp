@@ -168,6 +168,58 @@ TEST(Cli, BenchWritesTheJsonContract) {
 
 namespace {
 
+// The work recorder (docs/performance.md "Scaling"): the bench records its extra steps, every
+// colour pass lists each block once, and a run records every --record-interval-th step with the
+// run loop's own time.
+TEST(Cli, BenchAndRunRecordTheWorkDistribution) {
+  const fs::path dir = temp_dir("record");
+  fs::create_directories(dir);
+  const fs::path bench_record = dir / "bench_record.json";
+  const Result b = run("bench --particles 2000 --threads 1 --steps 1 --record-steps 2 --record-work " + bench_record.string());
+  ASSERT_EQ(b.exit_code, 0) << b.output;
+  std::ifstream bin(bench_record);
+  const nlohmann::json rb = nlohmann::json::parse(bin);
+  EXPECT_EQ(rb["format"], "talus-work-record/1");
+  ASSERT_EQ(rb["steps"].size(), 2u);
+  EXPECT_GE(rb["fork_join_seconds"].size(), 2u);
+  for (const auto& step : rb["steps"]) {
+    std::size_t p2g_particles = 0, stress_particles = 0, passes = 0;
+    double listed = 0.0;
+    for (const auto& region : step["regions"]) {
+      listed += region["seconds"].get<double>();
+      if (region["schedule"] != "dynamic") continue;
+      EXPECT_EQ(region["block_seconds"].size(), region["block_particles"].size());
+      std::size_t sum = 0;
+      for (const auto& n : region["block_particles"]) sum += n.get<std::size_t>();
+      const std::string name = region["name"];
+      if (name.rfind("p2g colour", 0) == 0) {
+        p2g_particles += sum;
+        ++passes;
+      }
+      if (name == "stress") stress_particles = sum;
+    }
+    EXPECT_EQ(passes, 8u);
+    EXPECT_EQ(p2g_particles, step["particles"].get<std::size_t>());
+    EXPECT_EQ(stress_particles, step["particles"].get<std::size_t>());
+    EXPECT_LE(listed, step["seconds"].get<double>() * 1.000001);
+  }
+  std::ifstream in(kInputs + "elastic_block_slide.json");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  text.replace(text.find("\"end\": 1.0"), 10, "\"end\": 0.02");
+  std::ofstream(dir / "short.json") << text;
+  const fs::path run_record = dir / "run_record.json";
+  const Result r = run("run " + (dir / "short.json").string() + " --out " + (dir / "out").string() +
+                       " --threads 1 --quiet --record-interval 3 --record-work " + run_record.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream rin(run_record);
+  const nlohmann::json rr = nlohmann::json::parse(rin);
+  const auto steps = rr["run_steps"].get<std::size_t>();
+  EXPECT_EQ(rr["steps"].size(), (steps + 2) / 3);
+  EXPECT_EQ(rr["steps"][1]["step"], 3);
+  EXPECT_EQ(rr["steps"][0]["regions"].back()["name"], "output and guards");
+  fs::remove_all(dir);
+}
+
 // A scene with runout diagnostics ends with the runout distance and where its files are (issue 7).
 TEST(Cli, RunWithRunoutDiagnosticsPrintsTheRunoutAndItsFiles) {
   const fs::path dir = temp_dir("runout");

@@ -42,6 +42,10 @@ TEST(SceneJson, BadInputNamesTheKeyAndTheRange) {
   test::expect_variant_error(ok, "\"end\": 0.1", "\"end\": -1", "time.end");
   test::expect_variant_error(ok, "\"end\": 0.1", "\"end\": 0.1, \"courant\": 1.0", "time.courant = 1 is outside the allowed range (0, 1)");
   test::expect_variant_error(ok, "\"time\"", "\"tmie\": {}, \"time\"", "unknown key tmie");
+  test::expect_variant_error(ok, "\"time\"", "\"solver\": { \"block_cells\": 2 }, \"time\"",
+                             "solver.block_cells = 2: must be 0 (automatic) or 3..64 for the linear shape");
+  test::expect_variant_error(ok, "\"time\"", "\"solver\": { \"shape\": \"bspline2\", \"block_cells\": 4 }, \"time\"",
+                             "solver.block_cells = 4: must be 0 (automatic) or 5..64 for the bspline2 shape");
   test::expect_variant_error(ok, "\"density\": 1000", "\"density\": \"heavy\"", "materials.m.density must be a number");
   test::expect_variant_error(ok, "\"material\": \"m\"", "\"material\": \"sand\"", "bodies[0].material = \"sand\" names no material");
   test::expect_variant_error(ok, "\"max\": [0.5, 0.5, 0.5]", "\"max\": [0.5, 0.5, 1.5]", "lies outside the grid");

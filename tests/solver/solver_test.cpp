@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -155,6 +156,63 @@ TEST(Solver, BitIdenticalForOneAndTwoThreadsForEveryShapeAndScheme) {
     const auto& b = two.particles();
     for (int d = 0; d < 3; ++d) EXPECT_TRUE(same_bits(a.domain[d], b.domain[d])) << to_string(shape) << " domain " << d;
     EXPECT_EQ(a.domain[0].empty(), shape != ShapeKind::CpGimp);
+  }
+}
+
+// The passes hand blocks out heaviest first (CellSort, BlockOrder::LargestFirst); within a colour
+// the blocks write disjoint nodes, so the order must change nothing: index order on one thread and
+// the work order on three threads give the same bits, for the colour passes of MUSL (P2G, G2P with
+// the remap) and the single gather pass of USF.
+TEST(Solver, BitIdenticalForEitherBlockOrder) {
+  for (SchemeKind scheme : {SchemeKind::Musl, SchemeKind::Usf}) {
+    auto run = [&](int threads, BlockOrder order) {
+      omp_set_num_threads(threads);
+      Scene scene = test::tumbling_block_scene(0.02);
+      scene.scheme = scheme;
+      Solver solver(scene);
+      solver.set_block_order(order);
+      while (!solver.finished()) solver.step();
+      EXPECT_GT(solver.sort_count(), 1);
+      return solver;
+    };
+    const int saved = omp_get_max_threads();
+    const Solver index = run(1, BlockOrder::Index);
+    const Solver work = run(3, BlockOrder::LargestFirst);
+    omp_set_num_threads(saved);
+    test::expect_same_particles_and_energies(index, work, to_string(scheme));
+    // the orders differ: some colour's hand-out list is not in index order
+    bool reordered = false;
+    for (int c = 0; c < 8; ++c) {
+      const auto& list = work.cell_sort().colour(c);
+      reordered = reordered || !std::is_sorted(list.begin(), list.end());
+      for (std::size_t i = 1; i < list.size(); ++i)
+        EXPECT_GE(work.cell_sort().block_end(list[i - 1]) - work.cell_sort().block_begin(list[i - 1]),
+                  work.cell_sort().block_end(list[i]) - work.cell_sort().block_begin(list[i]));
+    }
+    EXPECT_TRUE(reordered);
+  }
+}
+
+// Smaller colour blocks (solver.block_cells: 3 for linear, 5 for the B-spline) colour the grid
+// differently; the results must still not depend on the thread count.
+TEST(Solver, BitIdenticalForOneAndThreeThreadsWithSmallerBlocks) {
+  for (auto [shape, cells] : {std::pair{ShapeKind::Linear, 3}, std::pair{ShapeKind::BSpline2, 5}}) {
+    auto run = [&, shape = shape, cells = cells](int threads) {
+      omp_set_num_threads(threads);
+      Scene scene = test::tumbling_block_scene(0.02);
+      scene.shape = shape;
+      scene.block_cells = cells;
+      Solver solver(scene);
+      EXPECT_EQ(solver.cell_sort().block_cells(), cells);
+      while (!solver.finished()) solver.step();
+      EXPECT_GT(solver.sort_count(), 1);
+      return solver;
+    };
+    const int saved = omp_get_max_threads();
+    const Solver one = run(1);
+    const Solver three = run(3);
+    omp_set_num_threads(saved);
+    test::expect_same_particles_and_energies(one, three, to_string(shape));
   }
 }
 

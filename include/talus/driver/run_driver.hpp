@@ -16,6 +16,7 @@
 #include "talus/diagnostics/runout.hpp"
 #include "talus/io/checkpoint.hpp"
 #include "talus/solver/solver.hpp"
+#include "talus/solver/work_recorder.hpp"
 
 #include <optional>
 #include <string>
@@ -31,6 +32,9 @@ struct RunOptions {
   const RunProgress* resume = nullptr;
   /// Catch SIGINT/SIGTERM: finish the step, write a checkpoint and return (interrupted_signal).
   bool handle_signals = true;
+  /// Work recorder (talus run --record-work): attached to the solver for the run; the time the
+  /// loop spends outside a recorded step (output, guards) is added to that step as serial time.
+  WorkRecorder* recorder = nullptr;
 };
 
 struct RunSummary {

@@ -22,11 +22,18 @@
 
 namespace talus {
 
+/// The order in which a pass over blocks hands them out (the results do not depend on it).
+enum class BlockOrder {
+  LargestFirst,  // by decreasing particle count: load balance by work (the default)
+  Index,         // by block index (bounding-box order; talus before the scaling model)
+};
+
 class CellSort {
  public:
   CellSort() = default;
-  /// reach_low/high: the shape function's support in cells around the particle's cell.
-  CellSort(const Grid& grid, int reach_low, int reach_high);
+  /// reach_low/high: the shape function's support in cells around the particle's cell;
+  /// block_cells: the block edge (0: automatic, the smallest multiple of 4 with one cell of slack).
+  CellSort(const Grid& grid, int reach_low, int reach_high, int block_cells = 0);
 
   /// Sort the store by (block, cell), rebuild offsets and colour lists, and activate the grid tiles
   /// the blocks may write until the next sort.
@@ -39,7 +46,13 @@ class CellSort {
   std::array<int, 3> block_origin(std::size_t b) const;
   std::uint32_t block_begin(std::size_t b) const { return block_start_[b]; }
   std::uint32_t block_end(std::size_t b) const { return block_start_[b + 1]; }
+  /// The blocks of colour c, in hand-out order (block_order()).
   const std::vector<std::uint32_t>& colour(int c) const { return colour_blocks_[c]; }
+  /// All blocks in hand-out order, for passes over every block (the stress pass).
+  const std::vector<std::uint32_t>& blocks_in_work_order() const { return work_order_; }
+  BlockOrder block_order() const { return block_order_; }
+  /// Reorder the hand-out lists (takes effect at once and at every later sort).
+  void set_block_order(BlockOrder order);
   /// Particles of cell (local index l in block b): [cell_start[b*cells_per_block + l], ... + 1).
   const std::vector<std::uint32_t>& cell_start() const { return cell_start_; }
   /// Compact index of the active block that holds padded cell (i, j, k) (cell coordinates as
@@ -56,6 +69,7 @@ class CellSort {
 
  private:
   void activate_tiles(Grid& grid);
+  void order_blocks();
 
   int block_cells_ = 4;
   int slack_ = 1;
@@ -66,6 +80,8 @@ class CellSort {
   std::vector<std::uint32_t> block_start_;  // particle offsets per active block (+1 end)
   std::vector<std::uint32_t> cell_start_;   // particle offsets per cell of active blocks (+1 end)
   std::array<std::vector<std::uint32_t>, 8> colour_blocks_;
+  std::vector<std::uint32_t> work_order_;  // all blocks in hand-out order
+  BlockOrder block_order_ = BlockOrder::LargestFirst;
   // Scratch reused between sorts.
   std::vector<std::uint32_t> bbox_block_index_;   // per bounding-box block: count, then compact index + 1
   std::vector<std::uint32_t> particle_block_, particle_cell_, order_;

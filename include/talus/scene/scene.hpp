@@ -102,6 +102,11 @@ struct Scene {
   SchemeKind scheme = SchemeKind::Musl;
   ShapeKind shape = ShapeKind::Linear;
   int sort_interval = 20;              // re-sort at least this often (also when a particle drifts)
+  /// Edge of the colour blocks in cells (particles/cell_sort.hpp); 0 = automatic: the smallest
+  /// multiple of 4 that leaves one cell of slack (4 for linear, 8 for the wider supports). Smaller
+  /// blocks (down to 3 for linear, 5 for the others) give the colour passes more blocks to share
+  /// among threads; the sums then run in another (still thread-independent) order.
+  int block_cells = 0;
   /// Gravity (the body force) grows linearly from 0 to its full value over this time [s]; 0 = applied
   /// at once. A quasi-static load (the Bardenhagen-Kober column, seed 000 sec. 4(1)) needs it.
   double gravity_ramp_time = 0.0;

@@ -11,6 +11,7 @@
 #include "talus/scene/scene.hpp"
 #include "talus/smoothing/mls_strain_smoother.hpp"
 #include "talus/solver/phase_timer.hpp"
+#include "talus/solver/work_recorder.hpp"
 
 #include <array>
 #include <cstdint>
@@ -92,6 +93,13 @@ class Solver {
   SolverState state() const;
   void restore(ParticleStore particles, const SolverState& state);
 
+  /// Attach a work recorder (solver/work_recorder.hpp) or detach it (null, the default): the
+  /// steps it asks for are timed region by region and block by block. Results are unchanged.
+  void record_work(WorkRecorder* recorder) { recorder_ = recorder; }
+  /// The order in which the passes over blocks hand them out (CellSort::set_block_order); the
+  /// results are the same for either (tested), only the load balance differs.
+  void set_block_order(BlockOrder order) { sort_.set_block_order(order); }
+
  private:
   template <class Terrain>
   void step_with_shape(double dt);
@@ -145,6 +153,12 @@ class Solver {
   bool large_displacement_ = false;        // G2P of this step: some displacement beyond the limit
   bool crosses_open_face_ = false;         // G2P of this step: some particle leaves through an open face
   PhaseTimes times_;
+  // The work recorder (null unless attached) and its per-block timing buffers.
+  WorkRecorder* recorder_ = nullptr;
+  ColourPassTiming pass_timing_;
+  std::vector<double> stress_block_seconds_;
+  /// The recorder when the current step is recorded, else null.
+  WorkRecorder* recording() const { return recorder_ && recorder_->active() ? recorder_ : nullptr; }
   // MLS smoothing: allocated only when the scene enables it.
   std::optional<MlsStrainSmoother> smoother_;
   std::vector<std::uint8_t> smooth_body_;                 // per body: smoothed or not

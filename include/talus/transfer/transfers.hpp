@@ -12,6 +12,7 @@
 #include "talus/grid/grid.hpp"
 #include "talus/particles/cell_sort.hpp"
 #include "talus/particles/particle_store.hpp"
+#include "talus/transfer/colour_pass_timing.hpp"
 
 #include <array>
 #include <cstddef>
@@ -28,7 +29,8 @@ enum class ScatterFields {
 };
 
 template <class Shape, class Terrain>
-void scatter_to_grid(const ParticleStore& particles, const CellSort& sort, Grid& grid, ScatterFields fields);
+void scatter_to_grid(const ParticleStore& particles, const CellSort& sort, Grid& grid, ScatterFields fields,
+                     ColourPassTiming* timing = nullptr);  // timing: the work recorder's, null normally
 
 struct GatherResult {
   bool needs_sort = false;          // some particle drifted beyond its block's slack
@@ -68,7 +70,7 @@ struct GatherOptions {
 template <class Shape, class Terrain>
 GatherResult gather_from_grid(ParticleStore& particles, const CellSort& sort, Grid& grid,
                               std::array<std::vector<double>, 3>& displacement, std::vector<double>& block_damping,
-                              const GatherOptions& options);
+                              const GatherOptions& options, ColourPassTiming* timing = nullptr);
 
 /// Per-particle strain and spin increments of a range, structure of arrays.
 struct StrainIncrements {

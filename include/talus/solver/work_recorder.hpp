@@ -1,0 +1,82 @@
+#pragma once
+// The work-distribution recorder: what each parallel region of a step did, for the scaling model
+// (tools/scaling_model.py, docs/performance.md "Scaling"). For each recorded step it keeps, in the
+// order the step runs them, every parallel region with its OpenMP schedule and the time it took:
+//   colour passes and the stress pass (schedule(dynamic, 1) over blocks): the seconds and the
+//     particles of every block, in the order the loop hands them out;
+//   loops over particles or grid tiles (schedule(static)): their length and their time;
+//   serial parts: their time.
+// What the step took besides the regions it lists is serial glue (the model keeps it serial).
+// With no recorder attached (Solver::record_work(nullptr), the normal path) nothing is timed.
+#include "talus/particles/cell_sort.hpp"
+#include "talus/transfer/colour_pass_timing.hpp"
+
+#include <nlohmann/json_fwd.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace talus {
+
+enum class RegionSchedule { Static, Dynamic, Serial };
+
+struct WorkRegion {
+  std::string name;
+  RegionSchedule schedule = RegionSchedule::Serial;
+  int chunk = 1;               // dynamic: the chunk size of the schedule
+  int parallel_regions = 0;    // fork/join + barrier pairs inside (0 for serial parts)
+  double seconds = 0.0;        // wall time of the region
+  std::size_t items = 0;       // static: iterations of the loop (particles or tiles)
+  std::vector<double> block_seconds;           // dynamic: per block, in hand-out order
+  std::vector<std::uint32_t> block_particles;  // dynamic: particles per block, same order
+};
+
+struct WorkStep {
+  std::int64_t step = 0;
+  double seconds = 0.0;  // wall time of the whole step
+  std::size_t particles = 0;
+  std::size_t blocks = 0;
+  std::vector<WorkRegion> regions;
+};
+
+class WorkRecorder {
+ public:
+  /// Record every `interval`-th step that is offered (begin_step), at most `max_steps` of them.
+  explicit WorkRecorder(int max_steps, int interval = 1) : max_steps_(max_steps), interval_(interval < 1 ? 1 : interval) {}
+
+  /// Called by the solver at the start of each step; true when this step is recorded.
+  bool begin_step(std::int64_t step, std::size_t particles, std::size_t blocks);
+  void end_step(double seconds);
+  bool active() const { return active_; }
+  bool full() const { return static_cast<int>(steps_.size()) >= max_steps_; }
+
+  void add_static(const char* name, std::size_t items, int parallel_regions, double seconds);
+  void add_serial(const char* name, double seconds);
+  /// One region per colour of `timing` (8, or 1 for a single pass over all blocks).
+  void add_colour_passes(const char* name, const ColourPassTiming& timing, const CellSort& sort, bool single_pass);
+  /// A schedule(dynamic, 1) loop over all blocks in sort.blocks_in_work_order().
+  void add_block_loop(const char* name, const std::vector<double>& block_seconds, double seconds, const CellSort& sort);
+  /// Serial time the caller (the run loop) spent after the last recorded step (output, guards).
+  void add_after_step(const char* name, double seconds);
+  /// Time outside the steps over a whole run, for the model's run prediction.
+  void set_totals(std::int64_t steps, double solver_seconds, double other_seconds);
+
+  const std::vector<WorkStep>& steps() const { return steps_; }
+  /// Wall time of an empty `omp parallel for` (fork, a loop of `threads` iterations, barrier) at
+  /// each thread count 1..max_threads: the per-region cost the model adds (best of 5 x 2000).
+  static std::vector<double> measure_fork_join(int max_threads);
+
+  /// The record as JSON ("format": "talus-work-record/1"); `meta` is merged in.
+  nlohmann::json to_json(const nlohmann::json& meta) const;
+
+ private:
+  int max_steps_, interval_;
+  std::int64_t offered_ = 0;
+  bool active_ = false;
+  std::vector<WorkStep> steps_;
+  std::int64_t total_steps_ = 0;
+  double solver_seconds_ = 0.0, other_seconds_ = 0.0;
+};
+
+}  // namespace talus

@@ -1,0 +1,156 @@
+#include "talus/solver/work_recorder.hpp"
+
+#include <nlohmann/json.hpp>
+#include <omp.h>
+
+#include <algorithm>
+
+namespace talus {
+
+bool WorkRecorder::begin_step(std::int64_t step, std::size_t particles, std::size_t blocks) {
+  active_ = !full() && (offered_++ % interval_) == 0;
+  if (active_) {
+    steps_.emplace_back();
+    steps_.back().step = step;
+    steps_.back().particles = particles;
+    steps_.back().blocks = blocks;
+  }
+  return active_;
+}
+
+void WorkRecorder::end_step(double seconds) {
+  if (active_) steps_.back().seconds = seconds;
+  active_ = false;
+}
+
+void WorkRecorder::add_static(const char* name, std::size_t items, int parallel_regions, double seconds) {
+  if (!active_) return;
+  WorkRegion r;
+  r.name = name;
+  r.schedule = RegionSchedule::Static;
+  r.items = items;
+  r.parallel_regions = parallel_regions;
+  r.seconds = seconds;
+  steps_.back().regions.push_back(std::move(r));
+}
+
+void WorkRecorder::add_serial(const char* name, double seconds) {
+  if (!active_) return;
+  WorkRegion r;
+  r.name = name;
+  r.seconds = seconds;
+  steps_.back().regions.push_back(std::move(r));
+}
+
+void WorkRecorder::add_colour_passes(const char* name, const ColourPassTiming& timing, const CellSort& sort,
+                                     bool single_pass) {
+  if (!active_) return;
+  for (int c = 0; c < (single_pass ? 1 : 8); ++c) {
+    WorkRegion r;
+    r.name = single_pass ? std::string(name) : std::string(name) + " colour " + std::to_string(c);
+    r.schedule = RegionSchedule::Dynamic;
+    r.parallel_regions = 1;
+    r.seconds = timing.wall[c];
+    r.block_seconds = timing.block_seconds[c];
+    const std::size_t count = r.block_seconds.size();
+    r.block_particles.resize(count);
+    for (std::size_t bi = 0; bi < count; ++bi) {
+      const std::size_t b = single_pass ? sort.blocks_in_work_order()[bi] : sort.colour(c)[bi];
+      r.block_particles[bi] = sort.block_end(b) - sort.block_begin(b);
+    }
+    steps_.back().regions.push_back(std::move(r));
+  }
+}
+
+void WorkRecorder::add_block_loop(const char* name, const std::vector<double>& block_seconds, double seconds,
+                                  const CellSort& sort) {
+  if (!active_) return;
+  WorkRegion r;
+  r.name = name;
+  r.schedule = RegionSchedule::Dynamic;
+  r.parallel_regions = 1;
+  r.seconds = seconds;
+  r.block_seconds = block_seconds;
+  r.block_particles.resize(block_seconds.size());
+  for (std::size_t bi = 0; bi < block_seconds.size(); ++bi) {
+    const std::size_t b = sort.blocks_in_work_order()[bi];
+    r.block_particles[bi] = sort.block_end(b) - sort.block_begin(b);
+  }
+  steps_.back().regions.push_back(std::move(r));
+}
+
+void WorkRecorder::add_after_step(const char* name, double seconds) {
+  if (steps_.empty()) return;
+  WorkRegion r;
+  r.name = name;
+  r.seconds = seconds;
+  steps_.back().regions.push_back(std::move(r));
+  steps_.back().seconds += seconds;
+}
+
+void WorkRecorder::set_totals(std::int64_t steps, double solver_seconds, double other_seconds) {
+  total_steps_ = steps;
+  solver_seconds_ = solver_seconds;
+  other_seconds_ = other_seconds;
+}
+
+std::vector<double> WorkRecorder::measure_fork_join(int max_threads) {
+  const int saved = omp_get_max_threads();
+  std::vector<double> cost(static_cast<std::size_t>(max_threads) + 1, 0.0);
+  volatile int sink = 0;
+  for (int t = 1; t <= max_threads; ++t) {
+    omp_set_num_threads(t);
+    double best = 1e300;
+    for (int trial = 0; trial < 5; ++trial) {
+      constexpr int kRegions = 2000;
+      const double start = omp_get_wtime();
+      for (int r = 0; r < kRegions; ++r) {
+#pragma omp parallel for schedule(dynamic, 1)
+        for (int i = 0; i < t; ++i) sink = sink + i;  // as the colour passes: dynamic, one item per thread
+      }
+      best = std::min(best, (omp_get_wtime() - start) / kRegions);
+    }
+    cost[t] = best;
+  }
+  omp_set_num_threads(saved);
+  return cost;
+}
+
+nlohmann::json WorkRecorder::to_json(const nlohmann::json& meta) const {
+  nlohmann::json j = meta;
+  j["format"] = "talus-work-record/1";
+  nlohmann::json steps = nlohmann::json::array();
+  for (const WorkStep& s : steps_) {
+    nlohmann::json js;
+    js["step"] = s.step;
+    js["seconds"] = s.seconds;
+    js["particles"] = s.particles;
+    js["blocks"] = s.blocks;
+    nlohmann::json regions = nlohmann::json::array();
+    for (const WorkRegion& r : s.regions) {
+      nlohmann::json jr;
+      jr["name"] = r.name;
+      jr["schedule"] = r.schedule == RegionSchedule::Static ? "static" : r.schedule == RegionSchedule::Dynamic ? "dynamic" : "serial";
+      if (r.schedule == RegionSchedule::Dynamic) {
+        jr["chunk"] = r.chunk;
+        jr["block_seconds"] = r.block_seconds;
+        jr["block_particles"] = r.block_particles;
+      }
+      if (r.schedule == RegionSchedule::Static) jr["items"] = r.items;
+      jr["parallel_regions"] = r.parallel_regions;
+      jr["seconds"] = r.seconds;
+      regions.push_back(std::move(jr));
+    }
+    js["regions"] = std::move(regions);
+    steps.push_back(std::move(js));
+  }
+  j["steps"] = std::move(steps);
+  if (total_steps_ > 0) {
+    j["run_steps"] = total_steps_;
+    j["run_solver_seconds"] = solver_seconds_;
+    j["run_other_seconds"] = other_seconds_;
+  }
+  return j;
+}
+
+}  // namespace talus

@@ -1,0 +1,163 @@
+#!/usr/bin/env python3
+"""Checks the scaling model (tools/scaling_model.py) against measured runs on this machine: records the
+work at 1 thread, predicts the speed-up at 2 (or --threads) threads, then measures 1 and 2 threads
+`--repeat` times, alternating, and prints prediction and measurements side by side.
+
+    flock -x /work/quiet.lock tools/scaling_validation.py --case block --case shear --case flume \
+        [--talus build/talus] [--repeat 2] [--flume-end 0.5] [--out docs/performance/scaling_validation.json]
+
+Cases: block (talus bench, 1 M particles, linear elastic), shear (talus bench --scene shear --material dp
+--shape bspline2, 1 M particles), flume (inputs/denlinger_flume.json run to --flume-end seconds of
+simulated time, with its outputs). Threads are pinned (OMP_PROC_BIND=close, OMP_PLACES=cores unless
+set). The bench rates are those of the timed steps; the flume rate is the run's particle-updates per
+second of wall time, output included. The prediction for the flume is the run's wall time at 1 thread
+split by the record into the steps (scaled by the model's speed-up of the recorded steps) and the rest
+of the run loop (output, guards: kept serial).
+"""
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import scaling_model  # noqa: E402
+
+
+def env():
+    e = dict(os.environ)
+    e.setdefault("OMP_PROC_BIND", "close")
+    e.setdefault("OMP_PLACES", "cores")
+    return e
+
+
+def load():
+    return os.getloadavg()[0]
+
+
+def bench(talus, args, threads, record=None):
+    with tempfile.NamedTemporaryFile(suffix=".json") as f:
+        cmd = [talus, "bench", "--threads", str(threads), "--json", f.name] + args
+        if record:
+            cmd += ["--record-work", record]
+        subprocess.run(cmd, check=True, env=env(), stdout=subprocess.DEVNULL)
+        return json.load(open(f.name))["particle_updates_per_second"]
+
+
+def flume_scene(end, path):
+    here = os.path.dirname(os.path.abspath(__file__))
+    s = json.load(open(os.path.join(here, "..", "inputs", "denlinger_flume.json")))
+    s["time"]["end"] = end
+    s["name"] = "flume_validation"
+    json.dump(s, open(path, "w"))
+
+
+def run(talus, scene, threads, out, record=None):
+    cmd = [talus, "run", scene, "--threads", str(threads), "--quiet", "--out", out]
+    if record:
+        cmd += ["--record-work", record, "--record-interval", "37"]
+    text = subprocess.run(cmd, check=True, env=env(), capture_output=True, text=True).stdout
+    m = re.search(r"done: (\d+) steps .* in ([0-9.]+) s \(([0-9.]+) M particle-updates/s\)", text)
+    return float(m.group(3)) * 1e6, float(m.group(2))
+
+
+def predicted_speedup(record_path, threads, schedule="recorded"):
+    record = json.load(open(record_path))
+    barrier = scaling_model.Barrier(record["fork_join_seconds"], 1e-6)
+    one = sum(scaling_model.predict(record, 1, barrier, schedule, "robust").values())
+    many = sum(scaling_model.predict(record, threads, barrier, schedule, "robust").values())
+    return one / many, record
+
+
+def plot(results, path):
+    """Measured speed-ups (every run) beside the model's, per case."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return
+    fig, ax = plt.subplots(figsize=(6, 3.5))
+    for i, e in enumerate(results):
+        ax.plot([i - 0.1] * len(e["measured_speedup"]), e["measured_speedup"], "o", color="C0",
+                label="measured" if i == 0 else None)
+        ax.plot([i + 0.1], [e["predicted_speedup"]], "x", color="C3", ms=9, label="model" if i == 0 else None)
+    ax.set_xticks(range(len(results)))
+    ax.set_xticklabels([e["case"] for e in results])
+    ax.set(ylabel=f"speed-up at {results[0]['threads']} threads", xlim=(-0.5, len(results) - 0.5))
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    print("wrote", path)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--talus", default="build/talus")
+    ap.add_argument("--case", action="append", choices=["block", "shear", "flume"])
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--repeat", type=int, default=2)
+    ap.add_argument("--particles", type=int, default=1000000)
+    ap.add_argument("--steps", type=int, default=10)
+    ap.add_argument("--flume-end", type=float, default=0.5)
+    ap.add_argument("--workdir", default="build/validation")
+    ap.add_argument("--out", default="")
+    a = ap.parse_args()
+    os.makedirs(a.workdir, exist_ok=True)
+    results = []
+    for case in a.case or ["block", "shear", "flume"]:
+        rec = os.path.join(a.workdir, f"{case}_record_1thread.json")
+        t0 = time.time()
+        entry = {"case": case, "threads": a.threads, "load_before": load()}
+        if case in ("block", "shear"):
+            args = ["--particles", str(a.particles), "--steps", str(a.steps)]
+            if case == "shear":
+                args += ["--scene", "shear", "--material", "dp", "--shape", "bspline2"]
+            bench(a.talus, args + ["--record-steps", "3"], 1, rec)
+            ones, manys = [], []
+            for _ in range(a.repeat):
+                ones.append(bench(a.talus, args, 1))
+                manys.append(bench(a.talus, args, a.threads))
+            speedup, _ = predicted_speedup(rec, a.threads)
+            base = sum(ones) / len(ones)
+            entry.update(command="talus bench " + " ".join(args))
+        else:
+            scene = os.path.join(a.workdir, "flume_validation.json")
+            flume_scene(a.flume_end, scene)
+            run(a.talus, scene, 1, os.path.join(a.workdir, "flume_run"), rec)
+            ones, manys, walls1 = [], [], []
+            for _ in range(a.repeat):
+                r1, w1 = run(a.talus, scene, 1, os.path.join(a.workdir, "flume_run"))
+                ones.append(r1)
+                walls1.append(w1)
+                manys.append(run(a.talus, scene, a.threads, os.path.join(a.workdir, "flume_run"))[0])
+            step_speedup, record = predicted_speedup(rec, a.threads)
+            solver_s, other_s = record["run_solver_seconds"], record["run_other_seconds"]
+            share = solver_s / (solver_s + other_s)  # the steps' share of the recorded run's loop
+            speedup = 1.0 / (share / step_speedup + (1.0 - share))
+            base = sum(ones) / len(ones)
+            entry.update(command=f"talus run inputs/denlinger_flume.json with time.end = {a.flume_end}",
+                         step_speedup=step_speedup, steps_share=share)
+        entry.update(measured_1=ones, measured_n=manys, predicted_speedup=speedup, predicted_n=base * speedup,
+                     measured_speedup=[m / base for m in manys], load_after=load(), seconds=time.time() - t0)
+        err = [(base * speedup - m) / m for m in manys]
+        entry["prediction_error"] = err
+        results.append(entry)
+        print(f"{case}: 1 thread {', '.join(f'{x / 1e6:.3f}' for x in ones)} M/s; {a.threads} threads "
+              f"{', '.join(f'{x / 1e6:.3f}' for x in manys)} M/s (x{', '.join(f'{m / base:.2f}' for m in manys)}); "
+              f"model x{speedup:.2f} -> {base * speedup / 1e6:.3f} M/s, error {', '.join(f'{100 * e:+.1f}%' for e in err)}; "
+              f"load {entry['load_before']:.2f} -> {entry['load_after']:.2f}", flush=True)
+    if a.out:
+        plot(results, a.out.rsplit(".", 1)[0] + ".png")
+        with open(a.out, "w") as f:
+            json.dump({"cpu": open("/proc/cpuinfo").read().split("model name")[1].split("\n")[0].strip(": "),
+                       "results": results}, f, indent=1)
+        print("wrote", a.out)
+
+
+if __name__ == "__main__":
+    main()
