@@ -142,6 +142,14 @@ ConeFit read_cone(ObjectReader& r) {
   return ConeFit::PlaneStrain;
 }
 
+// The separation rule shared by the granular models: stress-free beyond V / V0 = ratio, 0 disables.
+void read_separation(ObjectReader& r, GranularOptions& g) {
+  g.separation_volume_ratio = r.number_or("separation_volume_ratio", g.separation_volume_ratio, 0.0, kHuge);
+  if (g.separation_volume_ratio != 0.0 && g.separation_volume_ratio <= 1.0)
+    throw input_error(fmt::format("{} = {} is outside the allowed range (1, inf), or 0 to disable",
+                                  r.key_path("separation_volume_ratio"), g.separation_volume_ratio));
+}
+
 // Drucker-Prager keys next to density/young/poisson (seed 001 eq. 23-25, Table 2); the ranges are
 // checked by the DruckerPrager constructor, which names the key path.
 void read_drucker_prager(ObjectReader& r, MaterialSpec& m) {
@@ -164,22 +172,42 @@ void read_drucker_prager(ObjectReader& r, MaterialSpec& m) {
   g.flowing_plastic_strain = r.number_or("flowing_plastic_strain", g.flowing_plastic_strain, 0.0, kHuge);
   g.flowing_dilatancy_angle_deg =
       r.number_or("flowing_dilatancy_angle", g.flowing_dilatancy_angle_deg, 0.0, p.friction_angle_deg);
-  g.separation_volume_ratio = r.number_or("separation_volume_ratio", g.separation_volume_ratio, 0.0, kHuge);
-  if (g.separation_volume_ratio != 0.0 && g.separation_volume_ratio <= 1.0)
-    throw input_error(fmt::format("{} = {} is outside the allowed range (1, inf), or 0 to disable",
-                                  r.key_path("separation_volume_ratio"), g.separation_volume_ratio));
+  read_separation(r, g);
+}
+
+// μ(I) keys next to density/young/poisson (Jop et al. 2006, friction law and inertial number; docs/mu-i.md); defaults are the
+// glass beads of Jop et al. 2006; the ranges are checked by the MuI constructor, which names the key.
+void read_mu_i(ObjectReader& r, MaterialSpec& m) {
+  MuIParameters& p = m.mu_i;
+  p.young = m.elastic.young;
+  p.poisson = m.elastic.poisson;
+  auto any_number = [&](const char* key, double fallback) {
+    return r.number_or(key, fallback, -kHuge, kHuge);  // range checked below, with the allowed interval
+  };
+  p.mu_s = any_number("mu_s", p.mu_s);
+  p.mu_2 = any_number("mu_2", p.mu_2);
+  p.i0 = any_number("i0", p.i0);
+  p.grain_diameter = any_number("grain_diameter", p.grain_diameter);
+  p.grain_density = any_number("grain_density", p.grain_density);
+  (void)MuI(p, r.path() + ".");  // validates, throws with the key path and the allowed range
+  read_separation(r, m.granular);
 }
 
 MaterialSpec read_material(ObjectReader r, const std::string& name) {
   MaterialSpec m;
   m.name = name;
-  const std::string model = r.choice("model", "linear_elastic", {"linear_elastic", "drucker_prager"});
-  m.model = model == "drucker_prager" ? MaterialModel::DruckerPrager : MaterialModel::LinearElastic;
+  const std::string model = r.choice("model", "linear_elastic", {"linear_elastic", "drucker_prager", "mu_i"});
+  m.model = model == "drucker_prager" ? MaterialModel::DruckerPrager
+            : model == "mu_i"         ? MaterialModel::MuI
+                                      : MaterialModel::LinearElastic;
   m.density = r.number("density", 0.0, kHuge, true);
   m.elastic.young = r.number("young", 0.0, kHuge, true);
   if (m.model == MaterialModel::DruckerPrager) {
     m.elastic.poisson = r.number("poisson", 0.0, 0.5, false, true);
     read_drucker_prager(r, m);
+  } else if (m.model == MaterialModel::MuI) {
+    m.elastic.poisson = r.number("poisson", 0.0, 0.5, false, true);
+    read_mu_i(r, m);
   } else {
     m.elastic.poisson = r.number("poisson", -1.0, 0.5, true, true);
   }
@@ -482,6 +510,14 @@ nlohmann::json scene_to_json(const Scene& s) {
       mj["cone"] = to_string(p.cone);
       mj["flowing_plastic_strain"] = m.granular.flowing_plastic_strain;
       mj["flowing_dilatancy_angle"] = m.granular.flowing_dilatancy_angle_deg;
+      mj["separation_volume_ratio"] = m.granular.separation_volume_ratio;
+    } else if (m.model == MaterialModel::MuI) {
+      const MuIParameters& p = m.mu_i;
+      mj["mu_s"] = p.mu_s;
+      mj["mu_2"] = p.mu_2;
+      mj["i0"] = p.i0;
+      mj["grain_diameter"] = p.grain_diameter;
+      mj["grain_density"] = p.grain_density;
       mj["separation_volume_ratio"] = m.granular.separation_volume_ratio;
     }
     mats[m.name] = mj;
