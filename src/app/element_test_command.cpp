@@ -1,9 +1,12 @@
 // `talus element-test SPEC.json --out FILE.csv`: single-point Drucker–Prager test along a
 // strain- or mixed-controlled path (seed 001 sec. 6(3), Fig. 13). The spec format and the CSV
 // columns are documented in docs/drucker-prager.md; the driver is talus::run_element_test.
+// A spec whose material has "model": "mu_i" runs the μ(I) steady simple shear instead
+// (talus::run_mu_i_shear_test; spec and columns in docs/mu-i.md).
 #include "commands.hpp"
 #include "talus/core/error.hpp"
 #include "talus/material/element_test.hpp"
+#include "talus/material/mu_i_shear_test.hpp"
 
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
@@ -86,10 +89,81 @@ class SpecReader {
     return j.contains(key) ? number(j, prefix, key) : fallback;
   }
 
+ public:
+  /// "model" of the spec's material: drucker_prager (default) or mu_i.
+  bool is_mu_i(const json& root) const {
+    if (!root.is_object() || !root.contains("material") || !root["material"].is_object()) return false;
+    const json& m = root["material"];
+    if (!m.contains("model")) return false;
+    const json& model = m["model"];
+    const std::string name = model.is_string() ? model.get<std::string>() : std::string();
+    if (name != "drucker_prager" && name != "mu_i") fail("material.model must be one of drucker_prager, mu_i");
+    return name == "mu_i";
+  }
+
+  // μ(I): material keys as in a scene (docs/mu-i.md), path {"type": "mu_i_shear", "pressure",
+  // "inertial_number": {"min", "max", "count"} (log-spaced), "strain_increment", "increments"}.
+  MuIShearSpec read_mu_i(const json& root) const {
+    require_object(root, "");
+    check_keys(root, "", {"description", "material", "path"});
+    if (root.contains("description") && !root["description"].is_string())
+      fail("description must be a string");
+    MuIShearSpec spec;
+    const json& m = member(root, "", "material");
+    const std::string mp = "material.";
+    check_keys(m, mp, {"model", "young", "poisson", "mu_s", "mu_2", "i0", "grain_diameter", "grain_density"});
+    MuIParameters& p = spec.material;
+    p.young = required_number(m, mp, "young");
+    p.poisson = required_number(m, mp, "poisson");
+    p.mu_s = optional_number(m, mp, "mu_s", p.mu_s);
+    p.mu_2 = optional_number(m, mp, "mu_2", p.mu_2);
+    p.i0 = optional_number(m, mp, "i0", p.i0);
+    p.grain_diameter = optional_number(m, mp, "grain_diameter", p.grain_diameter);
+    p.grain_density = optional_number(m, mp, "grain_density", p.grain_density);
+    try {
+      MuI check(p, mp);  // validates ranges; messages name material.<key>
+    } catch (const Error& e) {
+      fail(e.what());
+    }
+    const json& path = member(root, "", "path");
+    const std::string pp = "path.";
+    check_keys(path, pp, {"type", "pressure", "inertial_number", "strain_increment", "increments"});
+    const json& type = member(path, pp, "type");
+    if (!type.is_string() || type.get<std::string>() != "mu_i_shear")
+      fail("path.type must be mu_i_shear for a mu_i material");
+    spec.pressure = required_number(path, pp, "pressure");
+    if (!(spec.pressure > 0.0))
+      fail(fmt::format("path.pressure = {} is out of range; allowed > 0 (Pa, compression positive)", spec.pressure));
+    const json& range = member(path, pp, "inertial_number");
+    if (!range.is_object()) fail("path.inertial_number must be an object {min, max, count}");
+    const std::string rp = "path.inertial_number.";
+    check_keys(range, rp, {"min", "max", "count"});
+    const double lo = required_number(range, rp, "min"), hi = required_number(range, rp, "max");
+    if (!(lo > 0.0)) fail(fmt::format("path.inertial_number.min = {} is out of range; allowed > 0", lo));
+    if (!(hi >= lo)) fail(fmt::format("path.inertial_number.max = {} is out of range; allowed >= min = {}", hi, lo));
+    const json& count = member(range, rp, "count");
+    if (!count.is_number_integer() || count.get<long long>() < 1 || count.get<long long>() > 100000)
+      fail("path.inertial_number.count must be an integer in [1, 100000]");
+    const int n = static_cast<int>(count.get<long long>());
+    for (int k = 0; k < n; ++k)
+      spec.inertial_numbers.push_back(n == 1 ? lo : lo * std::pow(hi / lo, static_cast<double>(k) / (n - 1)));
+    spec.strain_increment = optional_number(path, pp, "strain_increment", spec.strain_increment);
+    if (!(spec.strain_increment > 0.0 && spec.strain_increment <= 1.0))
+      fail(fmt::format("path.strain_increment = {} is out of range; allowed (0, 1]", spec.strain_increment));
+    if (path.contains("increments")) {
+      const json& inc = path["increments"];
+      if (!inc.is_number_integer() || inc.get<long long>() < 1 || inc.get<long long>() > 10000000)
+        fail("path.increments must be an integer in [1, 10000000]");
+      spec.increments = static_cast<int>(inc.get<long long>());
+    }
+    return spec;
+  }
+
+ private:
   DruckerPragerParameters material(const json& m) const {
     const std::string prefix = "material.";
     check_keys(m, prefix,
-               {"young", "poisson", "friction_angle", "dilatancy_angle", "cohesion",
+               {"model", "young", "poisson", "friction_angle", "dilatancy_angle", "cohesion",
                 "hardening_modulus", "kinematic_fraction", "tension_cutoff", "cone"});
     DruckerPragerParameters p;
     p.young = required_number(m, prefix, "young");
@@ -208,7 +282,21 @@ void run_element_test_command(const std::string& spec_file, const std::string& o
   } catch (const json::parse_error& e) {
     throw input_error(fmt::format("{}: invalid JSON: {}", spec_file, e.what()));
   }
-  const ElementTestSpec spec = SpecReader(spec_file).read(root);
+  const SpecReader reader(spec_file);
+  if (reader.is_mu_i(root)) {
+    const std::vector<MuIShearPoint> points = run_mu_i_shear_test(reader.read_mu_i(root));
+    std::ofstream out(out_file);
+    if (!out) throw io_error(fmt::format("cannot write {}", out_file));
+    write_mu_i_shear_csv(out, points);
+    out.close();
+    if (!out) throw io_error(fmt::format("error while writing {}", out_file));
+    double worst = 0.0;
+    for (const MuIShearPoint& p : points) worst = std::fmax(worst, std::abs(p.relative_error));
+    fmt::print("element-test: mu(I) simple shear at {} inertial numbers, largest |tau/p / mu(I) - 1| = {:.2e}, wrote {}\n",
+               points.size(), worst, out_file);
+    return;
+  }
+  const ElementTestSpec spec = reader.read(root);
   const std::vector<ElementTestPoint> points = run_element_test(spec);
 
   std::ofstream out(out_file);
@@ -226,7 +314,8 @@ void add_element_test_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "element-test",
       "Single-point Drucker-Prager test (uniaxial compression, simple shear, drained triaxial, "
-      "oedometer) from a JSON spec; writes a CSV. See docs/drucker-prager.md.");
+      "oedometer) or mu(I) steady simple shear from a JSON spec; writes a CSV. See "
+      "docs/drucker-prager.md, docs/mu-i.md.");
   auto spec_file = std::make_shared<std::string>();
   auto out_file = std::make_shared<std::string>();
   cmd->add_option("spec", *spec_file, "JSON spec (material + path), e.g. inputs/element_tests/*.json")
