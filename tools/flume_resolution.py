@@ -23,7 +23,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
-from talus_plot import finish_axes, read_csv_columns, save_figure, write_csv_rows  # noqa: E402
+from talus_plot import finish_axes, read_csv_columns, run_talus, save_figure, write_csv_rows  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TIMES = (0.5, 1.0, 2.0)  # [s] front positions compared between resolutions
@@ -51,7 +51,7 @@ def main():
                 subprocess.run([sys.executable, os.path.join(ROOT, "tools", "make_flume_scene.py"), "--cell", str(h),
                                 "--name", name], check=True, stdout=f)
             t0 = time.perf_counter()
-            subprocess.run([a.talus, "run", scene, "--out", run_dir, "--threads", str(a.threads), "--quiet"], check=True)
+            run_talus(a.talus, "run", scene, "--out", run_dir, threads=a.threads)
             with open(wall_path, "w") as f:
                 f.write(f"{time.perf_counter() - t0:.1f}\n")
         runout = read_csv_columns(os.path.join(run_dir, "runout.csv"))

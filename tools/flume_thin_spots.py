@@ -22,7 +22,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from talus_plot import write_csv_rows  # noqa: E402
+from talus_plot import read_vtu, write_csv_rows  # noqa: E402
 
 
 def frame_near(run, time):
@@ -36,15 +36,8 @@ def frame_near(run, time):
 
 def read_particles(path):
     """Positions, stress (n x 6) and density of one .vtu frame."""
-    import vtk
-    from vtk.util.numpy_support import vtk_to_numpy
-    reader = vtk.vtkXMLUnstructuredGridReader()
-    reader.SetFileName(path)
-    reader.Update()
-    grid = reader.GetOutput()
-    data = grid.GetPointData()
-    return (vtk_to_numpy(grid.GetPoints().GetData()), vtk_to_numpy(data.GetArray("stress")),
-            vtk_to_numpy(data.GetArray("density")))
+    d = read_vtu(path, "stress", "density")
+    return d["points"], d["stress"], d["density"]
 
 
 def enclosed_empty_area(x, y, cell):

@@ -8,7 +8,6 @@ Usage: /usr/bin/python3 tools/plot_column_collapse.py --talus build/talus [--run
 """
 import argparse
 import os
-import subprocess
 import sys
 
 import matplotlib
@@ -16,16 +15,12 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
+from talus_plot import ROOT, read_vtu, run_talus  # noqa: E402
 
 
 def read_frame_xz(path):
-    import vtk  # python3-vtk9 (tools/setup.sh)
-    reader = vtk.vtkXMLUnstructuredGridReader()
-    reader.SetFileName(path)
-    reader.Update()
-    points = reader.GetOutput().GetPoints()
-    xyz = np.array([points.GetPoint(i) for i in range(points.GetNumberOfPoints())])
+    xyz = read_vtu(path)["points"]
     return xyz[:, 0], xyz[:, 2]
 
 
@@ -37,8 +32,7 @@ def main():
     args = ap.parse_args()
     run = args.run_dir or os.path.join(ROOT, "runs", "column_collapse_2d")
     if not args.run_dir:
-        subprocess.run([args.talus, "run", os.path.join(ROOT, "inputs", "column_collapse_2d.json"), "--out", run],
-                       check=True)
+        run_talus(args.talus, "run", os.path.join(ROOT, "inputs", "column_collapse_2d.json"), "--out", run, quiet=False)
     d = np.genfromtxt(os.path.join(run, "energy.csv"), delimiter=",", names=True)
     released = d["gravity"][0] - d["gravity"][-1]
     t = d["time"]

@@ -19,7 +19,6 @@ import glob
 import json
 import math
 import os
-import subprocess
 import sys
 
 import matplotlib
@@ -27,7 +26,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
+from talus_plot import ROOT, run_talus  # noqa: E402
 
 
 def cone(fit, angle_deg, cohesion):
@@ -63,8 +63,7 @@ def run_specs(talus, specs, csv_dir):
     os.makedirs(csv_dir, exist_ok=True)
     for spec in specs:
         out = os.path.join(csv_dir, os.path.basename(spec).replace(".json", ".csv"))
-        subprocess.run([talus, "element-test", spec, "--out", out], check=True,
-                       stdout=subprocess.DEVNULL)
+        run_talus(talus, "element-test", spec, "--out", out)
 
 
 def load(spec, csv_dir):

@@ -14,7 +14,6 @@ Usage: /usr/bin/python3 tools/plot_terrain.py --talus build/talus [--runs runs/t
 import argparse
 import math
 import os
-import subprocess
 import sys
 import xml.etree.ElementTree as ET
 
@@ -24,9 +23,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
-from talus_plot import finish_axes, save_figure  # noqa: E402
-
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from talus_plot import ROOT, finish_axes, read_vtu, run_talus, save_figure  # noqa: E402
 G = 9.81
 THETA = math.radians(30.0)
 
@@ -34,25 +31,16 @@ THETA = math.radians(30.0)
 def run(args, name):
     out = os.path.join(args.runs, name)
     if not (args.reuse and os.path.exists(os.path.join(out, "energy.csv"))):
-        subprocess.run([args.talus, "run", os.path.join(ROOT, "inputs", "terrain", name + ".json"), "--out", out],
-                       check=True, stdout=subprocess.DEVNULL)
+        run_talus(args.talus, "run", os.path.join(ROOT, "inputs", "terrain", name + ".json"), "--out", out)
     return out
 
 
 def frames(run_dir):
     """(time, xyz array, mass weights) of every particle frame of a run."""
-    import vtk  # python3-vtk9 (tools/setup.sh)
-    from vtk.util.numpy_support import vtk_to_numpy
     result = []
     for ds in ET.parse(os.path.join(run_dir, "particles.pvd")).getroot().iter("DataSet"):
-        reader = vtk.vtkXMLUnstructuredGridReader()
-        reader.SetFileName(os.path.join(run_dir, ds.get("file")))
-        reader.Update()
-        out = reader.GetOutput()
-        xyz = vtk_to_numpy(out.GetPoints().GetData())
-        pd = out.GetPointData()
-        mass = vtk_to_numpy(pd.GetArray("density")) * vtk_to_numpy(pd.GetArray("volume"))
-        result.append((float(ds.get("timestep")), xyz, mass))
+        d = read_vtu(os.path.join(run_dir, ds.get("file")), "density", "volume")
+        result.append((float(ds.get("timestep")), d["points"], d["density"] * d["volume"]))
     return result
 
 

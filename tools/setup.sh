@@ -7,7 +7,7 @@ packages=(
   cmake g++ make
   libeigen3-dev libhdf5-dev libvtk9-dev nlohmann-json3-dev libgtest-dev
   libcli11-dev libfmt-dev
-  python3-matplotlib python3-numpy python3-vtk9 hdf5-tools
+  python3-matplotlib python3-numpy python3-vtk9 python3-jsonschema hdf5-tools
 )
 
 missing=()

@@ -15,7 +15,6 @@ import argparse
 import json
 import math
 import os
-import subprocess
 import sys
 import tempfile
 import time
@@ -25,9 +24,7 @@ import numpy as np  # noqa: E402
 import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from vtk.util.numpy_support import vtk_to_numpy  # noqa: E402
-import vtk  # noqa: E402
-from talus_plot import finish_axes, save_figure, write_csv_rows  # noqa: E402
+from talus_plot import finish_axes, read_vtu, run_talus, save_figure, write_csv_rows  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 OUT = os.path.join(ROOT, "docs", "verification")
@@ -88,19 +85,14 @@ def run(talus, scene, threads):
             json.dump(scene, f)
         out = os.path.join(tmp, "out")
         t0 = time.perf_counter()
-        r = subprocess.run([talus, "run", path, "--out", out, "--threads", str(threads), "--quiet"],
-                           capture_output=True, text=True)
+        r = run_talus(talus, "run", path, "--out", out, threads=threads, check=False)
         wall = time.perf_counter() - t0
         if r.returncode != 0:
             return None
         energy = np.genfromtxt(os.path.join(out, "energy.csv"), delimiter=",", names=True)
         frames = sorted(os.listdir(os.path.join(out, "frames")))
-        reader = vtk.vtkXMLUnstructuredGridReader()
-        reader.SetFileName(os.path.join(out, "frames", frames[-1]))
-        reader.Update()
-        grid = reader.GetOutput()
-        x = vtk_to_numpy(grid.GetPoints().GetData())
-        stress = vtk_to_numpy(grid.GetPointData().GetArray("stress"))
+        last = read_vtu(os.path.join(out, "frames", frames[-1]), "stress")
+        x, stress = last["points"], last["stress"]
         steps = int(energy["step"][-1])
         return {"wall": wall, "energy": energy, "x": x, "stress": stress, "steps": steps, "particles": len(x)}
 

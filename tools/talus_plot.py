@@ -4,8 +4,49 @@ The scripts run as `/usr/bin/python3 tools/X.py` and find this module next to th
 their own folder on sys.path before importing it).
 """
 import csv
+import os
+import subprocess
 
 import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def read_vtu(path, *arrays):
+    """One .vtu frame as {"points": n x 3 positions, name: array for each name in arrays}.
+
+    Needs VTK's Python module (python3-vtk9, installed by tools/setup.sh)."""
+    import vtk
+    from vtk.util.numpy_support import vtk_to_numpy
+    reader = vtk.vtkXMLUnstructuredGridReader()
+    reader.SetFileName(path)
+    reader.Update()
+    grid = reader.GetOutput()
+    data = {"points": vtk_to_numpy(grid.GetPoints().GetData())}
+    for name in arrays:
+        array = grid.GetPointData().GetArray(name)
+        if array is None:
+            raise KeyError(f"{path} has no point array '{name}'")
+        data[name] = vtk_to_numpy(array)
+    return data
+
+
+def run_talus(talus, *args, threads=None, quiet=True, capture=False, check=True):
+    """Run the talus program (`talus run SCENE --out DIR`, `talus element-test ...`): the arguments
+    as given, then --threads and --quiet for `run` when asked. Returns the CompletedProcess; with
+    check, a failure raises with talus's own one-line error. capture keeps stdout and stderr."""
+    cmd = [talus, *map(str, args)]
+    if args and args[0] == "run":
+        if threads is not None:
+            cmd += ["--threads", str(threads)]
+        if quiet:
+            cmd.append("--quiet")
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if check and r.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} failed ({r.returncode}): {r.stderr.strip() or r.stdout.strip()}")
+    if not capture and r.stdout and not quiet:
+        print(r.stdout, end="")
+    return r
 
 
 def read_csv_columns(path):

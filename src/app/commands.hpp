@@ -11,5 +11,6 @@ void add_check_command(CLI::App& app);
 void add_bench_command(CLI::App& app);
 void add_element_test_command(CLI::App& app);
 void add_dem_springs_command(CLI::App& app);
+void add_schema_command(CLI::App& app);
 
 }  // namespace talus::app

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   talus::app::add_bench_command(app);
   talus::app::add_element_test_command(app);
   talus::app::add_dem_springs_command(app);
+  talus::app::add_schema_command(app);
 
   try {
     app.parse(argc, argv);

@@ -3,8 +3,9 @@
 #include "commands.hpp"
 #include "talus/core/error.hpp"
 #include "talus/io/checkpoint.hpp"
-#include "talus/io/run_driver.hpp"
+#include "talus/driver/run_driver.hpp"
 #include "talus/scene/scene_json.hpp"
+#include "talus/solver/memory_estimate.hpp"
 #include "talus/solver/solver.hpp"
 
 #include <fmt/core.h>
@@ -14,6 +15,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 namespace talus::app {
 
@@ -27,18 +29,23 @@ void print_warnings(const Scene& scene) {
   for (const std::string& w : scene_warnings(scene)) fmt::print(stderr, "talus: warning: {}\n", w);
 }
 
-void print_scene_summary(const Solver& solver) {
-  const Scene& s = solver.scene();
+// What a run would do, from the scene and the memory estimate alone: nothing is seeded or
+// allocated, so this answers at once on any scene (solver/memory_estimate.hpp).
+void print_scene_summary(const Scene& s, const MemoryEstimate& memory) {
   const auto& g = s.grid;
   fmt::print("scene      {}{}\n", s.name, s.description.empty() ? "" : " - " + s.description);
   fmt::print("grid       {} x {} x {} cells of {} m, origin ({}, {}, {})\n", g.cells[0], g.cells[1], g.cells[2], g.h,
              g.origin[0], g.origin[1], g.origin[2]);
-  fmt::print("particles  {} in {} bod{}\n", solver.particles().size(), s.bodies.size(), s.bodies.size() == 1 ? "y" : "ies");
+  fmt::print("particles  {} in {} bod{}\n", memory.particles, s.bodies.size(), s.bodies.size() == 1 ? "y" : "ies");
   fmt::print("method     {} with {} shape functions, Courant {}\n", to_string(s.scheme), to_string(s.shape), s.courant);
-  const double dt = solver.stable_time_step();
+  const double dt = s.initial_time_step();
   fmt::print("time       end {} s, initial dt {:.3e} s (~{:.0f} steps if speeds stay low)\n", s.end_time, dt, s.end_time / dt);
-  fmt::print("memory     {:.1f} MB particles, {:.1f} MB grid (active tiles)\n", solver.particles().bytes() / 1e6,
-             solver.grid().active_bytes() / 1e6);
+  const std::optional<std::size_t> available = available_memory();
+  fmt::print("memory     about {}: {} B per particle, {} of grid at the start (up to {} if the flow covers the whole "
+             "grid); {}\n",
+             format_bytes(double(memory.total())), memory.bytes_per_particle, format_bytes(double(memory.grid_bytes)),
+             format_bytes(double(memory.grid_bytes_bound)),
+             available ? format_bytes(double(*available)) + " available" : "available memory unknown");
 }
 
 // The end-of-run lines of a scene with runout diagnostics (docs/flume.md).
@@ -72,6 +79,8 @@ void add_run_command(CLI::App& app) {
     set_threads(*threads);
     Scene scene = read_scene_file(*scene_path);  // validated before anything is written
     print_warnings(scene);
+    const MemoryEstimate memory = estimate_memory(scene);
+    require_memory_fits(scene, memory);  // a scene that cannot fit stops here, before anything is allocated
     std::string dir = out_dir->empty() ? "runs/" + scene.name : *out_dir;
     Solver solver(std::move(scene));
     std::unique_ptr<Checkpoint> checkpoint;
@@ -83,7 +92,8 @@ void add_run_command(CLI::App& app) {
       fmt::print("talus: restart from {} at step {}, t = {:.6g} s\n", *restart, solver.step_count(), solver.time());
     }
     const int threads = omp_get_max_threads();
-    fmt::print("talus: {} particles, {} thread{}, output in {}\n", solver.particles().size(), threads, threads == 1 ? "" : "s", dir);
+    fmt::print("talus: {} particles, {} thread{}, about {} of memory, output in {}\n", solver.particles().size(), threads,
+               threads == 1 ? "" : "s", format_bytes(double(memory.total())), dir);
     RunOptions options;
     options.out_dir = dir;
     options.progress = !*quiet;
@@ -128,9 +138,11 @@ void add_check_command(CLI::App& app) {
   auto scene_path = std::make_shared<std::string>();
   cmd->add_option("scene", *scene_path, "Scene file (JSON)")->required();
   cmd->callback([=]() {
-    Solver solver(read_scene_file(*scene_path));
-    print_warnings(solver.scene());
-    print_scene_summary(solver);
+    const Scene scene = read_scene_file(*scene_path);
+    print_warnings(scene);
+    const MemoryEstimate memory = estimate_memory(scene);
+    print_scene_summary(scene, memory);
+    require_memory_fits(scene, memory);
     fmt::print("ok\n");
   });
 }

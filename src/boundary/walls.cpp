@@ -14,4 +14,14 @@ Walls::Walls(const std::array<std::array<WallSpec, 2>, 3>& specs, const GridGeom
   }
 }
 
+const char* to_string(WallType type) {
+  switch (type) {
+    case WallType::Open: return "open";
+    case WallType::Slip: return "slip";
+    case WallType::Fixed: return "fixed";
+    case WallType::Friction: return "friction";
+  }
+  return "?";
+}
+
 }  // namespace talus

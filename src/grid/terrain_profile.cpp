@@ -39,20 +39,20 @@ double TerrainProfile::Piece::x_at(double ds) const {
 TerrainProfile::TerrainProfile(const TerrainSpec& spec) : spec_(spec) {
   const auto& P = spec.points;
   const std::size_t n = P.size();
-  if (n < 2) throw input_error(fmt::format("grid.terrain.points: {} given, at least 2 (x, z) points needed", n));
+  if (n < 2) throw input_error(fmt::format("points: {} given, at least 2 (x, z) points needed", n));
   for (std::size_t i = 0; i < n; ++i) {
     if (!std::isfinite(P[i][0]) || !std::isfinite(P[i][1]))
-      throw input_error(fmt::format("grid.terrain.points[{}]: must be finite", i));
+      throw input_error(fmt::format("points[{}]: must be finite", i));
     if (i > 0 && !(P[i][0] > P[i - 1][0]))
-      throw input_error(fmt::format("grid.terrain.points[{}]: x = {} must be greater than the previous x = {}", i,
+      throw input_error(fmt::format("points[{}]: x = {} must be greater than the previous x = {}", i,
                                     P[i][0], P[i - 1][0]));
   }
   if (!spec.radii.empty() && spec.radii.size() != n)
-    throw input_error(fmt::format("grid.terrain.radii: {} given, one per point ({}) or none", spec.radii.size(), n));
+    throw input_error(fmt::format("radii: {} given, one per point ({}) or none", spec.radii.size(), n));
   const auto radius = [&](std::size_t i) { return spec.radii.empty() ? 0.0 : spec.radii[i]; };
   for (std::size_t i = 0; i < n; ++i)
     if (!(radius(i) >= 0.0) || !std::isfinite(radius(i)))
-      throw input_error(fmt::format("grid.terrain.radii[{}]: {} must be >= 0 (0 = sharp kink)", i, radius(i)));
+      throw input_error(fmt::format("radii[{}]: {} must be >= 0 (0 = sharp kink)", i, radius(i)));
 
   // Tangent points of each transition: A before the vertex, B after it.
   std::vector<std::array<double, 2>> a(n), b(n);
@@ -72,7 +72,7 @@ TerrainProfile::TerrainProfile(const TerrainSpec& spec) : spec_(spec) {
     // the one at i
     if (a[i][0] < b[i - 1][0] - 1e-12 * (1.0 + std::abs(P[i][0])))
       throw input_error(fmt::format(
-          "grid.terrain.radii: the transitions at points {} and {} overlap (or do not fit on the segment between "
+          "radii: the transitions at points {} and {} overlap (or do not fit on the segment between "
           "them): reduce the radii",
           i - 1, i));
   }

@@ -15,7 +15,7 @@ namespace talus {
 namespace {
 
 constexpr const char* kFormat = "talus-checkpoint";
-constexpr int kFormatVersion = 2;  // 2: outflow through open faces
+constexpr int kFormatVersion = 3;  // 2: outflow through open faces; 3: the energy ledger's names
 
 template <class T>
 const H5::PredType& h5_type();
@@ -116,10 +116,9 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
       write_attribute(s, "time", state.time);
       write_attribute(s, "step", state.step);
       write_attribute(s, "last_dt", state.last_dt);
-      write_attribute(s, "friction_work", state.friction_work);
-      write_attribute(s, "plastic_work", state.plastic_work);
-      write_attribute(s, "outflow_energy", state.outflow_energy);
-      write_attribute(s, "damping_work", state.damping_work);
+      state.work.for_each_term([&](const char* name, double value, bool accumulated) {
+        if (accumulated) write_attribute(s, name, value);
+      });
       write_attribute(s, "outflow_mass", state.outflow_mass);
       write_attribute(s, "outflow_particles", state.outflow_particles);
       write_attribute(s, "steps_since_sort", static_cast<std::int32_t>(state.steps_since_sort));
@@ -138,11 +137,9 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
       write_attribute(r, "next_frame", run.next_frame);
       write_attribute(r, "next_history", run.next_history);
       write_attribute(r, "next_checkpoint", run.next_checkpoint);
-      write_attribute(r, "initial_kinetic", run.initial.kinetic);
-      write_attribute(r, "initial_strain", run.initial.strain);
-      write_attribute(r, "initial_gravity", run.initial.gravity);
-      write_attribute(r, "initial_friction_work", run.initial.friction_work);
-      write_attribute(r, "initial_plastic_work", run.initial.plastic_work);
+      run.initial.for_each_term([&](const char* name, double value, bool) {
+        write_attribute(r, (std::string("initial_") + name).c_str(), value);
+      });
       write_attribute(r, "energy_max_released", run.energy_max_released);
       write_array(r, "frame_times", run.frame_times);
       write_array(r, "frame_steps", run.frame_steps);
@@ -182,10 +179,9 @@ Checkpoint read_checkpoint(const std::string& path) {
     c.solver.time = read_attribute<double>(s, "time");
     c.solver.step = read_attribute<std::int64_t>(s, "step");
     c.solver.last_dt = read_attribute<double>(s, "last_dt");
-    c.solver.friction_work = read_attribute<double>(s, "friction_work");
-    c.solver.plastic_work = read_attribute<double>(s, "plastic_work");
-    c.solver.outflow_energy = read_attribute<double>(s, "outflow_energy");
-    c.solver.damping_work = read_attribute<double>(s, "damping_work");
+    c.solver.work.for_each_term([&](const char* name, double& value, bool accumulated) {
+      if (accumulated) value = read_attribute<double>(s, name);
+    });
     c.solver.outflow_mass = read_attribute<double>(s, "outflow_mass");
     c.solver.outflow_particles = read_attribute<std::int64_t>(s, "outflow_particles");
     c.solver.steps_since_sort = read_attribute<std::int32_t>(s, "steps_since_sort");
@@ -206,11 +202,9 @@ Checkpoint read_checkpoint(const std::string& path) {
     c.run.next_frame = read_attribute<double>(r, "next_frame");
     c.run.next_history = read_attribute<double>(r, "next_history");
     c.run.next_checkpoint = read_attribute<double>(r, "next_checkpoint");
-    c.run.initial.kinetic = read_attribute<double>(r, "initial_kinetic");
-    c.run.initial.strain = read_attribute<double>(r, "initial_strain");
-    c.run.initial.gravity = read_attribute<double>(r, "initial_gravity");
-    c.run.initial.friction_work = read_attribute<double>(r, "initial_friction_work");
-    c.run.initial.plastic_work = read_attribute<double>(r, "initial_plastic_work");
+    c.run.initial.for_each_term([&](const char* name, double& value, bool) {
+      value = read_attribute<double>(r, (std::string("initial_") + name).c_str());
+    });
     c.run.energy_max_released = read_attribute<double>(r, "energy_max_released");
     c.run.frame_times = read_array<double>(r, "frame_times");
     c.run.frame_steps = read_array<std::int64_t>(r, "frame_steps");

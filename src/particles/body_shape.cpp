@@ -16,4 +16,12 @@ bool body_contains(const BodySpec& body, const Vec3& p) {
   return false;
 }
 
+const char* to_string(BodyShapeKind shape) {
+  switch (shape) {
+    case BodyShapeKind::Box: return "box";
+    case BodyShapeKind::Prism: return "prism";
+  }
+  return "?";
+}
+
 }  // namespace talus

@@ -30,6 +30,22 @@ std::size_t ParticleStore::add(std::int64_t particle_id, const Vec3& position, c
   return id.size() - 1;
 }
 
+void ParticleStore::reserve(std::size_t n) {
+  id.reserve(n);
+  for (int d = 0; d < 3; ++d) {
+    x[d].reserve(n);
+    v[d].reserve(n);
+  }
+  mass.reserve(n);
+  volume.reserve(n);
+  volume0.reserve(n);
+  for (int c = 0; c < 6; ++c) {
+    stress[c].reserve(n);
+    strain[c].reserve(n);
+  }
+  body.reserve(n);
+}
+
 void ParticleStore::enable_plastic_state(bool with_back_stress) {
   plastic_enabled_ = true;
   plastic_strain.assign(size(), 0.0);
@@ -66,32 +82,12 @@ void permute_field(std::vector<T>& field, const std::vector<std::uint32_t>& orde
 void ParticleStore::permute(const std::vector<std::uint32_t>& order) {
   permute_field(id, order, id_scratch_);
   permute_field(body, order, body_scratch_);
-  auto each = [&](std::vector<double>& f) { permute_field(f, order, scratch_); };
-  for (auto& f : x) each(f);
-  for (auto& f : v) each(f);
-  each(mass);
-  each(volume);
-  each(volume0);
-  for (auto& f : stress) each(f);
-  for (auto& f : strain) each(f);
-  each(plastic_strain);
-  for (auto& f : back_stress) each(f);
-  for (auto& f : domain) each(f);
+  for_each_double_array([&](const char*, std::vector<double>& f) { permute_field(f, order, scratch_); });
 }
 
 std::size_t ParticleStore::bytes() const {
   std::size_t b = id.capacity() * sizeof(std::int64_t) + body.capacity() * sizeof(std::uint16_t);
-  auto add = [&](const std::vector<double>& f) { b += f.capacity() * sizeof(double); };
-  for (auto& f : x) add(f);
-  for (auto& f : v) add(f);
-  add(mass);
-  add(volume);
-  add(volume0);
-  for (auto& f : stress) add(f);
-  for (auto& f : strain) add(f);
-  add(plastic_strain);
-  for (auto& f : back_stress) add(f);
-  for (auto& f : domain) add(f);
+  for_each_double_array([&](const char*, const std::vector<double>& f) { b += f.capacity() * sizeof(double); });
   return b;
 }
 

@@ -25,97 +25,123 @@ std::vector<double> axis_points(double origin, double h, int n, double lo, doubl
   return points;
 }
 
-/// A body on a terrain grid. Candidate points are the cell-local points of the (x, y, w) cells of the
-/// grid, mapped to z = w + z_b(x) (z_b: the grid's bed, terrain.hpp); the map has unit Jacobian, so
-/// each still carries the volume (h/n)^3. A physical box keeps the points inside it: the bed clips a
-/// box that reaches below it (candidates exist only above the bed), and a box with no point above
-/// the bed is an input error. A terrain-frame box reads its third coordinate as w directly.
-void seed_on_terrain(const Scene& scene, std::size_t b, const ProfileTerrain& bed, ParticleStore& store,
-                     std::int64_t& next_id) {
-  const BodySpec& body = scene.bodies[b];
-  const GridGeometry& g = scene.grid;
-  const double h = g.h;
-  const int n = body.particles_per_cell;
-  const double w_top = g.origin[2] + g.cells[2] * h;
-  const std::vector<double> xs = axis_points(g.origin[0], h, n, body.box_min[0], body.box_max[0]);
-  const std::vector<double> ys = axis_points(g.origin[1], h, n, body.box_min[1], body.box_max[1]);
-  // every point of the grid's w column, and one cell of points above the top: a body that holds
-  // one of those reaches above the grid
-  const std::vector<double> ws = axis_points(g.origin[2], h, n, g.origin[2], w_top + h);
-  const double volume = std::pow(h / n, 3);
-  const double mass = scene.materials[body.material].density * volume;
-  const bool terrain_frame = body.frame == BoxFrame::Terrain;
-  // Whether a candidate lies in the body (the box's x and y ranges are those of xs and ys): a
-  // terrain-frame box by its w range, any physical body by its own inside test at (x, y, z).
-  const auto inside = [&](double px, double py, double pw, double pz) {
-    if (terrain_frame) return pw >= body.box_min[2] && pw < body.box_max[2];
-    return body_contains(body, Vec3(px, py, pz));
-  };
-  const std::size_t first = store.size();
-  bool above_top = false;
-  for (double px : xs) {
-    const double zb = bed.height(px);
-    for (double py : ys)
-      for (double pw : ws) {
-        const double pz = pw + zb;
-        if (!inside(px, py, pw, pz)) continue;
-        if (pw >= w_top) {
-          above_top = true;
-          continue;
-        }
-        store.add(next_id++, Vec3(px, py, pz), body.velocity, mass, volume, static_cast<std::uint16_t>(b));
-      }
+/// The candidate points of one body and the test that keeps them. Off a terrain grid the candidates
+/// are the cell-local points of the body's bounding box, and the third axis is z. On a terrain grid
+/// they are the cell-local points of the (x, y, w) cells of the grid, mapped to z = w + z_b(x) (z_b:
+/// the grid's bed, terrain.hpp); the map has unit Jacobian, so each still carries the volume
+/// (h/n)^3. A physical box keeps the points inside it: the bed clips a box that reaches below it
+/// (candidates exist only above the bed), and a box with no point above the bed is an input error.
+/// A terrain-frame box reads its third coordinate as w directly. The y range of the candidates is
+/// the body's, so the test does not depend on y: counting can multiply by the number of ys.
+class BodyCandidates {
+ public:
+  BodyCandidates(const GridGeometry& grid, const BodySpec& body, std::string label, const ProfileTerrain& bed)
+      : grid_(grid), label_(std::move(label)), body_(body), bed_(bed), terrain_(grid.has_terrain()) {
+    const GridGeometry& g = grid;
+    const int n = body_.particles_per_cell;
+    xs_ = axis_points(g.origin[0], g.h, n, body_.box_min[0], body_.box_max[0]);
+    ys_ = axis_points(g.origin[1], g.h, n, body_.box_min[1], body_.box_max[1]);
+    w_top_ = g.origin[2] + g.cells[2] * g.h;
+    // On a terrain grid: every point of the grid's w column, and one cell of points above the top:
+    // a body that holds one of those reaches above the grid.
+    third_ = terrain_ ? axis_points(g.origin[2], g.h, n, g.origin[2], w_top_ + g.h)
+                      : axis_points(g.origin[2], g.h, n, body_.box_min[2], body_.box_max[2]);
   }
-  if (above_top)
-    throw input_error(fmt::format(
-        "bodies[{}] (\"{}\") reaches above the grid's top (w = {} above the bed: grid.origin[2] + grid.size[2] with "
-        "grid.terrain) over part of its x range",
-        b, body.name, w_top));
-  if (store.size() == first)
-    throw input_error(fmt::format(
-        "bodies[{}]{} (\"{}\") holds no particle: it lies below the bed (grid.terrain) or is thinner than the "
-        "particle spacing h/n = {}",
-        b, body.shape == BodyShapeKind::Prism ? ".prism" : "", body.name, h / n));
-}
+
+  /// Visit every kept point in seeding order (x, then y, then the third axis): f(Vec3 position).
+  template <class F>
+  void for_each_point(F&& f) const {
+    for (double px : xs_) {
+      const double zb = terrain_ ? bed_.height(px) : 0.0;
+      for (double py : ys_)
+        for (double third : third_)
+          if (keeps(px, py, third, zb)) f(Vec3(px, py, terrain_ ? third + zb : third));
+    }
+  }
+
+  /// The number of points the body holds. Throws the input errors of a body that reaches above a
+  /// terrain grid or holds no particle, naming the body by its label.
+  std::size_t count() const {
+    std::size_t in_xz = 0;
+    bool above_top = false;
+    if (!ys_.empty())
+      for (double px : xs_) {
+        const double zb = terrain_ ? bed_.height(px) : 0.0;
+        for (double third : third_) {
+          if (!inside(px, ys_.front(), third, zb)) continue;
+          if (terrain_ && third >= w_top_) above_top = true;
+          else ++in_xz;
+        }
+      }
+    const double spacing = grid_.h / body_.particles_per_cell;
+    const bool box = body_.shape == BodyShapeKind::Box;
+    if (above_top)
+      throw input_error(fmt::format(
+          "{} (\"{}\") reaches above the grid's top (w = {} above the bed: grid.origin[2] + grid.size[2] with "
+          "grid.terrain) over part of its x range",
+          label_, body_.name, w_top_));
+    if (terrain_ && in_xz == 0)
+      throw input_error(fmt::format(
+          "{} (\"{}\") holds no particle: it lies below the bed (grid.terrain) or is thinner than the "
+          "particle spacing h/n = {}",
+          label_, body_.name, spacing));
+    if (xs_.empty() || ys_.empty() || third_.empty())
+      throw input_error(fmt::format(
+          "{} (\"{}\") holds no particle: its {} is thinner than the particle spacing h/n = {} "
+          "along some axis", label_, body_.name, box ? "box" : "bounding box", spacing));
+    if (in_xz == 0)
+      throw input_error(fmt::format("{} (\"{}\") holds no particle: no particle point (spacing h/n = {}) "
+                                    "lies inside it", label_, body_.name, spacing));
+    return in_xz * ys_.size();
+  }
+
+ private:
+  // Whether a candidate lies in the body (the box's x and y ranges are those of xs and ys): a
+  // terrain-frame box by its w range, a box off a terrain grid always, any other body by its own
+  // inside test at (x, y, z).
+  bool inside(double px, double py, double third, double zb) const {
+    if (!terrain_) return body_.shape == BodyShapeKind::Box || body_contains(body_, Vec3(px, py, third));
+    if (body_.frame == BoxFrame::Terrain) return third >= body_.box_min[2] && third < body_.box_max[2];
+    return body_contains(body_, Vec3(px, py, third + zb));
+  }
+  bool keeps(double px, double py, double third, double zb) const {
+    return inside(px, py, third, zb) && !(terrain_ && third >= w_top_);
+  }
+
+  const GridGeometry& grid_;
+  std::string label_;
+  const BodySpec& body_;
+  const ProfileTerrain& bed_;
+  bool terrain_;
+  double w_top_ = 0.0;
+  std::vector<double> xs_, ys_, third_;
+};
+
+
+std::string name_of(const BodyLabel& label, std::size_t b) { return label ? label(b) : fmt::format("body {}", b); }
 
 }  // namespace
 
-ParticleStore seed_particles(const Scene& scene) {
+std::size_t count_particles(const GridGeometry& grid, const std::vector<BodySpec>& bodies, const BodyLabel& label) {
+  const ProfileTerrain bed = grid_bed(grid);
+  std::size_t total = 0;
+  for (std::size_t b = 0; b < bodies.size(); ++b) total += BodyCandidates(grid, bodies[b], name_of(label, b), bed).count();
+  return total;
+}
+
+ParticleStore seed_particles(const GridGeometry& grid, const std::vector<BodySpec>& bodies,
+                             const std::vector<double>& material_density, const BodyLabel& label) {
   ParticleStore store;
-  const double h = scene.grid.h;
+  store.reserve(count_particles(grid, bodies, label));  // exact: no array grows past its final size while seeding
+  const ProfileTerrain bed = grid_bed(grid);
   std::int64_t next_id = 0;
-  const ProfileTerrain bed = grid_bed(scene.grid);
-  for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
-    const BodySpec& body = scene.bodies[b];
-    const MaterialSpec& material = scene.materials[body.material];
-    const int n = body.particles_per_cell;
-    if (scene.grid.has_terrain()) {
-      seed_on_terrain(scene, b, bed, store, next_id);
-      continue;
-    }
-    std::array<std::vector<double>, 3> axes;
-    for (int d = 0; d < 3; ++d)
-      axes[d] = axis_points(scene.grid.origin[d], h, n, body.box_min[d], body.box_max[d]);
-    const bool box = body.shape == BodyShapeKind::Box;
-    const std::string key = box ? fmt::format("bodies[{}]", b) : fmt::format("bodies[{}].{}", b, to_string(body.shape));
-    if (axes[0].empty() || axes[1].empty() || axes[2].empty())
-      throw input_error(fmt::format(
-          "{} (\"{}\") holds no particle: its {} is thinner than the particle spacing h/n = {} "
-          "along some axis", key, body.name, box ? "box" : "bounding box", h / n));
-    const double volume = std::pow(h / n, 3);
-    const double mass = material.density * volume;
-    const std::int64_t first_id = next_id;
-    // The candidates span the bounding box; a box keeps them all, other shapes keep those inside.
-    for (double px : axes[0])
-      for (double py : axes[1])
-        for (double pz : axes[2]) {
-          const Vec3 position(px, py, pz);
-          if (box || body_contains(body, position))
-            store.add(next_id++, position, body.velocity, mass, volume, static_cast<std::uint16_t>(b));
-        }
-    if (next_id == first_id)
-      throw input_error(fmt::format("{} (\"{}\") holds no particle: no particle point (spacing h/n = {}) "
-                                    "lies inside it", key, body.name, h / n));
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    const BodySpec& body = bodies[b];
+    const double volume = std::pow(grid.h / body.particles_per_cell, 3);
+    const double mass = material_density.at(body.material) * volume;
+    BodyCandidates(grid, body, name_of(label, b), bed).for_each_point([&](const Vec3& position) {
+      store.add(next_id++, position, body.velocity, mass, volume, static_cast<std::uint16_t>(b));
+    });
   }
   return store;
 }

@@ -7,10 +7,15 @@
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
+#include <optional>
 #include <set>
+#include <sstream>
 #include <string>
+#include <vector>
 
 namespace talus::scene_detail {
 
@@ -74,13 +79,13 @@ class ObjectReader {
     return has(key) ? string(key) : fallback;
   }
 
-  /// One of a fixed set of words.
-  std::string choice(const std::string& key, const std::string& fallback, std::initializer_list<const char*> allowed) {
-    const std::string value = string_or(key, fallback);
+  /// One of a fixed set of words; an empty fallback makes the key required.
+  std::string choice(const std::string& key, const std::string& fallback, const std::vector<std::string>& allowed) {
+    const std::string value = fallback.empty() ? string(key) : string_or(key, fallback);
     std::string list;
-    for (const char* a : allowed) {
+    for (const std::string& a : allowed) {
       if (value == a) return value;
-      list += (list.empty() ? "" : ", ") + std::string(a);
+      list += (list.empty() ? "" : ", ") + a;
     }
     throw input_error(fmt::format("{} = \"{}\" is not one of: {}", key_path(key), value, list));
   }
@@ -98,6 +103,17 @@ class ObjectReader {
 
   ObjectReader object(const std::string& key) { return ObjectReader(raw(key), key_path(key)); }
 
+  /// Refuse a key not in `allowed` before reading any (a misspelt key is named as such, not as the
+  /// required key it was meant to be).
+  void refuse_unknown(const std::vector<std::string>& allowed) const {
+    for (auto it = object_.begin(); it != object_.end(); ++it) {
+      if (std::find(allowed.begin(), allowed.end(), it.key()) != allowed.end()) continue;
+      std::string known;
+      for (const auto& k : allowed) known += (known.empty() ? "" : ", ") + k;
+      throw input_error(fmt::format("unknown key {} (allowed here: {})", key_path(it.key()), known));
+    }
+  }
+
   /// Every key of the object must have been read; call last.
   void finish() const {
     for (auto it = object_.begin(); it != object_.end(); ++it) {
@@ -111,8 +127,16 @@ class ObjectReader {
   /// Mark a key as understood without reading it (e.g. "comment").
   void allow(const std::string& key) { used_.insert(key); }
 
+  /// The interval as messages write it; an end at 1e30 or beyond is unbounded: (0, inf).
+  static std::string interval(double lo, double hi, bool open_lo, bool open_hi) {
+    constexpr double unbounded = 1e30;
+    const bool no_lo = lo <= -unbounded, no_hi = hi >= unbounded;
+    return fmt::format("{}{}, {}{}", open_lo || no_lo ? "(" : "[", no_lo ? std::string("-inf") : fmt::format("{}", lo),
+                       no_hi ? std::string("inf") : fmt::format("{}", hi), open_hi || no_hi ? ")" : "]");
+  }
+
   static double check_number(const Json& j, const std::string& path, double lo, double hi, bool open_lo, bool open_hi) {
-    const auto range = fmt::format("{}{}, {}{}", open_lo ? "(" : "[", lo, hi, open_hi ? ")" : "]");
+    const auto range = interval(lo, hi, open_lo, open_hi);
     if (!j.is_number()) throw input_error(fmt::format("{} must be a number in {}, got {}", path, range, j.dump()));
     const double v = j.get<double>();
     const bool ok = std::isfinite(v) && (open_lo ? v > lo : v >= lo) && (open_hi ? v < hi : v <= hi);
@@ -126,5 +150,41 @@ class ObjectReader {
   std::string path_;
   std::set<std::string> used_;
 };
+
+/// Runs a lower layer's check. Its domain error names the value as that layer knows it
+/// ("points[1]: ...", "friction_angle = 95 ..."); here the key path goes in front
+/// ("grid.terrain.points[1]: ..."), so only the scene layer knows the file's key paths.
+template <class Check>
+void with_key_path(const std::string& prefix, Check&& check) {
+  try {
+    check();
+  } catch (const Error& e) {
+    if (e.kind() != Error::Kind::Input) throw;
+    throw input_error(prefix + e.what());
+  }
+}
+
+/// The whole text of a file; nothing when it cannot be opened (the caller names the file's role).
+inline std::optional<std::string> read_text_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) return std::nullopt;
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+/// Parse a whole input file; a syntax error is an input error naming `source`, the line and column.
+inline Json parse_json(const std::string& text, const std::string& source) {
+  try {
+    return Json::parse(text);
+  } catch (const Json::exception& e) {
+    // nlohmann's message already names the line and column. Not only parse_error: a number that
+    // overflows a double (1e999) is an out_of_range error.
+    std::string what = e.what();
+    const auto bracket = what.find(']');
+    throw input_error(
+        fmt::format("{}: malformed JSON: {}", source, bracket == std::string::npos ? what : what.substr(bracket + 2)));
+  }
+}
 
 }  // namespace talus::scene_detail

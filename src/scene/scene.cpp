@@ -1,6 +1,11 @@
 #include "talus/scene/scene.hpp"
 
+#include "talus/particles/seeding.hpp"
+
 #include <fmt/core.h>
+
+#include <algorithm>
+#include <cmath>
 
 namespace talus {
 
@@ -9,6 +14,15 @@ double MaterialSpec::bulk_modulus() const {
 }
 double MaterialSpec::shear_modulus() const { return elastic.young / (2.0 * (1.0 + elastic.poisson)); }
 double MaterialSpec::p_wave_modulus() const { return bulk_modulus() + 4.0 / 3.0 * shear_modulus(); }
+
+double Scene::initial_time_step() const {
+  double max_rate = 0.0;
+  for (const BodySpec& body : bodies) {
+    const MaterialSpec& m = materials[body.material];
+    max_rate = std::max(max_rate, std::sqrt(m.p_wave_modulus() / m.density) + body.velocity.norm());
+  }
+  return courant * grid.h / max_rate;
+}
 
 const char* to_string(SchemeKind scheme) {
   switch (scheme) {
@@ -49,23 +63,25 @@ const char* to_string(ConeFit cone) {
   return "?";
 }
 
-const char* to_string(BodyShapeKind shape) {
-  switch (shape) {
-    case BodyShapeKind::Box: return "box";
-    case BodyShapeKind::Prism: return "prism";
-  }
-  return "?";
+namespace {
+
+// How seeding names a body in its errors: its key path, bodies[i] or bodies[i].prism.
+BodyLabel body_label(const Scene& scene) {
+  return [&scene](std::size_t b) {
+    const BodySpec& body = scene.bodies[b];
+    return fmt::format("bodies[{}]{}", b, body.shape == BodyShapeKind::Box ? "" : std::string(".") + to_string(body.shape));
+  };
 }
 
-const char* to_string(WallType type) {
-  switch (type) {
-    case WallType::Open: return "open";
-    case WallType::Slip: return "slip";
-    case WallType::Fixed: return "fixed";
-    case WallType::Friction: return "friction";
-  }
-  return "?";
+}  // namespace
+
+ParticleStore seed_particles(const Scene& scene) {
+  std::vector<double> densities;
+  for (const MaterialSpec& m : scene.materials) densities.push_back(m.density);
+  return seed_particles(scene.grid, scene.bodies, densities, body_label(scene));
 }
+
+std::size_t count_particles(const Scene& scene) { return count_particles(scene.grid, scene.bodies, body_label(scene)); }
 
 std::vector<std::string> scene_warnings(const Scene& scene) {
   std::vector<std::string> warnings;

@@ -85,8 +85,9 @@ void velocities_from_momentum(Grid& grid, const Walls& walls, double mass_floor)
   wall_projected_velocities(grid, walls, mass_floor, Walls::Stage::Remap, grid.momentum);
 }
 
-void fold_ghost_nodes(Grid& grid, const Walls& walls, bool mass, bool momentum, bool force, const Vec3& gravity) {
+void fold_ghost_nodes(Grid& grid, const Walls& walls, ScatteredFields fields, const Vec3& gravity) {
   if (!walls.has_mirrored_walls()) return;
+  const auto [mass, momentum, force] = fields;
   for_active_nodes(grid, [&](std::size_t n, std::uint32_t tile, int slot) {
     std::array<std::array<int, 3>, 7> ghosts;
     std::array<std::array<double, 3>, 7> signs;

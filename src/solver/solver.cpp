@@ -8,6 +8,7 @@
 #include "talus/shape/gimp.hpp"
 #include "talus/shape/linear.hpp"
 #include "talus/solver/grid_update.hpp"
+#include "talus/solver/scheme.hpp"
 #include "talus/solver/stability_guards.hpp"
 #include "talus/transfer/transfers.hpp"
 
@@ -93,17 +94,13 @@ void Solver::remove_outflow() {
                                         step_, time_));
   std::vector<std::uint32_t> kept;
   kept.reserve(n - leaving);
-  const Vec3 gravity = scene_.gravity;
   for (std::size_t p = 0; p < n; ++p) {
     if (!beyond(p)) {
       kept.push_back(static_cast<std::uint32_t>(p));
       continue;
     }
-    const double v2 = P.v[0][p] * P.v[0][p] + P.v[1][p] * P.v[1][p] + P.v[2][p] * P.v[2][p];
-    Sym6 stress;
-    for (int c = 0; c < 6; ++c) stress[c] = P.stress[c][p];
-    outflow_energy_ += 0.5 * P.mass[p] * v2 + P.volume[p] * materials_.stored_energy_density(P.body[p], stress) -
-                       P.mass[p] * (gravity[0] * P.x[0][p] + gravity[1] * P.x[1][p] + gravity[2] * P.x[2][p]);
+    const ParticleEnergy e = particle_energy(p);
+    work_.outflow += e.kinetic + e.strain + e.gravity;
     outflow_mass_ += P.mass[p];
     ++outflow_particles_;
   }
@@ -174,21 +171,13 @@ void Solver::step_with_shape(double dt) {
   }
 }
 
-// One explicit step. MUSL (seed 000 eq. 47-56): P2G, grid update, G2P, momentum remap, strain and
-// stress from the remapped velocities. The other schemes (seed 001 sec. 4(1)) differ from it in:
-//   USL    no remap: strain from v^L (Sulsky's original).
-//   USF    stress first (Bardenhagen 2002): strain from the start-of-step nodal velocities
-//          p_i / m_i, stress update, then the force of the updated stress; no remap, no stress
-//          update at the end.
-//   USAVG  half of each (Nairn 2003): the USF update with dt/2 at the start, the MUSL update with
-//          dt/2 at the end.
+// One explicit step, in the order MUSL runs it (Edo & Matsubara 2015, eq. 47-56); the scheme's row
+// (solver/scheme.hpp) says which phases run and with what share of dt.
 template <class Shape, class Terrain>
 void Solver::step_with(double dt) {
-  const SchemeKind scheme = scene_.scheme;
-  const bool stress_first = scheme == SchemeKind::Usf || scheme == SchemeKind::Usavg;
-  const bool stress_last = scheme != SchemeKind::Usf;
-  const double first_dt = scheme == SchemeKind::Usavg ? 0.5 * dt : dt;  // USAVG: half the step each side
-  const double last_dt = first_dt;
+  const SchemeSteps scheme = scheme_steps(scene_.scheme);
+  const double stress_dt = scheme.stress_dt_share * dt;
+  const Vec3 gravity = gravity_at(time_ + 0.5 * dt);
   // 1. sort: when a particle has drifted beyond its block's slack, and every sort_interval steps
   //    to keep the memory order close to the cell order. With MLS smoothing, every step: the
   //    neighbour search reads the cell offsets, which must be those of the current positions.
@@ -197,35 +186,34 @@ void Solver::step_with(double dt) {
 
   // 2. P2G: nodal mass, momentum and internal force. USF / USAVG update the stress in between,
   //    from the start-of-step nodal velocities (walls applied), before scattering the force.
-  if (!stress_first) {
+  if (!scheme.stress_first) {
     ScopedPhase timer(times_, Phase::P2G);
     grid_.clear_active();
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentumForce);
-    fold_ghost_nodes(grid_, walls_, true, true, true, gravity_at(time_ + 0.5 * dt));
+    fold_ghost_nodes(grid_, walls_, {.mass = true, .momentum = true, .force = true}, gravity);
   } else {
     {
       ScopedPhase timer(times_, Phase::P2G);
       grid_.clear_active();
       scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentum);
-      fold_ghost_nodes(grid_, walls_, true, true, false, gravity_at(time_ + 0.5 * dt));
+      fold_ghost_nodes(grid_, walls_, {.mass = true, .momentum = true}, gravity);
       start_velocities(grid_, walls_, mass_floor_);
       mirror_ghost_nodes(grid_, walls_, GhostFields::Start);
     }
-    update_stress<Shape, Terrain>({grid_.velocity_l[0].data(), grid_.velocity_l[1].data(), grid_.velocity_l[2].data()},
-                                  first_dt, false);
+    update_stress<Shape, Terrain>(grid_.start_velocity(), stress_dt, false);
     ScopedPhase timer(times_, Phase::P2G);
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Force);
-    fold_ghost_nodes(grid_, walls_, false, false, true, gravity_at(time_ + 0.5 * dt));
+    fold_ghost_nodes(grid_, walls_, {.force = true}, gravity);
   }
   // 3. grid: velocities, accelerations with gravity, walls.
   {
     ScopedPhase timer(times_, Phase::Grid);
-    friction_work_ += update_grid(grid_, walls_, gravity_at(time_ + 0.5 * dt), dt, mass_floor_);
+    work_.friction_work += update_grid(grid_, walls_, gravity, dt, mass_floor_);
     mirror_ghost_nodes(grid_, walls_, GhostFields::AfterGridUpdate);
   }
   // 4. G2P: particle velocities and this step's displacement. MUSL and USAVG scatter the new
   //    momentum for the remap in the same pass (the weights are those of x_p^k in both).
-  const bool remap = scheme == SchemeKind::Musl || scheme == SchemeKind::Usavg;
+  const bool remap = scheme.remap;
   {
     ScopedPhase timer(times_, Phase::G2P);
     if (remap) grid_.clear_momentum();
@@ -236,7 +224,7 @@ void Solver::step_with(double dt) {
     if (options.pic_fraction > 0.0) block_damping_.assign(sort_.block_count(), 0.0);
     const GatherResult r = gather_from_grid<Shape, Terrain>(particles_, sort_, grid_, displacement_, block_damping_, options);
     if (options.pic_fraction > 0.0)
-      for (double d : block_damping_) damping_work_ += d;  // in block order: thread-independent
+      for (double d : block_damping_) work_.damping += d;  // in block order: thread-independent
     if (r.nonfinite >= 0) report_bad_particle(r.nonfinite, "velocity is not finite");
     if (r.outside >= 0) report_bad_particle(r.outside, "left the grid");
     needs_sort_ = r.needs_sort;
@@ -245,19 +233,18 @@ void Solver::step_with(double dt) {
   }
   // 5. remap (MUSL): v_i^{k+1} = sum m_p v_p N_i / m_i, with the walls (seed 000 eq. 52); the
   //    momentum was scattered in the G2P pass.
-  std::array<const double*, 3> node_velocity = {grid_.velocity_l[0].data(), grid_.velocity_l[1].data(),
-                                                grid_.velocity_l[2].data()};
+  NodeVectors node_velocity = grid_.lagrangian_velocity();
   if (remap) {
     ScopedPhase timer(times_, Phase::Remap);
-    fold_ghost_nodes(grid_, walls_, false, true, false, gravity_at(time_ + 0.5 * dt));
+    fold_ghost_nodes(grid_, walls_, {.momentum = true}, gravity);
     velocities_from_momentum(grid_, walls_, mass_floor_);
     mirror_ghost_nodes(grid_, walls_, GhostFields::Remapped);
-    node_velocity = {grid_.momentum[0].data(), grid_.momentum[1].data(), grid_.momentum[2].data()};
+    node_velocity = grid_.velocity();
   }
   // 6. strain (and its MLS smoothing when enabled) and stress, then move the particles (USF: only
   //    move them).
-  if (stress_last) {
-    update_stress<Shape, Terrain>(node_velocity, last_dt, true);
+  if (scheme.stress_last) {
+    update_stress<Shape, Terrain>(node_velocity, stress_dt, true);
   } else {
     ScopedPhase timer(times_, Phase::Stress);
     move_particles();
@@ -286,7 +273,7 @@ void Solver::move_particles() {
 // cpGIMP domains follow the deformation here too (seed 000 eq. 57-58). `move` applies the step's
 // displacement afterwards (the particles' last use of their start-of-step position).
 template <class Shape, class Terrain>
-void Solver::update_stress(const std::array<const double*, 3>& node_velocity, double dt, bool move) {
+void Solver::update_stress(const NodeVectors& node_velocity, double dt, bool move) {
   if (smoother_) {
     update_stress_smoothed<Shape, Terrain>(node_velocity, dt, move);
     return;
@@ -318,7 +305,7 @@ void Solver::update_material_by_chunks(double dt, bool move, FillChunk fill) {
       block_dissipation_[b] = dissipated;
     }
   }
-  for (double d : block_dissipation_) plastic_work_ += d;
+  for (double d : block_dissipation_) work_.plastic_work += d;
 }
 
 // The material update of particles [begin, end) from their increments; returns the dissipation.
@@ -345,7 +332,7 @@ double Solver::update_chunk(std::size_t begin, std::size_t end, const StrainIncr
 // it only rotates the stress, eq. 54 names the strain). Positions move in the last pass, after
 // the smoother has read them.
 template <class Shape, class Terrain>
-void Solver::update_stress_smoothed(const std::array<const double*, 3>& node_velocity, double dt, bool move) {
+void Solver::update_stress_smoothed(const NodeVectors& node_velocity, double dt, bool move) {
   ParticleStore& P = particles_;
   const std::size_t blocks = sort_.block_count();
   {
@@ -397,25 +384,27 @@ void Solver::measure_smoothing_change() {
   ++smoothing_passes_;
 }
 
-EnergyBudget Solver::energies() const {
+Solver::ParticleEnergy Solver::particle_energy(std::size_t p) const {
   const ParticleStore& P = particles_;
-  const Vec3 g = scene_.gravity;
-  const auto sums = deterministic_sum<3>(P.size(), [&](std::size_t p, std::array<double, 3>& acc) {
-    const double v2 = P.v[0][p] * P.v[0][p] + P.v[1][p] * P.v[1][p] + P.v[2][p] * P.v[2][p];
-    acc[0] += 0.5 * P.mass[p] * v2;
-    Sym6 s;
-    for (int c = 0; c < 6; ++c) s[c] = P.stress[c][p];
-    acc[1] += P.volume[p] * materials_.stored_energy_density(P.body[p], s);
-    acc[2] -= P.mass[p] * (g[0] * P.x[0][p] + g[1] * P.x[1][p] + g[2] * P.x[2][p]);
+  const Vec3& g = scene_.gravity;
+  const double v2 = P.v[0][p] * P.v[0][p] + P.v[1][p] * P.v[1][p] + P.v[2][p] * P.v[2][p];
+  Sym6 s;
+  for (int c = 0; c < 6; ++c) s[c] = P.stress[c][p];
+  return {0.5 * P.mass[p] * v2, P.volume[p] * materials_.stored_energy_density(P.body[p], s),
+          -P.mass[p] * (g[0] * P.x[0][p] + g[1] * P.x[1][p] + g[2] * P.x[2][p])};
+}
+
+EnergyBudget Solver::energies() const {
+  const auto sums = deterministic_sum<3>(particles_.size(), [&](std::size_t p, std::array<double, 3>& acc) {
+    const ParticleEnergy e = particle_energy(p);
+    acc[0] += e.kinetic;
+    acc[1] += e.strain;
+    acc[2] += e.gravity;
   });
-  EnergyBudget e;
+  EnergyBudget e = work_;
   e.kinetic = sums[0];
   e.strain = sums[1];
   e.gravity = sums[2];
-  e.friction_work = friction_work_;
-  e.plastic_work = plastic_work_;
-  e.outflow = outflow_energy_;
-  e.damping = damping_work_;
   return e;
 }
 
@@ -436,10 +425,7 @@ SolverState Solver::state() const {
   s.time = time_;
   s.step = step_;
   s.last_dt = last_dt_;
-  s.friction_work = friction_work_;
-  s.plastic_work = plastic_work_;
-  s.outflow_energy = outflow_energy_;
-  s.damping_work = damping_work_;
+  s.work = work_;
   s.outflow_mass = outflow_mass_;
   s.outflow_particles = outflow_particles_;
   s.steps_since_sort = steps_since_sort_;
@@ -493,10 +479,7 @@ void Solver::restore(ParticleStore particles, const SolverState& s) {
   time_ = s.time;
   step_ = s.step;
   last_dt_ = s.last_dt;
-  friction_work_ = s.friction_work;
-  plastic_work_ = s.plastic_work;
-  outflow_energy_ = s.outflow_energy;
-  damping_work_ = s.damping_work;
+  work_ = s.work;
   outflow_mass_ = s.outflow_mass;
   outflow_particles_ = s.outflow_particles;
   steps_since_sort_ = s.steps_since_sort;

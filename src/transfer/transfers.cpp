@@ -126,8 +126,7 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::arra
   const Terrain& terrain = grid.template terrain<Terrain>();
   const GridGeometry& g = grid.geometry();
   const auto nodes = g.nodes();
-  const double* dv[3] = {grid.force[0].data(), grid.force[1].data(), grid.force[2].data()};
-  const double* vl[3] = {grid.velocity_l[0].data(), grid.velocity_l[1].data(), grid.velocity_l[2].data()};
+  const NodeVectors dv = grid.velocity_change(), vl = grid.lagrangian_velocity();
   double* mom[3] = {grid.momentum[0].data(), grid.momentum[1].data(), grid.momentum[2].data()};
   double* disp[3] = {displacement[0].data(), displacement[1].data(), displacement[2].data()};
   bool needs_sort = result.needs_sort, large = result.large_displacement, crossing = result.crosses_open_face;
@@ -245,7 +244,7 @@ GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, Grid& grid
 }
 
 template <class Shape, class Terrain>
-void strain_increments(const ParticleStore& P, const Grid& grid, const std::array<const double*, 3>& nv,
+void strain_increments(const ParticleStore& P, const Grid& grid, const NodeVectors& nv,
                        double dt, std::size_t begin, std::size_t end, StrainIncrements& out) {
   const Terrain& terrain = grid.template terrain<Terrain>();
   const double h = grid.geometry().h;
@@ -301,7 +300,7 @@ void strain_increments(const ParticleStore& P, const Grid& grid, const std::arra
                                                          std::array<std::vector<double>, 3>&, std::vector<double>&, \
                                                          const GatherOptions&);                                     \
   template void strain_increments<SHAPE, TERRAIN>(const ParticleStore&, const Grid&,                          \
-                                                  const std::array<const double*, 3>&, double, std::size_t,    \
+                                                  const NodeVectors&, double, std::size_t,    \
                                                   std::size_t, StrainIncrements&);
 
 TALUS_INSTANTIATE_TRANSFERS(LinearShape, FlatTerrain)

@@ -4,7 +4,7 @@
 #include "talus/core/error.hpp"
 #include "talus/diagnostics/runout.hpp"
 #include "talus/io/checkpoint.hpp"
-#include "talus/io/run_driver.hpp"
+#include "talus/driver/run_driver.hpp"
 #include "talus/io/runout_output.hpp"
 #include "talus/scene/scene_json.hpp"
 #include "talus/solver/solver.hpp"

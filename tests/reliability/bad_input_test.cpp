@@ -38,7 +38,7 @@ TEST(BadInput, EveryMistakeNamesTheKeyPathInOneLine) {
       {"truncated", "\"guards\"", "\"gua", "malformed JSON"},
       {"number overflowing to Inf", "\"end\": 0.1", "\"end\": 1e999", "malformed JSON"},
       {"unknown key", "\"courant\": 0.3", "\"courant\": 0.3, \"courrant\": 0.3", "unknown key time.courrant"},
-      {"wrong type", "\"young\": 1.0e6", "\"young\": \"1e6\"", "materials.rubber.young must be a number in (0, 1e+30]"},
+      {"wrong type", "\"young\": 1.0e6", "\"young\": \"1e6\"", "materials.rubber.young must be a number in (0, inf)"},
       {"negative", "\"density\": 1000.0", "\"density\": -1000.0", "materials.rubber.density = -1000 is outside the allowed range (0"},
       {"zero", "\"cell_size\": 0.05", "\"cell_size\": 0", "grid.cell_size = 0 is outside the allowed range (0"},
       {"nu = 0.5", "\"poisson\": 0.3", "\"poisson\": 0.5", "materials.rubber.poisson = 0.5 is outside the allowed range (-1, 0.5)"},

@@ -1,16 +1,17 @@
-// Instability guards and the hard cases of issue 9: each hard scene either runs stably or stops
-// with a one-line diagnosis (step, time, particle, field, value) after writing its last good state;
-// it never crashes and never writes a non-finite value.
+// Instability guards and the hard cases: each hard scene has one right outcome, asserted below (it
+// runs to its end with a physical check, or it stops with a one-line diagnosis after writing its
+// last good state); none crashes or writes a non-finite value.
 #include "../solver/scene_fixtures.hpp"
 #include "reliability_fixtures.hpp"
 #include "talus/core/error.hpp"
 #include "talus/io/checkpoint.hpp"
-#include "talus/io/run_driver.hpp"
+#include "talus/driver/run_driver.hpp"
 #include "talus/solver/solver.hpp"
 #include "talus/solver/stability_guards.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -84,40 +85,67 @@ TEST(Guards, EnergyGrowthBeyondTheFactorStops) {
   EXPECT_NO_THROW(guard.check(e, solver.particles(), scene, 30, 0.03));
 }
 
-/// Runs a scene through the run driver; returns the diagnosis ("" if it ran to the end) after
-/// checking that the folder holds only readable, finite output and, on failure, a checkpoint of
-/// the last good state that restarts.
-std::string run_hard_case(const Scene& scene, const std::string& name) {
+/// What a hard case left: the diagnosis ("" when it ran to the end) and the state it ended in.
+struct HardCaseRun {
+  std::string diagnosis;
+  double end_time = 0.0;         // time of the last completed step (the last good state on failure)
+  EnergyBudget initial, final;   // the budget at the start and at the end (or the last good state)
+  ParticleStore particles;       // the particles at the end (or in the last good state)
+};
+
+/// Runs a scene through the run driver, after checking that the folder holds only readable, finite
+/// output and, on failure, a checkpoint of the last good state that restarts.
+HardCaseRun run_hard_case(const Scene& scene, const std::string& name) {
   const fs::path dir = test::temp_dir(name);
   RunOptions options;
   options.out_dir = dir.string();
   options.progress = false;
   options.handle_signals = false;
-  std::string diagnosis;
+  HardCaseRun run;
   Solver solver(scene);
+  run.initial = solver.energies();
   try {
     run_scene(solver, options);
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), Error::Kind::Instability) << e.what();
-    diagnosis = e.what();
+    run.diagnosis = e.what();
   }
+  run.end_time = solver.time();
+  run.final = solver.energies();
+  run.particles = solver.particles();
   test::expect_readable_run_folder(dir);
-  if (!diagnosis.empty()) {
-    expect_diagnosis(diagnosis, "position (");
-    EXPECT_NE(diagnosis.find("last good state"), std::string::npos) << diagnosis;
+  if (!run.diagnosis.empty()) {
+    expect_diagnosis(run.diagnosis, "position (");
+    EXPECT_NE(run.diagnosis.find("last good state"), std::string::npos) << run.diagnosis;
     const std::string cp = (dir / "checkpoint.h5").string();
     Solver again(scene);
     EXPECT_NO_THROW(restore_checkpoint(again, read_checkpoint(cp), cp));
     EXPECT_LT(again.step_count(), 1000000);
   }
   fs::remove_all(dir);
-  return diagnosis;
+  return run;
 }
 
-// Seed 000's column: a 1D bar of E = 1e6, rho = 1, L0 = 50 under its own weight rho b L0 = 12500
-// (|g| = 250) with 100 particles along the bar (2 per cell of 1.0), linear MPM: the particles at
-// the top cross cells while the column oscillates, the classic cell-crossing noise.
-TEST(HardCases, Seed000ColumnUnderGravityWithLinearShapes) {
+/// The largest value of f(particle index) over the particles.
+template <class F>
+double max_over_particles(const ParticleStore& P, F f) {
+  double m = -INFINITY;
+  for (std::size_t p = 0; p < P.size(); ++p) m = std::max(m, f(p));
+  return m;
+}
+
+/// The largest total of the budget's terms relative to the start: > 0 means energy was created.
+double energy_gain(const HardCaseRun& run) {
+  const double scale = run.initial.kinetic + run.initial.strain + std::abs(run.initial.gravity);
+  return (run.final.total() - run.initial.total()) / scale;
+}
+
+// The column of Edo & Matsubara 2015 (sec. 4(1)): a 1D bar of E = 1e6, rho = 1, L0 = 50 under its
+// own weight rho b L0 = 12500 (|g| = 250) with 100 particles along the bar (2 per cell of 1.0),
+// linear MPM: the particles at the top cross cells while the column oscillates, the classic
+// cell-crossing noise. Right outcome: it runs, noisy but bounded (docs/verification.md measures
+// the noise), and creates no energy beyond the budget's measured drift.
+TEST(HardCases, EdoMatsubaraColumnUnderGravityWithLinearShapes) {
   Scene scene = parse_scene(R"({
     "name": "column",
     "grid": { "origin": [0, 0, 0], "size": [60, 1, 1], "cell_size": 1.0 },
@@ -129,13 +157,18 @@ TEST(HardCases, Seed000ColumnUnderGravityWithLinearShapes) {
     "boundaries": { "x-": "fixed", "x+": "open", "y-": "slip", "y+": "slip", "z-": "slip", "z+": "slip" },
     "output": { "frame_interval": 0.05, "history_interval": 0.001 }
   })", "column");
-  const std::string d = run_hard_case(scene, "column");
-  RecordProperty("diagnosis", d);
-  std::printf("column: %s\n", d.empty() ? "ran to the end" : d.c_str());
+  const HardCaseRun run = run_hard_case(scene, "column");
+  EXPECT_EQ(run.diagnosis, "");
+  EXPECT_DOUBLE_EQ(run.end_time, 0.3);
+  std::printf("column: energy change %.3g of the initial energy\n", energy_gain(run));
+  EXPECT_LT(std::abs(energy_gain(run)), 0.01);  // measured -0.00057
+  // The bar stays on the grid and above its fixed end.
+  EXPECT_GT(-max_over_particles(run.particles, [&](std::size_t p) { return -run.particles.x[0][p]; }), 0.0);
 }
 
+// 100 m/s into a fixed wall: three times the block's wave speed (~37 m/s). Right outcome: it runs;
+// the no-rebound wall takes energy out (docs/theory.md "Walls"), so the budget may only lose.
 TEST(HardCases, BlockImpactingAWallAtHighSpeed) {
-  // 100 m/s into a fixed wall: three times the block's wave speed (~37 m/s).
   Scene scene = parse_scene(R"({
     "name": "impact",
     "grid": { "origin": [0, 0, 0], "size": [0.8, 0.4, 0.4], "cell_size": 0.04 },
@@ -147,13 +180,17 @@ TEST(HardCases, BlockImpactingAWallAtHighSpeed) {
     "boundaries": { "x+": "fixed" },
     "output": { "frame_interval": 0.001 }
   })", "impact");
-  const std::string d = run_hard_case(scene, "impact");
-  std::printf("impact: %s\n", d.empty() ? "ran to the end" : d.c_str());
+  const HardCaseRun run = run_hard_case(scene, "impact");
+  EXPECT_EQ(run.diagnosis, "");
+  std::printf("impact: energy change %.3g of the initial energy\n", energy_gain(run));
+  EXPECT_LT(energy_gain(run), 0.0);  // measured -0.39
+  EXPECT_LT(max_over_particles(run.particles, [&](std::size_t p) { return run.particles.x[0][p]; }), 0.8 + 0.04);
 }
 
+// A light, soft dust layer on a stiff block: nodes at the dust's edge hold a tiny mass next to nodes
+// of the block (the nodal mass ratio across the stencil is ~1e-8). Right outcome: it runs, and the
+// dust launched upwards at 1 m/s rises like a projectile (the block under it barely moves).
 TEST(HardCases, NearEmptyNodes) {
-  // A light, soft dust layer on a stiff block: nodes at the dust's edge hold a tiny mass next to
-  // nodes of the block (the nodal mass ratio across the stencil is ~1e-8).
   Scene scene = parse_scene(R"({
     "name": "dust",
     "grid": { "origin": [0, 0, 0], "size": [0.4, 0.4, 0.4], "cell_size": 0.04 },
@@ -166,25 +203,31 @@ TEST(HardCases, NearEmptyNodes) {
     "boundaries": { "z-": "fixed", "z+": "open" },
     "output": { "frame_interval": 0.01 }
   })", "dust");
-  const std::string d = run_hard_case(scene, "dust");
-  std::printf("near-empty nodes: %s\n", d.empty() ? "ran to the end" : d.c_str());
+  const HardCaseRun run = run_hard_case(scene, "dust");
+  EXPECT_EQ(run.diagnosis, "");
+  const ParticleStore& P = run.particles;
+  const double fastest = max_over_particles(P, [&](std::size_t p) {
+    return std::sqrt(P.v[0][p] * P.v[0][p] + P.v[1][p] * P.v[1][p] + P.v[2][p] * P.v[2][p]);
+  });
+  EXPECT_LT(fastest, 1.5);  // nothing is flung off the near-empty nodes
 }
 
+// One particle 1e-9 h past a node, away from the others, with a large stress. Right outcome: it
+// runs, every position stays finite.
 TEST(HardCases, StrayParticleJustPastANode) {
   Scene scene = test::free_fall_scene("musl");
   scene.end_time = 0.05;
   scene.gravity = Vec3(0, 0, -9.81);
   Solver solver(scene);
   auto& P = solver.particles();
-  // Move one particle to 1e-9 h past a node, away from the others, with a large stress.
   P.x[0][0] = 0.05 * 2 + 1e-9 * 0.05;
   P.x[1][0] = 0.05 * 1 + 1e-9 * 0.05;
   P.x[2][0] = 0.05 * 4 + 1e-9 * 0.05;
   P.stress[0][0] = 1e4;
-  const std::string d = instability_of(solver);
-  std::printf("stray particle: %s\n", d.empty() ? "ran to the end" : d.c_str());
+  EXPECT_EQ(instability_of(solver), "");
+  EXPECT_TRUE(solver.finished());
   for (std::size_t p = 0; p < P.size(); ++p)
-    for (int c = 0; c < 3; ++c) ASSERT_TRUE(std::isfinite(P.x[c][p]) || !d.empty());
+    for (int c = 0; c < 3; ++c) ASSERT_TRUE(std::isfinite(P.x[c][p]));
 }
 
 TEST(HardCases, ParticlesAtTheDomainEdge) {
@@ -207,9 +250,9 @@ TEST(HardCases, ParticlesAtTheDomainEdge) {
     j.replace(j.find("XP"), 2, xp);
     return parse_scene(j, "edge");
   };
-  EXPECT_EQ(run_hard_case(scene_with("0", "slip"), "edge_slip"), "");
+  EXPECT_EQ(run_hard_case(scene_with("0", "slip"), "edge_slip").diagnosis, "");
   // open x faces are outflow boundaries: the particles pushed through x+ are removed and counted
-  EXPECT_EQ(run_hard_case(scene_with("3", "open"), "edge_open"), "");
+  EXPECT_EQ(run_hard_case(scene_with("3", "open"), "edge_open").diagnosis, "");
   Solver solver(scene_with("3", "open"));
   const std::size_t seeded = solver.particles().size();
   while (!solver.finished()) solver.step();
@@ -218,9 +261,10 @@ TEST(HardCases, ParticlesAtTheDomainEdge) {
             static_cast<std::int64_t>(seeded));
 }
 
+// Cohesionless sand pulled apart: two bodies moving away from each other put the particles at
+// their interface in tension, i.e. on the apex of the cone. Right outcome: it runs, and no particle
+// is left carrying tension (the return to the apex, or separation, leaves p >= 0).
 TEST(HardCases, DruckerPragerApexStates) {
-  // Cohesionless sand pulled apart: two bodies moving away from each other put the particles at
-  // their interface in tension, i.e. on the apex of the cone.
   Scene scene = parse_scene(R"({
     "name": "apex",
     "grid": { "origin": [0, 0, 0], "size": [0.8, 0.2, 0.3], "cell_size": 0.025 },
@@ -234,14 +278,25 @@ TEST(HardCases, DruckerPragerApexStates) {
     "boundaries": { "z-": { "type": "friction", "friction_coefficient": 0.3 }, "z+": "open" },
     "output": { "frame_interval": 0.02 }
   })", "apex");
-  const std::string d = run_hard_case(scene, "apex");
-  std::printf("apex: %s\n", d.empty() ? "ran to the end" : d.c_str());
+  const HardCaseRun run = run_hard_case(scene, "apex");
+  EXPECT_EQ(run.diagnosis, "");
+  const ParticleStore& P = run.particles;
+  const double most_tensile = max_over_particles(P, [&](std::size_t p) {
+    return (P.stress[0][p] + P.stress[1][p] + P.stress[2][p]) / 3.0;  // mean stress, tension positive
+  });
+  EXPECT_LE(most_tensile, 1e-6);
 }
 
+// A 60 degree slope, emulated on the flat grid by rotating gravity: g = 9.81 (sin 60, 0, -cos 60),
+// friction 0.05 on the floor (far below tan 60), so the soft block (E = 1 MPa) accelerates down
+// the whole grid into the x+ wall at about 4.6 m/s. What talus does today: the block survives the
+// impact, then, as it breaks up against the wall, nodes with a small share of mass take large
+// accelerations and a particle moves 2.9 cells in one step at t = 0.594 s; the CFL guard stops the
+// run there and writes the last good state. This is the guard working, not the physics a user
+// wants (the same happens on uGIMP, with a fixed wall and at Courant 0.1): the right outcome would
+// be a completed run, and the small-nodal-mass instability that prevents it is open
+// (docs/reliability.md "Hard cases"). The test pins today's outcome, so a change to it is seen.
 TEST(HardCases, SteepSixtyDegreeSlopeWithLowFriction) {
-  // A 60 degree slope, emulated on the flat grid by rotating gravity: g = 9.81 (sin 60, 0, -cos 60),
-  // friction 0.05 on the floor (far below tan 60), so the block accelerates down the whole grid
-  // into the x+ wall.
   const double s = std::sin(M_PI / 3), c = std::cos(M_PI / 3);
   Scene scene = parse_scene(fmt::format(R"({{
     "name": "steep",
@@ -253,8 +308,11 @@ TEST(HardCases, SteepSixtyDegreeSlopeWithLowFriction) {
     "boundaries": {{ "z-": {{ "type": "friction", "friction_coefficient": 0.05 }}, "z+": "open" }},
     "output": {{ "frame_interval": 0.1 }}
   }})", 9.81 * s, -9.81 * c), "steep");
-  const std::string d = run_hard_case(scene, "steep");
-  std::printf("steep slope: %s\n", d.empty() ? "ran to the end" : d.c_str());
+  const HardCaseRun run = run_hard_case(scene, "steep");
+  expect_diagnosis(run.diagnosis, "CFL breach");
+  // It slid the whole slope and hit the wall first: the last good state is after t = 0.55 s.
+  EXPECT_GT(run.end_time, 0.55);
+  EXPECT_LT(run.end_time, 0.6);
 }
 
 }  // namespace

@@ -17,8 +17,8 @@
 // slip removes the normal component, fixed all. The z+ face follows the terrain too (normal -n).
 // The x and y faces are vertical planes on any grid (cells keep vertical sides), so they stay
 // axis-aligned.
+#include "talus/boundary/wall_spec.hpp"
 #include "talus/grid/grid.hpp"
-#include "talus/scene/scene.hpp"
 
 #include <array>
 #include <cmath>
@@ -193,41 +193,23 @@ class Walls {
     if (axis == 2 && !bed_normal_.empty()) {
       const Vec3& up = bed_normal_[static_cast<std::size_t>(column)];
       const double n[3] = {side == 0 ? up[0] : -up[0], side == 0 ? up[1] : -up[1], side == 0 ? up[2] : -up[2]};
-      return apply_along_normal(w, n, v, stage, m, v_start, contact_velocity);
+      return apply_along_normal(w, n, v, stage, m, v_start, contact_velocity, kBedRemapTolerance);
     }
-    const double inward = side == 0 ? 1.0 : -1.0;  // the wall's normal, pointing into the domain
-    switch (w.type) {
-      case WallType::Open: return 0.0;
-      case WallType::Fixed: v[0] = v[1] = v[2] = 0.0; return 0.0;
-      case WallType::Slip: v[axis] = 0.0; return 0.0;
-      case WallType::Friction: {
-        const double vn = v[axis] * inward;
-        bool contact = vn < 0.0;  // moving into the wall (seed 001 eq. 14)
-        if (stage == Stage::Remap) contact = contact || contact_velocity[axis] * inward <= 0.0;
-        if (stage == Stage::Start) contact = true;
-        if (!contact) return 0.0;  // separating: free
-        v[axis] = 0.0;             // no rebound (eq. 17-18)
-        if (stage != Stage::GridUpdate || vn >= 0.0) return 0.0;  // friction acts once, in the grid update
-        const int t1 = (axis + 1) % 3, t2 = (axis + 2) % 3;
-        const double vt = std::sqrt(v[t1] * v[t1] + v[t2] * v[t2]);
-        const double limit = w.friction_coefficient * (-vn);  // mu |dv_n|  (eq. 15-16)
-        const double scale = vt <= limit ? 0.0 : 1.0 - limit / vt;  // stick, or slide slower
-        double work = 0.0;
-        for (int t : {t1, t2}) {
-          const double after = v[t] * scale;
-          if (v_start) work -= m * (after - v[t]) * v_start[t];
-          v[t] = after;
-        }
-        return work;
-      }
-    }
-    return 0.0;
+    // An axis wall is a wall whose inward normal is the axis (exact: the products with 0 and +-1
+    // below change no bit), so both kinds share one contact rule. Its contact state in the remap
+    // needs no tolerance: removing the normal velocity along an axis leaves exactly 0.
+    const double inward = side == 0 ? 1.0 : -1.0;
+    double n[3] = {0.0, 0.0, 0.0};
+    n[axis] = inward;
+    return apply_along_normal(w, n, v, stage, m, v_start, contact_velocity, 0.0);
   }
 
-  /// The same rules as apply_one for a wall of unit inward normal n (the bed of a terrain grid).
-  /// The stages as in apply_one (Walls::Stage), with v.n in place of v[axis] * inward.
+  /// The wall rules for a wall of unit inward normal n (an axis, or the bed of a terrain grid), at
+  /// the stages of Walls::Stage. `remap_tolerance`: a node of the grid update's contact keeps it in
+  /// the remap when its v^L . n <= remap_tolerance |v^L| (the round-off of removing v_n along a
+  /// general normal; 0 along an axis).
   static double apply_along_normal(const WallSpec& w, const double n[3], double v[3], Stage stage, double m,
-                                   const double* v_start, const double* contact_velocity) {
+                                   const double* v_start, const double* contact_velocity, double remap_tolerance) {
     const double vn = v[0] * n[0] + v[1] * n[1] + v[2] * n[2];
     switch (w.type) {
       case WallType::Open: return 0.0;
@@ -238,11 +220,11 @@ class Walls {
       case WallType::Friction: {
         bool contact = vn < 0.0;  // moving into the bed (seed 001 eq. 14)
         if (stage == Stage::Remap) {
-          // in contact in the grid update: v^L . n = 0 up to the round-off of removing v_n along a
-          // general normal (a separating node has v^L . n of the order of its speed)
+          // in contact in the grid update: v^L . n = 0 up to round-off (a separating node has
+          // v^L . n of the order of its speed)
           const double* c = contact_velocity;
           const double cn = c[0] * n[0] + c[1] * n[1] + c[2] * n[2];
-          contact = contact || cn <= 1e-12 * std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+          contact = contact || cn <= remap_tolerance * std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
         }
         if (stage == Stage::Start) contact = true;
         if (!contact) return 0.0;                       // separating: free
@@ -263,6 +245,8 @@ class Walls {
     }
     return 0.0;
   }
+
+  static constexpr double kBedRemapTolerance = 1e-12;
 
   std::array<std::array<WallSpec, 2>, 3> specs_{};
   std::vector<Vec3> bed_normal_;  // per node column (x index); empty on a flat grid

@@ -24,6 +24,9 @@ inline constexpr int kPad = 2;        // ghost cells beyond each domain face
 inline constexpr int kTileEdge = 4;   // nodes per tile edge
 inline constexpr int kTileNodes = kTileEdge * kTileEdge * kTileEdge;
 
+/// One node vector field, read-only, as three component arrays.
+using NodeVectors = std::array<const double*, 3>;
+
 struct GridGeometry {
   Vec3 origin = Vec3::Zero();            // physical corner of the domain (a node)
   double h = 1.0;                        // cell size
@@ -94,13 +97,23 @@ class Grid {
   /// Bytes of node data in the active tiles (what the grid really occupies).
   std::size_t active_bytes() const;
 
-  // Node fields. `momentum` holds m v after a scatter and v after update; `force` holds f, then
-  // the acceleration a; `velocity_l` is the updated (Lagrangian) velocity v^L = v + a dt.
+  // Node fields, as scattered: mass, momentum m v, force f. The grid update turns them in place
+  // into velocities (10 doubles a node, not 16), so after it read them through the views below,
+  // which name what each array holds at that point of the step (grid_update.hpp).
   LazyArray mass;
   std::array<LazyArray, 3> momentum;
   std::array<LazyArray, 3> force;
   std::array<LazyArray, 3> velocity_l;
   static constexpr int kFieldCount = 10;
+
+  /// v_i: `momentum` after update_grid, velocities_from_momentum (the remap) or start_velocities' input.
+  NodeVectors velocity() const { return view(momentum); }
+  /// v_i^L - v_i, the particle velocity increment: `force` after update_grid.
+  NodeVectors velocity_change() const { return view(force); }
+  /// v_i^L = v_i + a_i dt after update_grid.
+  NodeVectors lagrangian_velocity() const { return view(velocity_l); }
+  /// USF / USAVG: the start-of-step velocities start_velocities writes (into `velocity_l`).
+  NodeVectors start_velocity() const { return view(velocity_l); }
 
  private:
   GridGeometry geometry_;
@@ -109,6 +122,8 @@ class Grid {
   std::array<int, 3> tiles_{0, 0, 0};
   std::size_t stride_x_ = 0, stride_y_ = 0;
   std::vector<std::uint32_t> active_tiles_;
+
+  static NodeVectors view(const std::array<LazyArray, 3>& f) { return {f[0].data(), f[1].data(), f[2].data()}; }
 };
 
 }  // namespace talus

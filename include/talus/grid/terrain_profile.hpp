@@ -29,7 +29,8 @@ struct TerrainSpec {
 class TerrainProfile {
  public:
   TerrainProfile() = default;
-  /// Throws input_error (naming "grid.terrain...") for a profile that is not a valid graph.
+  /// Throws input_error for a profile that is not a valid graph, naming the member ("points[2]:",
+  /// "radii:"); the scene reader puts the key path in front.
   explicit TerrainProfile(const TerrainSpec& spec);
 
   double height(double x) const;

@@ -6,14 +6,16 @@
 //   /                      attributes format = "talus-checkpoint", format_version, talus_version,
 //                          scene_hash (FNV-1a 64 of the resolved scene JSON, hex), scene_name
 //   /scene_json            the resolved scene (scene_to_json), as bytes
-//   /solver                attributes time, step, last_dt, friction_work, plastic_work,
+//   /solver                attributes time, step, last_dt, the accumulated terms of the energy
+//                          ledger by name (friction_work, plastic_work, outflow, damping;
+//                          solver/energy_budget.hpp), outflow_mass, outflow_particles,
 //                          steps_since_sort, sorts, needs_sort
 //   /solver/sort_cell0..2  int32 per particle: the cell each particle was sorted into
 //   /particles/<name>      one dataset per allocated particle array, named by
 //                          ParticleStore::for_each_double_array / for_each_integer_array
 //                          (x0.., v0.., mass, volume, volume0, stress0..5, strain0..5, ..., id, body)
 //   /run                   attributes next_frame, next_history, next_checkpoint, the initial energy
-//                          budget (initial_kinetic, ...), energy_max_released; datasets
+//                          budget (initial_<term> for every ledger term), energy_max_released; datasets
 //                          frame_times, frame_steps (the frames written so far)
 // The solver uses no random numbers, so there is no RNG state to save.
 #include "talus/particles/particle_store.hpp"

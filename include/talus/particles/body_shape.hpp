@@ -1,8 +1,8 @@
 #pragma once
-// Which points a body fills: the inside test per body shape (scene.hpp BodyShapeKind). Seeding
+// Which points a body fills: the inside test per body shape (body_spec.hpp BodyShapeKind). Seeding
 // (seeding.cpp) lays candidate points over the body's bounding box and keeps those inside.
 #include "talus/core/types.hpp"
-#include "talus/scene/scene.hpp"
+#include "talus/particles/body_spec.hpp"
 
 namespace talus {
 

@@ -39,6 +39,9 @@ struct ParticleStore {
   std::size_t add(std::int64_t particle_id, const Vec3& position, const Vec3& velocity,
                   double particle_mass, double particle_volume, std::uint16_t body_index);
 
+  /// Reserve room for n particles in the arrays add() fills, so seeding grows none of them.
+  void reserve(std::size_t n);
+
   /// Allocate (zeroed) the plastic state arrays for all particles.
   /// The back stress only with `with_back_stress`: it stays zero unless some body has kinematic
   /// hardening (H > 0 and kinematic_fraction > 0), and then costs 48 B per particle for nothing.
@@ -60,7 +63,7 @@ struct ParticleStore {
   /// Arrays a scene does not use are visited too, empty; callers skip those.
   /// The checkpoint (io/checkpoint.cpp) and the finite-value guard (solver/stability_guards.cpp)
   /// walk the particles through this visitor only: A NEW PER-PARTICLE ARRAY IS CHECKPOINTED AND
-  /// GUARDED BY ADDING ONE LINE HERE (and to permute() and bytes()).
+  /// GUARDED BY ADDING ONE LINE HERE (permute() and bytes() walk it too).
   template <class F>
   void for_each_double_array(F&& f) {
     visit_double_arrays(*this, f);

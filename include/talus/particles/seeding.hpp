@@ -1,13 +1,28 @@
 #pragma once
-// Filling the scene's bodies with particles: n x n x n particles per cell at the cell-local points
+// Filling the bodies with particles: n x n x n particles per cell at the cell-local points
 // (k + 1/2) h / n, keeping those inside the body's box. Each particle carries the volume (h/n)^3 and
 // the mass density * volume; ids run from 0 in body order, so they are stable and reproducible.
+#include "talus/grid/grid.hpp"
+#include "talus/particles/body_spec.hpp"
 #include "talus/particles/particle_store.hpp"
-#include "talus/scene/scene.hpp"
+
+#include <cstddef>
+#include <functional>
+#include <string>
+#include <vector>
 
 namespace talus {
 
-/// Seed every body of the scene. Throws input_error for a body that holds no particle.
-ParticleStore seed_particles(const Scene& scene);
+/// How an error names body b (default "body b"; the scene gives its key path, "bodies[b]").
+using BodyLabel = std::function<std::string(std::size_t body)>;
+
+/// Seed every body on the grid; `material_density[body.material]` is the body's initial density.
+/// Throws input_error for a body that holds no particle, naming it by `label`.
+ParticleStore seed_particles(const GridGeometry& grid, const std::vector<BodySpec>& bodies,
+                             const std::vector<double>& material_density, const BodyLabel& label = {});
+
+/// The number of particles seed_particles would make, with the same input errors, without
+/// allocating them: a scene's size is known before its memory is (solver/memory_estimate.hpp).
+std::size_t count_particles(const GridGeometry& grid, const std::vector<BodySpec>& bodies, const BodyLabel& label = {});
 
 }  // namespace talus

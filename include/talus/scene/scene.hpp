@@ -1,11 +1,15 @@
 #pragma once
-// The validated description of a run: plain structs, filled in and checked by scene_reader.cpp.
+// The validated description of a run: plain structs, filled in and checked by scene_json.cpp.
+// The scene layer aggregates: the grid's, the bodies', the walls' and the smoother's own specs live
+// in their layers (GridGeometry, BodySpec, WallSpec, MlsSettings); what only a run needs is here.
 // Nothing below the solver reads JSON; everything it needs is here, with defaults resolved.
-#include "talus/core/polygon.hpp"
+#include "talus/boundary/wall_spec.hpp"
 #include "talus/core/types.hpp"
 #include "talus/grid/grid.hpp"
 #include "talus/material/drucker_prager.hpp"
 #include "talus/material/mu_i.hpp"
+#include "talus/particles/body_spec.hpp"
+#include "talus/particles/particle_store.hpp"
 #include "talus/smoothing/mls_settings.hpp"
 
 #include <array>
@@ -53,39 +57,6 @@ struct MaterialSpec {
   double p_wave_modulus() const;
   double bulk_modulus() const;
   double shear_modulus() const;
-};
-
-/// How a body's box is read on a terrain grid: in physical (x, y, z) (the bed clips what lies below
-/// it), or in the grid's (x, y, w), w = height above the bed (a layer of uniform vertical thickness
-/// that follows the terrain; its cells are the grid's isoparametric cells).
-enum class BoxFrame { Physical, Terrain };
-/// The region a body fills: an axis-aligned box, or a prism (a polygon in the x-z plane extruded
-/// over [y0, y1]; e.g. the sand wedge behind a flume gate). particles/body_shape.hpp tests points.
-enum class BodyShapeKind { Box, Prism };
-
-struct PrismSpec {
-  PolygonPoints points;   // (x, z) vertices, a simple polygon, >= 3
-  double y0 = 0.0, y1 = 0.0;
-};
-
-struct BodySpec {
-  std::string name;
-  int material = 0;                      // index into Scene::materials
-  BodyShapeKind shape = BodyShapeKind::Box;
-  /// The box filled with particles; for a prism its bounding box (the candidates seeding tests).
-  Vec3 box_min = Vec3::Zero();
-  Vec3 box_max = Vec3::Zero();
-  BoxFrame frame = BoxFrame::Physical;   // grid.terrain only
-  PrismSpec prism;                       // BodyShapeKind::Prism only
-  int particles_per_cell = 2;            // n: n x n x n particles per cell
-  Vec3 velocity = Vec3::Zero();          // initial velocity
-};
-
-enum class WallType { Open, Slip, Fixed, Friction };
-
-struct WallSpec {
-  WallType type = WallType::Slip;
-  double friction_coefficient = 0.0;  // mu, only for Friction
 };
 
 struct OutputSpec {
@@ -149,6 +120,10 @@ struct Scene {
   OutputSpec output;
   GuardSpec guards;
   RunoutSpec runout;
+
+  /// The first step's Courant time step, courant h / max over bodies of (c + |v0|), c = sqrt(M / rho):
+  /// what Solver::stable_time_step gives for the freshly seeded particles, known before seeding.
+  double initial_time_step() const;
 };
 
 /// Settings that are valid but were measured to misbehave (each line says what was measured and
@@ -161,9 +136,13 @@ constexpr double kMlsStableRadiusFactor = 2.5;
 
 const char* to_string(SchemeKind scheme);
 const char* to_string(ShapeKind shape);
-const char* to_string(WallType type);
 const char* to_string(MaterialModel model);
 const char* to_string(ConeFit cone);
-const char* to_string(BodyShapeKind shape);
+
+/// Seed every body of the scene (particles/seeding.hpp with the scene's grid and densities).
+/// Throws input_error for a body that holds no particle.
+ParticleStore seed_particles(const Scene& scene);
+/// The number of particles seed_particles(scene) makes, without making them (same input errors).
+std::size_t count_particles(const Scene& scene);
 
 }  // namespace talus

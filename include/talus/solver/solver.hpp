@@ -4,6 +4,7 @@
 #include "talus/boundary/walls.hpp"
 #include "talus/grid/grid.hpp"
 #include "talus/solver/body_materials.hpp"
+#include "talus/solver/energy_budget.hpp"
 #include "talus/transfer/transfers.hpp"
 #include "talus/particles/cell_sort.hpp"
 #include "talus/particles/particle_store.hpp"
@@ -18,31 +19,13 @@
 
 namespace talus {
 
-/// The terms of the energy budget: kinetic + stored strain + gravitational potential + work
-/// dissipated by friction + plastic work. For a conservative continuum this total stays at its
-/// initial value; its drift measures the scheme's numerical dissipation or gain (and the energy
-/// lost in no-rebound impacts on walls, which a rigid wall's normal impulse does not account for).
-struct EnergyBudget {
-  double kinetic = 0.0;
-  double strain = 0.0;
-  double gravity = 0.0;         // -sum m g.x (zero at the grid origin)
-  double friction_work = 0.0;   // work dissipated by wall friction, accumulated
-  double plastic_work = 0.0;    // accumulated plastic dissipation
-  double outflow = 0.0;         // energy (kinetic + strain + gravity) carried out through open faces
-  double damping = 0.0;         // kinetic energy removed by the PIC share of the G2P update (solver.pic_fraction)
-  double total() const { return kinetic + strain + gravity + friction_work + plastic_work + outflow + damping; }
-};
-
 /// Everything besides the particle arrays that the next step depends on: what a checkpoint saves
 /// with the particles so that a restored solver continues bit for bit (docs/reliability.md).
 struct SolverState {
   double time = 0.0;
   std::int64_t step = 0;
   double last_dt = 0.0;
-  double friction_work = 0.0;
-  double plastic_work = 0.0;
-  double outflow_energy = 0.0;          // see EnergyBudget::outflow
-  double damping_work = 0.0;            // see EnergyBudget::damping
+  EnergyBudget work;                    // the accumulated terms (kinetic, strain, gravity stay 0)
   double outflow_mass = 0.0;            // [kg] of the particles removed at open faces
   std::int64_t outflow_particles = 0;
   int steps_since_sort = 0;
@@ -115,14 +98,19 @@ class Solver {
   template <class Shape, class Terrain>
   void step_with(double dt);
   template <class Shape, class Terrain>
-  void update_stress(const std::array<const double*, 3>& node_velocity, double dt, bool move);
+  void update_stress(const NodeVectors& node_velocity, double dt, bool move);
   template <class Shape, class Terrain>
-  void update_stress_smoothed(const std::array<const double*, 3>& node_velocity, double dt, bool move);
+  void update_stress_smoothed(const NodeVectors& node_velocity, double dt, bool move);
   template <class Shape>
   double update_chunk(std::size_t begin, std::size_t end, const StrainIncrements& inc, double dt, bool move);
   template <class Shape, class FillChunk>
   void update_material_by_chunks(double dt, bool move, FillChunk fill);
   void move_particles();
+  /// The energy particle p holds: kinetic, stored strain, gravitational (energies(), the outflow).
+  struct ParticleEnergy {
+    double kinetic, strain, gravity;
+  };
+  ParticleEnergy particle_energy(std::size_t p) const;
   /// Remove the particles beyond an open face (after they moved), adding their energy and mass to
   /// the outflow; deterministic (the kept particles keep their order).
   void remove_outflow();
@@ -148,10 +136,7 @@ class Solver {
   bool needs_sort_ = true;
   int steps_since_sort_ = 0;
   std::int64_t sorts_ = 0;
-  double friction_work_ = 0.0;
-  double plastic_work_ = 0.0;
-  double outflow_energy_ = 0.0;
-  double damping_work_ = 0.0;
+  EnergyBudget work_;                  // the accumulated terms of the ledger (energy_budget.hpp)
   std::vector<double> block_damping_;  // per sort block, this step's PIC damping
   double outflow_mass_ = 0.0;
   std::int64_t outflow_particles_ = 0;

@@ -81,7 +81,7 @@ struct StrainIncrements {
 /// `node_velocity` (v^{k+1} after the MUSL remap, v^L for USL).
 template <class Shape, class Terrain>
 void strain_increments(const ParticleStore& particles, const Grid& grid,
-                       const std::array<const double*, 3>& node_velocity, double dt, std::size_t begin,
+                       const NodeVectors& node_velocity, double dt, std::size_t begin,
                        std::size_t end, StrainIncrements& out);
 
 }  // namespace talus

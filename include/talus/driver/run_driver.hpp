@@ -1,21 +1,18 @@
 #pragma once
-// The run loop with its outputs: steps the solver to the end time, writes particle frames on the
-// frame schedule, energy-history rows on the history schedule, and a progress line.
+// The run loop: steps the solver to the end time, writes the outputs when each is due
+// (driver/run_outputs.hpp: energy history, runout files, frames, checkpoints), keeps the last good
+// state for the instability guards, catches SIGINT/SIGTERM and prints a progress line.
 //
 // Output folder:
 //   scene.json           the fully resolved scene (every default filled in)
 //   particles.pvd        ParaView time series of the frames
 //   frames/particles_NNNNNN.vtu
-//   energy.csv           time, step, dt, kinetic, strain, gravity, boundary_work, plastic_work, total
+//   energy.csv           time, step, dt, each term of the energy ledger (solver/energy_budget.hpp), total
 //   checkpoint.h5        the last checkpoint (output.checkpoint_interval, SIGINT/SIGTERM, instability)
 //   runout.csv           runout diagnostics on the history schedule (only with diagnostics.runout)
 //   runout.json          the runout after the last step: front, tail, gate, runout plane (diagnostics.runout)
 //   deposit.csv          the deposit thickness raster at the end (only with diagnostics.runout)
 //   terrain.vtu          the terrain surface, written once (only when the scene has a terrain)
-//
-// Crash safety (docs/reliability.md): frames, the .pvd index, scene.json and checkpoints are written
-// to a temporary name and renamed; energy rows are flushed one by one, and a restart rewrites the
-// history up to the checkpoint's step (atomically) before it appends.
 #include "talus/diagnostics/runout.hpp"
 #include "talus/io/checkpoint.hpp"
 #include "talus/solver/solver.hpp"

@@ -1,6 +1,6 @@
 // Body shapes (scene bodies[i].box / .prism): the polygon tests, the prism's validation messages,
 // and seeding that keeps exactly the candidate points inside the prism.
-#include "scene_fixtures.hpp"
+#include "../solver/scene_fixtures.hpp"
 #include "talus/core/error.hpp"
 #include "talus/core/polygon.hpp"
 #include "talus/particles/body_shape.hpp"

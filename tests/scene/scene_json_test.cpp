@@ -1,10 +1,16 @@
 // The scene reader: defaults, round trip, and one clear message per kind of bad input.
-#include "scene_fixtures.hpp"
+#include "../solver/scene_fixtures.hpp"
 #include "talus/core/error.hpp"
+#include "talus/scene/element_test_json.hpp"
 #include "talus/scene/scene_json.hpp"
 #include "talus/solver/solver.hpp"
 
 #include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <string>
+#include <vector>
 
 namespace talus {
 namespace {
@@ -43,6 +49,49 @@ TEST(SceneJson, BadInputNamesTheKeyAndTheRange) {
   test::expect_variant_error(ok, "\"young\": 1e6", "\"young\": 0", "materials.m.young");
   EXPECT_NE(error_of("{ \"grid\": ").find("malformed JSON"), std::string::npos);
   test::expect_variant_error(ok, "\"time\"", "\"solver\": { \"scheme\": \"rk4\" }, \"time\"", "solver.scheme = \"rk4\" is not one of: musl, usl");
+}
+
+// The element test reads its material with the scene's Drucker-Prager fields (issue 22): the
+// same keys, the same ranges, the same messages, and "apex" for the default tension cut-off in both.
+TEST(SceneJson, DruckerPragerKeysFollowOneRuleInScenesAndElementTests) {
+  const std::string sand = replace_once(kMinimal, "\"density\": 1000, \"young\": 1e6, \"poisson\": 0.3",
+                                        "\"model\": \"drucker_prager\", \"density\": 1000, \"young\": 1e6, "
+                                        "\"poisson\": 0.3, \"friction_angle\": 30, \"tension_cutoff\": \"apex\"");
+  const Scene s = parse_scene(sand, "t");
+  EXPECT_TRUE(std::isinf(s.materials[0].drucker_prager.tension_cutoff));
+  EXPECT_EQ(scene_to_json(parse_scene(scene_to_json(s).dump(), "again")), scene_to_json(s));
+  const std::string spec_material =
+      R"({"young": 1e6, "poisson": 0.3, "friction_angle": 30, "tension_cutoff": "apex"})";
+  const std::string spec_path = R"({"type": "oedometer", "strain": 0.01, "increments": 10})";
+  auto spec_error = [&](const std::string& from, const std::string& to) {
+    try {
+      parse_element_test(R"({"material": )" + replace_once(spec_material, from, to) + R"(, "path": )" + spec_path + "}",
+                         "spec.json");
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_TRUE(std::isinf(parse_element_test(R"({"material": )" + spec_material + R"(, "path": )" + spec_path + "}",
+                                            "spec.json")
+                             .material.tension_cutoff));
+  // "@" stands for the material's key path: materials.m. in the scene, material. in the spec.
+  const std::vector<std::array<std::string, 3>> cases = {
+      {"\"poisson\": 0.3", "\"poisson\": 0.5", "@poisson = 0.5 is outside the allowed range [0, 0.5)"},
+      {"\"friction_angle\": 30", "\"friction_angle\": 95", "@friction_angle = 95 is out of range; allowed (0, 90)"},
+      {"\"apex\"", "\"top\"", "@tension_cutoff = \"top\" is not \"apex\" or a mean stress >= 0"},
+      {"\"apex\"", "-1", "@tension_cutoff = -1 is out of range"},
+      {"\"friction_angle\": 30", "\"friction_angle\": 30, \"frction\": 1", "unknown key @frction"},
+  };
+  auto with_prefix = [](std::string message, const std::string& prefix) {
+    return message.replace(message.find('@'), 1, prefix);
+  };
+  for (const auto& [from, to, message] : cases) {
+    const std::string in_scene = error_of(replace_once(sand, from, to));
+    const std::string in_spec = spec_error(from, to);
+    EXPECT_NE(in_scene.find(with_prefix(message, "materials.m.")), std::string::npos) << in_scene;
+    EXPECT_NE(in_spec.find(with_prefix(message, "material.")), std::string::npos) << in_spec;
+  }
 }
 
 TEST(SceneJson, EmptyBodyIsRefusedWhenSeeding) {

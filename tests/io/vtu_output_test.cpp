@@ -1,7 +1,7 @@
 // A frame written by the solver's writer reads back through VTK's own reader with the right arrays,
 // and the run driver writes a .pvd index, the resolved scene and the energy history.
-#include "scene_fixtures.hpp"
-#include "talus/io/run_driver.hpp"
+#include "../solver/scene_fixtures.hpp"
+#include "talus/driver/run_driver.hpp"
 #include "talus/io/vtu_writer.hpp"
 #include "talus/solver/solver.hpp"
 

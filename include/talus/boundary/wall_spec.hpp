@@ -1,0 +1,15 @@
+#pragma once
+// What a face of the grid domain does (docs/scene-reference.md "Boundaries"): the boundary layer's
+// own input, which the scene reader fills in for each of the six faces.
+namespace talus {
+
+enum class WallType { Open, Slip, Fixed, Friction };
+
+struct WallSpec {
+  WallType type = WallType::Slip;
+  double friction_coefficient = 0.0;  // mu, only for Friction
+};
+
+const char* to_string(WallType type);
+
+}  // namespace talus

@@ -1,0 +1,117 @@
+#pragma once
+// The outputs of a run, one object each. Each knows when it is due (its OutputSchedule, whose next
+// time lives in RunProgress and so travels in the checkpoint), how to write, and how to pick up a
+// resumed run: a restart cuts every file back to the checkpoint's step before appending.
+//
+//   EnergyHistory  energy.csv            history schedule (output.history_interval; 0 = every step)
+//   RunoutFiles    runout.csv            history schedule; runout.json and deposit.csv at the end
+//                                        (only with diagnostics.runout)
+//   FrameSeries    frames/*.vtu + .pvd   frame schedule (output.frame_interval; 0 = first and last)
+//   CheckpointFile checkpoint.h5         checkpoint schedule (output.checkpoint_interval; 0 = none),
+//                                        and on a signal or an instability
+// Crash safety (docs/reliability.md): frames, the .pvd index, scene.json and checkpoints are written
+// to a temporary name and renamed; history rows are flushed one by one.
+#include "talus/diagnostics/runout.hpp"
+#include "talus/io/checkpoint.hpp"
+#include "talus/io/vtu_writer.hpp"
+#include "talus/solver/solver.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <string>
+
+namespace talus {
+
+/// An output on a time interval. `next` is the time it is next due (kept in RunProgress).
+struct OutputSchedule {
+  double interval;  // [s]; 0 = not on a schedule
+  double& next;
+  /// Whether time t has reached the next output time (never when there is no interval).
+  bool reached(double t) const { return interval > 0.0 && t >= next; }
+  /// Move the next output time past t (an output just written at t).
+  void advance_past(double t) {
+    while (interval > 0.0 && next <= t) next += interval;
+  }
+};
+
+/// Create the output folder. A fresh run removes the outputs of an earlier run there (no stale frame
+/// survives); a resumed run keeps the frames `resume` lists and drops later ones. Both remove
+/// leftover temporary files of a killed writer.
+void prepare_output_folder(const std::filesystem::path& dir, const RunProgress* resume);
+
+/// energy.csv: time, step, dt, every term of the energy ledger, total.
+class EnergyHistory {
+ public:
+  /// A fresh run (no resume_step) starts the file with its header; a resumed one keeps the rows up
+  /// to resume_step (the file rewritten atomically) and appends.
+  EnergyHistory(const std::filesystem::path& dir, std::optional<std::int64_t> resume_step);
+  /// One row, flushed: a killed run leaves only whole rows behind.
+  void write(const Solver& solver, const EnergyBudget& energies);
+  void flush() { file_.flush(); }
+
+ private:
+  std::ofstream file_;
+};
+
+/// runout.csv, runout.json, deposit.csv (docs/flume.md); does nothing without diagnostics.runout.
+class RunoutFiles {
+ public:
+  RunoutFiles(const Scene& scene, const std::filesystem::path& dir, std::optional<std::int64_t> resume_step);
+  bool enabled() const { return monitor_.has_value(); }
+  /// One row of runout.csv, on the history schedule.
+  void write(const Solver& solver);
+  /// What finish() wrote: the runout after the last step, and the files' paths.
+  struct Outcome {
+    std::optional<RunoutResult> result;
+    std::string summary_path;  // runout.json
+    std::string deposit_path;  // deposit.csv (empty unless the run reached its end)
+  };
+  /// runout.json (the front after the last step), and deposit.csv when the run reached its end.
+  Outcome finish(Solver& solver) const;
+  const std::string& history_path() const { return history_path_; }
+
+ private:
+  const Scene& scene_;
+  std::filesystem::path dir_;
+  std::optional<RunoutMonitor> monitor_;
+  std::string history_path_;
+  std::ofstream file_;
+};
+
+/// The particle frames and the ParaView series that lists them.
+class FrameSeries {
+ public:
+  /// `progress` records each frame's time and step (the checkpoint carries them); a resumed run's
+  /// series starts with the frames it lists.
+  FrameSeries(const std::filesystem::path& dir, bool compress, RunProgress& progress);
+  /// Write the solver's particles as the next frame; returns its file name (frames/...).
+  std::string write(Solver& solver);
+  /// Whether the last frame is of this step already.
+  bool has_frame_of_step(std::int64_t step) const;
+  const std::string& pvd_path() const { return pvd_path_; }
+
+ private:
+  std::filesystem::path dir_;
+  bool compress_;
+  RunProgress& progress_;
+  std::string pvd_path_;
+  PvdIndex pvd_;
+};
+
+/// checkpoint.h5: the solver's state and the run's progress.
+class CheckpointFile {
+ public:
+  explicit CheckpointFile(const std::filesystem::path& dir) : path_((dir / "checkpoint.h5").string()) {}
+  void write(Solver& solver, const RunProgress& progress);
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+/// The name of frame i: frames/particles_<i:06>.vtu.
+std::string frame_name(std::size_t index);
+
+}  // namespace talus

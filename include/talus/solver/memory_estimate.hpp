@@ -1,0 +1,46 @@
+#pragma once
+// What a scene will need in memory, known before anything is allocated: `talus check` prints it and
+// `talus run` refuses a scene that does not fit, with one line (needed, available, what to change)
+// and exit code 2, instead of running until an allocation fails (docs/reliability.md "Memory").
+//
+// The model counts the arrays the solver really holds, per particle (fields, sort and scratch
+// arrays, MLS buffers, the guard's snapshot copy, the largest transient buffer: a VTU frame) and
+// per grid node (10 doubles, committed tile by tile where particles are). The grid part is the
+// tiles the bodies cover at the start; a flow that spreads commits more, at most the whole grid
+// (reported as `grid_bytes_bound`). tests/solver/memory_estimate_test.cpp checks the model against
+// the peak resident memory of real runs.
+#include "talus/scene/scene.hpp"
+
+#include <cstddef>
+#include <optional>
+#include <string>
+
+namespace talus {
+
+struct MemoryEstimate {
+  std::size_t particles = 0;           // exact: the particles seeding will make
+  std::size_t bytes_per_particle = 0;  // every per-particle array the run holds at its peak
+  std::size_t particle_bytes = 0;      // particles * bytes_per_particle
+  std::size_t grid_bytes = 0;          // node data of the tiles the bodies cover at the start
+  std::size_t grid_bytes_bound = 0;    // node data of the whole grid (a flow that covers it all)
+  std::size_t total() const { return particle_bytes + grid_bytes; }
+};
+
+/// Counts the particles (particles/seeding.hpp count_particles: same input errors, no allocation)
+/// and sizes what the solver and the run's outputs will hold.
+MemoryEstimate estimate_memory(const Scene& scene);
+
+/// Memory this process may still use [bytes]: the environment variable TALUS_MEMORY_LIMIT when set
+/// (bytes, or with a K/M/G/T suffix: a share of a node for one run), else the smaller of the
+/// system's MemAvailable and the room left under a cgroup (container, batch job) limit. Throws
+/// input_error for a TALUS_MEMORY_LIMIT that is not a positive size. nullopt when unknown.
+std::optional<std::size_t> available_memory();
+
+/// Throws input_error (exit code 2) when the estimate exceeds the available memory, with the
+/// figures and what to change. Does nothing when the available memory is unknown.
+void require_memory_fits(const Scene& scene, const MemoryEstimate& estimate);
+
+/// Bytes as "1.23 GB" (powers of 1000, as `talus check` prints them).
+std::string format_bytes(double bytes);
+
+}  // namespace talus

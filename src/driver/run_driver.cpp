@@ -1,0 +1,311 @@
+#include "talus/driver/run_driver.hpp"
+
+#include "talus/core/error.hpp"
+#include "talus/driver/run_outputs.hpp"
+#include "talus/io/runout_output.hpp"
+#include "talus/io/vtu_writer.hpp"
+#include "talus/scene/scene_json.hpp"
+#include "talus/solver/stability_guards.hpp"
+
+#include <fmt/core.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+
+namespace talus {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+volatile std::sig_atomic_t g_signal = 0;
+
+extern "C" void on_stop_signal(int sig) { g_signal = sig; }
+
+/// SIGINT/SIGTERM set a flag for the run loop while this lives; a second signal acts as usual
+/// (SA_RESETHAND), so a run that does not stop can still be killed.
+class SignalCatcher {
+ public:
+  explicit SignalCatcher(bool enabled) : enabled_(enabled) {
+    if (!enabled_) return;
+    g_signal = 0;
+    struct sigaction sa {};
+    sa.sa_handler = on_stop_signal;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = SA_RESETHAND;
+    sigaction(SIGINT, &sa, &old_int_);
+    sigaction(SIGTERM, &sa, &old_term_);
+  }
+  ~SignalCatcher() {
+    if (!enabled_) return;
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+  }
+  SignalCatcher(const SignalCatcher&) = delete;
+  SignalCatcher& operator=(const SignalCatcher&) = delete;
+  int caught() const { return enabled_ ? static_cast<int>(g_signal) : 0; }
+
+ private:
+  bool enabled_;
+  struct sigaction old_int_ {}, old_term_ {};
+};
+
+std::string format_duration(double seconds) {
+  if (!std::isfinite(seconds) || seconds < 0) return "?";
+  const long s = std::lround(seconds);
+  if (s >= 3600) return fmt::format("{}h{:02}m", s / 3600, (s / 60) % 60);
+  if (s >= 60) return fmt::format("{}m{:02}s", s / 60, s % 60);
+  return fmt::format("{}s", s);
+}
+
+/// The progress line on stderr: at most every `seconds`, and after the last step.
+class ProgressLine {
+ public:
+  ProgressLine(const Solver& solver, const RunOptions& options)
+      : solver_(solver), enabled_(options.progress), seconds_(options.progress_seconds),
+        first_step_(solver.step_count()), start_(std::chrono::steady_clock::now()), last_(start_),
+        tty_(isatty(fileno(stderr))) {}
+
+  double elapsed() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+
+  void update() {
+    const auto now = std::chrono::steady_clock::now();
+    const bool last = solver_.finished();
+    if (!enabled_ || (std::chrono::duration<double>(now - last_).count() < seconds_ && !last)) return;
+    last_ = now;
+    const Scene& scene = solver_.scene();
+    const double wall = elapsed();
+    const double fraction = scene.max_steps > 0
+                                ? std::max(solver_.time() / scene.end_time, double(solver_.step_count()) / scene.max_steps)
+                                : solver_.time() / scene.end_time;
+    const double rate = (solver_.step_count() - first_step_) * double(solver_.particles().size()) / std::max(wall, 1e-9);
+    fmt::print(stderr, "{}talus: step {:>8}  t = {:.4g}/{:.4g} s ({:5.1f}%)  dt = {:.3e} s  {:.2f} M particle-updates/s  ETA {}{}",
+               tty_ ? "\r" : "", solver_.step_count(), solver_.time(), scene.end_time, 100.0 * fraction, solver_.last_dt(),
+               rate / 1e6, format_duration(wall * (1.0 - fraction) / std::max(fraction, 1e-12)), tty_ ? "   " : "\n");
+    if (tty_ && last) fmt::print(stderr, "\n");
+  }
+
+ private:
+  const Solver& solver_;
+  bool enabled_;
+  double seconds_;
+  std::int64_t first_step_;
+  std::chrono::steady_clock::time_point start_, last_;
+  bool tty_;
+};
+
+/// The last state that passed every guard, kept in memory to be written when a later step fails.
+struct Snapshot {
+  bool valid = false;
+  ParticleStore particles;
+  SolverState state;
+  RunProgress progress;
+  std::int64_t step = -1;
+};
+
+/// One run: its outputs, schedules, guards and snapshot, and the loop over steps.
+class RunLoop {
+ public:
+  RunLoop(Solver& solver, const RunOptions& options)
+      : solver_(solver), scene_(solver.scene()), dir_(options.out_dir), resuming_(options.resume != nullptr),
+        progress_(resuming_ ? *options.resume : RunProgress{}),
+        history_(dir_, resume_step()), runout_(scene_, dir_, resume_step()),
+        frames_(dir_, scene_.output.compress, progress_), checkpoint_(dir_),
+        history_schedule_{scene_.output.history_interval, progress_.next_history},
+        frame_schedule_{scene_.output.frame_interval, progress_.next_frame},
+        checkpoint_schedule_{scene_.output.checkpoint_interval, progress_.next_checkpoint},
+        progress_line_(solver, options), signals_(options.handle_signals) {}
+
+  RunSummary run();
+
+ private:
+  std::optional<std::int64_t> resume_step() const {
+    return resuming_ ? std::optional<std::int64_t>(solver_.step_count()) : std::nullopt;
+  }
+  void start();
+  void write_terrain();
+  /// One step and the outputs it makes due; returns whether anything was written or must be kept.
+  bool step_and_write();
+  void write_history_row();
+  void write_frame() {
+    frames_.write(solver_);
+    ++summary_.frames;
+  }
+  void write_checkpoint() {
+    progress_.energy_max_released = energy_guard_.max_released();
+    checkpoint_.write(solver_, progress_);
+    ++summary_.checkpoints;
+  }
+  void take_snapshot();
+  [[noreturn]] void fail(const Error& e);
+  void finish();
+
+  Solver& solver_;
+  const Scene& scene_;
+  fs::path dir_;
+  bool resuming_;
+  RunProgress progress_;
+  EnergyHistory history_;
+  RunoutFiles runout_;
+  FrameSeries frames_;
+  CheckpointFile checkpoint_;
+  OutputSchedule history_schedule_, frame_schedule_, checkpoint_schedule_;
+  EnergyGuard energy_guard_;
+  Snapshot snapshot_;
+  ProgressLine progress_line_;
+  SignalCatcher signals_;
+  RunSummary summary_;
+};
+
+RunSummary RunLoop::run() {
+  start();
+  while (!solver_.finished()) {
+    bool keep = false;
+    try {
+      keep = step_and_write();
+    } catch (const Error& e) {
+      if (e.kind() != Error::Kind::Instability) throw;
+      fail(e);
+    }
+    // The snapshot never predates a frame or checkpoint, so the failure path writes in order.
+    if (keep) take_snapshot();
+    if (const int sig = signals_.caught(); sig != 0 && !solver_.finished()) {
+      write_checkpoint();
+      summary_.interrupted_signal = sig;
+      break;
+    }
+    progress_line_.update();
+  }
+  finish();
+  return summary_;
+}
+
+void RunLoop::start() {
+  write_file_atomically((dir_ / "scene.json").string(), scene_to_json(scene_).dump(2) + "\n");
+  summary_.pvd_path = frames_.pvd_path();
+  summary_.checkpoint_path = checkpoint_.path();
+  summary_.runout_path = runout_.history_path();
+  write_terrain();
+  if (resuming_) {
+    summary_.initial = progress_.initial;
+    energy_guard_ = EnergyGuard(scene_, solver_.particles(), progress_.initial);
+    energy_guard_.set_max_released(progress_.energy_max_released);
+  } else {
+    summary_.initial = solver_.energies();
+    progress_.initial = summary_.initial;
+    energy_guard_ = EnergyGuard(scene_, solver_.particles(), summary_.initial);
+    history_.write(solver_, summary_.initial);
+    runout_.write(solver_);
+    write_frame();
+    // Each schedule's first time is one interval after the start.
+    progress_.next_frame = scene_.output.frame_interval;
+    progress_.next_history = scene_.output.history_interval;
+    progress_.next_checkpoint = scene_.output.checkpoint_interval;
+  }
+  take_snapshot();
+}
+
+// The terrain surface, once, over the grid's x and y range (ParaView shows it with the particles).
+void RunLoop::write_terrain() {
+  const FlumeCoordinates bed = flume_coordinates_of(scene_);
+  if (bed.flat()) return;
+  const GridGeometry& g = scene_.grid;
+  summary_.terrain_path = (dir_ / "terrain.vtu").string();
+  write_terrain_vtu(summary_.terrain_path, bed.profile(), g.origin[0], g.origin[0] + g.cells[0] * g.h, g.origin[1],
+                    g.origin[1] + g.cells[1] * g.h, 0.25 * g.h);
+}
+
+bool RunLoop::step_and_write() {
+  solver_.step();
+  const double t = solver_.time();
+  const bool last = solver_.finished();
+  // The history (and the energy guard that reads it): every step when it has no interval.
+  if (history_schedule_.interval <= 0.0 || history_schedule_.reached(t) || last) write_history_row();
+  const bool frame_due = frame_schedule_.reached(t) || last;
+  const bool checkpoint_due = checkpoint_schedule_.reached(t) && !last;
+  const bool snapshot_due = frame_due || checkpoint_due ||
+                            (scene_.guards.snapshot_interval > 0 &&
+                             solver_.step_count() - snapshot_.step >= scene_.guards.snapshot_interval);
+  // What is written or kept as the last good state is checked in every field first (the solver
+  // scans them only every few steps, stability_guards.hpp).
+  if (snapshot_due) solver_.check_particles();
+  if (frame_due) {
+    write_frame();
+    frame_schedule_.advance_past(t);
+  }
+  if (checkpoint_due) {
+    checkpoint_schedule_.advance_past(t);
+    write_checkpoint();
+  }
+  return snapshot_due;
+}
+
+void RunLoop::write_history_row() {
+  ScopedPhase timer(solver_.phase_times(), Phase::Output);
+  const EnergyBudget e = solver_.energies();
+  history_.write(solver_, e);
+  runout_.write(solver_);
+  history_schedule_.advance_past(solver_.time());
+  energy_guard_.check(e, solver_.particles(), scene_, solver_.step_count(), solver_.time());
+}
+
+void RunLoop::take_snapshot() {
+  if (scene_.guards.snapshot_interval <= 0) return;
+  snapshot_.particles = solver_.particles();
+  snapshot_.state = solver_.state();
+  snapshot_.progress = progress_;
+  snapshot_.progress.energy_max_released = energy_guard_.max_released();
+  snapshot_.valid = true;
+  snapshot_.step = solver_.step_count();
+}
+
+// A step failed: go back to the last good state, write it as a frame (unless it is the last frame
+// already) and a checkpoint, and stop with the diagnosis.
+void RunLoop::fail(const Error& e) {
+  std::string message = e.what();
+  try {
+    history_.flush();
+    if (snapshot_.valid) {
+      solver_.restore(snapshot_.particles, snapshot_.state);
+      progress_ = snapshot_.progress;
+      energy_guard_.set_max_released(snapshot_.progress.energy_max_released);
+      std::string frame = "the last frame";
+      if (!frames_.has_frame_of_step(solver_.step_count())) {
+        frame = frames_.write(solver_);
+        ++summary_.frames;
+      }
+      write_checkpoint();
+      message += fmt::format(" | last good state (after step {}, t = {:.6g} s) written to {} and checkpoint.h5",
+                             solver_.step_count(), solver_.time(), frame);
+    }
+  } catch (const Error& io) {
+    message += fmt::format(" | the last good state could not be written: {}", io.what());
+  }
+  throw instability_error(message);
+}
+
+void RunLoop::finish() {
+  history_.flush();
+  const RunoutFiles::Outcome runout = runout_.finish(solver_);
+  summary_.runout = runout.result;
+  summary_.runout_summary_path = runout.summary_path;
+  summary_.deposit_path = runout.deposit_path;
+  summary_.steps = solver_.step_count();
+  summary_.time = solver_.time();
+  summary_.wall_seconds = progress_line_.elapsed();
+  summary_.final = solver_.energies();
+}
+
+}  // namespace
+
+RunSummary run_scene(Solver& solver, const RunOptions& options) {
+  prepare_output_folder(options.out_dir, options.resume);
+  RunLoop loop(solver, options);
+  return loop.run();
+}
+
+}  // namespace talus

@@ -1,0 +1,195 @@
+#include "talus/solver/memory_estimate.hpp"
+
+#include "talus/core/error.hpp"
+#include "talus/grid/grid.hpp"
+#include "talus/particles/seeding.hpp"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+namespace talus {
+
+namespace {
+
+// Per-particle arrays, in bytes (particles/particle_store.hpp, particles/cell_sort.hpp, solver.hpp).
+constexpr std::size_t kAlwaysFields = 8 /* id */ + 2 /* body */ + 8 * (3 + 3 + 1 + 1 + 1 + 6 + 6);
+constexpr std::size_t kPlasticStrain = 8;
+constexpr std::size_t kBackStress = 6 * 8;
+constexpr std::size_t kGimpDomain = 3 * 8;
+constexpr std::size_t kPermuteScratch = 8 + 8 + 2;        // one double array, ids, bodies
+constexpr std::size_t kCellSort = 3 * 4;                  // block, cell, order (uint32)
+constexpr std::size_t kDisplacement = 3 * 8;              // the step's displacement
+constexpr std::size_t kSmoothing = (6 + 6 + 3) * 8;       // raw and smoothed strain, raw spin
+constexpr std::size_t kSortCell = 3 * 4;                  // the sort state a snapshot keeps
+// The largest transient buffer: a particle frame's VTK arrays (points, velocity, speed, stress,
+// strain, density, volume, id, body, vertex offsets and connectivity; io/vtu_writer.cpp).
+constexpr std::size_t kFrameArrays = 24 + 24 + 8 + 48 + 48 + 8 + 8 + 8 + 2 + 4 + 4;
+constexpr std::size_t kNodeBytes = Grid::kFieldCount * sizeof(double);
+
+std::size_t bytes_per_particle(const Scene& scene) {
+  bool plastic = false, kinematic = false;
+  for (const BodySpec& body : scene.bodies) {
+    const MaterialSpec& m = scene.materials[body.material];
+    if (m.model == MaterialModel::LinearElastic) continue;
+    plastic = true;  // Drucker-Prager and μ(I) keep the plastic state (BodyMaterials)
+    if (m.model != MaterialModel::DruckerPrager) continue;
+    kinematic = kinematic || (m.drucker_prager.hardening_modulus > 0.0 && m.drucker_prager.kinematic_fraction > 0.0);
+  }
+  std::size_t fields = kAlwaysFields;
+  if (plastic) fields += kPlasticStrain;
+  if (kinematic) fields += kBackStress;
+  if (scene.shape == ShapeKind::CpGimp) fields += kGimpDomain;
+  std::size_t bytes = fields + kPermuteScratch + kCellSort + kDisplacement + kFrameArrays;
+  if (scene.smoothing.enabled) bytes += kSmoothing;
+  if (scene.guards.snapshot_interval > 0) bytes += fields + kSortCell;  // the last good state
+  return bytes;
+}
+
+/// Tiles of 4^3 nodes that a node range [lo, hi] of each axis meets, clipped to the grid.
+std::size_t tiles_in(const std::array<int, 3>& lo, const std::array<int, 3>& hi, const std::array<int, 3>& nodes) {
+  std::size_t tiles = 1;
+  for (int d = 0; d < 3; ++d) {
+    const int a = std::clamp(lo[d], 0, nodes[d] - 1) / kTileEdge;
+    const int b = std::clamp(hi[d], 0, nodes[d] - 1) / kTileEdge;
+    tiles *= static_cast<std::size_t>(b - a + 1);
+  }
+  return tiles;
+}
+
+/// The node data of the tiles each body's box (in the grid's x, y, w) covers, widened by the
+/// largest shape function's reach (2 nodes). Overlapping bodies count twice: an upper estimate.
+std::size_t start_grid_bytes(const Scene& scene) {
+  const GridGeometry& g = scene.grid;
+  const ProfileTerrain bed = grid_bed(g);
+  const std::array<int, 3> nodes = g.nodes();
+  std::size_t tiles = 0;
+  for (const BodySpec& body : scene.bodies) {
+    double w_lo = body.box_min[2], w_hi = body.box_max[2];
+    if (g.has_terrain() && body.frame == BoxFrame::Physical) {
+      // the bed under the box, sampled at the node columns it spans
+      double bed_lo = INFINITY, bed_hi = -INFINITY;
+      const int i0 = static_cast<int>(std::floor(g.to_grid(0, body.box_min[0]))) - 1;
+      const int i1 = static_cast<int>(std::ceil(g.to_grid(0, body.box_max[0]))) + 1;
+      for (int i = std::max(i0, 0); i <= std::min(i1, nodes[0] - 1); ++i) {
+        const double zb = bed.height(g.node_position(0, i));
+        bed_lo = std::min(bed_lo, zb);
+        bed_hi = std::max(bed_hi, zb);
+      }
+      if (bed_lo <= bed_hi) {
+        w_lo = std::max(g.origin[2], body.box_min[2] - bed_hi);
+        w_hi = body.box_max[2] - bed_lo;
+      }
+    }
+    const double lo[3] = {body.box_min[0], body.box_min[1], w_lo};
+    const double hi[3] = {body.box_max[0], body.box_max[1], w_hi};
+    std::array<int, 3> a{}, b{};
+    for (int d = 0; d < 3; ++d) {
+      a[d] = static_cast<int>(std::floor(std::max(g.to_grid(d, lo[d]), -1.0))) - 2;
+      b[d] = static_cast<int>(std::ceil(std::min(g.to_grid(d, hi[d]), double(nodes[d])))) + 2;
+    }
+    tiles += tiles_in(a, b, nodes);
+  }
+  return tiles * kTileNodes * kNodeBytes;
+}
+
+std::optional<std::size_t> parse_size(std::string text) {
+  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.pop_back();
+  if (text.empty()) return std::nullopt;
+  double scale = 1.0;
+  switch (std::toupper(static_cast<unsigned char>(text.back()))) {
+    case 'K': scale = 1e3; break;
+    case 'M': scale = 1e6; break;
+    case 'G': scale = 1e9; break;
+    case 'T': scale = 1e12; break;
+    default: break;
+  }
+  if (scale != 1.0) text.pop_back();
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (end == text.c_str() || *end != '\0' || !(value > 0.0) || !std::isfinite(value)) return std::nullopt;
+  return static_cast<std::size_t>(value * scale);
+}
+
+/// A number from a one-line file (cgroup v2), nullopt for "max" or an unreadable file.
+std::optional<std::size_t> read_number(const char* path) {
+  std::ifstream in(path);
+  std::string word;
+  if (!(in >> word) || word == "max") return std::nullopt;
+  try {
+    return static_cast<std::size_t>(std::stoull(word));
+  } catch (...) {
+    return std::nullopt;
+  }
+}
+
+}  // namespace
+
+MemoryEstimate estimate_memory(const Scene& scene) {
+  MemoryEstimate e;
+  e.particles = count_particles(scene);
+  e.bytes_per_particle = bytes_per_particle(scene);
+  e.particle_bytes = e.particles * e.bytes_per_particle;
+  e.grid_bytes = start_grid_bytes(scene);
+  const std::array<int, 3> nodes = scene.grid.nodes();
+  std::size_t all_tiles = 1;
+  for (int d = 0; d < 3; ++d) all_tiles *= static_cast<std::size_t>((nodes[d] + kTileEdge - 1) / kTileEdge);
+  e.grid_bytes_bound = all_tiles * kTileNodes * kNodeBytes;
+  e.grid_bytes = std::min(e.grid_bytes, e.grid_bytes_bound);
+  return e;
+}
+
+std::optional<std::size_t> available_memory() {
+  if (const char* limit = std::getenv("TALUS_MEMORY_LIMIT")) {
+    const std::optional<std::size_t> bytes = parse_size(limit);
+    if (!bytes)
+      throw input_error(fmt::format("TALUS_MEMORY_LIMIT = \"{}\" is not a memory size (a positive number of bytes, "
+                                    "optionally with K, M, G or T: 8G)", limit));
+    return bytes;
+  }
+  std::optional<std::size_t> available;
+  std::ifstream meminfo("/proc/meminfo");
+  std::string line;
+  while (std::getline(meminfo, line))
+    if (line.rfind("MemAvailable:", 0) == 0) {
+      std::istringstream fields(line.substr(13));
+      std::size_t kib = 0;
+      if (fields >> kib) available = kib * 1024;
+    }
+  const std::optional<std::size_t> cap = read_number("/sys/fs/cgroup/memory.max");
+  const std::optional<std::size_t> used = read_number("/sys/fs/cgroup/memory.current");
+  if (cap && used) {
+    const std::size_t room = *cap > *used ? *cap - *used : 0;
+    available = available ? std::min(*available, room) : room;
+  }
+  return available;
+}
+
+void require_memory_fits(const Scene& scene, const MemoryEstimate& e) {
+  const std::optional<std::size_t> available = available_memory();
+  if (!available || e.total() <= *available) return;
+  // What to change: the particle count goes with (1/h)^3 and n^3, so this factor on h (or on n
+  // the other way) brings the particles down to what fits.
+  const double fit = std::max(0.0, double(*available) - double(e.grid_bytes)) / double(std::max<std::size_t>(e.particle_bytes, 1));
+  const double h_factor = fit > 0.0 ? std::cbrt(1.0 / fit) : INFINITY;
+  throw input_error(fmt::format(
+      "scene \"{}\" needs about {} ({} particles x {} B + {} of grid) but {} is available{}; make grid.cell_size {:.2g}x "
+      "larger or use fewer particles_per_cell, or run it on a machine with more memory",
+      scene.name, format_bytes(double(e.total())), e.particles, e.bytes_per_particle, format_bytes(double(e.grid_bytes)),
+      format_bytes(double(*available)), std::getenv("TALUS_MEMORY_LIMIT") ? " (TALUS_MEMORY_LIMIT)" : "",
+      std::max(h_factor, 1.01)));
+}
+
+std::string format_bytes(double bytes) {
+  if (bytes >= 1e12) return fmt::format("{:.2f} TB", bytes / 1e12);
+  if (bytes >= 1e9) return fmt::format("{:.2f} GB", bytes / 1e9);
+  if (bytes >= 1e6) return fmt::format("{:.1f} MB", bytes / 1e6);
+  return fmt::format("{:.1f} kB", bytes / 1e3);
+}
+
+}  // namespace talus

@@ -1,0 +1,36 @@
+// LazyArray (core/lazy_array.hpp) reads zero until written and moves its memory; Error
+// (core/error.hpp) keeps every message on one line and maps kinds to exit codes.
+#include "talus/core/error.hpp"
+#include "talus/core/lazy_array.hpp"
+
+#include <gtest/gtest.h>
+
+#include <utility>
+
+namespace talus {
+namespace {
+
+TEST(LazyArray, ReadsZeroUntilWrittenAndMovesItsMemory) {
+  LazyArray a(1 << 22);  // 32 MB of address space
+  EXPECT_EQ(a.size(), std::size_t(1) << 22);
+  EXPECT_EQ(a[0], 0.0);
+  EXPECT_EQ(a[(1 << 22) - 1], 0.0);
+  a[12345] = 2.5;
+  const double* memory = a.data();
+  LazyArray b(std::move(a));
+  EXPECT_EQ(b.data(), memory);
+  EXPECT_EQ(b[12345], 2.5);
+  EXPECT_EQ(a.size(), 0u);
+  EXPECT_EQ(a.data(), nullptr);
+}
+
+TEST(Error, OneLineMessagesAndExitCodes) {
+  const Error e = input_error("bodies[0] (\"a\nb\x01\") is bad");
+  EXPECT_STREQ(e.what(), "bodies[0] (\"a\\nb\\x01\") is bad");
+  EXPECT_EQ(e.exit_code(), 2);
+  EXPECT_EQ(instability_error("x").exit_code(), 3);
+  EXPECT_EQ(io_error("x").exit_code(), 2);
+}
+
+}  // namespace
+}  // namespace talus
