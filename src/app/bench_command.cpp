@@ -5,12 +5,14 @@
 #include "talus/core/version.hpp"
 #include "talus/scene/scene_json.hpp"
 #include "talus/material/drucker_prager.hpp"
+#include "talus/material/mu_i.hpp"
 #include "talus/solver/solver.hpp"
 
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
 #include <omp.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -89,6 +91,9 @@ std::string cpu_model() {
 const char* const kSand = R"("model": "drucker_prager", "density": 1600.0, "young": 2.0e6, "poisson": 0.3,
     "friction_angle": 40.0, "dilatancy_angle": 0.0, "cohesion": 10.0, "hardening_modulus": 0.0,
     "kinematic_fraction": 0.2)";
+/// The `mu_i` material: the glass beads of Jop et al. 2006 (the model's defaults), with the sand's
+/// elasticity and density so that the time step and the waves match the `dp` bench.
+const char* const kBeads = R"("model": "mu_i", "density": 1600.0, "young": 2.0e6, "poisson": 0.3)";
 constexpr double kBenchCell = 0.01;  // [m]
 int g_block_cells = 0;               // --block-cells, for every bench scene
 const char* const kElastic = R"("model": "linear_elastic", "density": 2000.0, "young": 1.0e7, "poisson": 0.3)";
@@ -108,7 +113,8 @@ Scene bench_scene(const std::string& name, double grid_xy, double grid_z, double
     "bodies": [ {{ "name": "body", "material": "m", "box": {{ "min": [{8}, {8}, 0], "max": [{9}, {9}, {10}] }},
                   "particles_per_cell": 2{11} }} ],
     "boundaries": {{ "z-": {{ "type": "friction", "friction_coefficient": {12} }}, "z+": "open" }}
-  }})", name, grid_xy, grid_z, kBenchCell, shape, scheme, mls_json, material == "dp" ? kSand : kElastic, body_lo,
+  }})", name, grid_xy, grid_z, kBenchCell, shape, scheme, mls_json,
+                                       material == "dp" ? kSand : material == "mu_i" ? kBeads : kElastic, body_lo,
                                        body_hi, body_top, body_extra, floor_friction, g_block_cells);
   return parse_scene(json, name);
 }
@@ -149,12 +155,12 @@ void refuse_unavailable(const BenchOptions& o) {
     throw input_error(fmt::format("--shape {}: unknown; available: linear, ugimp, cpgimp, bspline2", o.shape));
   if (!one_of(o.scheme, {"musl", "usl", "usf", "usavg"}))
     throw input_error(fmt::format("--scheme {}: unknown; available: musl, usl, usf, usavg", o.scheme));
-  if (!one_of(o.scene, {"block", "column", "shear"}))
-    throw input_error(fmt::format("--scene {}: unknown; available: block, column, shear", o.scene));
-  if (o.scene == "shear" && o.material != "dp")
-    throw input_error("--scene shear needs --material dp (the sand is put at its yield stress)");
-  if (!one_of(o.material, {"elastic", "dp"}))
-    throw input_error(fmt::format("--material {}: unknown; available: elastic, dp", o.material));
+  if (!one_of(o.scene, {"block", "column", "shear", "update"}))
+    throw input_error(fmt::format("--scene {}: unknown; available: block, column, shear, update", o.scene));
+  if ((o.scene == "shear" || o.scene == "update") && o.material != "dp" && o.material != "mu_i")
+    throw input_error(fmt::format("--scene {} needs --material dp or mu_i (the material is put at its yield stress)", o.scene));
+  if (!one_of(o.material, {"elastic", "dp", "mu_i"}))
+    throw input_error(fmt::format("--material {}: unknown; available: elastic, dp, mu_i", o.material));
   if (!one_of(o.mls, {"off", "linear", "quadratic", "cubic"}))
     throw input_error(fmt::format("--mls {}: unknown; available: off, linear, quadratic, cubic", o.mls));
 }
@@ -165,9 +171,32 @@ void refuse_unavailable(const BenchOptions& o) {
 /// p = rho g (z_top - z) + 1 kPa and tau = k + 3 alpha p, i.e. f = alpha I1 + q - k = 0 (seed 001
 /// eq. 23, q = tau in pure shear). The shear rate 1/s loads the stress by G dt per step, far more
 /// than round-off, so each step's trial lies outside the cone.
+/// With --material mu_i the stress is tau = mu(I) p, I from the imposed rate (Jop et al. 2006,
+/// friction law and inertial number): the steady state, in which every particle takes the flowing return.
 void start_in_simple_shear(Solver& solver) {
   const Scene& scene = solver.scene();
   const MaterialSpec& m = scene.materials.at(0);
+  const bool mu_i = m.model == MaterialModel::MuI;
+  if (mu_i) {
+    const MuI beads(m.mu_i);
+    ParticleStore& P = solver.particles();
+    double z_low = std::numeric_limits<double>::infinity(), z_top = -z_low;
+    for (double z : P.x[2]) {
+      z_low = std::min(z_low, z);
+      z_top = std::max(z_top, z);
+    }
+    const double z_mid = 0.5 * (z_low + z_top), rate = 1.0, g = std::abs(scene.gravity[2]);
+    for (std::size_t p = 0; p < P.size(); ++p) {
+      const double pressure = m.density * g * (z_top - P.x[2][p]) + 1.0e3;
+      const double tau = beads.friction(beads.inertial_number(rate, pressure)) * pressure;
+      P.v[0][p] = rate * (P.x[2][p] - z_mid);
+      P.v[1][p] = P.v[2][p] = 0.0;
+      for (int c = 0; c < 3; ++c) P.stress[c][p] = -pressure;
+      P.stress[YZ][p] = P.stress[XY][p] = 0.0;
+      P.stress[XZ][p] = tau;
+    }
+    return;
+  }
   const DruckerPrager model(m.drucker_prager);
   ParticleStore& P = solver.particles();
   double z_low = std::numeric_limits<double>::infinity(), z_top = -z_low;
@@ -189,8 +218,97 @@ void start_in_simple_shear(Solver& solver) {
 
 void record_work(Solver& solver, const BenchOptions& o, const nlohmann::json& bench);
 
+/// The update scene: the constitutive update alone, as BodyMaterials runs it per particle (objective
+/// rotation, then the model), over N particles held in structure-of-arrays like the particle store,
+/// each in simple shear at its yield stress (overburden p = 1 kPa ... 17 kPa across the particles)
+/// with the increment of a 1/s shear rate over dt = 1e-4 s, so that every particle takes the plastic
+/// return in every pass. No grid, no transfers: the ratio of two materials here is the ratio of
+/// their updates per particle (docs/performance.md, "μ(I) against Drucker-Prager").
+void run_update_bench(const BenchOptions& o) {
+  if (o.threads > 0) omp_set_num_threads(o.threads);
+  const std::size_t n = static_cast<std::size_t>(o.particles);
+  const double dt = 1.0e-4, rate = 1.0, shear = 2.0e6 / (2.0 * 1.3);
+  std::array<std::vector<double>, 6> stress;
+  for (auto& c : stress) c.assign(n, 0.0);
+  std::vector<double> plastic(n, 0.0);
+  DruckerPragerParameters dp;
+  dp.young = 2.0e6;
+  dp.poisson = 0.3;
+  dp.friction_angle_deg = 40.0;
+  dp.cohesion = 10.0;
+  dp.kinematic_fraction = 0.2;
+  const DruckerPrager sand(dp);
+  MuIParameters mi;
+  mi.young = 2.0e6;
+  mi.poisson = 0.3;
+  const MuI beads(mi);
+  for (std::size_t p = 0; p < n; ++p) {
+    const double pressure = 1.0e3 + 1.6e4 * double(p) / double(n);
+    const double tau = o.material == "dp" ? sand.initial_strength() + 3.0 * sand.alpha() * pressure
+                                          : beads.friction(beads.inertial_number(rate, pressure)) * pressure;
+    for (int c = 0; c < 3; ++c) stress[c][p] = -pressure;
+    stress[XZ][p] = tau;
+  }
+  Sym6 de = Sym6::Zero();
+  de[XZ] = 0.5 * rate * dt;
+  const double w_xz = 0.5 * rate * dt;  // v_x = rate z: w_xz = dt (dv_x/dz - dv_z/dx) / 2, as the strain pass
+  std::size_t plastic_updates = 0;
+  double dissipated = 0.0;
+  const auto start = std::chrono::steady_clock::now();
+  for (int step = 0; step < o.steps; ++step) {
+#pragma omp parallel for schedule(static) reduction(+ : plastic_updates, dissipated)
+    for (std::size_t p = 0; p < n; ++p) {
+      Sym6 s;
+      for (int c = 0; c < 6; ++c) s[c] = stress[c][p];
+      rotate_objectively(s, 0.0, w_xz, 0.0);
+      if (o.material == "dp") {
+        DruckerPragerState state;
+        state.equivalent_plastic_strain = plastic[p];
+        const DruckerPragerResult r = sand.update(s, state, de);
+        plastic_updates += r.regime != DruckerPragerResult::Regime::Elastic ? 1 : 0;
+        dissipated += r.plastic_work;
+        plastic[p] = state.equivalent_plastic_strain;
+      } else {
+        const MuIResult r = beads.update(s, de, dt);
+        plastic_updates += r.regime == MuIResult::Regime::Flowing ? 1 : 0;
+        dissipated += r.plastic_work;
+        plastic[p] += r.plastic_shear_strain;
+      }
+      for (int c = 0; c < 6; ++c) stress[c][p] = s[c];
+    }
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double rate_updates = double(n) * o.steps / wall;
+  fmt::print("talus bench: update scene (the constitutive update alone), {} particles, {} material, {} threads, {} passes\n",
+             n, o.material, omp_get_max_threads(), o.steps);
+  fmt::print("  {:.3f} M updates/s ({:.3f} s, {:.2f} ns per particle update)\n", rate_updates / 1e6, wall,
+             1e9 * wall * omp_get_max_threads() / (double(n) * o.steps));
+  fmt::print("  plastic: {:.1f}% of the updates (dissipated {:.3e} J/m^3 in all, G = {:.4g} Pa)\n",
+             100.0 * double(plastic_updates) / (double(n) * o.steps), dissipated, shear);
+  if (!o.json_path.empty()) {
+    nlohmann::json j;
+    j["talus_version"] = kVersion;
+    j["scene"] = "update";
+    j["material"] = o.material;
+    j["particles"] = n;
+    j["steps"] = o.steps;
+    j["threads"] = omp_get_max_threads();
+    j["cpu"] = cpu_model();
+    j["wall_seconds"] = wall;
+    j["updates_per_second"] = rate_updates;
+    j["plastic_share"] = double(plastic_updates) / (double(n) * o.steps);
+    std::ofstream out(o.json_path);
+    if (!out) throw io_error(fmt::format("cannot write {}", o.json_path));
+    out << j.dump(2) << "\n";
+  }
+}
+
 void run_bench(const BenchOptions& o) {
   refuse_unavailable(o);
+  if (o.scene == "update") {
+    run_update_bench(o);
+    return;
+  }
   if (o.threads > 0) omp_set_num_threads(o.threads);
   g_block_cells = o.block_cells;
   const std::string mls_json =
@@ -314,13 +432,13 @@ void record_work(Solver& solver, const BenchOptions& o, const nlohmann::json& be
 void add_bench_command(CLI::App& app) {
   auto o = std::make_shared<BenchOptions>();
   auto* cmd = app.add_subcommand("bench", "Measure speed: particle-updates per second, time per phase, memory per particle");
-  cmd->add_option("--scene", o->scene, "block (a cube sliding on a frictional floor) | column (a sand column collapsing, 2:1) | shear (the block's sand in simple shear at yield: every particle plastic every step; --material dp)")->capture_default_str();
+  cmd->add_option("--scene", o->scene, "block (a cube sliding on a frictional floor) | column (a sand column collapsing, 2:1) | shear (the block's sand in simple shear at yield: every particle plastic every step; --material dp or mu_i) | update (the constitutive update alone, every particle plastic; --material dp or mu_i)")->capture_default_str();
   cmd->add_option("--particles", o->particles, "Approximate particle count")->check(CLI::Range(1000LL, 100000000LL))->capture_default_str();
   cmd->add_option("--shape", o->shape, "linear | ugimp | cpgimp | bspline2")
       ->capture_default_str();
   cmd->add_option("--scheme", o->scheme, "musl | usl | usf | usavg")
       ->capture_default_str();
-  cmd->add_option("--material", o->material, "elastic | dp (Drucker-Prager sand, seed 001 Table 2)")->capture_default_str();
+  cmd->add_option("--material", o->material, "elastic | dp (Drucker-Prager sand, seed 001 Table 2) | mu_i (glass beads, Jop et al. 2006)")->capture_default_str();
   cmd->add_option("--mls", o->mls, "off | linear | quadratic | cubic")->capture_default_str();
   cmd->add_option("--mls-radius", o->mls_radius, "MLS radius in cells (solver.smoothing.radius_factor)")
       ->check(CLI::Range(0.5, 8.0))

@@ -2,13 +2,17 @@
 // strain- or mixed-controlled path (seed 001 sec. 6(3), Fig. 13). The spec format and the CSV
 // columns are documented in docs/drucker-prager.md; the spec is read by the scene layer
 // (scene/element_test_json.hpp), the driver is talus::run_element_test.
+// A spec whose material has "model": "mu_i" runs the μ(I) steady simple shear instead
+// (talus::run_mu_i_shear_test; spec and columns in docs/mu-i.md).
 #include "commands.hpp"
 #include "talus/core/error.hpp"
 #include "talus/material/element_test.hpp"
+#include "talus/material/mu_i_shear_test.hpp"
 #include "talus/scene/element_test_json.hpp"
 
 #include <fmt/core.h>
 
+#include <cmath>
 #include <fstream>
 #include <memory>
 #include <string>
@@ -17,8 +21,23 @@ namespace talus::app {
 
 namespace {
 
+void run_mu_i_test_command(const MuIShearSpec& spec, const std::string& out_file) {
+  const std::vector<MuIShearPoint> points = run_mu_i_shear_test(spec);
+  std::ofstream out(out_file);
+  if (!out) throw io_error(fmt::format("cannot write {}", out_file));
+  write_mu_i_shear_csv(out, points);
+  out.close();
+  if (!out) throw io_error(fmt::format("error while writing {}", out_file));
+  double worst = 0.0;
+  for (const MuIShearPoint& p : points) worst = std::fmax(worst, std::abs(p.relative_error));
+  fmt::print("element-test: mu(I) simple shear at {} inertial numbers, largest |tau/p / mu(I) - 1| = {:.2e}, wrote {}\n",
+             points.size(), worst, out_file);
+}
+
 void run_element_test_command(const std::string& spec_file, const std::string& out_file) {
-  const ElementTestSpec spec = read_element_test_file(spec_file);  // the scene's reader and rules
+  const ElementTestRequest request = read_element_test_request(spec_file);  // the scene's reader and rules
+  if (request.model == ElementTestRequest::Model::MuI) return run_mu_i_test_command(request.mu_i, out_file);
+  const ElementTestSpec& spec = request.drucker_prager;
   const std::vector<ElementTestPoint> points = run_element_test(spec);
 
   std::ofstream out(out_file);
@@ -36,7 +55,8 @@ void add_element_test_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "element-test",
       "Single-point Drucker-Prager test (uniaxial compression, simple shear, drained triaxial, "
-      "oedometer) from a JSON spec; writes a CSV. See docs/drucker-prager.md.");
+      "oedometer) or mu(I) steady simple shear from a JSON spec; writes a CSV. See "
+      "docs/drucker-prager.md, docs/mu-i.md.");
   auto spec_file = std::make_shared<std::string>();
   auto out_file = std::make_shared<std::string>();
   cmd->add_option("spec", *spec_file, "JSON spec (material + path), e.g. inputs/element_tests/*.json")

@@ -1,5 +1,7 @@
 // The element test's spec: {"description": ..., "material": {...}, "path": {...}} (docs/drucker-prager.md
-// "Element tests"). The material is the scene's Drucker-Prager table; the path's keys depend on its type.
+// "Element tests", docs/mu-i.md). The material is the scene's Drucker-Prager or μ(I) table, chosen by
+// "model"; the path's keys depend on its type (mu_i_shear for a μ(I) material, the others for
+// Drucker-Prager).
 #include "talus/scene/element_test_json.hpp"
 
 #include "scene_fields.hpp"
@@ -13,9 +15,14 @@ namespace {
 using namespace scene_detail;
 
 struct SpecDraft {
-  ElementTestSpec spec;
+  ElementTestRequest request;
+  std::string path_type = "uniaxial_compression";
   std::string description;
 };
+
+const std::vector<std::string> kDruckerPragerPaths = {"uniaxial_compression", "simple_shear", "drained_triaxial",
+                                                      "oedometer"};
+const std::vector<std::string> kMuIPaths = {"mu_i_shear"};
 
 #define TALUS_AT(member) [](auto& d) -> auto& { return d.member; }
 
@@ -45,30 +52,13 @@ Field<ElementTestSpec> strain_field() {
         for (double t : s.strain_targets) moves = moves || t != 0.0;
         if (!moves) throw input_error(fmt::format("{} must contain a non-zero target", path));
       },
-      [](const ElementTestSpec& s, Json& j) { j["strain"] = s.strain_targets; }, {.required = true});
+      [](const ElementTestSpec& s, Json& j) { j["strain"] = s.strain_targets; },
+      {.required = true, .when = kDruckerPragerPaths});
 }
 
-Table<ElementTestSpec> path_table() {
+Fields<ElementTestSpec> drucker_prager_path_fields() {
   using S = ElementTestSpec;
-  Table<S> t;
-  t.selector = "type";
-  t.values = {"uniaxial_compression", "simple_shear", "drained_triaxial", "oedometer"};
-  t.selected = [](const S& s) {
-    switch (s.path) {
-      case ElementPath::UniaxialCompression: return std::string("uniaxial_compression");
-      case ElementPath::SimpleShear: return std::string("simple_shear");
-      case ElementPath::DrainedTriaxial: return std::string("drained_triaxial");
-      case ElementPath::Oedometer: return std::string("oedometer");
-    }
-    return std::string();
-  };
-  t.fields = {
-      choice<S>("type", TALUS_AT(path),
-                std::vector<std::pair<std::string, ElementPath>>{{"uniaxial_compression", ElementPath::UniaxialCompression},
-                                                                 {"simple_shear", ElementPath::SimpleShear},
-                                                                 {"drained_triaxial", ElementPath::DrainedTriaxial},
-                                                                 {"oedometer", ElementPath::Oedometer}},
-                "the loading path (material/element_test.hpp)", {.required = true}),
+  return {
       number<S>("confining_pressure", TALUS_AT(pressure), {0.0, kHuge, true}, "lateral pressure, compression positive",
                 {.unit = "Pa", .required = true, .when = {"drained_triaxial"}}),
       number<S>("normal_stress", TALUS_AT(pressure), {0.0, kHuge}, "constant normal stress, compression positive",
@@ -77,11 +67,110 @@ Table<ElementTestSpec> path_table() {
                 {.unit = "Pa", .when = {"oedometer"}}),
       strain_field(),
       integer<S>("increments", TALUS_AT(increments), 1, 10000000, "increments over the whole path",
-                 {.required = true}),
+                 {.required = true, .when = kDruckerPragerPaths}),
       boolean<S>("spin", TALUS_AT(spin), "apply the path's spin to the stress (Jaumann rate, as the MPM loop does)",
                  {.when = {"simple_shear"}}),
   };
+}
+
+// μ(I) steady simple shear (docs/mu-i.md): constant pressure, imposed inertial numbers, log-spaced.
+Field<MuIShearSpec> inertial_number_field() {
+  Json number = {{"type", "number"}, {"exclusiveMinimum", 0}};
+  return custom<MuIShearSpec>(
+      "inertial_number", "object", "required", "{min > 0, max ≥ min, count in [1, 100000]}",
+      "the imposed inertial numbers I: `count` values from `min` to `max`, log-spaced",
+      {{"type", "object"},
+       {"properties", {{"min", number}, {"max", number}, {"count", {{"type", "integer"}, {"minimum", 1}, {"maximum", 100000}}}}},
+       {"required", Json::array({"min", "max", "count"})},
+       {"additionalProperties", false}},
+      [](ObjectReader& r, MuIShearSpec& s) {
+        ObjectReader range = r.object("inertial_number");
+        const double lo = range.number("min", 0.0, kHuge, true);
+        const double hi = range.number("max", lo, kHuge);
+        const int n = range.integer("count", 1, 100000);
+        range.finish();
+        s.inertial_numbers.clear();
+        for (int k = 0; k < n; ++k)
+          s.inertial_numbers.push_back(n == 1 ? lo : lo * std::pow(hi / lo, static_cast<double>(k) / (n - 1)));
+      },
+      [](const MuIShearSpec& s, Json& j) {
+        if (s.inertial_numbers.empty()) return;
+        j["inertial_number"] = {{"min", s.inertial_numbers.front()},
+                                {"max", s.inertial_numbers.back()},
+                                {"count", s.inertial_numbers.size()}};
+      },
+      {.required = true});
+}
+
+Fields<MuIShearSpec> mu_i_path_fields() {
+  using S = MuIShearSpec;
+  return {
+      number<S>("pressure", TALUS_AT(pressure), {0.0, kHuge, true}, "constant pressure, compression positive",
+                {.unit = "Pa", .required = true}),
+      inertial_number_field(),
+      number<S>("strain_increment", TALUS_AT(strain_increment), {0.0, 1.0, true, false},
+                "engineering shear strain per increment, γ̇ dt"),
+      integer<S>("increments", TALUS_AT(increments), 1, 10000000, "increments per inertial number"),
+  };
+}
+
+Table<SpecDraft> path_table() {
+  using S = SpecDraft;
+  Table<S> t;
+  t.selector = "type";
+  t.values = kDruckerPragerPaths;
+  t.values.insert(t.values.end(), kMuIPaths.begin(), kMuIPaths.end());
+  t.selected = [](const S& d) { return d.path_type; };
+  std::vector<std::string> words = t.values;
+  t.fields = join<S>({
+      {custom<S>(
+          "type", "string", "required", choices_text(words),
+          "the loading path (material/element_test.hpp; mu_i_shear: material/mu_i_shear_test.hpp, for a mu_i material)",
+          {{"type", "string"}, {"enum", words}},
+          [words](ObjectReader& r, S& d) {
+            d.path_type = r.choice("type", std::string(), words);
+            const std::vector<std::pair<std::string, ElementPath>> paths = {
+                {"uniaxial_compression", ElementPath::UniaxialCompression},
+                {"simple_shear", ElementPath::SimpleShear},
+                {"drained_triaxial", ElementPath::DrainedTriaxial},
+                {"oedometer", ElementPath::Oedometer}};
+            for (const auto& [w, path] : paths)
+              if (w == d.path_type) d.request.drucker_prager.path = path;
+          },
+          [](const S& d, Json& j) { j["type"] = d.path_type; }, {.required = true})},
+      lift<S, ElementTestSpec>(drucker_prager_path_fields(), TALUS_AT(request.drucker_prager)),  // each names its paths
+      lift<S, MuIShearSpec>(mu_i_path_fields(), TALUS_AT(request.mu_i), kMuIPaths),
+  });
   return t;
+}
+const Table<SpecDraft>& path_fields() {
+  static const Table<SpecDraft> table = path_table();
+  return table;
+}
+
+// The material: the scene's Drucker-Prager fields (the default) or its μ(I) fields, by "model".
+Table<SpecDraft> material_table() {
+  using S = SpecDraft;
+  const std::vector<std::string> dp = {"drucker_prager"}, mu_i = {"mu_i"};
+  Table<S> t;
+  t.selector = "model";
+  t.values = {"drucker_prager", "mu_i"};
+  t.selected = [](const S& d) {
+    return std::string(d.request.model == ElementTestRequest::Model::MuI ? "mu_i" : "drucker_prager");
+  };
+  t.fields = join<S>({
+      {choice<S>("model", TALUS_AT(request.model),
+                 std::vector<std::pair<std::string, ElementTestRequest::Model>>{
+                     {"drucker_prager", ElementTestRequest::Model::DruckerPrager}, {"mu_i", ElementTestRequest::Model::MuI}},
+                 "constitutive model, as a scene material's")},
+      lift<S, DruckerPragerParameters>(drucker_prager_table().fields, TALUS_AT(request.drucker_prager.material), dp),
+      lift<S, MuIParameters>(mu_i_table().fields, TALUS_AT(request.mu_i.material), mu_i),
+  });
+  return t;
+}
+const Table<SpecDraft>& material_fields() {
+  static const Table<SpecDraft> table = material_table();
+  return table;
 }
 
 const Table<SpecDraft>& spec_table() {
@@ -90,20 +179,26 @@ const Table<SpecDraft>& spec_table() {
     t.fields = {
         string<SpecDraft>("description", TALUS_AT(description), "free text"),
         custom_object<SpecDraft>(
-            "material", drucker_prager_table(), "required", "the Drucker-Prager constants (as a scene material's)",
+            "material", material_fields(), "required",
+            "the material constants, as a scene material's (model drucker_prager or mu_i)",
             [](ObjectReader& r, SpecDraft& d) {
               ObjectReader material = r.object("material");
-              read_fields(material, d.spec.material, drucker_prager_table());
+              read_fields(material, d, material_fields());
             },
-            [](const SpecDraft& d, Json& j) { j["material"] = write_fields(d.spec.material, drucker_prager_table()); },
-            {.required = true}),
+            [](const SpecDraft& d, Json& j) { j["material"] = write_fields(d, material_fields()); }, {.required = true}),
         custom_object<SpecDraft>(
-            "path", path_table(), "required", "the strain or mixed path",
+            "path", path_fields(), "required", "the strain or mixed path",
             [](ObjectReader& r, SpecDraft& d) {
               ObjectReader path = r.object("path");
-              read_fields(path, d.spec, path_table());
+              read_fields(path, d, path_fields());
+              const bool mu_i = d.request.model == ElementTestRequest::Model::MuI;
+              const bool mu_i_path = d.path_type == "mu_i_shear";
+              if (mu_i != mu_i_path)
+                throw input_error(fmt::format("{} = \"{}\" does not fit material.model = \"{}\"; allowed {}",
+                                              path.key_path("type"), d.path_type, mu_i ? "mu_i" : "drucker_prager",
+                                              choices_text(mu_i ? kMuIPaths : kDruckerPragerPaths)));
             },
-            [](const SpecDraft& d, Json& j) { j["path"] = write_fields(d.spec, path_table()); }, {.required = true}),
+            [](const SpecDraft& d, Json& j) { j["path"] = write_fields(d, path_fields()); }, {.required = true}),
     };
     return t;
   }();
@@ -112,12 +207,25 @@ const Table<SpecDraft>& spec_table() {
 
 }  // namespace
 
-ElementTestSpec parse_element_test(const std::string& text, const std::string& source) {
+ElementTestRequest parse_element_test_request(const std::string& text, const std::string& source) {
   const Json root = parse_json(text, source);
   SpecDraft draft;
   ObjectReader r(root, "");
   read_fields(r, draft, spec_table());
-  return draft.spec;
+  return draft.request;
+}
+
+ElementTestRequest read_element_test_request(const std::string& path) {
+  const auto text = read_text_file(path);
+  if (!text) throw io_error(fmt::format("cannot read spec file {}", path));
+  return parse_element_test_request(*text, path);
+}
+
+ElementTestSpec parse_element_test(const std::string& text, const std::string& source) {
+  const ElementTestRequest request = parse_element_test_request(text, source);
+  if (request.model != ElementTestRequest::Model::DruckerPrager)
+    throw input_error("material.model = \"mu_i\": this reader takes a Drucker-Prager spec only");
+  return request.drucker_prager;
 }
 
 ElementTestSpec read_element_test_file(const std::string& path) {

@@ -48,6 +48,7 @@ const char* to_string(MaterialModel model) {
   switch (model) {
     case MaterialModel::LinearElastic: return "linear_elastic";
     case MaterialModel::DruckerPrager: return "drucker_prager";
+    case MaterialModel::MuI: return "mu_i";
   }
   return "?";
 }

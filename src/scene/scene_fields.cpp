@@ -302,11 +302,32 @@ Fields<DruckerPragerParameters> drucker_prager_strength_fields() {
   };
 }
 
+// μ(I) constants (Jop, Forterre & Pouliquen 2006, the friction law and the inertial number;
+// docs/mu-i.md). Defaults: their glass beads (MuIParameters). The ranges, μ2 > μs among them, are
+// checked by the MuI constructor (the material layer), which names the key.
+Fields<MuIParameters> mu_i_fields() {
+  using P = MuIParameters;
+  return {
+      number<P>("mu_s", TALUS_AT(mu_s), {0.0, kHuge}, "static friction coefficient μs (glass beads, Jop et al. 2006: tan 20.9°)",
+                {.domain_checked = true}),
+      number<P>("mu_2", TALUS_AT(mu_2), {0.0, kHuge, true}, "limiting friction coefficient μ2 as I → ∞ (glass beads: tan 32.76°)",
+                {.allowed = "> μs", .domain_checked = true}),
+      number<P>("i0", TALUS_AT(i0), {0.0, kHuge, true}, "I0 of μ(I) = μs + (μ2 − μs)/(1 + I0/I)",
+                {.domain_checked = true}),
+      number<P>("grain_diameter", TALUS_AT(grain_diameter), {0.0, kHuge, true}, "d in I = γ̇ᵖ d / √(p/ρs)",
+                {.unit = "m", .domain_checked = true}),
+      number<P>("grain_density", TALUS_AT(grain_density), {0.0, kHuge, true}, "ρs, the density of the grains (not of the packing: that is `density`)",
+                {.unit = "kg/m³", .domain_checked = true}),
+  };
+}
+
 Table<MaterialSpec> make_material_table() {
   // The models, the default first; a model's keys are the fields with .when = {its name}.
-  const auto models = named({MaterialModel::LinearElastic, MaterialModel::DruckerPrager});
+  const auto models = named({MaterialModel::LinearElastic, MaterialModel::DruckerPrager, MaterialModel::MuI});
   using M = MaterialSpec;
   const std::vector<std::string> dp = {"drucker_prager"};
+  const std::vector<std::string> mu_i = {"mu_i"};
+  const std::vector<std::string> granular = {"drucker_prager", "mu_i"};
   const std::vector<std::string> elastic = {"linear_elastic"};
   Table<M> t;
   t.selector = "model";
@@ -315,13 +336,14 @@ Table<MaterialSpec> make_material_table() {
   t.fields = join<M>({
       {choice<M>("model", TALUS_AT(model),
                  models,
-                 "constitutive model (Drucker–Prager: Abe, Johansson & Konagai 2005, eq. 23–25; docs/drucker-prager.md)"),
+                 "constitutive model (Drucker–Prager: Abe, Johansson & Konagai 2005, eq. 23–25; docs/drucker-prager.md; "
+                 "μ(I): Jop, Forterre & Pouliquen 2006 in the form of Dunatunga & Kamrin 2015, docs/mu-i.md)"),
        number<M>("density", TALUS_AT(density), {0.0, kHuge, true}, "initial density [kg/m³]", {.required = true}),
        number<M>("young", TALUS_AT(elastic.young), {0.0, kHuge, true}, "Young's modulus E [Pa]", {.required = true}),
        number<M>("poisson", TALUS_AT(elastic.poisson), {-1.0, 0.5, true, true}, "Poisson's ratio ν",
                  {.required = true, .when = elastic}),
        number<M>("poisson", TALUS_AT(elastic.poisson), {0.0, 0.5, false, true}, "Poisson's ratio ν",
-                 {.required = true, .when = dp})},
+                 {.required = true, .when = granular})},
       lift<M, DruckerPragerParameters>(drucker_prager_strength_fields(), TALUS_AT(drucker_prager), dp),
       {check<M>(
            [](ObjectReader& r, M& m) {
@@ -329,7 +351,15 @@ Table<MaterialSpec> make_material_table() {
              m.drucker_prager.poisson = m.elastic.poisson;
              with_key_path(r.path() + ".", [&] { (void)DruckerPrager(m.drucker_prager); });
            },
-           dp),
+           dp)},
+      lift<M, MuIParameters>(mu_i_fields(), TALUS_AT(mu_i), mu_i),
+      {check<M>(
+           [](ObjectReader& r, M& m) {
+             m.mu_i.young = m.elastic.young;
+             m.mu_i.poisson = m.elastic.poisson;
+             with_key_path(r.path() + ".", [&] { (void)MuI(m.mu_i); });
+           },
+           mu_i),
        number<M>("flowing_plastic_strain", TALUS_AT(granular.flowing_plastic_strain), {0.0, kHuge},
                  "ε_p beyond which a particle counts as flowing", {.when = dp}),
        custom<M>(
@@ -356,7 +386,7 @@ Table<MaterialSpec> make_material_table() {
                                              r.key_path("separation_volume_ratio"), v));
            },
            [](const M& m, Json& j) { j["separation_volume_ratio"] = m.granular.separation_volume_ratio; },
-           {.when = dp})},
+           {.when = granular})},
   });
   return t;
 }
@@ -791,6 +821,21 @@ const Table<DruckerPragerParameters>& drucker_prager_table() {
          number<P>("poisson", TALUS_AT(poisson), {0.0, 0.5, false, true}, "Poisson's ratio ν", {.required = true})},
         drucker_prager_strength_fields(),
         {check<P>([](ObjectReader& r, P& p) { with_key_path(r.path() + ".", [&] { (void)DruckerPrager(p); }); })},
+    });
+    return t;
+  }();
+  return table;
+}
+
+const Table<MuIParameters>& mu_i_table() {
+  static const Table<MuIParameters> table = [] {
+    using P = MuIParameters;
+    Table<P> t;
+    t.fields = join<P>({
+        {number<P>("young", TALUS_AT(young), {0.0, kHuge, true}, "Young's modulus E [Pa]", {.required = true}),
+         number<P>("poisson", TALUS_AT(poisson), {0.0, 0.5, false, true}, "Poisson's ratio ν", {.required = true})},
+        mu_i_fields(),
+        {check<P>([](ObjectReader& r, P& p) { with_key_path(r.path() + ".", [&] { (void)MuI(p); }); })},
     });
     return t;
   }();

@@ -27,4 +27,9 @@ const Table<SceneDraft>& scene_table();
 /// same fields (model "drucker_prager").
 const Table<DruckerPragerParameters>& drucker_prager_table();
 
+/// The μ(I) constants (young, poisson, mu_s, mu_2, i0, grain_diameter, grain_density), with the
+/// check of the MuI constructor: the element test's "material" object for "model": "mu_i". The
+/// scene's materials use the same fields (model "mu_i").
+const Table<MuIParameters>& mu_i_table();
+
 }  // namespace talus::scene_detail

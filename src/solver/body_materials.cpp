@@ -19,27 +19,39 @@ BodyMaterials::BodyMaterials(const Scene& scene, ParticleStore& particles) {
       any_plastic_ = true;
       // the back stress moves only with kinematic hardening (docs/drucker-prager.md)
       any_kinematic_ = any_kinematic_ || (m.drucker_prager.hardening_modulus > 0.0 && m.drucker_prager.kinematic_fraction > 0.0);
+    } else if (m.model == MaterialModel::MuI) {
+      body.mu_i.emplace_back(m.mu_i, "materials." + m.name + ".");
+      body.granular = m.granular;  // the separation rule only
+      any_plastic_ = true;         // the equivalent plastic shear strain is kept per particle
     }
     bodies_.push_back(std::move(body));
   }
   if (any_plastic_ && !particles.has_plastic_state()) particles.enable_plastic_state(any_kinematic_);
 }
 
+// Separated: no contact with neighbours, hence no stress (the rule of both granular models).
+[[gnu::always_inline]] inline bool BodyMaterials::separated(const Body& body, const ParticleStore& P, std::size_t p) {
+  const double ratio = body.granular.separation_volume_ratio;
+  return ratio > 0.0 && P.volume[p] > ratio * P.volume0[p];
+}
+
+// The elastic energy a separated particle still held is released without doing work on the
+// continuum; count it as dissipated so the budget closes. Resets the plastic state, zeroes s.
+[[gnu::always_inline]] inline double BodyMaterials::release_separated(const Body& body, ParticleStore& P, std::size_t p,
+                                                                      Sym6& s) {
+  const double released = P.volume[p] * body.elastic.energy_density(s);
+  P.plastic_strain[p] = 0.0;
+  if (P.has_back_stress())
+    for (int c = 0; c < 6; ++c) P.back_stress[c][p] = 0.0;
+  s.setZero();
+  return released;
+}
+
 // Inlined into update(): as a call, the stress passed through memory cost a stalled reload
 // (store forwarding) that perf put at 7% of a B-spline Drucker-Prager step.
 [[gnu::always_inline]] inline double BodyMaterials::update_drucker_prager(const Body& body, ParticleStore& P, std::size_t p, Sym6& s,
                                             const Sym6& de, double w_yz, double w_xz, double w_xy) const {
-  const double ratio = body.granular.separation_volume_ratio;
-  if (ratio > 0.0 && P.volume[p] > ratio * P.volume0[p]) {
-    // Separated: no contact with neighbours, hence no stress. The elastic energy it still held is
-    // released without doing work on the continuum; count it as dissipated so the budget closes.
-    const double released = P.volume[p] * body.elastic.energy_density(s);
-    P.plastic_strain[p] = 0.0;
-    if (P.has_back_stress())
-      for (int c = 0; c < 6; ++c) P.back_stress[c][p] = 0.0;
-    s.setZero();
-    return released;
-  }
+  if (separated(body, P, p)) return release_separated(body, P, p, s);
   DruckerPragerState state;
   state.equivalent_plastic_strain = P.plastic_strain[p];
   const bool kinematic = P.has_back_stress();  // otherwise the back stress is zero and stays zero
@@ -59,7 +71,21 @@ BodyMaterials::BodyMaterials(const Scene& scene, ParticleStore& particles) {
   return r.plastic_work * P.volume[p];
 }
 
-double BodyMaterials::update(ParticleStore& P, std::size_t begin, std::size_t end, const StrainIncrements& inc) const {
+// μ(I) (Jop et al. 2006 in the form of Dunatunga & Kamrin 2015): the rate enters through dt.
+// P.plastic_strain accumulates the equivalent plastic shear strain (output only: the model has no
+// state besides the stress).
+[[gnu::always_inline]] inline double BodyMaterials::update_mu_i(const Body& body, ParticleStore& P, std::size_t p, Sym6& s,
+                                                                const Sym6& de, double w_yz, double w_xz, double w_xy,
+                                                                double dt) const {
+  if (separated(body, P, p)) return release_separated(body, P, p, s);
+  rotate_objectively(s, w_yz, w_xz, w_xy);
+  const MuIResult r = body.mu_i[0].update(s, de, dt);
+  P.plastic_strain[p] += r.plastic_shear_strain;
+  return r.plastic_work * P.volume[p];
+}
+
+double BodyMaterials::update(ParticleStore& P, std::size_t begin, std::size_t end, const StrainIncrements& inc,
+                             double dt) const {
   double dissipated = 0.0;
   for (std::size_t p = begin; p < end; ++p) {
     const std::size_t k = p - begin;
@@ -74,8 +100,10 @@ double BodyMaterials::update(ParticleStore& P, std::size_t begin, std::size_t en
     if (body.model == MaterialModel::LinearElastic) {
       rotate_objectively(s, w_yz, w_xz, w_xy);  // Jaumann rate, Hughes-Winget
       body.elastic.add_increment(s, de);        // seed 000 eq. 34
-    } else {
+    } else if (body.model == MaterialModel::DruckerPrager) {
       dissipated += update_drucker_prager(body, P, p, s, de, w_yz, w_xz, w_xy);
+    } else {
+      dissipated += update_mu_i(body, P, p, s, de, w_yz, w_xz, w_xy, dt);
     }
     for (int c = 0; c < 6; ++c) {
       P.stress[c][p] = s[c];

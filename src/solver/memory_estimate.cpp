@@ -36,8 +36,9 @@ std::size_t bytes_per_particle(const Scene& scene) {
   bool plastic = false, kinematic = false;
   for (const BodySpec& body : scene.bodies) {
     const MaterialSpec& m = scene.materials[body.material];
+    if (m.model == MaterialModel::LinearElastic) continue;
+    plastic = true;  // Drucker-Prager and μ(I) keep the plastic state (BodyMaterials)
     if (m.model != MaterialModel::DruckerPrager) continue;
-    plastic = true;
     kinematic = kinematic || (m.drucker_prager.hardening_modulus > 0.0 && m.drucker_prager.kinematic_fraction > 0.0);
   }
   std::size_t fields = kAlwaysFields;

@@ -328,7 +328,7 @@ void Solver::update_stress(const NodeVectors& node_velocity, double dt, bool mov
     return;
   }
   ScopedPhase timer(times_, Phase::Stress);
-  update_material_by_chunks<Shape>(move, [&](std::size_t begin, std::size_t end, StrainIncrements& inc) {
+  update_material_by_chunks<Shape>(dt, move, [&](std::size_t begin, std::size_t end, StrainIncrements& inc) {
     strain_increments<Shape, Terrain>(particles_, grid_, node_velocity, dt, begin, end, inc);
   });
 }
@@ -337,7 +337,7 @@ void Solver::update_stress(const NodeVectors& node_velocity, double dt, bool mov
 // blocks: fill(begin, end, inc) provides the chunk's strain and spin increments. The dissipation
 // is summed per block, then over blocks in block order, so it does not depend on the thread count.
 template <class Shape, class FillChunk>
-void Solver::update_material_by_chunks(bool move, FillChunk fill) {
+void Solver::update_material_by_chunks(double dt, bool move, FillChunk fill) {
   const std::size_t blocks = sort_.block_count();
   block_dissipation_.assign(blocks, 0.0);
   WorkRecorder* const rec = recording();
@@ -356,7 +356,7 @@ void Solver::update_material_by_chunks(bool move, FillChunk fill) {
       for (std::size_t begin = sort_.block_begin(b); begin < sort_.block_end(b); begin += StrainIncrements::kCapacity) {
         const std::size_t end = std::min<std::size_t>(begin + StrainIncrements::kCapacity, sort_.block_end(b));
         fill(begin, end, inc);
-        dissipated += update_chunk<Shape>(begin, end, inc, move);
+        dissipated += update_chunk<Shape>(begin, end, inc, dt, move);
       }
       block_dissipation_[b] = dissipated;
       if (block_seconds) (*block_seconds)[bi] = omp_get_wtime() - block_start;
@@ -368,9 +368,9 @@ void Solver::update_material_by_chunks(bool move, FillChunk fill) {
 
 // The material update of particles [begin, end) from their increments; returns the dissipation.
 template <class Shape>
-double Solver::update_chunk(std::size_t begin, std::size_t end, const StrainIncrements& inc, bool move) {
+double Solver::update_chunk(std::size_t begin, std::size_t end, const StrainIncrements& inc, double dt, bool move) {
   ParticleStore& P = particles_;
-  const double dissipated = materials_.update(P, begin, end, inc);
+  const double dissipated = materials_.update(P, begin, end, inc, dt);
   if constexpr (Shape::kDomain == DomainSource::Current) {
     // seed 000 eq. 57-58, l_p = G_p l_p0 with G_p <- (I + grad v dt) G_p, for a domain kept
     // as an axis-aligned box: each half width stretches with the normal strain increment
@@ -423,7 +423,7 @@ void Solver::update_stress_smoothed(const NodeVectors& node_velocity, double dt,
     measure_smoothing_change();
   }
   ScopedPhase timer(times_, Phase::Stress);
-  update_material_by_chunks<Shape>(move, [&](std::size_t begin, std::size_t end, StrainIncrements& inc) {
+  update_material_by_chunks<Shape>(dt, move, [&](std::size_t begin, std::size_t end, StrainIncrements& inc) {
     for (int c = 0; c < 6; ++c) std::copy_n(smooth_strain_[c].data() + begin, end - begin, inc.strain[c].data());
     for (int c = 0; c < 3; ++c) std::copy_n(raw_spin_[c].data() + begin, end - begin, inc.spin[c].data());
   });  // eq. 55-56

@@ -96,6 +96,27 @@ TEST(Checkpoint, RestartIsBitIdenticalWithDruckerPragerState) {
   check_restart_is_bit_identical(scene, 80, {13, 50});
 }
 
+// μ(I) (docs/mu-i.md): the model's only state besides the stress is the accumulated plastic shear
+// strain, and its strength depends on the step's dt; both come back from a checkpoint.
+TEST(Checkpoint, RestartIsBitIdenticalWithMuIState) {
+  const Scene scene = parse_scene(R"({
+    "name": "mu_i_drop",
+    "grid": { "origin": [0, 0, 0], "size": [0.6, 0.3, 0.4], "cell_size": 0.025 },
+    "time": { "end": 0.2, "courant": 0.4 },
+    "materials": { "beads": { "model": "mu_i", "density": 1500.0, "young": 2.0e6, "poisson": 0.3 } },
+    "bodies": [ { "name": "heap", "material": "beads", "box": { "min": [0.1, 0.05, 0.0], "max": [0.3, 0.25, 0.25] },
+                  "particles_per_cell": 2, "velocity": [1.5, 0.0, 0.0] } ],
+    "boundaries": { "z-": { "type": "friction", "friction_coefficient": 0.5 }, "z+": "open" }
+  })", "mu_i_drop");
+  Solver probe(scene);
+  ASSERT_TRUE(probe.particles().has_plastic_state());
+  for (int i = 0; i < 80; ++i) probe.step();
+  double max_plastic = 0.0;
+  for (double e : probe.particles().plastic_strain) max_plastic = std::max(max_plastic, e);
+  EXPECT_GT(max_plastic, 0.0) << "the test should exercise the plastic state";
+  check_restart_is_bit_identical(scene, 80, {13, 50});
+}
+
 TEST(Checkpoint, RecordsVersionSceneHashAndEveryParticleArray) {
   const auto dir = test::temp_dir("layout");
   Solver solver(drucker_prager_scene());

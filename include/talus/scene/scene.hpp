@@ -7,6 +7,7 @@
 #include "talus/core/types.hpp"
 #include "talus/grid/grid.hpp"
 #include "talus/material/drucker_prager.hpp"
+#include "talus/material/mu_i.hpp"
 #include "talus/particles/body_spec.hpp"
 #include "talus/particles/particle_store.hpp"
 #include "talus/smoothing/mls_settings.hpp"
@@ -28,10 +29,11 @@ struct LinearElasticParameters {
   double poisson = 0.0;  // nu [-]
 };
 
-enum class MaterialModel { LinearElastic, DruckerPrager };
+enum class MaterialModel { LinearElastic, DruckerPrager, MuI };
 
 /// What a runout scene does with Drucker-Prager particles beyond the constitutive law itself
-/// (seed 001 sec. 7; docs/drucker-prager.md "In the MPM solver").
+/// (seed 001 sec. 7; docs/drucker-prager.md "In the MPM solver"). μ(I) bodies use only the
+/// separation rule (docs/mu-i.md).
 struct GranularOptions {
   /// A particle counts as flowing once its equivalent plastic strain exceeds this; from then on
   /// it uses `flowing_dilatancy_angle` (seed 001: "dilatancy is set to 0 once flow starts").
@@ -49,7 +51,8 @@ struct MaterialSpec {
   double density = 0.0;  // initial density [kg/m^3]
   LinearElasticParameters elastic;  // for Drucker-Prager: the elastic part (same E, nu)
   DruckerPragerParameters drucker_prager;  // MaterialModel::DruckerPrager only (E, nu copied in)
-  GranularOptions granular;                // MaterialModel::DruckerPrager only
+  MuIParameters mu_i;                      // MaterialModel::MuI only (E, nu copied in)
+  GranularOptions granular;                // DruckerPrager (all of it) and MuI (separation only)
   /// P-wave (constrained) modulus M = K + 4G/3, which sets the wave speed c = sqrt(M / rho).
   double p_wave_modulus() const;
   double bulk_modulus() const;

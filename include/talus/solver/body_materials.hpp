@@ -10,9 +10,11 @@
 //   strain += d_eps, V <- V (1 + tr d_eps)         (seed 000 eq. 35)
 // Drucker-Prager bodies add the granular rules of a runout scene (scene.hpp GranularOptions):
 // psi -> flowing_dilatancy_angle once eps_p > flowing_plastic_strain, and stress-free, virgin
-// particles once V / V0 > separation_volume_ratio.
+// particles once V / V0 > separation_volume_ratio. μ(I) bodies (docs/mu-i.md) keep the separation
+// rule and need the time step: their strength depends on the shear rate.
 #include "talus/material/drucker_prager.hpp"
 #include "talus/material/linear_elastic.hpp"
+#include "talus/material/mu_i.hpp"
 #include "talus/particles/particle_store.hpp"
 #include "talus/scene/scene.hpp"
 #include "talus/transfer/transfers.hpp"
@@ -25,15 +27,16 @@ namespace talus {
 class BodyMaterials {
  public:
   /// Builds one model per body; allocates the particles' plastic state when any body is
-  /// Drucker-Prager (and only then).
+  /// Drucker-Prager or μ(I) (and only then).
   BodyMaterials() = default;
   BodyMaterials(const Scene& scene, ParticleStore& particles);
 
   /// Update the stress, material state, strain and volume of particles [begin, end) from the
-  /// increments `inc` (entry k belongs to particle begin + k). Returns the energy the material
+  /// increments `inc` (entry k belongs to particle begin + k) over the time step dt. Returns the energy the material
   /// dissipated in this chunk [J]: plastic work V sigma : d_eps^p plus the elastic energy dropped
   /// by separated particles. Deterministic: the sum runs in particle order.
-  double update(ParticleStore& particles, std::size_t begin, std::size_t end, const StrainIncrements& inc) const;
+  double update(ParticleStore& particles, std::size_t begin, std::size_t end, const StrainIncrements& inc,
+                double dt) const;
 
   /// P-wave modulus K + 4G/3 of a body (sets the wave speed and the time step).
   double p_wave_modulus(std::size_t body) const { return bodies_[body].p_wave_modulus; }
@@ -43,10 +46,12 @@ class BodyMaterials {
   }
   /// The volume that sets a particle's wave speed c = sqrt(M V / m). A separated Drucker-Prager
   /// particle carries no stress, so its further dilation must not shrink the time step: its
-  /// volume counts at most as separation_volume_ratio V0.
+  /// volume counts at most as separation_volume_ratio V0 (the same for a μ(I) particle).
   double wave_speed_volume(std::size_t body, double volume, double volume0) const {
     const double ratio = bodies_[body].granular.separation_volume_ratio;
-    return bodies_[body].model == MaterialModel::DruckerPrager && ratio > 0.0 && volume > ratio * volume0
+    const MaterialModel model = bodies_[body].model;
+    return (model == MaterialModel::DruckerPrager || model == MaterialModel::MuI) && ratio > 0.0 &&
+                   volume > ratio * volume0
                ? ratio * volume0
                : volume;
   }
@@ -59,8 +64,13 @@ class BodyMaterials {
     double p_wave_modulus = 0.0;
     // Drucker-Prager only:
     std::vector<DruckerPrager> plastic;  // [0] as given, [1] with the flowing dilatancy angle
-    GranularOptions granular;
+    GranularOptions granular;  // and μ(I): separation_volume_ratio
+    std::vector<MuI> mu_i;     // μ(I) only: one model
   };
+  static bool separated(const Body& body, const ParticleStore& P, std::size_t p);
+  static double release_separated(const Body& body, ParticleStore& P, std::size_t p, Sym6& stress);
+  double update_mu_i(const Body& body, ParticleStore& P, std::size_t p, Sym6& stress, const Sym6& d_eps, double w_yz,
+                     double w_xz, double w_xy, double dt) const;
   double update_drucker_prager(const Body& body, ParticleStore& P, std::size_t p, Sym6& stress, const Sym6& d_eps,
                                double w_yz, double w_xz, double w_xy) const;
 

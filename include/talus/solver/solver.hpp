@@ -110,9 +110,9 @@ class Solver {
   template <class Shape, class Terrain>
   void update_stress_smoothed(const NodeVectors& node_velocity, double dt, bool move);
   template <class Shape>
-  double update_chunk(std::size_t begin, std::size_t end, const StrainIncrements& inc, bool move);
+  double update_chunk(std::size_t begin, std::size_t end, const StrainIncrements& inc, double dt, bool move);
   template <class Shape, class FillChunk>
-  void update_material_by_chunks(bool move, FillChunk fill);
+  void update_material_by_chunks(double dt, bool move, FillChunk fill);
   void move_particles();
   /// The energy particle p holds: kinetic, stored strain, gravitational (energies(), the outflow).
   struct ParticleEnergy {

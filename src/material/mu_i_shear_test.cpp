@@ -1,0 +1,55 @@
+// μ(I) simple shear at constant pressure and imposed rate (docs/mu-i.md, sec. 5).
+#include "talus/material/mu_i_shear_test.hpp"
+
+#include "talus/core/error.hpp"
+#include "talus/core/tensor.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <ostream>
+
+namespace talus {
+
+std::vector<MuIShearPoint> run_mu_i_shear_test(const MuIShearSpec& spec) {
+  const MuI model(spec.material, "material.");
+  if (!(spec.pressure > 0.0) || !(spec.strain_increment > 0.0) || spec.increments < 1)
+    throw input_error("path: pressure and strain_increment must be > 0 and increments >= 1");
+  std::vector<MuIShearPoint> points;
+  for (const double i : spec.inertial_numbers) {
+    MuIShearPoint pt;
+    pt.inertial_number = i;
+    // Jop et al. 2006: the inertial number solved for the shear rate
+    pt.shear_rate = i * std::sqrt(spec.pressure / spec.material.grain_density) / spec.material.grain_diameter;
+    pt.dt = spec.strain_increment / pt.shear_rate;
+    Sym6 stress = -spec.pressure * identity6();
+    Sym6 d_eps = Sym6::Zero();
+    d_eps[XY] = 0.5 * spec.strain_increment;  // tensor component of gamma_xy
+    double tau_previous = 0.0;
+    for (int n = 0; n < spec.increments; ++n) {
+      tau_previous = std::sqrt(j2(stress));
+      const MuIResult r = model.update(stress, d_eps, pt.dt);
+      pt.plastic_shear_rate = r.plastic_shear_strain / pt.dt;
+    }
+    pt.pressure = -trace(stress) / 3.0;
+    pt.shear_stress = std::sqrt(j2(stress));
+    pt.friction = pt.shear_stress / pt.pressure;
+    pt.friction_analytic = model.friction(i);  // Jop et al. 2006, the friction law
+    pt.relative_error = pt.friction / pt.friction_analytic - 1.0;
+    pt.last_change = std::abs(pt.shear_stress - tau_previous) / pt.shear_stress;
+    points.push_back(pt);
+  }
+  return points;
+}
+
+void write_mu_i_shear_csv(std::ostream& out, const std::vector<MuIShearPoint>& points) {
+  out << "I,shear_rate,dt,p,tau,tau_over_p,mu_analytic,relative_error,plastic_shear_rate,last_change\n";
+  char buffer[512];
+  for (const MuIShearPoint& p : points) {
+    std::snprintf(buffer, sizeof buffer, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.6e,%.17g,%.3e\n",
+                  p.inertial_number, p.shear_rate, p.dt, p.pressure, p.shear_stress, p.friction,
+                  p.friction_analytic, p.relative_error, p.plastic_shear_rate, p.last_change);
+    out << buffer;
+  }
+}
+
+}  // namespace talus

@@ -1,0 +1,136 @@
+// μ(I) through the talus program (issue 21): the shipped element test reproduces τ/p = μ(I) to
+// 1e-10 relative over I = 1e-4 ... 1, and bad μ(I) parameters give one-line errors, exit 2.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class MuICli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("talus_mu_i_cli_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  Result run(const std::string& args) const {
+    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
+    const std::string command =
+        std::string("\"") + TALUS_BINARY + "\" " + args + " > \"" + out.string() + "\" 2> \"" + err.string() + "\"";
+    const int status = std::system(command.c_str());
+    Result r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(out);
+    r.err = slurp(err);
+    return r;
+  }
+
+  fs::path write(const std::string& name, const std::string& text) const {
+    const fs::path p = dir_ / name;
+    std::ofstream(p) << text;
+    return p;
+  }
+
+  fs::path dir_;
+};
+
+const std::string kInputs = std::string(TALUS_SOURCE_DIR) + "/inputs/";
+
+TEST_F(MuICli, ElementTestReproducesMuOfIWithinTenToTheMinusTen) {
+  const fs::path csv = dir_ / "mu_i.csv";
+  const Result r = run("element-test \"" + kInputs + "element_tests/mu_i_simple_shear.json\" --out \"" + csv.string() + "\"");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "I,shear_rate,dt,p,tau,tau_over_p,mu_analytic,relative_error,plastic_shear_rate,last_change");
+  int rows = 0;
+  double i_min = 1e30, i_max = 0.0, worst = 0.0;
+  constexpr double kMuS = 0.3818628674187188, kMu2 = 0.6434683848584607, kI0 = 0.279;
+  while (std::getline(in, line)) {
+    std::vector<double> v;
+    std::stringstream fields(line);
+    std::string f;
+    while (std::getline(fields, f, ',')) v.push_back(std::stod(f));
+    ASSERT_EQ(v.size(), 10u) << line;
+    ++rows;
+    const double i = v[0], p = v[3], tau = v[4], shear_rate = v[1], plastic_rate = v[8];
+    i_min = std::min(i_min, i);
+    i_max = std::max(i_max, i);
+    // the analytic law evaluated here, independently of the program (Jop et al. 2006, the friction law)
+    const double mu = kMuS + (kMu2 - kMuS) / (1.0 + kI0 / i);
+    worst = std::max(worst, std::abs(tau / p / mu - 1.0));
+    EXPECT_LT(std::abs(tau / p / mu - 1.0), 1e-10) << "I = " << i;
+    EXPECT_NEAR(p, 1.0e3, 1e-9);  // constant pressure
+    EXPECT_NEAR(plastic_rate / shear_rate, 1.0, 1e-9) << "I = " << i;  // steady: all of the shear is plastic
+  }
+  EXPECT_EQ(rows, 41);
+  EXPECT_NEAR(i_min, 1e-4, 1e-18);
+  EXPECT_NEAR(i_max, 1.0, 1e-14);
+  std::printf("[ measured ] mu(I) element test: largest |tau/p / mu(I) - 1| = %.2e\n", worst);
+}
+
+TEST_F(MuICli, BadElementTestParameterExitsTwoNamingTheKey) {
+  const fs::path spec = write("bad.json", R"({"material": {"model": "mu_i", "young": 1e7, "poisson": 0.3, "mu_s": 0.5, "mu_2": 0.4},
+      "path": {"type": "mu_i_shear", "pressure": 1e3, "inertial_number": {"min": 1e-3, "max": 1, "count": 3}}})");
+  const Result r = run("element-test \"" + spec.string() + "\" --out \"" + (dir_ / "x.csv").string() + "\"");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find("material.mu_2 = 0.4 is out of range; allowed mu_2 > mu_s = 0.5"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "x.csv"));
+}
+
+// Each bad value in the shipped μ(I) scene: exit 2, one line naming materials.beads.<key> and its
+// range, no output folder.
+TEST_F(MuICli, BadSceneParametersExitTwoNamingTheKeyAndRange) {
+  const std::string scene = slurp(kInputs + "column_collapse_mu_i.json");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"\"mu_2\": 0.6434683848584607", "materials.beads.mu_2 = 0.3 is out of range; allowed mu_2 > mu_s"},
+      {"\"i0\": 0.279", "materials.beads.i0 = 0 is out of range; allowed I0 > 0"},
+      {"\"grain_diameter\": 0.53e-3", "materials.beads.grain_diameter = -1 is out of range; allowed d > 0"},
+      {"\"grain_density\": 2450.0", "materials.beads.grain_density = 0 is out of range; allowed rho_s > 0"},
+  };
+  const std::vector<std::string> replacements = {"\"mu_2\": 0.3", "\"i0\": 0", "\"grain_diameter\": -1", "\"grain_density\": 0"};
+  for (std::size_t k = 0; k < cases.size(); ++k) {
+    std::string text = scene;
+    const std::size_t at = text.find(cases[k].first);
+    ASSERT_NE(at, std::string::npos) << cases[k].first;
+    text.replace(at, cases[k].first.size(), replacements[k]);
+    const fs::path file = write("bad" + std::to_string(k) + ".json", text);
+    const fs::path out = dir_ / ("out" + std::to_string(k));
+    const Result r = run("run \"" + file.string() + "\" --out \"" + out.string() + "\"");
+    EXPECT_EQ(r.exit_code, 2) << cases[k].second;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find(cases[k].second), std::string::npos) << "expected '" << cases[k].second << "' in: " << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
+}  // namespace
