@@ -3,8 +3,8 @@
 and a horizontal runout plane, with a sand wedge at rest behind a bed-normal gate.
 
     python3 tools/make_flume_scene.py > inputs/denlinger_flume.json                 # the defaults
-    python3 tools/make_flume_scene.py --slope 30 --bed-friction 27 --name denlinger_flume_seed001 \
-        > inputs/denlinger_flume_seed001.json                                       # seed 001's set
+    python3 tools/make_flume_scene.py --slope 30 --bed-friction 27 --name denlinger_flume_abe2005 \
+        > inputs/denlinger_flume_abe2005.json                                       # Abe, Johansson & Konagai's (2005) set
     python3 tools/make_flume_scene.py --cell 0.01 --name flume_h010 > /tmp/flume_h010.json  # resolution study
 
 Geometry (x down-flume, z up, y across; the runout plane is z = 0, the gate foot is x = 0):
@@ -107,8 +107,8 @@ def flat_slope(a):
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--name", default="denlinger_flume")
-    p.add_argument("--slope", type=float, default=31.4, help="slope angle [deg] (experiment: 31.4, seed 001: 30)")
-    p.add_argument("--bed-friction", type=float, default=29.0, help="bed friction angle [deg] (29; seed 001: 27)")
+    p.add_argument("--slope", type=float, default=31.4, help="slope angle [deg] (experiment: 31.4, Abe, Johansson & Konagai 2005: 30)")
+    p.add_argument("--bed-friction", type=float, default=29.0, help="bed friction angle [deg] (29; Abe, Johansson & Konagai 2005: 27)")
     p.add_argument("--friction", type=float, default=40.0, help="internal friction angle [deg]")
     p.add_argument("--density", type=float, default=1600.0)
     p.add_argument("--slope-length", type=float, default=1.2, help="gate to the start of the transition [m]")

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""MLS radius sweep on the column W = 12500 (seed 000 Fig. 6-7; the paper leaves the radius open:
+"""MLS radius sweep on the column W = 12500 (Edo & Matsubara 2015, Fig. 6-7; the paper leaves the radius open:
 "the radius of influence is the cell size times an arbitrary constant").
 
 For linear MPM, uGIMP and cpGIMP, runs the column without MLS and with each basis spanning x (linear,

@@ -3,13 +3,13 @@
 
 Why the column and the bars go unstable at wide radii (docs/verification.md, "MLS radius"): this
 builds the semi-discrete stiffness of a 1D uGIMP bar, K = B^T V E S B, where B maps nodal
-displacements to particle strains (uGIMP gradients, seed 000 eq. 31) and S is the MLS smoothing of
-the particle strains (seed 000 eq. 39-46, basis along the bar). It solves M^-1 K phi = lambda phi
+displacements to particle strains (uGIMP gradients, Edo & Matsubara 2015, eq. 31) and S is the MLS smoothing of
+the particle strains (Edo & Matsubara 2015, eq. 39-46, basis along the bar). It solves M^-1 K phi = lambda phi
 with the lumped nodal mass M, and compares each lambda with lambda_1, the bar's fundamental without
 smoothing. A mode far softer than lambda_1 carries almost no stress: a displacement pattern that
 the body force or an impact can grow without resistance.
 
-The bar is the one of seed 000's benchmarks, in units of the cell: 50 cells, 2 particles per cell,
+The bar is the one of Edo & Matsubara's (2015) benchmarks, in units of the cell: 50 cells, 2 particles per cell,
 uGIMP half width 1/4 cell, fixed at x = 0 and free at the other end, E = rho = 1. The configuration
 is the undeformed one, so this is the stiffness at the start of a run, not along it.
 
@@ -39,7 +39,7 @@ HALF_WIDTH = 0.25  # uGIMP l_p for 2 particles per cell of size 1
 
 
 def mls_weight(s):
-    """Cubic spline of seed 000 eq. 39 (standard form)."""
+    """Cubic spline of Edo & Matsubara 2015, eq. 39 (standard form)."""
     s = np.abs(s)
     inner = 2.0 / 3.0 - 4.0 * s ** 2 + 4.0 * s ** 3
     outer = 4.0 / 3.0 - 4.0 * s + 4.0 * s ** 2 - 4.0 / 3.0 * s ** 3
@@ -47,7 +47,7 @@ def mls_weight(s):
 
 
 def ugimp(d, lp=HALF_WIDTH):
-    """uGIMP weight and gradient of a node at distance d = x_p - x_i (cell size 1; seed 000 eq. 30-31)."""
+    """uGIMP weight and gradient of a node at distance d = x_p - x_i (cell size 1; Edo & Matsubara 2015, eq. 30-31)."""
     a = np.abs(d)
     sign = np.sign(d)
     w = np.where(a < lp, 1.0 - (d * d + lp * lp) / (2.0 * lp),

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Block between walls (seed 000 sec. 4(3), Fig. 12-13) at four cell sizes: which part of the energy
+"""Block between walls (Edo & Matsubara 2015, sec. 4(3), Fig. 12-13) at four cell sizes: which part of the energy
 error is the wall contact's and which is the cell crossing's that MLS smoothing removes.
 
 Runs inputs/benchmarks/block_between_walls.json refined along the bar (cell 0.5, 0.25, 0.125,

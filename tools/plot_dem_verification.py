@@ -1,7 +1,7 @@
 #!/usr/bin/python3
-"""Seed 002 Fig. 7 and Fig. 8 from talus's static hexagonal-assembly analysis.
+"""Abe 1996, Fig. 7 and Fig. 8 from talus's static hexagonal-assembly analysis.
 
-Runs the GoogleTest sweep (HexAssemblySweep.ReproducesSeed002Fig7AndFig8 in talus_dem_tests) with
+Runs the GoogleTest sweep (HexAssemblySweep.ReproducesAbe1996Fig7AndFig8 in talus_dem_tests) with
 TALUS_DEM_SWEEP_CSV set, then draws
 
   docs/verification/dem_poisson_fig7.png   nu (eq. 35) against kT/kN, with eq. 22
@@ -87,7 +87,7 @@ def plot_fig7(rows, path):
     xs, ys = series(rows, PAPER, "nu_measured")
     inside, above, below = clipped(xs, ys, low, high)
     scatter(ax, inside, marker="o", color="C0", ms=5,
-            label=f"static analysis, seed 002 loading ({block_label(rows, PAPER)})")
+            label=f"static analysis, Abe 1996 loading ({block_label(rows, PAPER)})")
     scatter(ax, above, marker="^", color="C0", ms=6, mfc="none")
     scatter(ax, below, marker="v", color="C0", ms=6, mfc="none")
     xs, ys = series(rows, EXACT, "nu_measured")
@@ -98,13 +98,13 @@ def plot_fig7(rows, path):
     ax.set_xlim(-1.0, 1.0)
     ax.set_ylim(low, high)
     finish_axes(ax, "kT / kN", "Poisson's ratio nu (eq. 35, plane strain)",
-                "Seed 002 Fig. 7: nu of a hexagonal disc block", fontsize=8, loc="upper right")
+                "Abe 1996, Fig. 7: nu of a hexagonal disc block", fontsize=8, loc="upper right")
     save_figure(fig, path, 150)
 
 
 def plot_fig8(rows, path):
     fig, ax = plt.subplots(figsize=(6.4, 4.6))
-    positive = lambda r: r["kT_over_kN"] > 0.0  # noqa: E731  (the range of seed 002 Fig. 8)
+    positive = lambda r: r["kT_over_kN"] > 0.0  # noqa: E731  (the range of Abe 1996, Fig. 8)
     curve_x = [0.005 * i for i in range(1, 201)]
     ax.plot(curve_x, [2.0 * math.sqrt(3.0) * (1.0 + x) / (3.0 + x) for x in curve_x], "k-", lw=1.2,
             label="eq. 37: 2 sqrt3 (1 + kT/kN)/(3 + kT/kN)")
@@ -117,7 +117,7 @@ def plot_fig8(rows, path):
     ax.plot(xs, ys, "x", color="C3", ms=5, label=f"uniform-state boundary tractions ({block_label(rows, EXACT)})")
     ax.set_xlim(0.0, 1.02)
     finish_axes(ax, "kT / kN", "2G / ((1 - nu) kN) = sigma11 / (kN eps11)",
-                "Seed 002 Fig. 8: stiffness of a hexagonal disc block", fontsize=8, loc="lower right")
+                "Abe 1996, Fig. 8: stiffness of a hexagonal disc block", fontsize=8, loc="lower right")
     save_figure(fig, path, 150)
 
 

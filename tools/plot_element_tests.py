@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Reproduce seed 001 Fig. 13 with the Drucker-Prager element tests.
+"""Reproduce Abe, Johansson & Konagai 2005, Fig. 13 with the Drucker-Prager element tests.
 
 Runs `talus element-test` on inputs/element_tests/fig13a_*.json (uniaxial compression, several
 hardening settings) and fig13b_*.json (simple shear, several dilatancy angles), then writes
@@ -119,7 +119,7 @@ def plot_hardening(specs, csv_dir, png):
     ax.set_xlabel("axial shortening  −ε_yy  [%]")
     ax.set_ylabel("axial compressive stress  −σ_yy  [kPa]")
     ax.set_title("Uniaxial compression, Drucker–Prager hardening settings\n"
-                 "(seed 001 Fig. 13 left; load to 2 %, back to 0, reload to 3 %)", fontsize=10)
+                 "(Abe, Johansson & Konagai 2005, Fig. 13 left; load to 2 %, back to 0, reload to 3 %)", fontsize=10)
     ax.legend(fontsize=8, loc="lower right")
     ax.grid(alpha=0.3)
     fig.tight_layout()
@@ -149,7 +149,7 @@ def plot_dilatancy(specs, csv_dir, png):
                 label=f"closed form, ψ = φ: tan φ = {math.tan(math.radians(phi)):.3f}")
     ax.set_xlabel("shear strain  γ_xy  [%]")
     ax.set_ylabel("volumetric strain  ε_v  [%]  (dilation positive)")
-    ax.set_title("Simple shear: volumetric vs shear strain (seed 001 Fig. 13 right)", fontsize=10)
+    ax.set_title("Simple shear: volumetric vs shear strain (Abe, Johansson & Konagai 2005, Fig. 13 right)", fontsize=10)
     ax.legend(fontsize=8, loc="upper left")
     ax.grid(alpha=0.3)
     ax2.set_xlabel("shear strain  γ_xy  [%]")

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""MLS strain smoothing (seed 000 sec. 4, Fig. 6-7, 9-10, 12-13) on the papers' elastic benchmarks.
+"""MLS strain smoothing (Edo & Matsubara 2015, sec. 4, Fig. 6-7, 9-10, 12-13) on the papers' elastic benchmarks.
 
 Runs `talus run` on the scenes in inputs/benchmarks/ with linear MPM, uGIMP and cpGIMP, each without
 and with MLS smoothing of the strain increments, and writes into docs/verification/:
@@ -50,7 +50,7 @@ def main():
     modes = ["off", a.basis]
     label = {"off": "without MLS", a.basis: f"MLS {a.basis} ({a.axes}), h = {a.radius:g} cells"}
 
-    # 1. Column W = 12500 (seed 000 Fig. 6-7).
+    # 1. Column W = 12500 (Edo & Matsubara 2015, Fig. 6-7).
     base = load("column_w12500")
     b = base["gravity"][0]
     delta = L0 + RHO0 * b * L0 ** 2 / (2 * E)
@@ -79,7 +79,7 @@ def main():
     base = load("dynamic_bar")
     v0 = base["bodies"][0]["velocity"][0]
     c = math.sqrt(E / RHO0)
-    exact = -E * abs(v0) / c  # seed 000 eq. 63
+    exact = -E * abs(v0) / c  # Edo & Matsubara 2015, eq. 63
     fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), sharey=True)
     for ax, shape in zip(axes, SHAPES):
         for mode in modes:

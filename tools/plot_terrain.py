@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Terrain-following grid and bed friction (issue 6, seed 001 eq. 14-22): the elastic-block checks.
+"""Terrain-following grid and bed friction (issue 6, Abe, Johansson & Konagai 2005, eq. 14-22): the elastic-block checks.
 
 Runs the scenes of inputs/terrain/ with talus (or reuses finished runs under --runs) and writes
   docs/verification/terrain_horizontal_plane.png  centre travel on a horizontal plane vs eq. 21
@@ -60,7 +60,7 @@ def main():
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
 
-    # 1. horizontal plane, seed 001 eq. 21
+    # 1. horizontal plane, Abe, Johansson & Konagai 2005, eq. 21
     mu, v0 = 0.3, 10.0
     fig, ax = plt.subplots(figsize=(6.5, 4))
     tr = np.linspace(0, 4.0, 400)
@@ -75,7 +75,7 @@ def main():
     finish_axes(ax, "time [s]", "centre travel [m]", "Block on a horizontal plane, mu = 0.3, v0 = 10 m/s")
     save_figure(fig, os.path.join(args.out, "terrain_horizontal_plane.png"), 120)
 
-    # 2. 30-degree plane, seed 001 eq. 22
+    # 2. 30-degree plane, Abe, Johansson & Konagai 2005, eq. 22
     fig, ax = plt.subplots(figsize=(6.5, 4))
     tr = np.linspace(0, 2.0, 200)
     ax.plot(tr, G * (math.sin(THETA) - mu * math.cos(THETA)) * math.cos(THETA) * tr ** 2 / 2, "k-", lw=3, alpha=0.3,

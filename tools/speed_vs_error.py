@@ -7,7 +7,7 @@ cell size, particles per cell), measures the error of each run and its wall time
     docs/verification/column_convergence.csv   column error against cell size
     docs/verification/*.png                    error vs time, convergence, energy histories
 Usage:  /usr/bin/python3 tools/speed_vs_error.py [--talus build/talus] [--threads 1] [--quick]
-        [--mls off,cubic]   MLS axis: each column / bar run once per basis listed (seed 000 eq. 54;
+        [--mls off,cubic]   MLS axis: each column / bar run once per basis listed (Edo & Matsubara 2015, eq. 54;
                             the bars are 2 particles across, so the fit spans x only, radius 2 cells)
 Needs numpy, matplotlib and VTK's Python module (Debian: python3-numpy python3-matplotlib python3-vtk9).
 """
@@ -108,7 +108,7 @@ def profile(x, sxx, axis=0):
 def column_metrics(res, b):
     delta = L0 + RHO0 * b * L0 ** 2 / (2 * E)
     xp, sp = profile(res["x"], res["stress"][:, 0])
-    exact = E * (np.sqrt(2 * RHO0 * b * (delta - np.minimum(xp, delta)) / E + 1) - 1)  # seed 000 eq. 61
+    exact = E * (np.sqrt(2 * RHO0 * b * (delta - np.minimum(xp, delta)) / E + 1) - 1)  # Edo & Matsubara 2015, eq. 61
     l2 = math.sqrt(np.sum((sp - exact) ** 2) / np.sum(exact ** 2))
     rough = math.sqrt(np.mean((sp[2:] - 2 * sp[1:-1] + sp[:-2]) ** 2)) / (RHO0 * b * L0)
     return l2, rough
@@ -117,7 +117,7 @@ def column_metrics(res, b):
 def bar_metrics(res, v0):
     c = math.sqrt(E / RHO0)
     t = res["energy"]["time"][-1]
-    exact = -E * abs(v0) / c  # seed 000 eq. 63
+    exact = -E * abs(v0) / c  # Edo & Matsubara 2015, eq. 63
     x, s = res["x"][:, 0], res["stress"][:, 0]
     sel = (x > 3.0) & (x < c * t - 6.0)
     return abs(s[sel].mean() / exact - 1.0)

@@ -85,7 +85,7 @@ std::string cpu_model() {
   return "unknown";
 }
 
-/// The sand the `dp` material and the column scene use: seed 001 Table 2 (E = 2 MPa, nu = 0.3,
+/// The sand the `dp` material and the column scene use: Abe, Johansson & Konagai 2005, Table 2 (E = 2 MPa, nu = 0.3,
 /// phi = 40 deg, psi = 0, c = 10 Pa, no hardening, combined-hardening parameter 0.8 -> kinematic
 /// fraction 0.2), density 1600 kg/m^3.
 const char* const kSand = R"("model": "drucker_prager", "density": 1600.0, "young": 2.0e6, "poisson": 0.3,
@@ -122,7 +122,7 @@ Scene bench_scene(const std::string& name, double grid_xy, double grid_z, double
 /// The block scene: a cube of about N particles sliding (0.5, 0.2, 0) m/s on a floor with mu = 0.3,
 /// in a grid with room around it. Shear waves from the settling keep every particle's stress
 /// changing, so no phase can take a shortcut.
-/// --mls linear|quadratic|cubic adds MLS smoothing of the strain increments (seed 000 eq. 54) with
+/// --mls linear|quadratic|cubic adds MLS smoothing of the strain increments (Edo & Matsubara 2015, eq. 54) with
 /// the radius --mls-radius (cells, default 2) over all three axes.
 Scene block_scene(long long particles, const std::string& shape, const std::string& scheme, const std::string& material,
                   const std::string& mls_json) {
@@ -168,7 +168,7 @@ void refuse_unavailable(const BenchOptions& o) {
 /// The shear scene: the block scene's sand put into steady simple shear at its yield stress, so that
 /// every particle takes the plastic (cone) return in every step, the flowing state of a runout.
 /// Velocity v_x = rate (z - z_mid); stress -p I + tau (e_x e_z + e_z e_x) with the overburden
-/// p = rho g (z_top - z) + 1 kPa and tau = k + 3 alpha p, i.e. f = alpha I1 + q - k = 0 (seed 001
+/// p = rho g (z_top - z) + 1 kPa and tau = k + 3 alpha p, i.e. f = alpha I1 + q - k = 0 (Abe, Johansson & Konagai 2005
 /// eq. 23, q = tau in pure shear). The shear rate 1/s loads the stress by G dt per step, far more
 /// than round-off, so each step's trial lies outside the cone.
 /// With --material mu_i the stress is tau = mu(I) p, I from the imposed rate (Jop et al. 2006,
@@ -438,7 +438,7 @@ void add_bench_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--scheme", o->scheme, "musl | usl | usf | usavg")
       ->capture_default_str();
-  cmd->add_option("--material", o->material, "elastic | dp (Drucker-Prager sand, seed 001 Table 2) | mu_i (glass beads, Jop et al. 2006)")->capture_default_str();
+  cmd->add_option("--material", o->material, "elastic | dp (Drucker-Prager sand, Abe, Johansson & Konagai 2005, Table 2) | mu_i (glass beads, Jop et al. 2006)")->capture_default_str();
   cmd->add_option("--mls", o->mls, "off | linear | quadratic | cubic")->capture_default_str();
   cmd->add_option("--mls-radius", o->mls_radius, "MLS radius in cells (solver.smoothing.radius_factor)")
       ->check(CLI::Range(0.5, 8.0))

@@ -1,4 +1,4 @@
-// `talus dem-springs`: DEM contact spring constants kN, kT from continuum constants (seed 002;
+// `talus dem-springs`: DEM contact spring constants kN, kT from continuum constants (Abe 1996;
 // docs/dem.md). Prints one JSON object; a continuum the packing cannot represent is refused with
 // exit code 2 and one line, never answered with a negative spring.
 #include "commands.hpp"
@@ -41,7 +41,7 @@ nlohmann::ordered_json compute_dem_springs(const DemSpringsOptions& options) {
   }
   const dem::PackingGeometry geometry = dem::make_packing_geometry(packing, options.parameters);
   const dem::PlaneCondition plane = options.plane_stress ? dem::PlaneCondition::stress : dem::PlaneCondition::strain;
-  // E and nu are those of the material; plane stress changes only how nu enters (seed 002 §2(1)).
+  // E and nu are those of the material; plane stress changes only how nu enters (Abe 1996, §2(1)).
   const dem::IsotropicElasticity target =
       options.young ? dem::IsotropicElasticity::from_young(*options.young, options.poisson)
                     : dem::IsotropicElasticity{*options.shear, options.poisson};
@@ -70,7 +70,7 @@ void add_dem_springs_command(CLI::App& app) {
   auto options = std::make_shared<DemSpringsOptions>();
   CLI::App* command = app.add_subcommand(
       "dem-springs",
-      "DEM contact springs kN, kT that reproduce an isotropic elastic continuum (seed 002, Abe 1996).\n"
+      "DEM contact springs kN, kT that reproduce an isotropic elastic continuum (Abe 1996).\n"
       "Prints one JSON object with kN and kT (2D: per unit depth, N/m/m = Pa; 3D: N/m).\n"
       "Packings:\n"
       "  hex         2D hexagonal close packing, eq. 34 (plane strain; nu <= 1/4)\n"

@@ -1,5 +1,5 @@
 // `talus element-test SPEC.json --out FILE.csv`: single-point Drucker–Prager test along a
-// strain- or mixed-controlled path (seed 001 sec. 6(3), Fig. 13). The spec format and the CSV
+// strain- or mixed-controlled path (Abe, Johansson & Konagai 2005, sec. 6(3), Fig. 13). The spec format and the CSV
 // columns are documented in docs/drucker-prager.md; the spec is read by the scene layer
 // (scene/element_test_json.hpp), the driver is talus::run_element_test.
 // A spec whose material has "model": "mu_i" runs the μ(I) steady simple shear instead

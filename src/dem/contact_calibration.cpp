@@ -13,8 +13,8 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kSqrt3 = std::numbers::sqrt3;
 
-// Seed 002 derives everything in plane strain; plane stress is the same algebra with nu read as
-// nu/(1+nu) (seed 002 §2(1)). The inverse maps the plane-strain value back.
+// Abe 1996 derives everything in plane strain; plane stress is the same algebra with nu read as
+// nu/(1+nu) (Abe 1996, §2(1)). The inverse maps the plane-strain value back.
 double plane_strain_equivalent(double poisson, PlaneCondition plane) {
   return plane == PlaneCondition::stress ? poisson / (1.0 + poisson) : poisson;
 }
@@ -44,7 +44,7 @@ void check_target(const IsotropicElasticity& target, const PackingGeometry& geom
     if (nu != 0.0) {
       throw input_error("--nu = " + number_text(nu) +
                         " cannot be represented by packing 'square': a square lattice gives only nu = 0 "
-                        "(seed 002 eq. 29-31); use hex or random2d");
+                        "(Abe 1996, eq. 29-31); use hex or random2d");
     }
     return;
   }
@@ -60,22 +60,22 @@ void check_target(const IsotropicElasticity& target, const PackingGeometry& geom
 ContactSprings springs_for(double g, double nu, const PackingGeometry& geometry) {
   switch (geometry.packing) {
     case Packing::hexagonal: {
-      // seed 002 eq. 34
+      // Abe 1996, eq. 34
       const double scale = 2.0 / kSqrt3 * g / (1.0 - 2.0 * nu);
       return {scale, scale * (1.0 - 4.0 * nu)};
     }
     case Packing::hexagonal_rotation_locked: {
-      // seed 002 eq. 53
+      // Abe 1996, eq. 53
       const double scale = kSqrt3 * g / (6.0 * (1.0 - 2.0 * nu));
       return {scale * (5.0 - 4.0 * nu), scale * (1.0 - 4.0 * nu)};
     }
     case Packing::square: {
-      // seed 002 eq. 30 with the lattice's gamma/rho = pi/4 (eq. 31): kN = kT = E, nu = 0 so E = 2G.
+      // Abe 1996, eq. 30 with the lattice's gamma/rho = pi/4 (eq. 31): kN = kT = E, nu = 0 so E = 2G.
       const double k = kPi / (4.0 * geometry.density_ratio) * 2.0 * g;
       return {k, k};
     }
     case Packing::random_2d: {
-      // seed 002 eq. 21 with a uniform contact density psi = Z/(2 pi) contacts per radian.
+      // Abe 1996, eq. 21 with a uniform contact density psi = Z/(2 pi) contacts per radian.
       const double psi = geometry.coordination / (2.0 * kPi);
       const double scale = g / geometry.density_ratio / (1.0 - 2.0 * nu) / psi;
       return {scale, scale * (1.0 - 4.0 * nu)};
@@ -122,7 +122,7 @@ IsotropicElasticity macroscopic_elasticity(const ContactSprings& springs, const 
   switch (geometry.packing) {
     case Packing::hexagonal:
     case Packing::random_2d: {
-      // seed 002 eq. 18 vs 19: G = (gamma / 2 rho)(kN + kT) psi with psi = Z/(2 pi), i.e.
+      // Abe 1996, eq. 18 vs 19: G = (gamma / 2 rho)(kN + kT) psi with psi = Z/(2 pi), i.e.
       // G = phi Z (kN + kT) / (4 pi) (= sqrt3/4 (kN + kT) for the hexagonal lattice, eq. 33); nu from eq. 22.
       g = geometry.density_ratio * geometry.coordination * (kn + kt) / (4.0 * kPi);
       nu = 0.25 * (1.0 - kt / kn);
@@ -136,10 +136,10 @@ IsotropicElasticity macroscopic_elasticity(const ContactSprings& springs, const 
       break;
     }
     case Packing::square: {
-      // seed 002 eq. 29: isotropic only when kN = kT; then E = (4 gamma / (pi rho)) kN and nu = 0.
+      // Abe 1996, eq. 29: isotropic only when kN = kT; then E = (4 gamma / (pi rho)) kN and nu = 0.
       if (std::abs(kn - kt) > 1e-12 * std::abs(kn)) {
         throw input_error("a square lattice with kN = " + number_text(kn) + " != kT = " + number_text(kt) +
-                          " is not isotropic (seed 002 eq. 29)");
+                          " is not isotropic (Abe 1996, eq. 29)");
       }
       g = 0.5 * 4.0 * geometry.density_ratio / kPi * kn;
       nu = 0.0;

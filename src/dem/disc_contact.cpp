@@ -19,7 +19,7 @@ ContactLoad contact_load(const ContactSprings& springs, const Vec2& normal, cons
 Mat2 disc_contact_stress(std::span<const ContactForce> contacts, double radius, double density_ratio) {
   Mat2 sum = Mat2::Zero();
   for (const ContactForce& contact : contacts) sum += contact.force * contact.normal.transpose();
-  return density_ratio / (std::numbers::pi * radius) * sum;  // seed 002 eq. 50
+  return density_ratio / (std::numbers::pi * radius) * sum;  // Abe 1996, eq. 50
 }
 
 }  // namespace talus::dem

@@ -40,7 +40,7 @@ class DofMap {
       discs += discs_in_row(spec, row);
     }
     index_.assign(static_cast<std::size_t>(discs * per_disc_), 0);
-    // Supports (seed 002 §3): bottom row vertically, bottom-left disc also horizontally.
+    // Supports (Abe 1996, §3): bottom row vertically, bottom-left disc also horizontally.
     for (int column = 0; column < discs_in_row(spec, 0); ++column) index_[slot({0, column}, 1)] = kFixed;
     index_[slot({0, 0}, 0)] = kFixed;
     for (int& entry : index_) {
@@ -145,7 +145,7 @@ void check_spec(const HexAssemblySpec& spec) {
   }
 }
 
-// For kT >= 0 the matrix is symmetric positive definite. For kT < 0 (the range Fig. 7 of seed 002
+// For kT >= 0 the matrix is symmetric positive definite. For kT < 0 (the range Fig. 7 of Abe 1996
 // also explores) it is indefinite, since a disc turning alone then lowers the energy; LDL^T without
 // pivoting usually still works there, and LU with pivoting takes over when it does not. Near
 // kT/kN = -1/3 the lattice has a nearly free mode (docs/dem.md) and no factorisation helps.
@@ -187,7 +187,7 @@ HexAssemblyResult analyse_hex_assembly(const HexAssemblySpec& spec) {
   const auto pairs = touching_pairs(spec);
 
   // Contact stiffness from the energy 1/2 kN dn^2 + 1/2 kT dt^2 with dn = (u_B - u_A).n and
-  // dt = (u_B - u_A).s - (w_A + w_B) (seed 002 eq. 1-3).
+  // dt = (u_B - u_A).s - (w_A + w_B) (Abe 1996, eq. 1-3).
   std::vector<Eigen::Triplet<double>> triplets;
   triplets.reserve(pairs.size() * 72);
   for (const auto& [disc_a, disc_b] : pairs) {
@@ -216,7 +216,7 @@ HexAssemblyResult analyse_hex_assembly(const HexAssemblySpec& spec) {
     if (i != kFixed) load[i] += value;  // a supported component passes its load to the support
   };
   if (spec.loading == HexLoading::equal_end_forces) {
-    // seed 002 §3: each row carries a band sqrt3 a high of the applied stress.
+    // Abe 1996, §3: each row carries a band sqrt3 a high of the applied stress.
     const double end_force = spec.applied_stress * kSqrt3 * a;
     for (int row = 0; row < spec.rows; ++row) {
       add_load({row, 0}, 0, -end_force);
@@ -261,8 +261,8 @@ HexAssemblyResult analyse_hex_assembly(const HexAssemblySpec& spec) {
                      (centre_of(gauge_b, a).x() - centre_of(gauge_a, a).x());
   result.strain_22 = (displacement(gauge_d).y() - displacement(gauge_c).y()) /
                      (centre_of(gauge_d, a).y() - centre_of(gauge_c, a).y());
-  result.poisson_ratio = -result.strain_22 / (result.strain_11 - result.strain_22);  // seed 002 eq. 35
-  result.stiffness_ratio = spec.applied_stress / (spec.springs.normal * result.strain_11);  // seed 002 eq. 36
+  result.poisson_ratio = -result.strain_22 / (result.strain_11 - result.strain_22);  // Abe 1996, eq. 35
+  result.stiffness_ratio = spec.applied_stress / (spec.springs.normal * result.strain_11);  // Abe 1996, eq. 36
 
   // The middle disc: its contact forces give the eq. 50 stress; its neighbours give the local strain.
   const DiscId centre{middle_row, middle_column};

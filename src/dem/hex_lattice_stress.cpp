@@ -24,7 +24,7 @@ LatticeResponse hexagonal_lattice_response(const ContactSprings& springs, const 
   response.rotation = rotations_locked ? 0.0 : balancing_rotation(displacement_gradient);
   const std::array<Vec2, 6> normals = hexagonal_contact_normals();
   for (int k = 0; k < 6; ++k) {
-    // seed 002 eq. 8: the neighbour's centre is 2a n away, so an affine field moves it by 2a H n
+    // Abe 1996, eq. 8: the neighbour's centre is 2a n away, so an affine field moves it by 2a H n
     // relative to the reference disc; both discs turn by the same angle.
     const Vec2 relative = 2.0 * radius * displacement_gradient * normals[k];
     const ContactLoad load =

@@ -91,10 +91,10 @@ DruckerPrager::DruckerPrager(const DruckerPragerParameters& parameters, std::str
   bulk_ = e / (3.0 * (1.0 - 2.0 * nu));
   lame_ = bulk_ - 2.0 * shear_ / 3.0;
   cone_coefficients(parameters_.cone, parameters_.friction_angle_deg, parameters_.cohesion, alpha_,
-                    k0_);  // seed 001 eq. 23: alpha from phi
+                    k0_);  // Abe, Johansson & Konagai 2005, eq. 23: alpha from phi
   double unused = 0.0;
   cone_coefficients(parameters_.cone, parameters_.dilatancy_angle_deg, 0.0, alpha_g_,
-                    unused);  // seed 001 eq. 24: alpha_g from psi
+                    unused);  // Abe, Johansson & Konagai 2005, eq. 24: alpha_g from psi
   const double h = parameters_.hardening_modulus, m = parameters_.kinematic_fraction;
   hardening_isotropic_ = (1.0 - m) * h;
   hardening_kinematic_ = m * h;

@@ -1,4 +1,4 @@
-// Single-point driver for the Drucker–Prager model (seed 001 sec. 6(3), Fig. 13).
+// Single-point driver for the Drucker–Prager model (Abe, Johansson & Konagai 2005, sec. 6(3), Fig. 13).
 #include "talus/material/element_test.hpp"
 
 #include "talus/core/error.hpp"

@@ -58,7 +58,7 @@ void ParticleStore::enable_domain_state() {
   domain_enabled_ = true;
   for (auto& l : domain) {
     l.resize(size());
-    for (std::size_t p = 0; p < size(); ++p) l[p] = 0.5 * std::cbrt(volume0[p]);  // l_p0 (seed 000 sec. 3)
+    for (std::size_t p = 0; p < size(); ++p) l[p] = 0.5 * std::cbrt(volume0[p]);  // l_p0 (Edo & Matsubara 2015, sec. 3)
   }
 }
 

@@ -61,7 +61,7 @@ inline double gap_to_cell(int i, double lo, double hi) {
   return g > 0.0 ? g : 0.0;
 }
 
-/// Cubic spline of seed 000 eq. 39 for 0 <= s < 1, the same arithmetic as mls_weight but as one
+/// Cubic spline of Edo & Matsubara 2015, eq. 39 for 0 <= s < 1, the same arithmetic as mls_weight but as one
 /// select, so the loop over neighbours vectorises (callers pass s < 1 only, or zero-weight padding).
 inline double mls_weight_inside(double s) {
   const double inner = 2.0 / 3.0 - 4.0 * s * s + 4.0 * s * s * s;

@@ -59,12 +59,12 @@ BodyMaterials::BodyMaterials(const Scene& scene, ParticleStore& particles) {
     for (int c = 0; c < 6; ++c) state.back_stress[c] = P.back_stress[c][p];
   else
     state.back_stress.setZero();
-  // seed 001 sec. 7: dilatancy set to its flowing value once the particle flows.
+  // Abe, Johansson & Konagai 2005, sec. 7: dilatancy set to its flowing value once the particle flows.
   const bool flowing = state.equivalent_plastic_strain > body.granular.flowing_plastic_strain;
   const DruckerPrager& model = body.plastic[flowing ? 1 : 0];
   rotate_objectively(s, w_yz, w_xz, w_xy);
   if (kinematic) model.rotate_state(state, w_yz, w_xz, w_xy);
-  const DruckerPragerResult r = model.update(s, state, de);  // seed 001 eq. 23-25, closed-form return
+  const DruckerPragerResult r = model.update(s, state, de);  // Abe, Johansson & Konagai 2005, eq. 23-25, closed-form return
   P.plastic_strain[p] = state.equivalent_plastic_strain;
   if (kinematic)
     for (int c = 0; c < 6; ++c) P.back_stress[c][p] = state.back_stress[c];
@@ -96,10 +96,10 @@ double BodyMaterials::update(ParticleStore& P, std::size_t begin, std::size_t en
     }
     const double w_yz = inc.spin[0][k], w_xz = inc.spin[1][k], w_xy = inc.spin[2][k];
     const Body& body = bodies_[P.body[p]];
-    P.volume[p] *= 1.0 + trace(de);  // seed 000 eq. 35: rho_new = rho / (1 + tr d_eps)
+    P.volume[p] *= 1.0 + trace(de);  // Edo & Matsubara 2015, eq. 35: rho_new = rho / (1 + tr d_eps)
     if (body.model == MaterialModel::LinearElastic) {
       rotate_objectively(s, w_yz, w_xz, w_xy);  // Jaumann rate, Hughes-Winget
-      body.elastic.add_increment(s, de);        // seed 000 eq. 34
+      body.elastic.add_increment(s, de);        // Edo & Matsubara 2015, eq. 34
     } else if (body.model == MaterialModel::DruckerPrager) {
       dissipated += update_drucker_prager(body, P, p, s, de, w_yz, w_xz, w_xy);
     } else {

@@ -59,12 +59,12 @@ Solver::Solver(Scene scene) : scene_(std::move(scene)) {
   seeded_particles_ = static_cast<std::int64_t>(particles_.size());
   grid_ = Grid(scene_.grid);
   sort_ = make_cell_sort(grid_, scene_.shape, scene_.block_cells);
-  if (scene_.shape == ShapeKind::CpGimp) particles_.enable_domain_state();  // seed 000 eq. 57-58
+  if (scene_.shape == ShapeKind::CpGimp) particles_.enable_domain_state();  // Edo & Matsubara 2015, eq. 57-58
   walls_ = Walls(scene_.walls, scene_.grid, grid_.profile_terrain());
   materials_ = BodyMaterials(scene_, particles_);
   // Nodes lighter than this are empty: far below any real nodal mass, far above round-off.
   mass_floor_ = 1e-12 * *std::min_element(particles_.mass.begin(), particles_.mass.end());
-  if (scene_.smoothing.enabled) {  // seed 000 eq. 54; buffers exist only for scenes that smooth
+  if (scene_.smoothing.enabled) {  // Edo & Matsubara 2015, eq. 54; buffers exist only for scenes that smooth
     smoother_.emplace(scene_.smoothing.mls, scene_.grid.h);
     smooth_body_.assign(scene_.bodies.size(), scene_.smoothing.bodies.empty() ? 1 : 0);
     for (int b : scene_.smoothing.bodies) smooth_body_[b] = 1;
@@ -155,7 +155,7 @@ double Solver::stable_time_step() const {
     const double speed = std::sqrt(P.v[0][p] * P.v[0][p] + P.v[1][p] * P.v[1][p] + P.v[2][p] * P.v[2][p]);
     max_rate = std::max(max_rate, c + speed);
   }
-  return scene_.courant * scene_.grid.h / max_rate;  // seed 000 eq. 60
+  return scene_.courant * scene_.grid.h / max_rate;  // Edo & Matsubara 2015, eq. 60
 }
 
 void Solver::step() {
@@ -278,7 +278,7 @@ void Solver::step_with(double dt) {
     large_displacement_ = r.large_displacement;
     crosses_open_face_ = r.crosses_open_face;
   }
-  // 5. remap (MUSL): v_i^{k+1} = sum m_p v_p N_i / m_i, with the walls (seed 000 eq. 52); the
+  // 5. remap (MUSL): v_i^{k+1} = sum m_p v_p N_i / m_i, with the walls (Edo & Matsubara 2015, eq. 52); the
   //    momentum was scattered in the G2P pass.
   NodeVectors node_velocity = grid_.lagrangian_velocity();
   if (remap) {
@@ -319,7 +319,7 @@ void Solver::move_particles() {
 // update runs over the chunk: the gather stays cache-friendly and the update loop is simple.
 // The dissipated energy is summed per block, then over blocks in block order, so the total does
 // not depend on the thread count.
-// cpGIMP domains follow the deformation here too (seed 000 eq. 57-58). `move` applies the step's
+// cpGIMP domains follow the deformation here too (Edo & Matsubara 2015, eq. 57-58). `move` applies the step's
 // displacement afterwards (the particles' last use of their start-of-step position).
 template <class Shape, class Terrain>
 void Solver::update_stress(const NodeVectors& node_velocity, double dt, bool move) {
@@ -372,7 +372,7 @@ double Solver::update_chunk(std::size_t begin, std::size_t end, const StrainIncr
   ParticleStore& P = particles_;
   const double dissipated = materials_.update(P, begin, end, inc, dt);
   if constexpr (Shape::kDomain == DomainSource::Current) {
-    // seed 000 eq. 57-58, l_p = G_p l_p0 with G_p <- (I + grad v dt) G_p, for a domain kept
+    // Edo & Matsubara 2015, eq. 57-58, l_p = G_p l_p0 with G_p <- (I + grad v dt) G_p, for a domain kept
     // as an axis-aligned box: each half width stretches with the normal strain increment
     // along its axis, l_d <- (1 + d_eps_dd) l_d (the shear part of G would tilt the box).
     for (std::size_t p = begin; p < end; ++p)
@@ -384,7 +384,7 @@ double Solver::update_chunk(std::size_t begin, std::size_t end, const StrainIncr
   return dissipated;
 }
 
-// With MLS smoothing (seed 000 eq. 53-56) a particle's fit needs its neighbours' increments, so
+// With MLS smoothing (Edo & Matsubara 2015, eq. 53-56) a particle's fit needs its neighbours' increments, so
 // the increments of all particles are computed first into full arrays, then smoothed, then the
 // material update runs per chunk with the smoothed strain increments (the spin is not smoothed:
 // it only rotates the stress, eq. 54 names the strain). Positions move in the last pass, after

@@ -16,7 +16,7 @@ namespace talus {
 namespace {
 
 /// The particle domain's half widths in grid units, as the shape function wants them: none for a
-/// material point, l_p0 = V0^(1/3)/2 for uGIMP (seed 000 eq. 59), the current per-axis half widths
+/// material point, l_p0 = V0^(1/3)/2 for uGIMP (Edo & Matsubara 2015, eq. 59), the current per-axis half widths
 /// for cpGIMP (eq. 57-58). The shape clamps them to what its support holds.
 template <class Shape>
 inline void half_widths(const ParticleStore& P, std::size_t p, double inv_h, double hw[3]) {
@@ -58,7 +58,7 @@ void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid, Co
         half_widths<Shape>(P, p, inv_h, hw);
         const double m = P.mass[p];
         const double mv[3] = {m * P.v[0][p], m * P.v[1][p], m * P.v[2][p]};
-        // -V sigma, for f_int = -sum V_p sigma_p grad N (seed 000 eq. 22)
+        // -V sigma, for f_int = -sum V_p sigma_p grad N (Edo & Matsubara 2015, eq. 22)
         const double vol = P.volume[p];
         const double sxx = -vol * P.stress[XX][p], syy = -vol * P.stress[YY][p], szz = -vol * P.stress[ZZ][p];
         const double syz = -vol * P.stress[YZ][p], sxz = -vol * P.stress[XZ][p], sxy = -vol * P.stress[XY][p];
@@ -123,7 +123,7 @@ namespace {
 
 // G2P over the blocks `block_list` (all blocks, or one colour's), in parallel. With `remap` each
 // particle's new momentum m_p v_p is scattered into grid.momentum with the same stencil right
-// after its gather (the MUSL remap, seed 000 eq. 52): that is race-free only when the blocks are
+// after its gather (the MUSL remap, Edo & Matsubara 2015, eq. 52): that is race-free only when the blocks are
 // one colour's, and it saves the remap's own pass over the particles and its weight evaluation.
 template <class Shape, class Terrain, bool remap, class BlockList>
 void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::array<std::vector<double>, 3>& displacement,
@@ -186,8 +186,8 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::arra
           damped += 0.5 * P.mass[p] * (before - after);
         }
         for (int d = 0; d < 3; ++d) {
-          P.v[d][p] += dvp[d];       // seed 000 eq. 50: v_p += dt sum a_i N_i
-          disp[d][p] = dt * vlp[d];  // seed 000 eq. 51: x_p += dt sum v_i^L N_i (applied later)
+          P.v[d][p] += dvp[d];       // Edo & Matsubara 2015, eq. 50: v_p += dt sum a_i N_i
+          disp[d][p] = dt * vlp[d];  // Edo & Matsubara 2015, eq. 51: x_p += dt sum v_i^L N_i (applied later)
           finite = finite && std::isfinite(P.v[d][p]) && std::isfinite(disp[d][p]);
         }
         if constexpr (remap) {
@@ -300,7 +300,7 @@ void strain_increments(const ParticleStore& P, const Grid& grid, const NodeVecto
         }
     });
     const std::size_t k = p - begin;
-    // seed 000 eq. 33: d_eps = dt/2 (L + L^T); spin dW = dt/2 (L - L^T)
+    // Edo & Matsubara 2015, eq. 33: d_eps = dt/2 (L + L^T); spin dW = dt/2 (L - L^T)
     out.strain[XX][k] = dt * L[0][0];
     out.strain[YY][k] = dt * L[1][1];
     out.strain[ZZ][k] = dt * L[2][2];

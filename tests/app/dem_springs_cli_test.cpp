@@ -1,5 +1,5 @@
 // `talus dem-springs` as a user runs it: one JSON object on success, exit code 2 and one line on
-// stderr for a continuum the packing cannot represent. Expected values come from the seed 002
+// stderr for a continuum the packing cannot represent. Expected values come from the Abe 1996
 // formulas written out here, not from the library.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -64,7 +64,7 @@ TEST(DemSpringsCli, HexPrintsEq34SpringsAsJson) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
   const double shear = young / (2.0 * (1.0 + nu));
-  const double kn = 2.0 / std::sqrt(3.0) * shear / (1.0 - 2.0 * nu);  // seed 002 eq. 34
+  const double kn = 2.0 / std::sqrt(3.0) * shear / (1.0 - 2.0 * nu);  // Abe 1996, eq. 34
   EXPECT_NEAR(j.at("kN").get<double>() / kn, 1.0, 1e-14);
   EXPECT_NEAR(j.at("kT").get<double>() / (kn * (1.0 - 4.0 * nu)), 1.0, 1e-14);
   EXPECT_EQ(j.at("packing"), "hex");
@@ -108,7 +108,7 @@ TEST(DemSpringsCli, PoissonRatioAboveTheLimitExitsWithCode2AndOneLine) {
   const CommandResult square = run_talus("dem-springs --E 1e7 --nu 0 --packing square");
   ASSERT_EQ(square.exit_code, 0) << square.err;
   const auto j = nlohmann::json::parse(square.out);
-  EXPECT_DOUBLE_EQ(j.at("kN").get<double>(), 1e7);  // seed 002 eq. 31: kN = kT = E
+  EXPECT_DOUBLE_EQ(j.at("kN").get<double>(), 1e7);  // Abe 1996, eq. 31: kN = kT = E
   EXPECT_DOUBLE_EQ(j.at("kT").get<double>(), 1e7);
 }
 

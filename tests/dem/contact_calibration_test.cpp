@@ -1,4 +1,4 @@
-// The spring formulas of seed 002 (eq. 21, 22, 30-31, 34, 53) and the 3D uniform-strain estimate:
+// The spring formulas of Abe 1996 (eq. 21, 22, 30-31, 34, 53) and the 3D uniform-strain estimate:
 // round trips, independent re-derivations from the contact law, and refusals.
 #include "talus/core/error.hpp"
 #include "talus/dem/contact_calibration.hpp"
@@ -84,7 +84,7 @@ TEST(ContactCalibration, PlaneStrainPoissonRatioIsEq22ForHexAndRandom2d) {
   for (Packing packing : {Packing::hexagonal, Packing::random_2d}) {
     for (double nu : {-0.4, 0.0, 0.125, 0.25}) {
       const ContactSprings k = calibrate_contact_springs({1.0e6, nu}, geometry_of(packing));
-      EXPECT_NEAR(0.25 * (1.0 - k.tangential_to_normal()), nu, 1e-14);  // seed 002 eq. 22
+      EXPECT_NEAR(0.25 * (1.0 - k.tangential_to_normal()), nu, 1e-14);  // Abe 1996, eq. 22
     }
   }
 }
@@ -135,7 +135,7 @@ TEST(ContactCalibration, SquareLatticeHasKnEqualKtEqualE) {
   const double young = 7.0e6;
   const ContactSprings k =
       calibrate_contact_springs(IsotropicElasticity::from_young(young, 0.0), geometry_of(Packing::square));
-  EXPECT_NEAR(k.normal / young, 1.0, 1e-15);  // seed 002 eq. 31
+  EXPECT_NEAR(k.normal / young, 1.0, 1e-15);  // Abe 1996, eq. 31
   EXPECT_DOUBLE_EQ(k.tangential, k.normal);
 }
 
@@ -153,7 +153,7 @@ TEST(ContactCalibration, AtTheLimitTheTangentialSpringVanishes) {
 // ---- independent re-derivation of the 2D formulas from the contact law ----------------------------
 // A lattice whose discs follow u(x) = H x + Q[x][x]/2 (rotation theta = curl u / 2, which balances
 // every disc's moments for such a field) must feel, per disc, the force density of the continuum:
-// sum F / (area per disc) = G lap u + G/(1 - 2 nu) grad div u (seed 002 eq. 19). No Taylor series is
+// sum F / (area per disc) = G lap u + G/(1 - 2 nu) grad div u (Abe 1996, eq. 19). No Taylor series is
 // truncated for a quadratic field, so the two agree to rounding error when the springs are right.
 
 struct QuadraticField {

@@ -1,4 +1,4 @@
-// Seed 002 §3 (Fig. 6-8): static analysis of a hexagonal disc block under horizontal tension.
+// Abe 1996, §3 (Fig. 6-8): static analysis of a hexagonal disc block under horizontal tension.
 // - With the paper's loading (equal end forces) the measured nu (eq. 35) follows eq. 22 for
 //   kT/kN > -1/3 and the stiffness (eq. 36) follows eq. 37 for 0 < kT/kN <= 1, up to an
 //   O(a / block size) end effect; below -1/3 the results scatter, as in the paper's Fig. 7.
@@ -38,7 +38,7 @@ IsotropicElasticity hexagonal_continuum(const ContactSprings& springs) {
   return macroscopic_elasticity(springs, make_packing_geometry(Packing::hexagonal));
 }
 
-Mat2 isotropic_law(const IsotropicElasticity& m, const Mat2& strain) {  // seed 002 eq. 52
+Mat2 isotropic_law(const IsotropicElasticity& m, const Mat2& strain) {  // Abe 1996, eq. 52
   const double nu = m.poisson_ratio;
   return m.shear_modulus * (2.0 * nu / (1.0 - 2.0 * nu) * strain.trace() * Mat2::Identity() + 2.0 * strain);
 }
@@ -105,7 +105,7 @@ TEST(HexAssembly, PaperLoadingAtKtZeroIsExact) {
   EXPECT_NEAR(r.stiffness_ratio / stiffness_eq37(0.0), 1.0, 1e-12);
 }
 
-TEST(HexAssemblySweep, ReproducesSeed002Fig7AndFig8) {
+TEST(HexAssemblySweep, ReproducesAbe1996Fig7AndFig8) {
   const char* csv_path = std::getenv("TALUS_DEM_SWEEP_CSV");
   std::ofstream csv;
   if (csv_path) {
@@ -161,14 +161,14 @@ TEST(HexAssemblySweep, ReproducesSeed002Fig7AndFig8) {
       }
     }
   }
-  // Fig. 7: eq. 22 holds where seed 002 says it does...
+  // Fig. 7: eq. 22 holds where Abe 1996 says it does...
   EXPECT_LT(max_poisson_error, 5e-3);
   // ...and Fig. 8: eq. 37.
   EXPECT_LT(max_stiffness_error, 2.5e-3);
   // Eq. 50 on an interior disc is the eq. 52 law of the local strain.
   EXPECT_LT(max_law_mismatch, 2e-4);
   // Below -1/3 the paper's loading excites a lattice mode that no longer decays (see the
-  // AlternatingRows test): the results scatter, as seed 002 reports.
+  // AlternatingRows test): the results scatter, as Abe 1996 reports.
   EXPECT_GT(scatter_below_third, 2e-2);
   std::cout << "[ sweep    ] max |nu - eq.22| = " << max_poisson_error
             << ", max rel. error vs eq.37 = " << max_stiffness_error
@@ -193,7 +193,7 @@ TEST(HexAssembly, AlternatingRowsSlideFreelyAtKtOverKnMinusOneThird) {
   // Moving every other row sideways by +u and the rows between by -u stretches each inclined
   // contact by 2u cos 60 and shears it by 2u sin 60: the restoring force on a disc is
   // 2u (kN + 3 kT), which vanishes at kT/kN = -1/3 and is destabilising below it. This is the mode
-  // the end loads excite; it explains where seed 002's Fig. 7 starts to scatter.
+  // the end loads excite; it explains where Abe's (1996) Fig. 7 starts to scatter.
   const double u = 1e-3;
   for (double alpha : {1.0, 0.0, -1.0 / 3.0, -0.5}) {
     const ContactSprings springs{1.0, alpha};

@@ -1,4 +1,4 @@
-// Seed 002 §4: the stress of eq. 50, evaluated from the contact forces of a hexagonal lattice under a
+// Abe 1996, §4: the stress of eq. 50, evaluated from the contact forces of a hexagonal lattice under a
 // uniform displacement gradient, is the isotropic law eq. 52 for the eq. 34 springs (free rotations)
 // and the non-symmetric eq. 55 for rotation-locked discs.
 #include "talus/dem/contact_calibration.hpp"
@@ -12,12 +12,12 @@
 namespace talus::dem {
 namespace {
 
-Mat2 isotropic_law(const IsotropicElasticity& m, const Mat2& strain) {  // seed 002 eq. 52
+Mat2 isotropic_law(const IsotropicElasticity& m, const Mat2& strain) {  // Abe 1996, eq. 52
   const double nu = m.poisson_ratio;
   return m.shear_modulus * (2.0 * nu / (1.0 - 2.0 * nu) * strain.trace() * Mat2::Identity() + 2.0 * strain);
 }
 
-// seed 002 eq. 55 divided by the eq. 50 factor (gamma/rho)/(pi a) = 1/(2 sqrt3 a); u(i, j) = du_i/dx_j.
+// Abe 1996, eq. 55 divided by the eq. 50 factor (gamma/rho)/(pi a) = 1/(2 sqrt3 a); u(i, j) = du_i/dx_j.
 // The seed's text (as scanned) drops the kN delta_2i delta_2j (u11 + 3 u22) term; it follows from the
 // same fourth-moment sum as the delta_1i delta_1j term.
 Mat2 locked_rotation_law(const ContactSprings& k, const Mat2& u, double radius) {
@@ -58,7 +58,7 @@ TEST(HexLatticeStress, RigidRotationCarriesNoStress) {
   spin << 0.0, -1e-3, 1e-3, 0.0;
   EXPECT_LT(hexagonal_lattice_response(springs, spin, 1.0, false).stress.norm(), 1e-15);
   // Locked discs resist the same rotation: an antisymmetric stress appears (the moments that hold
-  // the discs are what seed 002 §4(3) blames for it).
+  // the discs are what Abe 1996, §4(3) blames for it).
   const Mat2 locked = hexagonal_lattice_response(springs, spin, 1.0, true).stress;
   EXPECT_GT(std::abs(locked(0, 1) - locked(1, 0)), 1e-4);
 }
@@ -73,7 +73,7 @@ TEST(HexLatticeStress, LockedRotationStressIsEq55AndNotSymmetric) {
     EXPECT_LT((response.stress - expected).norm(), 1e-12 * expected.norm());
     EXPECT_GT(std::abs(response.stress(0, 1) - response.stress(1, 0)), 1e-3 * response.stress.norm());
   }
-  // ...unless kT = 0 (nu = 1/4), as seed 002 §4(3) says.
+  // ...unless kT = 0 (nu = 1/4), as Abe 1996, §4(3) says.
   const ContactSprings normal_only{1.0, 0.0};
   const Mat2 stress = hexagonal_lattice_response(normal_only, Mat2::Random(), 1.0, true).stress;
   EXPECT_NEAR(stress(0, 1), stress(1, 0), 1e-15);

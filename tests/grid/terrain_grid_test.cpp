@@ -1,4 +1,4 @@
-// The terrain-following grid (seed 001 eq. 19-20 in 3D, docs/theory.md "Terrain-following grid"):
+// The terrain-following grid (Abe, Johansson & Konagai 2005, eq. 19-20 in 3D, docs/theory.md "Terrain-following grid"):
 // the bed sampled at the node columns, its node normals (kinks: the normalised average), the
 // shape functions through the (x, y, w) map, and seeding bodies onto the terrain.
 #include "talus/core/error.hpp"
@@ -41,7 +41,7 @@ TEST(TerrainGrid, BedNodesLieOnTheProfileAndCarryItsNormal) {
   for (int i = 0; i < bed.columns(); ++i) {
     const double x = g.node_position(0, i);
     EXPECT_EQ(bed.node_height(i), profile.height(x)) << i;
-    // between nodes the floor is the chord (seed 001 eq. 20): linear in x within a cell
+    // between nodes the floor is the chord (Abe, Johansson & Konagai 2005, eq. 20): linear in x within a cell
     const double mid = x + 0.5 * g.h;
     if (i + 1 < bed.columns()) {
       EXPECT_NEAR(bed.height(mid), 0.5 * (bed.node_height(i) + bed.node_height(i + 1)), 1e-14);

@@ -1,5 +1,5 @@
 // Partition of unity, gradient consistency and linear completeness of every shape function,
-// through the same Stencil the transfers use (3D tensor product, seed 000 eq. 32), and the 1D
+// through the same Stencil the transfers use (3D tensor product, Edo & Matsubara 2015, eq. 32), and the 1D
 // weights against their closed forms (linear eq. 28-29, GIMP eq. 30-31, quadratic B-spline).
 #include "talus/grid/grid.hpp"
 #include "talus/shape/bspline.hpp"
@@ -118,7 +118,7 @@ TEST(ShapeFunctions, QuadraticBSplinePartitionOfUnityAndLinearCompleteness) {
 TEST(ShapeFunctions, LinearWeightsAreHatFunctions) {
   int base;
   double w[2], dw[2];
-  LinearShape::weights(3.25, 0.0, base, w, dw);  // seed 000 eq. 28: N = 1 - |x - x_i| / L
+  LinearShape::weights(3.25, 0.0, base, w, dw);  // Edo & Matsubara 2015, eq. 28: N = 1 - |x - x_i| / L
   EXPECT_EQ(base, 3);
   EXPECT_DOUBLE_EQ(w[0], 0.75);
   EXPECT_DOUBLE_EQ(w[1], 0.25);
@@ -126,7 +126,7 @@ TEST(ShapeFunctions, LinearWeightsAreHatFunctions) {
   EXPECT_DOUBLE_EQ(dw[1], 1.0);
 }
 
-// seed 000 eq. 30-31 with L = 1, r = x_p - x_i:
+// Edo & Matsubara 2015, eq. 30-31 with L = 1, r = x_p - x_i:
 //   |r| < lp:              S = 1 - (r^2 + lp^2) / (2 lp),   dS = -r / lp
 //   lp <= |r| <= 1 - lp:   S = 1 - |r|,                     dS = -sign(r)
 //   1 - lp < |r| < 1 + lp: S = (1 + lp - |r|)^2 / (4 lp),   dS = -sign(r) (1 + lp - |r|) / (2 lp)
@@ -166,7 +166,7 @@ void check_gimp_closed_form(double lp) {
   }
 }
 
-TEST(ShapeFunctions, GimpWeightsMatchTheClosedFormOfSeed000Eq30And31) {
+TEST(ShapeFunctions, GimpWeightsMatchTheClosedFormOfEdoMatsubara2015Eq30And31) {
   for (double lp : {0.125, 0.25, 0.5}) {
     check_gimp_closed_form<UGimpShape>(lp);
     check_gimp_closed_form<CpGimpShape>(lp);

@@ -1,4 +1,4 @@
-// MlsStrainSmoother (seed 000 eq. 38-46): the weight, exactness for polynomial fields, the guard,
+// MlsStrainSmoother (Edo & Matsubara 2015, eq. 38-46): the weight, exactness for polynomial fields, the guard,
 // the body mask, agreement with a brute-force evaluation of eq. 42-46, and determinism.
 #include "talus/smoothing/mls_strain_smoother.hpp"
 
@@ -86,7 +86,7 @@ double quadratic_field(int c, const double* x) {
   return linear_field(c, x) + 5e-5 * x[0] * x[0] - 4e-5 * x[1] * x[2] + 3e-5 * (c + 1) * x[2] * x[2] + 1e-5 * x[0] * x[1];
 }
 
-TEST(MlsWeight, CubicSplineOfSeed000Eq39) {
+TEST(MlsWeight, CubicSplineOfEdoMatsubara2015Eq39) {
   EXPECT_DOUBLE_EQ(mls_weight(0.0), 2.0 / 3.0);
   EXPECT_DOUBLE_EQ(mls_weight(0.5), 1.0 / 6.0);
   EXPECT_NEAR(mls_weight(0.5 - 1e-12), 1.0 / 6.0, 1e-11);  // continuous at s = 1/2
@@ -280,7 +280,7 @@ TEST(MlsStrainSmoother, GuardDecidesLikeEigensRcondAtAnyThreshold) {
   // The smoother decides well-conditioned fits from the exact condition number and leaves the rest
   // to Eigen's LLT and rcond(). Thresholds taken from the particles' own rcond values put many of
   // them just above and below the threshold, so both paths decide; each particle must be smoothed
-  // exactly when the reference LLT + rcond() (seed 000 eq. 42, relative coordinates) accepts it.
+  // exactly when the reference LLT + rcond() (Edo & Matsubara 2015, eq. 42, relative coordinates) accepts it.
   Cloud c = box_cloud(10, 0.45, 21);
   c.set_random_inputs(7);
   const auto& P = c.particles;

@@ -1,4 +1,4 @@
-// MLS smoothing in the solver (seed 000 eq. 54): scene options, the off path, which particles are
+// MLS smoothing in the solver (Edo & Matsubara 2015, eq. 54): scene options, the off path, which particles are
 // smoothed, and determinism of whole runs.
 #include "bit_identity.hpp"
 #include "scene_fixtures.hpp"

@@ -57,7 +57,7 @@ TEST(Solver, StepConservesMassAndMomentumWithoutExternalForces) {
   EXPECT_GT(max_stress, 1.0);
 }
 
-// Free fall (seed 001 §4(2)): a rigid translation, so the stress stays zero and the only energy
+// Free fall (Abe, Johansson & Konagai 2005, §4(2)): a rigid translation, so the stress stays zero and the only energy
 // error is that of the time integration. The scheme updates v^L = v + g dt and x += dt v^L, so each
 // step changes kinetic + potential energy by exactly -1/2 M |g|^2 dt^2: the total drifts down by
 // 1/2 M |g|^2 dt per unit time. The test asserts that exact drift, i.e. that nothing else leaks.
@@ -83,7 +83,7 @@ TEST(Solver, FreeFallEnergyDriftIsTheTimeIntegrationErrorOnly) {
   EXPECT_NEAR(solver.particles().v[2][0], -9.81 * solver.time(), 1e-9);
 }
 
-// Dynamic bar (seed 000 §4(2), eq. 63): a bar moving at v0 against a fixed end carries a
+// Dynamic bar (Edo & Matsubara 2015, §4(2), eq. 63): a bar moving at v0 against a fixed end carries a
 // compression wave; behind the front the stress is -E |v0| / c. Checked when the wave has crossed
 // 80% of the bar, away from the front and the fixed end.
 TEST(Solver, DynamicBarStressBehindTheFront) {
@@ -234,7 +234,7 @@ TEST(Solver, FrictionWorkClosesTheEnergyBudgetOfASlidingBlock) {
   EXPECT_LT(e1.kinetic, 0.01 * e0.kinetic);              // it stopped (rigid: at t = 0.68 s)
   EXPECT_GT(e1.friction_work, 0.9 * e0.kinetic);         // friction took the kinetic energy
   EXPECT_LT(std::abs(e1.total() - e0.total()), 0.02 * e0.total());
-  // Stopping distance against the rigid-body value v0^2 / (2 mu g) = 0.680 m (seed 001 eq. 21).
+  // Stopping distance against the rigid-body value v0^2 / (2 mu g) = 0.680 m (Abe, Johansson & Konagai 2005, eq. 21).
   double x = 0.0, m = 0.0;
   const auto& P = solver.particles();
   for (std::size_t p = 0; p < P.size(); ++p) {

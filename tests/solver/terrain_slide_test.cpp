@@ -1,4 +1,4 @@
-// Elastic blocks on frictional terrain (seed 001 sec. 5, eq. 21-22): the terrain-following grid
+// Elastic blocks on frictional terrain (Abe, Johansson & Konagai 2005, sec. 5, eq. 21-22): the terrain-following grid
 // (eq. 19-20) with Coulomb contact at the bed nodes (eq. 14-18), against the rigid-block solutions.
 // Quasi-2D like the paper: one cell across, slip side walls. docs/verification.md "Terrain".
 #include "bit_identity.hpp"
@@ -82,13 +82,13 @@ double incline_travel(double h, double mu, double end, double* normal_drift = nu
   return c1[0] - c0[0];
 }
 
-// seed 001 eq. 22: x = x0 + g (sin t - mu cos t) cos t t^2 / 2
+// Abe, Johansson & Konagai 2005, eq. 22: x = x0 + g (sin t - mu cos t) cos t t^2 / 2
 double rigid_incline(double mu, double t) {
   return kG * (std::sin(kTheta) - mu * std::cos(kTheta)) * std::cos(kTheta) * t * t / 2.0;
 }
 
 TEST(TerrainSlide, HorizontalPlaneStoppingDistance) {
-  // seed 001 eq. 21: stops at v0^2 / (2 mu g) = 16.99 m after v0 / (mu g) = 3.40 s
+  // Abe, Johansson & Konagai 2005, eq. 21: stops at v0^2 / (2 mu g) = 16.99 m after v0 / (mu g) = 3.40 s
   const double rigid = 10.0 * 10.0 / (2.0 * 0.3 * kG);
   // Linear MUSL at h = 0.125 is left out on purpose: at 10 m/s it gains energy from cell crossing
   // (+1.8% by t = 1 s, the same on a flat grid) and slides 5.5% too far; docs/verification.md.

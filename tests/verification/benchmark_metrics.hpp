@@ -52,7 +52,7 @@ inline Profile axial_profile(const ParticleStore& P) {
   return prof;
 }
 
-/// Bardenhagen-Kober column, seed 000 eq. 61-62: sigma(x) = E (sqrt(2 rho0 b (Delta - x)/E + 1) - 1),
+/// Bardenhagen-Kober column, Edo & Matsubara 2015, eq. 61-62: sigma(x) = E (sqrt(2 rho0 b (Delta - x)/E + 1) - 1),
 /// Delta = L0 + rho0 b L0^2 / (2E).
 struct ColumnError {
   double l2 = 0.0;         // || sigma_p - sigma(x_p) || / || sigma(x_p) || over the particles
@@ -65,7 +65,7 @@ inline ColumnError column_error(const Solver& solver, double E, double rho0, dou
   double num = 0.0, den = 0.0;
   for (std::size_t k = 0; k < prof.x.size(); ++k) {
     const double x = std::min(prof.x[k], delta);
-    const double exact = E * (std::sqrt(2 * rho0 * b * (delta - x) / E + 1) - 1);  // seed 000 eq. 61
+    const double exact = E * (std::sqrt(2 * rho0 * b * (delta - x) / E + 1) - 1);  // Edo & Matsubara 2015, eq. 61
     num += (prof.stress[k] - exact) * (prof.stress[k] - exact);
     den += exact * exact;
   }

@@ -23,18 +23,18 @@ test::ColumnError run_column(const char* name, ShapeKind shape) {
   return e;
 }
 
-// Seed 000 sec. 4(1), eq. 61-62, W = 10000 at the paper's resolution (cell 1, 100 particles).
+// Edo & Matsubara 2015, sec. 4(1), eq. 61-62, W = 10000 at the paper's resolution (cell 1, 100 particles).
 // Target: relative L2 stress error <= 2% for cpGIMP and the B-spline.
 TEST(ElasticBenchmarks, ColumnUnderBodyForceW10000) {
   EXPECT_LT(run_column("column_w10000", ShapeKind::CpGimp).l2, 0.02);  // measured 0.62%
   EXPECT_LT(run_column("column_w10000", ShapeKind::UGimp).l2, 0.02);   // measured 0.62%
-  EXPECT_LT(run_column("column_w10000", ShapeKind::Linear).l2, 0.02);  // measured 1.2% (MPM and GIMP match, seed 000)
+  EXPECT_LT(run_column("column_w10000", ShapeKind::Linear).l2, 0.02);  // measured 1.2% (MPM and GIMP match, Edo & Matsubara 2015)
   // Measured 0.23% with the mirrored ghost nodes at the fixed end (Walls::mirror); 5.4% when the
   // wall held the ghost node like the wall node (the first two cells over-stiff).
   EXPECT_LT(run_column("column_w10000", ShapeKind::BSpline2).l2, 0.02);
 }
 
-// W = 12500: linear MPM breaks up (cell-crossing jumps between neighbours, seed 000 Fig.), GIMP
+// W = 12500: linear MPM breaks up (cell-crossing jumps between neighbours, Edo & Matsubara 2015, Fig.), GIMP
 // stays smooth.
 TEST(ElasticBenchmarks, ColumnUnderBodyForceW12500LinearIsRoughGimpIsSmooth) {
   const auto linear = run_column("column_w12500", ShapeKind::Linear);
@@ -49,7 +49,7 @@ double dynamic_bar_ratio(ShapeKind shape) {
   test::run_to_end(solver);
   const double E = 1e6, c = 1000.0, v0 = s.bodies[0].velocity[0];
   const double front = c * solver.time();  // from the fixed end
-  const double exact = -E * std::abs(v0) / c;  // seed 000 eq. 63
+  const double exact = -E * std::abs(v0) / c;  // Edo & Matsubara 2015, eq. 63
   double sum = 0.0;
   int count = 0;
   const auto& P = solver.particles();
@@ -63,7 +63,7 @@ double dynamic_bar_ratio(ShapeKind shape) {
   return ratio;
 }
 
-// Seed 000 sec. 4(2), eq. 63. Target: within 2% of -E v0 / c for GIMP and the B-spline.
+// Edo & Matsubara 2015, sec. 4(2), eq. 63. Target: within 2% of -E v0 / c for GIMP and the B-spline.
 TEST(ElasticBenchmarks, DynamicBarStressBehindTheFront) {
   EXPECT_NEAR(dynamic_bar_ratio(ShapeKind::UGimp), 1.0, 0.02);   // measured 1.016
   EXPECT_NEAR(dynamic_bar_ratio(ShapeKind::CpGimp), 1.0, 0.02);  // measured 1.016
@@ -91,7 +91,7 @@ EnergyHistory energy_history(Solver& solver, const std::function<void()>& after_
   return h;
 }
 
-// Seed 001 sec. 4(2), Fig. 7: an elastic bar falls 0.5 m onto a rigid frictionless floor
+// Abe, Johansson & Konagai 2005, sec. 4(2), Fig. 7: an elastic bar falls 0.5 m onto a rigid frictionless floor
 // (unilateral contact) and bounces. The paper: MUSL and USF gain a little total energy, USAVG keeps
 // it nearly constant. Measured over the benchmark's 1 s (two impacts): no scheme gains energy (max
 // gain < 1e-4 of E0); each loses energy at the impacts (the no-rebound contact removes the floor
@@ -118,11 +118,11 @@ TEST(ElasticBenchmarks, ElasticFreeFallEnergyBySchemes) {
     EXPECT_GT(momentum_z, 25.0) << to_string(scheme);
     drift[i++] = std::abs(h.final_drift);
   }
-  EXPECT_LT(drift[2], drift[0]);  // USAVG conserves best (seed 001)
+  EXPECT_LT(drift[2], drift[0]);  // USAVG conserves best (Abe, Johansson & Konagai 2005)
   EXPECT_LT(drift[2], drift[1]);
 }
 
-// Seed 000 sec. 4(3): a block bouncing between two walls, 4 impacts. Seed 000 Fig. 12: without MLS
+// Edo & Matsubara 2015, sec. 4(3): a block bouncing between two walls, 4 impacts. Edo & Matsubara 2015, Fig. 12: without MLS
 // the strain energy grows after the impacts. Measured (MUSL, unilateral frictionless walls): no gain
 // above the initial energy (max gain linear 2.5e-4, cpGIMP 0), a loss at each impact: linear -12%,
 // cpGIMP -21% after 4 impacts (docs/verification.md). Asserted: no spurious gain, the block still

@@ -1,7 +1,7 @@
 // Momentum balance of the flume (issue 7 "Verification"; docs/flume.md): while the whole mass slides
 // on the inclined plane, its centre of mass accelerates along the plane at g (sin theta - tan delta
 // cos theta), whatever the sand does inside: the only forces along the plane are gravity and the
-// Coulomb friction mu N of the sliding bed nodes (seed 001 eq. 14-16). inputs/benchmarks/sand_slide_incline.json:
+// Coulomb friction mu N of the sliding bed nodes (Abe, Johansson & Konagai 2005, eq. 14-16). inputs/benchmarks/sand_slide_incline.json:
 // theta = 31.4 deg done by tilting gravity on a flat grid, delta = 29 deg.
 #include "talus/diagnostics/runout.hpp"
 #include "talus/scene/scene_json.hpp"

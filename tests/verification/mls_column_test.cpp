@@ -1,4 +1,4 @@
-// MLS smoothing on the Bardenhagen-Kober column at W = 12500 (seed 000 sec. 4(1), Fig. 6-7,
+// MLS smoothing on the Bardenhagen-Kober column at W = 12500 (Edo & Matsubara 2015, sec. 4(1), Fig. 6-7,
 // eq. 61-62): linear MPM, uGIMP and cpGIMP without and with smoothing. Target (issue 4): roughness
 // reduced >= 5x with MLS, L2 error not worse. Numbers: docs/verification.md "MLS strain smoothing".
 #include "mls_runs.hpp"
@@ -37,7 +37,7 @@ TEST(MlsColumn, ShippedInputIsTheVerifiedConfiguration) { test::expect_shipped_m
 
 // Linear MPM: target missed. The column's linear-MPM error is the cell-crossing error of the
 // internal force (a particle crossing a cell face changes its nodal force stencil abruptly,
-// seed 000 Fig. 6); smoothing the strain increment removes the particle-to-particle jumps it
+// Edo & Matsubara 2015, Fig. 6); smoothing the strain increment removes the particle-to-particle jumps it
 // causes in the increment but not the force error itself, so the profile stays wrong on the scale
 // of cells. Measured: roughness 0.359 -> 0.112 (3.2x), L2 24.9% -> 27.1% (9% worse).
 TEST(MlsColumn, W12500LinearMpmRoughnessDropsButTheTargetIsMissed) {

@@ -1,4 +1,4 @@
-// MLS smoothing on the dynamic benchmarks (seed 000 sec. 4(2)-(3)): the dynamic bar (Fig. 9-10,
+// MLS smoothing on the dynamic benchmarks (Edo & Matsubara 2015, sec. 4(2)-(3)): the dynamic bar (Fig. 9-10,
 // eq. 63) and the block between walls (Fig. 12-13). Numbers: docs/verification.md.
 #include "mls_runs.hpp"
 
@@ -46,7 +46,7 @@ TEST(MlsDynamicBar, EnergyOverTwelveTransitsMatchesTheUnsmoothedRun) {
   EXPECT_NEAR(on.final_drift, off.final_drift, 0.002);
 }
 
-// Block between unilateral walls (seed 000 Fig. 12-13), through its first impact (t = 11.25 s).
+// Block between unilateral walls (Edo & Matsubara 2015, Fig. 12-13), through its first impact (t = 11.25 s).
 // Target (issue 4): total energy within +-1% through 4 impacts with MLS; measured values for the
 // full run are in docs/verification.md. Each impact changes the energy by several percent with or
 // without MLS (the wall contact's own error, not the smoother's), so what is asserted here is that

@@ -1,5 +1,5 @@
 #pragma once
-// Runs of the papers' elastic benchmarks with and without MLS smoothing (seed 000 sec. 4), shared by
+// Runs of the papers' elastic benchmarks with and without MLS smoothing (Edo & Matsubara 2015, sec. 4), shared by
 // the MLS verification tests; each prints its measures so the test log carries the numbers.
 #include "benchmark_metrics.hpp"
 
@@ -58,7 +58,7 @@ inline Bar bar(const Scene& s, const char* label) {
   run_to_end(solver);
   const double E = 1e6, c = 1000.0, v0 = s.bodies[0].velocity[0];
   const double front = c * solver.time();
-  const double exact = -E * std::abs(v0) / c;  // seed 000 eq. 63
+  const double exact = -E * std::abs(v0) / c;  // Edo & Matsubara 2015, eq. 63
   const Profile prof = axial_profile(solver.particles());
   double sum = 0.0, rough = 0.0;
   int count = 0, rc = 0;

@@ -3,7 +3,7 @@
 // a face when it lies on the face or in the ghost layer beyond it.
 //  fixed     v = 0
 //  slip      bilateral roller: the normal component is removed (used for the sides of 1D bars)
-//  friction  unilateral Coulomb contact, seed 001 eq. 14-18: only a node moving into the wall is in
+//  friction  unilateral Coulomb contact, Abe, Johansson & Konagai 2005, eq. 14-18: only a node moving into the wall is in
 //            contact (eq. 14); its normal velocity is removed (no rebound, eq. 17-18) and that
 //            normal impulse |dv_n| bounds the tangential one (eq. 15-16): the node sticks when
 //            |v_t| <= mu |dv_n|, otherwise slides with |v_t| reduced by mu |dv_n|. Applying the
@@ -13,7 +13,7 @@
 // On a terrain grid (grid.terrain) the z- face is the bed: its nodes (w = 0, and the ghosts below)
 // carry the bed normal of their column (ProfileTerrain::node_normal; at a kink the normalised
 // average of the two sides), and every wall type acts along that normal instead of z: friction is
-// the same Coulomb rule with a general normal (seed 001 eq. 14-18 as written, with n the bed normal),
+// the same Coulomb rule with a general normal (Abe, Johansson & Konagai 2005, eq. 14-18 as written, with n the bed normal),
 // slip removes the normal component, fixed all. The z+ face follows the terrain too (normal -n).
 // The x and y faces are vertical planes on any grid (cells keep vertical sides), so they stay
 // axis-aligned.
@@ -150,7 +150,7 @@ class Walls {
   }
 
   /// How a frictional (unilateral) wall treats a node's velocity.
-  ///  GridUpdate  the contact decision of the step (seed 001 eq. 14-18) on the trial velocity v^L:
+  ///  GridUpdate  the contact decision of the step (Abe, Johansson & Konagai 2005, eq. 14-18) on the trial velocity v^L:
   ///              a node moving into the wall is in contact, loses its normal velocity, and friction
   ///              acts on its tangential velocity.
   ///  Remap       the MUSL remap v^{k+1} (the strain velocity): the node keeps the contact state the
@@ -218,7 +218,7 @@ class Walls {
         for (int d = 0; d < 3; ++d) v[d] -= vn * n[d];
         return 0.0;
       case WallType::Friction: {
-        bool contact = vn < 0.0;  // moving into the bed (seed 001 eq. 14)
+        bool contact = vn < 0.0;  // moving into the bed (Abe, Johansson & Konagai 2005, eq. 14)
         if (stage == Stage::Remap) {
           // in contact in the grid update: v^L . n = 0 up to round-off (a separating node has
           // v^L . n of the order of its speed)

@@ -1,12 +1,12 @@
 #pragma once
-// The verification problem of seed 002 §3 (Fig. 6): a hexagonally close-packed block of discs under
-// uniform horizontal tension, solved statically with a sparse stiffness matrix (seed 002 uses a
+// The verification problem of Abe 1996, §3 (Fig. 6): a hexagonally close-packed block of discs under
+// uniform horizontal tension, solved statically with a sparse stiffness matrix (Abe 1996 uses a
 // matrix method instead of dynamic DEM for the same reason: to test eq. 34 without damping or time
 // step effects).
 //
 // Layout: rows of discs of radius a touching their neighbours, row j at height sqrt3 a j, odd rows
 // shifted right by a and one disc shorter, an odd number of rows (so the block is symmetric about its
-// middle row). Loads and supports as in seed 002 §3: equal horizontal forces on the left- and
+// middle row). Loads and supports as in Abe 1996, §3: equal horizontal forces on the left- and
 // right-most disc of every row (see HexLoading for an exact alternative), the vertical displacement of
 // the bottom row and the horizontal one of the bottom-left disc fixed. sigma_11 is the sum of the end
 // forces over the height of the block, taken as rows * sqrt3 a (each row carries a band sqrt3 a high,
@@ -20,7 +20,7 @@ namespace talus::dem {
 
 /// How the horizontal tension is applied.
 enum class HexLoading {
-  // seed 002 §3: the same horizontal force on the outermost disc of every row. These forces differ
+  // Abe 1996, §3: the same horizontal force on the outermost disc of every row. These forces differ
   // from the contact forces of a uniform stress state by a self-equilibrated set concentrated at the
   // block's ends and corners, which leaves an O(a / block size) disturbance in the middle.
   equal_end_forces,
@@ -45,9 +45,9 @@ struct HexAssemblySpec {
 struct HexAssemblyResult {
   double strain_11 = 0.0;        // (u1_B - u1_A) / (x_B - x_A)
   double strain_22 = 0.0;        // (u2_D - u2_C) / (y_D - y_C)
-  double poisson_ratio = 0.0;    // seed 002 eq. 35: -eps22 / (eps11 - eps22)
-  double stiffness_ratio = 0.0;  // seed 002 eq. 36: sigma_11 / (kN eps11) = 2G / ((1 - nu) kN)
-  Mat2 centre_stress = Mat2::Zero();  // seed 002 eq. 50 on the middle disc
+  double poisson_ratio = 0.0;    // Abe 1996, eq. 35: -eps22 / (eps11 - eps22)
+  double stiffness_ratio = 0.0;  // Abe 1996, eq. 36: sigma_11 / (kN eps11) = 2G / ((1 - nu) kN)
+  Mat2 centre_stress = Mat2::Zero();  // Abe 1996, eq. 50 on the middle disc
   Mat2 centre_strain = Mat2::Zero();  // symmetric gradient fitted to the middle disc's six neighbours
   double centre_rotation = 0.0;       // rotation of the middle disc
   int unknowns = 0;                   // size of the solved system

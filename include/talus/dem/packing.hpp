@@ -1,7 +1,7 @@
 #pragma once
 // How the discs (2D) or spheres (3D) of a DEM assembly are arranged. The spring constants that make
 // an assembly behave like a given continuum depend on the arrangement only through its solid fraction
-// gamma/rho and its contact density (seed 002 eq. 11, 21), plus, in 3D, the particle radius, because
+// gamma/rho and its contact density (Abe 1996, eq. 11, 21), plus, in 3D, the particle radius, because
 // a 3D spring constant is a force per length while a 2D one is per unit depth as well.
 #include <numbers>
 #include <optional>
@@ -11,10 +11,10 @@
 namespace talus::dem {
 
 enum class Packing {
-  hexagonal,                 // 2D close packing, 6 contacts per disc (seed 002 eq. 32-34)
-  hexagonal_rotation_locked,  // the same, disc rotations suppressed (seed 002 eq. 53)
-  square,                    // 2D square lattice, 4 contacts per disc (seed 002 eq. 23-31)
-  random_2d,                 // isotropic random disc packing (seed 002 eq. 11, 20-22)
+  hexagonal,                 // 2D close packing, 6 contacts per disc (Abe 1996, eq. 32-34)
+  hexagonal_rotation_locked,  // the same, disc rotations suppressed (Abe 1996, eq. 53)
+  square,                    // 2D square lattice, 4 contacts per disc (Abe 1996, eq. 23-31)
+  random_2d,                 // isotropic random disc packing (Abe 1996, eq. 11, 20-22)
   random_3d,                 // isotropic random sphere packing, uniform-strain hypothesis (docs/dem.md)
 };
 
@@ -27,8 +27,8 @@ bool is_three_dimensional(Packing packing);
 bool is_regular_lattice(Packing packing);
 
 // Solid fractions gamma/rho fixed by the lattice geometry.
-inline constexpr double kHexagonalDensityRatio = std::numbers::pi / (2.0 * std::numbers::sqrt3);  // seed 002 §2(3)
-inline constexpr double kSquareDensityRatio = std::numbers::pi / 4.0;  // seed 002 eq. 31: rho/gamma = 4/pi
+inline constexpr double kHexagonalDensityRatio = std::numbers::pi / (2.0 * std::numbers::sqrt3);  // Abe 1996, §2(3)
+inline constexpr double kSquareDensityRatio = std::numbers::pi / 4.0;  // Abe 1996, eq. 31: rho/gamma = 4/pi
 
 // Defaults for random packings: the jamming point of frictionless random packings
 // (O'Hern et al., Phys. Rev. E 68, 011306, 2003): solid fraction 0.84 with Z = 4 contacts per disc in

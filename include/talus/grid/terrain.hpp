@@ -1,6 +1,6 @@
 #pragma once
 // The terrain types of the grid. The grid is uniform in (x, y, w) with w = z - z_b(x): cells keep
-// vertical sides and their floors follow the terrain (seed 001 eq. 19-20 in 3D, docs/theory.md
+// vertical sides and their floors follow the terrain (Abe, Johansson & Konagai 2005, eq. 19-20 in 3D, docs/theory.md
 // "Terrain-following grid"). Physical gradients need one correction,
 // dN/dx_phys = dN/dx - z_b'(x) dN/dw; the map has unit Jacobian, so masses and volumes need none.
 //
@@ -9,7 +9,7 @@
 //
 // ProfileTerrain is the grid's bed: the TerrainProfile sampled at the node columns x_i and
 // interpolated linearly between them. Within a cell the floor is then the straight edge between two
-// bed nodes, exactly the isoparametric cell of seed 001 eq. 20, so the bed nodes lie on the profile
+// bed nodes, exactly the isoparametric cell of Abe, Johansson & Konagai 2005, eq. 20, so the bed nodes lie on the profile
 // and linear shape functions reproduce linear fields in (x, z) exactly (docs/theory.md). The same
 // map serves every shape function, the cell sort, the leave-the-grid check, seeding and restart, so
 // they all agree on the cell of a particle to the last bit.
@@ -36,7 +36,7 @@ class ProfileTerrain {
   /// Samples `profile` at the node columns x_i = x0 + (i - pad) h, i = 0 .. columns - 1.
   ProfileTerrain(const TerrainProfile& profile, double x0, double h, int pad, int columns);
 
-  /// The grid's bed height: the nodal heights interpolated linearly (seed 001 eq. 20). Beyond the
+  /// The grid's bed height: the nodal heights interpolated linearly (Abe, Johansson & Konagai 2005, eq. 20). Beyond the
   /// sampled columns the end cells continue straight.
   double height(double x) const {
     const double xi = (x - x0_) * inv_h_ + pad_;

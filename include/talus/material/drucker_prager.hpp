@@ -1,13 +1,13 @@
 #pragma once
-// Drucker–Prager elastoplasticity for granular material (seed 001 eq. 23–25), with a closed-form
+// Drucker–Prager elastoplasticity for granular material (Abe, Johansson & Konagai 2005, eq. 23–25), with a closed-form
 // return mapping (cone, apex, tension cut-off) and linear combined isotropic/kinematic hardening
 // (Prager's rule). Theory, derivation and verification: docs/drucker-prager.md.
 //
 // Sign convention: stress positive in tension, so compression has I1 = tr(sigma) < 0. The yield
 // function is written for that sign,
-//     f = alpha I1 + sqrt(J2(s - beta)) - k(eps_p)          (seed 001 eq. 23)
-//     g = alpha_g I1 + sqrt(J2(s - beta))                   (seed 001 eq. 24, plastic potential)
-//     d_eps^p = d_lambda dg/dsigma                          (seed 001 eq. 25, non-associated flow)
+//     f = alpha I1 + sqrt(J2(s - beta)) - k(eps_p)          (Abe, Johansson & Konagai 2005, eq. 23)
+//     g = alpha_g I1 + sqrt(J2(s - beta))                   (Abe, Johansson & Konagai 2005, eq. 24, plastic potential)
+//     d_eps^p = d_lambda dg/dsigma                          (Abe, Johansson & Konagai 2005, eq. 25, non-associated flow)
 // with alpha > 0 (compression strengthens), s the stress deviator and beta the (deviatoric) back
 // stress. Strain and stress are Sym6 Voigt vectors of TENSOR components (core/types.hpp).
 //
@@ -23,8 +23,8 @@
 // update() allocates nothing, makes no virtual call and has no loop or iteration: it is a closed
 // form (one sqrt on the elastic path; one division and a few dozen flops more when plastic).
 //
-// Granular choices of seed 001 that the MPM loop makes (not this class):
-//  - "Dilatancy 0 once flowing" (seed 001, sec. 7(2)): keep a second model,
+// Granular choices of Abe, Johansson & Konagai 2005 that the MPM loop makes (not this class):
+//  - "Dilatancy 0 once flowing" (Abe, Johansson & Konagai 2005, sec. 7(2)): keep a second model,
 //    `model.with_dilatancy(0.0)` (a cheap copy with psi = 0, same everything else), and use it for
 //    particles flagged as flowing. Both models share DruckerPragerState, so switching is free.
 //  - Separated particles (no contact, stress-free): set the stress to zero and reset the state with
@@ -46,7 +46,7 @@ namespace talus {
 /// matched to the dilatancy angle psi (the same formula with psi in place of phi).
 ///  - PlaneStrain (default): equal strength to Mohr–Coulomb under plane strain with associated
 ///    flow, alpha = tan(phi)/sqrt(9 + 12 tan^2 phi), k = 3c/sqrt(9 + 12 tan^2 phi). Chosen because
-///    seed 001 analyses plane-strain (2D) flows and its parameters (Table 2) are meant that way,
+///    Abe, Johansson & Konagai 2005 analyses plane-strain (2D) flows and its parameters (Table 2) are meant that way,
 ///    and because with this fit the dilatancy angle keeps its textbook meaning: in steady simple
 ///    shear d eps_v / d gamma = tan(psi) exactly (docs/drucker-prager.md, verified in the tests).
 ///  - Compression: outer cone through the compression meridian (triaxial compression exact),
@@ -69,7 +69,7 @@ struct DruckerPragerParameters {
   /// 0 = purely isotropic (the cone grows: dk = H d eps_p), 1 = purely kinematic (the cone
   /// translates in the deviatoric plane: d beta = 2 H de^p), between: dk = (1 - m) H d eps_p and
   /// d beta = 2 m H de^p. Under monotonic proportional loading every m gives the same curve; they
-  /// differ after a load reversal (Bauschinger effect). Seed 001 Table 2 gives a "combined
+  /// differ after a load reversal (Bauschinger effect). Abe, Johansson & Konagai 2005, Table 2 gives a "combined
   /// hardening parameter" 0.8; read as Chen & Mizuno's M (the isotropic share, seed ref. 4),
   /// that is kinematic_fraction = 1 - M = 0.2. With H = 0 (as in Table 2) it has no effect.
   double kinematic_fraction = 0.0;
@@ -119,7 +119,7 @@ class DruckerPrager {
   /// consistently.
   void rotate_state(DruckerPragerState& state, double w_yz, double w_xz, double w_xy) const;
 
-  /// f = alpha I1 + sqrt(J2(s - beta)) - k(eps_p)   (seed 001 eq. 23). <= 0 is admissible.
+  /// f = alpha I1 + sqrt(J2(s - beta)) - k(eps_p)   (Abe, Johansson & Konagai 2005, eq. 23). <= 0 is admissible.
   double yield_function(const Sym6& stress, const DruckerPragerState& state) const;
 
   /// A copy with another dilatancy angle (degrees, validated in [0, phi]); for "psi = 0 once
@@ -180,7 +180,7 @@ inline DruckerPragerResult DruckerPrager::update(Sym6& stress, DruckerPragerStat
                                    2.0 * (xi[YZ] * xi[YZ] + xi[XZ] * xi[XZ] + xi[XY] * xi[XY]));  // sqrt(2) q
   const double q = xi_norm / std::numbers::sqrt2;
   const double k = k0_ + hardening_isotropic_ * state.equivalent_plastic_strain;
-  const double f = alpha_ * i1 + q - k;  // seed 001 eq. 23 at the trial state
+  const double f = alpha_ * i1 + q - k;  // Abe, Johansson & Konagai 2005, eq. 23 at the trial state
   if (f <= 0.0 && i1 <= first_invariant_cutoff_) {  // elastic
     for (int c = 0; c < 6; ++c) stress[c] = trial[c];
     return {};

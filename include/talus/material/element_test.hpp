@@ -1,6 +1,6 @@
 #pragma once
 // Single-point (element) tests of the Drucker–Prager model: a strain- or mixed-controlled loading
-// path applied to one material point, as in seed 001 sec. 6(3) and Fig. 13. The command
+// path applied to one material point, as in Abe, Johansson & Konagai 2005, sec. 6(3) and Fig. 13. The command
 // `talus element-test SPEC.json --out FILE.csv` reads the spec (src/app/element_test_command.cpp)
 // and calls run_element_test(); the CSV columns are documented in docs/drucker-prager.md.
 //
@@ -20,7 +20,7 @@ enum class ElementPath {
   UniaxialCompression,
   /// Engineering shear strain gamma_xy = 2 eps_xy prescribed; sigma_yy held at -pressure
   /// (constant normal stress); eps_xx = eps_zz = eps_yz = eps_xz = 0; starts at -pressure I.
-  /// eps_v = eps_yy is then the volumetric strain (dilatancy, seed 001 Fig. 13 right).
+  /// eps_v = eps_yy is then the volumetric strain (dilatancy, Abe, Johansson & Konagai 2005, Fig. 13 right).
   SimpleShear,
   /// Axial strain prescribed; lateral stresses held at -pressure (the confining pressure);
   /// starts at -pressure I.

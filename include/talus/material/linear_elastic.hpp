@@ -1,6 +1,6 @@
 #pragma once
 // Isotropic linear elasticity in incremental (hypoelastic) form with the Jaumann rate:
-// sigma <- sigma + dW sigma - sigma dW + lambda tr(d_eps) I + 2 G d_eps   (seed 000 eq. 34).
+// sigma <- sigma + dW sigma - sigma dW + lambda tr(d_eps) I + 2 G d_eps   (Edo & Matsubara 2015, eq. 34).
 #include "talus/core/tensor.hpp"
 
 namespace talus {

@@ -17,7 +17,7 @@ struct ParticleStore {
   std::array<std::vector<double>, 3> x;       // position [m]
   std::array<std::vector<double>, 3> v;       // velocity [m/s]
   std::vector<double> mass;                   // [kg], constant
-  std::vector<double> volume;                 // current volume [m^3] (seed 000 eq. 35)
+  std::vector<double> volume;                 // current volume [m^3] (Edo & Matsubara 2015, eq. 35)
   std::vector<double> volume0;                // volume at seeding [m^3] (sets the GIMP domain)
   std::array<std::vector<double>, 6> stress;  // Cauchy stress, Voigt xx yy zz yz xz xy [Pa]
   std::array<std::vector<double>, 6> strain;  // accumulated (log-like) strain, tensor components
@@ -27,7 +27,7 @@ struct ParticleStore {
   std::vector<double> plastic_strain;            // equivalent plastic strain
   std::array<std::vector<double>, 6> back_stress;  // kinematic hardening centre [Pa]; only with kinematic hardening
 
-  // cpGIMP particle domain: current half widths per axis [m] (seed 000 eq. 57-58); allocated only
+  // cpGIMP particle domain: current half widths per axis [m] (Edo & Matsubara 2015, eq. 57-58); allocated only
   // when the scene uses cpGIMP.
   std::array<std::vector<double>, 3> domain;
 

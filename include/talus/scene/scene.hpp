@@ -18,10 +18,10 @@
 
 namespace talus {
 
-/// Shape functions (docs/theory.md): linear MPM, uGIMP, cpGIMP (seed 000 eq. 30-31, 57-59),
+/// Shape functions (docs/theory.md): linear MPM, uGIMP, cpGIMP (Edo & Matsubara 2015, eq. 30-31, 57-59),
 /// quadratic B-spline.
 enum class ShapeKind { Linear, UGimp, CpGimp, BSpline2 };
-/// Update schemes (seed 001 sec. 4(1)): MUSL, USL, USF (Bardenhagen 2002), USAVG (Nairn 2003).
+/// Update schemes (Abe, Johansson & Konagai 2005, sec. 4(1)): MUSL, USL, USF (Bardenhagen 2002), USAVG (Nairn 2003).
 enum class SchemeKind { Musl, Usl, Usf, Usavg };
 
 struct LinearElasticParameters {
@@ -32,11 +32,11 @@ struct LinearElasticParameters {
 enum class MaterialModel { LinearElastic, DruckerPrager, MuI };
 
 /// What a runout scene does with Drucker-Prager particles beyond the constitutive law itself
-/// (seed 001 sec. 7; docs/drucker-prager.md "In the MPM solver"). μ(I) bodies use only the
+/// (Abe, Johansson & Konagai 2005, sec. 7; docs/drucker-prager.md "In the MPM solver"). μ(I) bodies use only the
 /// separation rule (docs/mu-i.md).
 struct GranularOptions {
   /// A particle counts as flowing once its equivalent plastic strain exceeds this; from then on
-  /// it uses `flowing_dilatancy_angle` (seed 001: "dilatancy is set to 0 once flow starts").
+  /// it uses `flowing_dilatancy_angle` (Abe, Johansson & Konagai 2005: "dilatancy is set to 0 once flow starts").
   double flowing_plastic_strain = 0.05;
   double flowing_dilatancy_angle_deg = 0.0;
   /// A particle whose volume exceeds this multiple of its initial volume has lost contact with
@@ -74,7 +74,7 @@ struct GuardSpec {
   int snapshot_interval = 10;          // [steps] between in-memory copies of the last good state; 0 = none
 };
 
-/// MLS smoothing of the strain increments (seed 000 eq. 38-46, 54; docs/theory.md).
+/// MLS smoothing of the strain increments (Edo & Matsubara 2015, eq. 38-46, 54; docs/theory.md).
 struct SmoothingSpec {
   bool enabled = false;
   MlsSettings mls;
@@ -100,7 +100,7 @@ struct Scene {
   GridGeometry grid;
   Vec3 gravity{0.0, 0.0, -9.81};
   double end_time = 1.0;
-  double courant = 0.3;                // seed 000 eq. 60: c dt / h
+  double courant = 0.3;                // Edo & Matsubara 2015, eq. 60: c dt / h
   int max_steps = 0;                   // 0 = no limit
   SchemeKind scheme = SchemeKind::Musl;
   ShapeKind shape = ShapeKind::Linear;
@@ -111,10 +111,10 @@ struct Scene {
   /// among threads; the sums then run in another (still thread-independent) order.
   int block_cells = 0;
   /// Gravity (the body force) grows linearly from 0 to its full value over this time [s]; 0 = applied
-  /// at once. A quasi-static load (the Bardenhagen-Kober column, seed 000 sec. 4(1)) needs it.
+  /// at once. A quasi-static load (the Bardenhagen-Kober column, Edo & Matsubara 2015, sec. 4(1)) needs it.
   double gravity_ramp_time = 0.0;
   /// The PIC share beta of the G2P velocity update, v_p = (1 - beta) FLIP + beta PIC (0 = pure FLIP,
-  /// seed 000 eq. 50). A small share (the flume uses 0.01) damps the grid-scale velocity noise that
+  /// Edo & Matsubara 2015, eq. 50). A small share (the flume uses 0.01) damps the grid-scale velocity noise that
   /// otherwise keeps a granular deposit jittering; the energy it removes is the budget's `damping`.
   double pic_fraction = 0.0;
   SmoothingSpec smoothing;

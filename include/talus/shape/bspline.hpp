@@ -1,11 +1,11 @@
 #pragma once
 // Quadratic B-spline shape functions (Steffen, Kirby & Berzins 2008): C1 weights on the 3 nodes
 // nearest the particle, so a particle crossing a cell face sees no jump in the force gradient (the
-// cell-crossing error of linear MPM, seed 000 sec. 4). In grid units, with i the nearest node and
+// cell-crossing error of linear MPM, Edo & Matsubara 2015, sec. 4). In grid units, with i the nearest node and
 // u = x_p - x_i in [-1/2, 1/2):
 //     N_{i-1} = (1/2 - u)^2 / 2,   N_i = 3/4 - u^2,   N_{i+1} = (1/2 + u)^2 / 2.
 // The support reaches one node below the particle's cell and two above (kReachLow = 1,
-// kReachHigh = 2); 3D is the tensor product (seed 000 eq. 32). Same interface as LinearShape.
+// kReachHigh = 2); 3D is the tensor product (Edo & Matsubara 2015, eq. 32). Same interface as LinearShape.
 #include "talus/shape/linear.hpp"
 
 #include <cmath>

@@ -1,5 +1,5 @@
 #pragma once
-// GIMP shape functions (generalized interpolation material point, seed 000 eq. 24-27, 30-31):
+// GIMP shape functions (generalized interpolation material point, Edo & Matsubara 2015, eq. 24-27, 30-31):
 // the weight of node i is the linear hat N_i averaged over the particle's domain, a box of
 // half-width l_p around x_p (chi_p = 1 on the domain, eq. 27):
 //     phi_ip = 1/(2 l_p) * integral_{x_p - l_p}^{x_p + l_p} N_i(x) dx                (eq. 24)
@@ -30,7 +30,7 @@ namespace talus {
 
 namespace gimp_detail {
 
-/// Linear hat N(u) = max(0, 1 - |u|) (seed 000 eq. 28).
+/// Linear hat N(u) = max(0, 1 - |u|) (Edo & Matsubara 2015, eq. 28).
 [[gnu::always_inline]] inline double hat(double u) {
   const double t = 1.0 - std::abs(u);
   return t > 0.0 ? t : 0.0;  // not std::fmax: that is a libm call here (its NaN rules)
@@ -61,13 +61,13 @@ namespace gimp_detail {
   const double inv = 0.5 / lp;
   for (int a = 0; a < n; ++a) {
     const double r = xi - (base + a);
-    w[a] = (hat_integral(r + lp) - hat_integral(r - lp)) * inv;  // seed 000 eq. 30
-    dw[a] = (hat(r + lp) - hat(r - lp)) * inv;                     // seed 000 eq. 31
+    w[a] = (hat_integral(r + lp) - hat_integral(r - lp)) * inv;  // Edo & Matsubara 2015, eq. 30
+    dw[a] = (hat(r + lp) - hat(r - lp)) * inv;                     // Edo & Matsubara 2015, eq. 31
   }
 }
 
 /// The same weights for a domain at most half a cell wide (lp <= 1/2) on the 3 nodes nearest xi,
-/// from the region formulas of seed 000 eq. 30-31 instead of the antiderivative: with u = xi -
+/// from the region formulas of Edo & Matsubara 2015, eq. 30-31 instead of the antiderivative: with u = xi -
 /// nearest node in [-1/2, 1/2),
 ///     w_low  = -u              (u <= -lp),   (lp - u)^2 / (4 lp)   (|u| < lp),   0 (u >= lp)
 ///     w_high =  u              (u >=  lp),   (lp + u)^2 / (4 lp)   (|u| < lp),   0 (u <= -lp)

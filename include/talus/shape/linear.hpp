@@ -1,6 +1,6 @@
 #pragma once
-// Linear (standard MPM) shape functions, seed 000 eq. 28-29: the 1D hat N_i(x) = 1 - |x - x_i| / L,
-// 3D weights as the tensor product (seed 000 eq. 32).
+// Linear (standard MPM) shape functions, Edo & Matsubara 2015, eq. 28-29: the 1D hat N_i(x) = 1 - |x - x_i| / L,
+// 3D weights as the tensor product (Edo & Matsubara 2015, eq. 32).
 //
 // The interface every shape function implements (the GIMP and B-spline functions follow it):
 //   kNodes            nodes per axis in a particle's support
@@ -18,7 +18,7 @@ namespace talus {
 /// Which half-width the transfers pass to a shape function's weights().
 enum class DomainSource {
   None,     // material point (linear, B-spline): half width unused
-  Initial,  // uGIMP: l_p0 = V0^(1/3)/2, fixed (seed 000 eq. 59)
+  Initial,  // uGIMP: l_p0 = V0^(1/3)/2, fixed (Edo & Matsubara 2015, eq. 59)
   Current,  // cpGIMP: the particle's current half widths (ParticleStore::domain, eq. 57-58)
 };
 
@@ -34,9 +34,9 @@ struct LinearShape {
     const double cell = std::floor(xi);
     base = static_cast<int>(cell);
     const double f = xi - cell;  // local coordinate in [0, 1)
-    w[0] = 1.0 - f;              // seed 000 eq. 28
+    w[0] = 1.0 - f;              // Edo & Matsubara 2015, eq. 28
     w[1] = f;
-    dw[0] = -1.0;                // seed 000 eq. 29 (per unit grid spacing)
+    dw[0] = -1.0;                // Edo & Matsubara 2015, eq. 29 (per unit grid spacing)
     dw[1] = 1.0;
   }
 };

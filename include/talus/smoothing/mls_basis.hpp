@@ -1,5 +1,5 @@
 #pragma once
-// The two ingredients of the MLS fit (seed 000 eq. 38-46): the weight W(r, h) and the polynomial
+// The two ingredients of the MLS fit (Edo & Matsubara 2015, eq. 38-46): the weight W(r, h) and the polynomial
 // basis F(x). Header-only: both are evaluated once per neighbour in the smoother's inner loop.
 #include <array>
 #include <cmath>
@@ -20,7 +20,7 @@ constexpr int mls_term_count(int degree, int axes) {
 static_assert(mls_term_count(1, 3) == 4 && mls_term_count(2, 3) == 10 && mls_term_count(3, 3) == 20);
 static_assert(mls_term_count(3, 1) == 4);  // the paper's 1D cubic fit
 
-/// Cubic-spline weight of seed 000 eq. 39 in its standard form (docs/theory.md), s = r / h:
+/// Cubic-spline weight of Edo & Matsubara 2015, eq. 39 in its standard form (docs/theory.md), s = r / h:
 ///   2/3 - 4 s^2 + 4 s^3            0 <= s < 1/2
 ///   4/3 - 4 s + 4 s^2 - 4/3 s^3    1/2 <= s < 1
 ///   0                              s >= 1

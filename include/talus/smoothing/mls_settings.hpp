@@ -1,5 +1,5 @@
 #pragma once
-// The settings of the MLS strain-increment smoother (seed 000 eq. 38-46), as the scene gives them.
+// The settings of the MLS strain-increment smoother (Edo & Matsubara 2015, eq. 38-46), as the scene gives them.
 #include "talus/smoothing/mls_basis.hpp"
 
 #include <array>
@@ -11,7 +11,7 @@ struct MlsSettings {
   double radius_factor = 2.0;              // h = radius_factor * cell size
   /// The axes the basis spans. A body one or two particle layers thick along an axis cannot
   /// resolve a quadratic along it (A is singular); leaving that axis out fits a 1D or 2D
-  /// polynomial and averages across it (seed 000's own tests are 1D).
+  /// polynomial and averages across it (Edo & Matsubara's (2015) own tests are 1D).
   std::array<bool, 3> axes{true, true, true};
   double min_rcond = 1e-10;                // guard on A's reciprocal condition number (1-norm estimate)
 };

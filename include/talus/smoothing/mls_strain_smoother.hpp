@@ -1,7 +1,7 @@
 #pragma once
 // MlsStrainSmoother: replaces each particle's strain increment by a moving-least-squares fit of
-// its neighbours' increments (seed 000 eq. 38-46), between the strain pass and the material update
-// (seed 000 eq. 54). For particle p with the n neighbours I of its body within the radius h:
+// its neighbours' increments (Edo & Matsubara 2015, eq. 38-46), between the strain pass and the material update
+// (Edo & Matsubara 2015, eq. 54). For particle p with the n neighbours I of its body within the radius h:
 //   A   = sum_I W(r_I, h) F(u_I) F(u_I)^T                         (eq. 42)
 //   B   = [W_1 F(u_1), ..., W_n F(u_n)]                           (eq. 43)
 //   Phi_I = F(u_p)^T (A^-1 B)_{:,I}                               (eq. 45, 46)

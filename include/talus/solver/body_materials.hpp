@@ -6,8 +6,8 @@
 //
 // Per particle and step (objective update, docs/theory.md):
 //   sigma <- R sigma R^T (Hughes-Winget rotation by the spin increment; also the back stress)
-//   sigma <- material(sigma, d_eps)                 (seed 000 eq. 34 / seed 001 eq. 23-25)
-//   strain += d_eps, V <- V (1 + tr d_eps)         (seed 000 eq. 35)
+//   sigma <- material(sigma, d_eps)                 (Edo & Matsubara 2015, eq. 34 / Abe, Johansson & Konagai 2005, eq. 23-25)
+//   strain += d_eps, V <- V (1 + tr d_eps)         (Edo & Matsubara 2015, eq. 35)
 // Drucker-Prager bodies add the granular rules of a runout scene (scene.hpp GranularOptions):
 // psi -> flowing_dilatancy_angle once eps_p > flowing_plastic_strain, and stress-free, virgin
 // particles once V / V0 > separation_volume_ratio. μ(I) bodies (docs/mu-i.md) keep the separation

@@ -51,7 +51,7 @@ class Solver {
   /// Scan every particle field now (finite values, positive volumes); throws an instability Error.
   void check_particles() const;
 
-  /// dt = courant * h / max_p (c_p + |v_p|) (seed 000 eq. 60), c_p the P-wave speed at the
+  /// dt = courant * h / max_p (c_p + |v_p|) (Edo & Matsubara 2015, eq. 60), c_p the P-wave speed at the
   /// particle's current density.
   double stable_time_step() const;
 
@@ -73,7 +73,7 @@ class Solver {
   std::int64_t outflow_particles() const { return outflow_particles_; }
   double outflow_mass() const { return outflow_mass_; }
 
-  /// MLS smoothing (seed 000 eq. 54): the smoother, or null when the scene does not enable it;
+  /// MLS smoothing (Edo & Matsubara 2015, eq. 54): the smoother, or null when the scene does not enable it;
   /// the counts of the last smoothing pass and the particle-passes left unsmoothed by its guard.
   const MlsStrainSmoother* smoother() const { return smoother_ ? &*smoother_ : nullptr; }
   MlsCounts last_smoothing() const { return last_smoothing_; }

@@ -1,7 +1,7 @@
 #pragma once
 // The nodes and weights one particle talks to: per axis, kNodes node-index parts and weights, so
 // that node (a, b, c) is ix[a] + iy[b] + iz[c] and N = wx[a] wy[b] wz[c] (tensor product,
-// seed 000 eq. 32). Gradients are in physical units (1/h applied); for a terrain grid the x
+// Edo & Matsubara 2015, eq. 32). Gradients are in physical units (1/h applied); for a terrain grid the x
 // derivative gains the mapping term -z_b'(x) dN/dw (docs/theory.md).
 #include "talus/grid/grid.hpp"
 

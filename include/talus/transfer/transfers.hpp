@@ -2,13 +2,13 @@
 // The particle <-> grid transfers of one step. Each is a template over the shape function and the
 // terrain type (instantiated in transfers.cpp), so the inner loops have compile-time extents.
 //
-//  scatter_to_grid    P2G: nodal mass, momentum and internal force (seed 000 eq. 47-49), as 8
+//  scatter_to_grid    P2G: nodal mass, momentum and internal force (Edo & Matsubara 2015, eq. 47-49), as 8
 //                     colour passes over blocks: no atomics, same order for any thread count.
-//  gather_from_grid   G2P: v_p += sum N_i (v_i^L - v_i), x_p += dt sum N_i v_i^L (seed 000 eq. 50-51),
+//  gather_from_grid   G2P: v_p += sum N_i (v_i^L - v_i), x_p += dt sum N_i v_i^L (Edo & Matsubara 2015, eq. 50-51),
 //                     parallel over blocks (pure gather); with the MUSL remap folded in, the new
 //                     momentum is scattered right after each particle's gather, in colour passes.
 //  strain_increments  d_eps_p = dt/2 sum (grad N_i (x) v_i + transpose) and the spin increment
-//                     (seed 000 eq. 33), for a range of particles into a small buffer.
+//                     (Edo & Matsubara 2015, eq. 33), for a range of particles into a small buffer.
 #include "talus/grid/grid.hpp"
 #include "talus/particles/cell_sort.hpp"
 #include "talus/particles/particle_store.hpp"
@@ -46,11 +46,11 @@ struct GatherResult {
 struct GatherOptions {
   double dt = 0.0;
   /// beta in [0, 1]: v_p = (1 - beta) (v_p + sum N (v^L - v)) + beta sum N v^L (0 = FLIP,
-  /// seed 000 eq. 50; 1 = PIC). With beta > 0 the kinetic energy the blend removes is written per
+  /// Edo & Matsubara 2015, eq. 50; 1 = PIC). With beta > 0 the kinetic energy the blend removes is written per
   /// sort block into `block_damping` (sized to the block count), for a thread-independent sum.
   double pic_fraction = 0.0;
   /// MUSL, USAVG: also scatter the new particle momentum m_p v_p into grid.momentum (cleared by the
-  /// caller), the remap of seed 000 eq. 52, in the same pass with the same weights; the nodal sums
+  /// caller), the remap of Edo & Matsubara 2015, eq. 52, in the same pass with the same weights; the nodal sums
   /// are those of scatter_to_grid(..., ScatterFields::Momentum), in the same order.
   bool remap = false;
   double max_displacement = std::numeric_limits<double>::infinity();  // [m], flags |dx_p| above it
