@@ -23,7 +23,7 @@ import numpy as np  # noqa: E402
 import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from speed_vs_error import OUT, benchmark_parser, find_talus, load, variant, run  # noqa: E402
+from speed_vs_error import OUT, benchmark_parser, parse_benchmark_args, load, variant, run  # noqa: E402
 from talus_plot import finish_axes, save_figure, write_csv_rows  # noqa: E402
 
 CELLS = [0.5, 0.25, 0.125, 0.0625]
@@ -42,9 +42,7 @@ def scene(base, h, shape, mode):
 def main():
     ap = benchmark_parser(__doc__)
     ap.add_argument("--jobs", type=int, default=2, help="runs at the same time (each on --threads threads)")
-    a = ap.parse_args()
-    talus = find_talus(a.talus)
-    os.makedirs(OUT, exist_ok=True)
+    a, talus = parse_benchmark_args(ap)
     base = load("block_between_walls")
     cases = [(h, shape, mode) for h in CELLS for shape in SHAPES for mode in MODES]
 

@@ -21,7 +21,7 @@ import numpy as np  # noqa: E402
 import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from speed_vs_error import E, RHO0, L0, OUT, benchmark_parser, find_talus, load, variant, run, profile, column_metrics  # noqa: E402
+from speed_vs_error import E, RHO0, L0, OUT, benchmark_parser, parse_benchmark_args, load, variant, run, profile, column_metrics  # noqa: E402
 from talus_plot import finish_axes, save_figure, write_csv_rows  # noqa: E402
 
 SHAPES = ["linear", "ugimp", "cpgimp"]
@@ -37,15 +37,27 @@ def with_mls(scene, basis, radius, axes):
     return s
 
 
+def shape_runs(talus, base, axes, modes, a, what):
+    """Per panel: (panel, shape, [(mode, result), ...]), the talus runs of the benchmark `base` with that
+    shape and each MLS mode (a run that failed is reported and left out)."""
+    for ax, shape in zip(axes, SHAPES):
+        results = []
+        for mode in modes:
+            res = run(talus, with_mls(variant(base, shape, "musl"), mode, a.radius, a.axes), a.threads)
+            if res is None:
+                print(f"{what} {shape} {mode}: run failed", flush=True)
+                continue
+            results.append((mode, res))
+        yield ax, shape, results
+
+
 def main():
     ap = benchmark_parser(__doc__)
     ap.add_argument("--basis", default="cubic", help="MLS basis for the 'with MLS' runs (the paper: cubic)")
     ap.add_argument("--radius", type=float, default=2.0, help="radius factor (h / cell size)")
     ap.add_argument("--axes", default="x", help="basis axes; the bars are 2 particles across, so 1D: x")
     ap.add_argument("--skip-walls", action="store_true", help="leave out the block between walls (the longest runs)")
-    a = ap.parse_args()
-    talus = find_talus(a.talus)
-    os.makedirs(OUT, exist_ok=True)
+    a, talus = parse_benchmark_args(ap)
     rows = []
     modes = ["off", a.basis]
     label = {"off": "without MLS", a.basis: f"MLS {a.basis} ({a.axes}), h = {a.radius:g} cells"}
@@ -56,12 +68,8 @@ def main():
     delta = L0 + RHO0 * b * L0 ** 2 / (2 * E)
     s0 = RHO0 * b * L0  # b m / A
     fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), sharey=True)
-    for ax, shape in zip(axes, SHAPES):
-        for mode in modes:
-            res = run(talus, with_mls(variant(base, shape, "musl"), mode, a.radius, a.axes), a.threads)
-            if res is None:
-                print(f"column {shape} {mode}: run failed", flush=True)
-                continue
+    for ax, shape, results in shape_runs(talus, base, axes, modes, a, "column"):
+        for mode, res in results:
             l2, rough = column_metrics(res, b)
             rows.append({"benchmark": "column_w12500", "shape": shape, "mls": mode, "l2": l2, "roughness": rough,
                          "wall_s": round(res["wall"], 3)})
@@ -81,12 +89,8 @@ def main():
     c = math.sqrt(E / RHO0)
     exact = -E * abs(v0) / c  # Edo & Matsubara 2015, eq. 63
     fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), sharey=True)
-    for ax, shape in zip(axes, SHAPES):
-        for mode in modes:
-            res = run(talus, with_mls(variant(base, shape, "musl"), mode, a.radius, a.axes), a.threads)
-            if res is None:
-                print(f"bar {shape} {mode}: run failed", flush=True)
-                continue
+    for ax, shape, results in shape_runs(talus, base, axes, modes, a, "bar"):
+        for mode, res in results:
             xp, sp = profile(res["x"], res["stress"][:, 0])
             t = res["energy"]["time"][-1]
             sel = (xp > 3.0) & (xp < c * t - 6.0)
@@ -106,12 +110,8 @@ def main():
     if not a.skip_walls:
         base = load("block_between_walls")
         fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), sharey=True)
-        for ax, shape in zip(axes, SHAPES):
-            for mode in modes:
-                res = run(talus, with_mls(variant(base, shape, "musl"), mode, a.radius, a.axes), a.threads)
-                if res is None:
-                    print(f"walls {shape} {mode}: run failed", flush=True)
-                    continue
+        for ax, shape, results in shape_runs(talus, base, axes, modes, a, "walls"):
+            for mode, res in results:
                 e = res["energy"]
                 tot = e["total"] / e["total"][0]
                 worst = float(np.max(np.abs(tot - 1.0)))

@@ -49,6 +49,14 @@ def benchmark_parser(doc):
     return ap
 
 
+def parse_benchmark_args(ap):
+    """Parse a benchmark driver's command line; returns (args, the talus program), with OUT created."""
+    a = ap.parse_args()
+    talus = find_talus(a.talus)
+    os.makedirs(OUT, exist_ok=True)
+    return a, talus
+
+
 def load(name):
     with open(os.path.join(ROOT, "inputs", "benchmarks", name + ".json")) as f:
         return json.load(f)
@@ -132,9 +140,7 @@ def main():
     ap = benchmark_parser(__doc__)
     ap.add_argument("--quick", action="store_true", help="fewer variants (a smoke test of the driver)")
     ap.add_argument("--mls", default="off", help="comma-separated MLS bases for the column and bar runs: off,linear,quadratic,cubic")
-    a = ap.parse_args()
-    talus = find_talus(a.talus)
-    os.makedirs(OUT, exist_ok=True)
+    a, talus = parse_benchmark_args(ap)
     rows = []
     histories = {}
 

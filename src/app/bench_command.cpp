@@ -15,6 +15,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <fstream>
 #include <initializer_list>
 #include <limits>
@@ -176,28 +177,17 @@ void refuse_unavailable(const BenchOptions& o) {
 void start_in_simple_shear(Solver& solver) {
   const Scene& scene = solver.scene();
   const MaterialSpec& m = scene.materials.at(0);
-  const bool mu_i = m.model == MaterialModel::MuI;
-  if (mu_i) {
-    const MuI beads(m.mu_i);
-    ParticleStore& P = solver.particles();
-    double z_low = std::numeric_limits<double>::infinity(), z_top = -z_low;
-    for (double z : P.x[2]) {
-      z_low = std::min(z_low, z);
-      z_top = std::max(z_top, z);
-    }
-    const double z_mid = 0.5 * (z_low + z_top), rate = 1.0, g = std::abs(scene.gravity[2]);
-    for (std::size_t p = 0; p < P.size(); ++p) {
-      const double pressure = m.density * g * (z_top - P.x[2][p]) + 1.0e3;
-      const double tau = beads.friction(beads.inertial_number(rate, pressure)) * pressure;
-      P.v[0][p] = rate * (P.x[2][p] - z_mid);
-      P.v[1][p] = P.v[2][p] = 0.0;
-      for (int c = 0; c < 3; ++c) P.stress[c][p] = -pressure;
-      P.stress[YZ][p] = P.stress[XY][p] = 0.0;
-      P.stress[XZ][p] = tau;
-    }
-    return;
+  // The yield (DP) or steady-flow (mu(I)) shear stress at overburden p under the 1/s rate.
+  std::function<double(double)> yield_tau;
+  if (m.model == MaterialModel::MuI) {
+    yield_tau = [beads = MuI(m.mu_i)](double pressure) {
+      return beads.friction(beads.inertial_number(1.0, pressure)) * pressure;
+    };
+  } else {
+    yield_tau = [model = DruckerPrager(m.drucker_prager)](double pressure) {
+      return model.initial_strength() + 3.0 * model.alpha() * pressure;
+    };
   }
-  const DruckerPrager model(m.drucker_prager);
   ParticleStore& P = solver.particles();
   double z_low = std::numeric_limits<double>::infinity(), z_top = -z_low;
   for (double z : P.x[2]) {
@@ -207,12 +197,11 @@ void start_in_simple_shear(Solver& solver) {
   const double z_mid = 0.5 * (z_low + z_top), rate = 1.0, g = std::abs(scene.gravity[2]);
   for (std::size_t p = 0; p < P.size(); ++p) {
     const double pressure = m.density * g * (z_top - P.x[2][p]) + 1.0e3;
-    const double tau = model.initial_strength() + 3.0 * model.alpha() * pressure;
     P.v[0][p] = rate * (P.x[2][p] - z_mid);
     P.v[1][p] = P.v[2][p] = 0.0;
     for (int c = 0; c < 3; ++c) P.stress[c][p] = -pressure;
     P.stress[YZ][p] = P.stress[XY][p] = 0.0;
-    P.stress[XZ][p] = tau;
+    P.stress[XZ][p] = yield_tau(pressure);
   }
 }
 

@@ -24,7 +24,8 @@ void remove_temporaries(const fs::path& dir) {
 /// The columns of energy.csv: time, step, dt, one per term of the energy ledger, then the total.
 std::string energy_header() {
   std::string header = "time,step,dt";
-  EnergyBudget().for_each_term([&](const char* name, double, bool) { header += std::string(",") + name; });
+  const EnergyBudget names;
+  EnergyBudget::for_each_term(names, [&](const char* name, double, bool) { header += std::string(",") + name; });
   return header + ",total";
 }
 
@@ -96,7 +97,7 @@ EnergyHistory::EnergyHistory(const fs::path& dir, std::optional<std::int64_t> re
 
 void EnergyHistory::write(const Solver& solver, const EnergyBudget& e) {
   std::string row = fmt::format("{:.10e},{},{:.6e}", solver.time(), solver.step_count(), solver.last_dt());
-  e.for_each_term([&](const char*, double value, bool) { row += fmt::format(",{:.10e}", value); });
+  EnergyBudget::for_each_term(e, [&](const char*, double value, bool) { row += fmt::format(",{:.10e}", value); });
   file_ << row << fmt::format(",{:.10e}\n", e.total());
   file_.flush();
 }

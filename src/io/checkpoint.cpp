@@ -116,7 +116,7 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
       write_attribute(s, "time", state.time);
       write_attribute(s, "step", state.step);
       write_attribute(s, "last_dt", state.last_dt);
-      state.work.for_each_term([&](const char* name, double value, bool accumulated) {
+      EnergyBudget::for_each_term(state.work, [&](const char* name, double value, bool accumulated) {
         if (accumulated) write_attribute(s, name, value);
       });
       write_attribute(s, "outflow_mass", state.outflow_mass);
@@ -137,7 +137,7 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
       write_attribute(r, "next_frame", run.next_frame);
       write_attribute(r, "next_history", run.next_history);
       write_attribute(r, "next_checkpoint", run.next_checkpoint);
-      run.initial.for_each_term([&](const char* name, double value, bool) {
+      EnergyBudget::for_each_term(run.initial, [&](const char* name, double value, bool) {
         write_attribute(r, (std::string("initial_") + name).c_str(), value);
       });
       write_attribute(r, "energy_max_released", run.energy_max_released);
@@ -179,7 +179,7 @@ Checkpoint read_checkpoint(const std::string& path) {
     c.solver.time = read_attribute<double>(s, "time");
     c.solver.step = read_attribute<std::int64_t>(s, "step");
     c.solver.last_dt = read_attribute<double>(s, "last_dt");
-    c.solver.work.for_each_term([&](const char* name, double& value, bool accumulated) {
+    EnergyBudget::for_each_term(c.solver.work, [&](const char* name, double& value, bool accumulated) {
       if (accumulated) value = read_attribute<double>(s, name);
     });
     c.solver.outflow_mass = read_attribute<double>(s, "outflow_mass");
@@ -202,7 +202,7 @@ Checkpoint read_checkpoint(const std::string& path) {
     c.run.next_frame = read_attribute<double>(r, "next_frame");
     c.run.next_history = read_attribute<double>(r, "next_history");
     c.run.next_checkpoint = read_attribute<double>(r, "next_checkpoint");
-    c.run.initial.for_each_term([&](const char* name, double& value, bool) {
+    EnergyBudget::for_each_term(c.run.initial, [&](const char* name, double& value, bool) {
       value = read_attribute<double>(r, (std::string("initial_") + name).c_str());
     });
     c.run.energy_max_released = read_attribute<double>(r, "energy_max_released");

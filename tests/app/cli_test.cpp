@@ -111,9 +111,6 @@ TEST(Cli, RunWritesAParaViewSeries) {
   fs::remove_all(dir);
 }
 
-}  // namespace
-
-namespace {
 
 TEST(Cli, BenchWritesTheJsonContract) {
   const fs::path dir = temp_dir("bench");
@@ -164,9 +161,6 @@ TEST(Cli, BenchWritesTheJsonContract) {
   fs::remove_all(dir);
 }
 
-}  // namespace
-
-namespace {
 
 // The work recorder (docs/performance.md "Scaling"): the bench records its extra steps, every
 // colour pass lists each block once, and a run records every --record-interval-th step with the

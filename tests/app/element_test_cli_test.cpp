@@ -1,4 +1,6 @@
 // `talus element-test`: runs the built program on a shipped spec and on bad specs.
+#include "program_fixture.hpp"
+
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
@@ -17,49 +19,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int exit_code = -1;
-  std::string out, err;
-};
+using Result = talus::test::ProgramResult;
+using talus::test::slurp;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-class ElementTestCli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("talus_element_test_cli_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  Result run(const std::string& args) const {
-    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string command = std::string("\"") + TALUS_BINARY + "\" " + args + " > \"" +
-                                out.string() + "\" 2> \"" + err.string() + "\"";
-    const int status = std::system(command.c_str());
-    Result r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(out);
-    r.err = slurp(err);
-    return r;
-  }
-
-  fs::path write_spec(const std::string& name, const std::string& text) const {
-    const fs::path p = dir_ / name;
-    std::ofstream(p) << text;
-    return p;
-  }
-
-  fs::path dir_;
-};
+class ElementTestCli : public talus::test::ProgramTest {};
 
 const char* kGoodMaterial =
     R"("material": {"young": 2.0e6, "poisson": 0.3, "friction_angle": 40.0, "cohesion": 10.0})";
@@ -90,7 +53,7 @@ TEST_F(ElementTestCli, WritesTheCsvForAShippedSpec) {
 }
 
 TEST_F(ElementTestCli, OutOfRangeValueExitsTwoWithOneLine) {
-  const fs::path spec = write_spec(
+  const fs::path spec = write(
       "bad.json", R"({"material": {"young": 2.0e6, "poisson": 0.3, "friction_angle": 95.0},
                      "path": {"type": "oedometer", "strain": 0.01, "increments": 10}})");
   const Result r = run("element-test \"" + spec.string() + "\" --out \"" + (dir_ / "x.csv").string() + "\"");
@@ -124,7 +87,7 @@ TEST_F(ElementTestCli, UnknownKeyAndBadPathValuesExitTwoNamingTheKey) {
   };
   int i = 0;
   for (const auto& [text, expected] : cases) {
-    const fs::path spec = write_spec("case" + std::to_string(i++) + ".json", text);
+    const fs::path spec = write("case" + std::to_string(i++) + ".json", text);
     const Result r = run("element-test \"" + spec.string() + "\" --out \"" + (dir_ / "x.csv").string() + "\"");
     EXPECT_EQ(r.exit_code, 2) << expected;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;

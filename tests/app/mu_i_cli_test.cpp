@@ -1,5 +1,7 @@
 // μ(I) through the talus program (issue 21): the shipped element test reproduces τ/p = μ(I) to
 // 1e-10 relative over I = 1e-4 ... 1, and bad μ(I) parameters give one-line errors, exit 2.
+#include "program_fixture.hpp"
+
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
@@ -18,48 +20,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int exit_code = -1;
-  std::string out, err;
-};
+using Result = talus::test::ProgramResult;
+using talus::test::slurp;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-class MuICli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("talus_mu_i_cli_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  Result run(const std::string& args) const {
-    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string command =
-        std::string("\"") + TALUS_BINARY + "\" " + args + " > \"" + out.string() + "\" 2> \"" + err.string() + "\"";
-    const int status = std::system(command.c_str());
-    Result r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(out);
-    r.err = slurp(err);
-    return r;
-  }
-
-  fs::path write(const std::string& name, const std::string& text) const {
-    const fs::path p = dir_ / name;
-    std::ofstream(p) << text;
-    return p;
-  }
-
-  fs::path dir_;
-};
+class MuICli : public talus::test::ProgramTest {};
 
 const std::string kInputs = std::string(TALUS_SOURCE_DIR) + "/inputs/";
 

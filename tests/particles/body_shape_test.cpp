@@ -74,33 +74,31 @@ std::string error_of(const std::string& text) { return test::scene_error_of(text
 
 TEST(PrismBody, BadPrismsAreRefusedNamingTheKey) {
   auto has = [](const std::string& what, const char* part) { return what.find(part) != std::string::npos; };
-  std::string e = error_of(prism_scene(R"({"points": [[0.1, 0.1], [0.5, 0.1]], "y": [0.2, 0.8]})"));
-  EXPECT_TRUE(has(e, "bodies[0].prism.points must be an array of at least 3")) << e;
-  e = error_of(prism_scene(R"({"points": [[0.1, 0.1], [0.5, 0.5], [0.5, 0.1], [0.1, 0.5]], "y": [0.2, 0.8]})"));
-  EXPECT_TRUE(has(e, "bodies[0].prism.points is not a simple polygon: edge 0")) << e;
-  e = error_of(prism_scene(R"({"points": [[0.1, 0.1], [0.3, 0.3], [0.5, 0.5]], "y": [0.2, 0.8]})"));
-  EXPECT_TRUE(has(e, "bodies[0].prism.points")) << e;  // collinear: folds back on itself
-  e = error_of(prism_scene(R"({"points": [[0.1, 0.1], [0.5, 0.1], [0.5, "a"]], "y": [0.2, 0.8]})"));
-  EXPECT_TRUE(has(e, "bodies[0].prism.points[2][1] must be a number")) << e;
-  e = error_of(prism_scene(R"({"points": [[0.1, 0.1], [0.5, 0.1], [0.5, 0.5]], "y": [0.8, 0.2]})"));
-  EXPECT_TRUE(has(e, "bodies[0].prism.y = [0.8, 0.2] must have y0 < y1")) << e;
-  e = error_of(prism_scene(R"({"points": [[0.1, 0.1], [1.5, 0.1], [0.5, 0.5]], "y": [0.2, 0.8]})"));
-  EXPECT_TRUE(has(e, "bodies[0].prism [0.1, 1.5] along axis 0 lies outside the grid")) << e;
-  e = error_of(prism_scene(R"({"points": [[0.1, 0.1], [0.5, 0.1], [0.5, 0.5]], "y": [0.2, 0.8], "z": 1})"));
-  EXPECT_TRUE(has(e, "unknown key bodies[0].prism.z")) << e;
-  // A sliver between the particle rows holds no particle: refused when seeded, naming the prism.
-  e = error_of(prism_scene(R"({"points": [[0.1, 0.01], [0.9, 0.01], [0.9, 0.02]], "y": [0.2, 0.8]})"));
-  EXPECT_TRUE(has(e, "bodies[0].prism (\"wedge\") holds no particle")) << e;
-  // A diagonal sliver whose bounding box spans many particle points, none of them inside.
-  e = error_of(prism_scene(R"({"points": [[0.0, 0.01], [0.9, 0.91], [0.9, 0.912]], "y": [0.2, 0.8]})"));
-  EXPECT_TRUE(has(e, "bodies[0].prism (\"wedge\") holds no particle: no particle point")) << e;
+  // (the prism's JSON, a part of the error it must give)
+  const std::pair<const char*, const char*> cases[] = {
+      {R"({"points": [[0.1, 0.1], [0.5, 0.1]], "y": [0.2, 0.8]})", "bodies[0].prism.points must be an array of at least 3"},
+      {R"({"points": [[0.1, 0.1], [0.5, 0.5], [0.5, 0.1], [0.1, 0.5]], "y": [0.2, 0.8]})", "bodies[0].prism.points is not a simple polygon: edge 0"},
+      {R"({"points": [[0.1, 0.1], [0.3, 0.3], [0.5, 0.5]], "y": [0.2, 0.8]})", "bodies[0].prism.points"},  // collinear: folds back on itself
+      {R"({"points": [[0.1, 0.1], [0.5, 0.1], [0.5, "a"]], "y": [0.2, 0.8]})", "bodies[0].prism.points[2][1] must be a number"},
+      {R"({"points": [[0.1, 0.1], [0.5, 0.1], [0.5, 0.5]], "y": [0.8, 0.2]})", "bodies[0].prism.y = [0.8, 0.2] must have y0 < y1"},
+      {R"({"points": [[0.1, 0.1], [1.5, 0.1], [0.5, 0.5]], "y": [0.2, 0.8]})", "bodies[0].prism [0.1, 1.5] along axis 0 lies outside the grid"},
+      {R"({"points": [[0.1, 0.1], [0.5, 0.1], [0.5, 0.5]], "y": [0.2, 0.8], "z": 1})", "unknown key bodies[0].prism.z"},
+      // A sliver between the particle rows holds no particle: refused when seeded, naming the prism.
+      {R"({"points": [[0.1, 0.01], [0.9, 0.01], [0.9, 0.02]], "y": [0.2, 0.8]})", "bodies[0].prism (\"wedge\") holds no particle"},
+      // A diagonal sliver whose bounding box spans many particle points, none of them inside.
+      {R"({"points": [[0.0, 0.01], [0.9, 0.91], [0.9, 0.912]], "y": [0.2, 0.8]})", "bodies[0].prism (\"wedge\") holds no particle: no particle point"},
+  };
+  for (const auto& [prism, part] : cases) {
+    const std::string e = error_of(prism_scene(prism));
+    EXPECT_TRUE(has(e, part)) << e;
+  }
   // Both shapes, or none.
   const std::string both = R"({
     "grid": { "size": [1, 1, 1], "cell_size": 0.1 }, "time": { "end": 0.1 },
     "materials": { "m": { "density": 1000, "young": 1e6, "poisson": 0.3 } },
     "bodies": [ { "name": "b", "material": "m", "box": { "min": [0.2, 0.2, 0.2], "max": [0.5, 0.5, 0.5] },
                   "prism": {"points": [[0.1, 0.1], [0.5, 0.1], [0.5, 0.5]], "y": [0.2, 0.8]} } ] })";
-  e = error_of(both);
+  const std::string e = error_of(both);
   EXPECT_TRUE(has(e, "bodies[0] needs exactly one shape")) << e;
 }
 

@@ -29,6 +29,22 @@ std::pair<Solver, Solver> run_on_one_and_two_threads(const Run& run) {
   return {std::move(one), std::move(two)};
 }
 
+/// Runs `scene` to its end on `threads` threads, after prepare(solver) (a block order, say), and
+/// restores the caller's thread count.
+template <class Prepare>
+Solver run_to_end(const Scene& scene, int threads, Prepare prepare) {
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(threads);
+  Solver solver(scene);
+  prepare(solver);
+  while (!solver.finished()) solver.step();
+  omp_set_num_threads(saved);
+  return solver;
+}
+inline Solver run_to_end(const Scene& scene, int threads) {
+  return run_to_end(scene, threads, [](Solver&) {});
+}
+
 /// Expects two finished runs to hold the same particles (ids, positions, velocities, stresses)
 /// and the same energy budget to the last bit; `label` names the case in a failure message.
 inline void expect_same_particles_and_energies(const Solver& one, const Solver& two, const std::string& label = "") {

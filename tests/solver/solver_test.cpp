@@ -165,20 +165,11 @@ TEST(Solver, BitIdenticalForOneAndTwoThreadsForEveryShapeAndScheme) {
 // the remap) and the single gather pass of USF.
 TEST(Solver, BitIdenticalForEitherBlockOrder) {
   for (SchemeKind scheme : {SchemeKind::Musl, SchemeKind::Usf}) {
-    auto run = [&](int threads, BlockOrder order) {
-      omp_set_num_threads(threads);
-      Scene scene = test::tumbling_block_scene(0.02);
-      scene.scheme = scheme;
-      Solver solver(scene);
-      solver.set_block_order(order);
-      while (!solver.finished()) solver.step();
-      EXPECT_GT(solver.sort_count(), 1);
-      return solver;
-    };
-    const int saved = omp_get_max_threads();
-    const Solver index = run(1, BlockOrder::Index);
-    const Solver work = run(3, BlockOrder::LargestFirst);
-    omp_set_num_threads(saved);
+    Scene scene = test::tumbling_block_scene(0.02);
+    scene.scheme = scheme;
+    const Solver index = test::run_to_end(scene, 1, [](Solver& s) { s.set_block_order(BlockOrder::Index); });
+    const Solver work = test::run_to_end(scene, 3, [](Solver& s) { s.set_block_order(BlockOrder::LargestFirst); });
+    EXPECT_GT(work.sort_count(), 1);
     test::expect_same_particles_and_energies(index, work, to_string(scheme));
     // the orders differ: some colour's hand-out list is not in index order
     bool reordered = false;
@@ -197,21 +188,12 @@ TEST(Solver, BitIdenticalForEitherBlockOrder) {
 // differently; the results must still not depend on the thread count.
 TEST(Solver, BitIdenticalForOneAndThreeThreadsWithSmallerBlocks) {
   for (auto [shape, cells] : {std::pair{ShapeKind::Linear, 3}, std::pair{ShapeKind::BSpline2, 5}}) {
-    auto run = [&, shape = shape, cells = cells](int threads) {
-      omp_set_num_threads(threads);
-      Scene scene = test::tumbling_block_scene(0.02);
-      scene.shape = shape;
-      scene.block_cells = cells;
-      Solver solver(scene);
-      EXPECT_EQ(solver.cell_sort().block_cells(), cells);
-      while (!solver.finished()) solver.step();
-      EXPECT_GT(solver.sort_count(), 1);
-      return solver;
-    };
-    const int saved = omp_get_max_threads();
-    const Solver one = run(1);
-    const Solver three = run(3);
-    omp_set_num_threads(saved);
+    Scene scene = test::tumbling_block_scene(0.02);
+    scene.shape = shape;
+    scene.block_cells = cells;
+    const Solver one = test::run_to_end(scene, 1), three = test::run_to_end(scene, 3);
+    EXPECT_EQ(one.cell_sort().block_cells(), cells);
+    EXPECT_GT(one.sort_count(), 1);
     test::expect_same_particles_and_energies(one, three, to_string(shape));
   }
 }

@@ -1,7 +1,7 @@
 #pragma once
 // The energy ledger: every term of a run's energy budget, named once. The solver's sums, the
 // checkpoint, the energy guard, the run summary and the columns of energy.csv all go through
-// EnergyBudget::for_each_term, so a new term is one member and one line in visit() below.
+// EnergyBudget::for_each_term, so a new term is one member and one line there.
 //
 //   kinetic + strain + gravity + friction_work + plastic_work + outflow + damping = initial total
 //
@@ -21,27 +21,18 @@ struct EnergyBudget {
   double outflow = 0.0;         // energy (kinetic + strain + gravity) carried out through open faces
   double damping = 0.0;         // kinetic energy removed by the PIC share of G2P (solver.pic_fraction)
 
-  /// Sum of every term, in the order of for_each_term.
+  /// Sum of every term, in ledger order.
   double total() const {
     double sum = 0.0;
-    for_each_term([&](const char*, double value, bool) { sum += value; });
+    for_each_term(*this, [&](const char*, double value, bool) { sum += value; });
     return sum;
   }
 
-  /// Visit every term in ledger order: f(const char* name, double& value, bool accumulated). The
-  /// name is the term's energy.csv column and checkpoint attribute; `accumulated` marks work done.
-  template <class F>
-  void for_each_term(F&& f) {
-    visit(*this, f);
-  }
-  template <class F>
-  void for_each_term(F&& f) const {
-    visit(*this, f);
-  }
-
- private:
+  /// Visit every term of `e` (const or not) in ledger order: f(const char* name, double& value,
+  /// bool accumulated). The name is the term's energy.csv column and checkpoint attribute;
+  /// `accumulated` marks work done.
   template <class Budget, class F>
-  static void visit(Budget& e, F& f) {
+  static void for_each_term(Budget& e, F&& f) {
     f("kinetic", e.kinetic, false);
     f("strain", e.strain, false);
     f("gravity", e.gravity, false);
