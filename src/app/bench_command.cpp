@@ -1,6 +1,7 @@
 // `talus bench`: fixed, documented 3D scenes at a chosen size; prints and writes particle-updates per
 // second, seconds per phase and memory per particle. See docs/performance.md.
 #include "commands.hpp"
+#include "talus/core/simd_dispatch.hpp"
 #include "talus/core/error.hpp"
 #include "talus/core/version.hpp"
 #include "talus/scene/scene_json.hpp"
@@ -268,8 +269,8 @@ void run_update_bench(const BenchOptions& o) {
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double rate_updates = double(n) * o.steps / wall;
-  fmt::print("talus bench: update scene (the constitutive update alone), {} particles, {} material, {} threads, {} passes\n",
-             n, o.material, omp_get_max_threads(), o.steps);
+  fmt::print("talus bench: update scene (the constitutive update alone), {} particles, {} material, {} threads, {} kernels, {} passes\n",
+             n, o.material, omp_get_max_threads(), active_isa(), o.steps);
   fmt::print("  {:.3f} M updates/s ({:.3f} s, {:.2f} ns per particle update)\n", rate_updates / 1e6, wall,
              1e9 * wall * omp_get_max_threads() / (double(n) * o.steps));
   fmt::print("  plastic: {:.1f}% of the updates (dissipated {:.3e} J/m^3 in all, G = {:.4g} Pa)\n",
@@ -282,6 +283,7 @@ void run_update_bench(const BenchOptions& o) {
     j["particles"] = n;
     j["steps"] = o.steps;
     j["threads"] = omp_get_max_threads();
+  j["isa"] = active_isa();
     j["cpu"] = cpu_model();
     j["wall_seconds"] = wall;
     j["updates_per_second"] = rate_updates;
@@ -354,6 +356,7 @@ void run_bench(const BenchOptions& o) {
   j["block_cells"] = solver.cell_sort().block_cells();
   j["steps"] = o.steps;
   j["threads"] = omp_get_max_threads();
+  j["isa"] = active_isa();
   j["cpu"] = cpu_model();
   j["wall_seconds"] = wall;
   j["particle_updates_per_second"] = rate;
@@ -374,8 +377,8 @@ void run_bench(const BenchOptions& o) {
   j["peak_rss_bytes"] = rss;
   if (o.stream) j["stream_triad_bytes_per_second"] = stream;
 
-  fmt::print("talus bench: {} scene, {} particles, {} shape, {} scheme, {} material, MLS {}, {} threads, {} steps\n", o.scene, n,
-             o.shape, o.scheme, o.material, o.mls, omp_get_max_threads(), o.steps);
+  fmt::print("talus bench: {} scene, {} particles, {} shape, {} scheme, {} material, MLS {}, {} threads, {} kernels, {} steps\n",
+             o.scene, n, o.shape, o.scheme, o.material, o.mls, omp_get_max_threads(), active_isa(), o.steps);
   fmt::print("  {:.3f} M particle-updates/s ({:.3f} s)\n", rate / 1e6, wall);
   const double total = solver.phase_times().total();
   for (int p = 0; p < static_cast<int>(Phase::Count); ++p)
@@ -445,7 +448,12 @@ void add_bench_command(CLI::App& app) {
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   cmd->add_flag("--stream", o->stream, "Also measure the STREAM triad memory bandwidth at the same thread count");
-  cmd->callback([o]() { run_bench(*o); });
+  auto isa = std::make_shared<std::string>();
+  add_isa_option(cmd, isa);
+  cmd->callback([o, isa]() {
+    if (!isa->empty()) select_isa(*isa);
+    run_bench(*o);
+  });
 }
 
 }  // namespace talus::app

@@ -4,6 +4,9 @@
 // one line on stderr and the error's exit code (2 bad input, 3 instability).
 #include <CLI/CLI.hpp>
 
+#include <memory>
+#include <string>
+
 namespace talus::app {
 
 void add_run_command(CLI::App& app);
@@ -12,5 +15,9 @@ void add_bench_command(CLI::App& app);
 void add_element_test_command(CLI::App& app);
 void add_dem_springs_command(CLI::App& app);
 void add_schema_command(CLI::App& app);
+
+/// The --isa option of the commands that run the solver (core/simd_dispatch.hpp); apply it with
+/// select_isa(*value) in the callback: "auto" (default) or a path of available_isas().
+void add_isa_option(CLI::App* command, const std::shared_ptr<std::string>& value);
 
 }  // namespace talus::app

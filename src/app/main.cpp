@@ -1,6 +1,7 @@
 // The talus command-line program: parses the subcommand and reports errors in one line.
 #include "commands.hpp"
 #include "talus/core/error.hpp"
+#include "talus/core/simd_dispatch.hpp"
 #include "talus/core/version.hpp"
 
 #include <fmt/core.h>
@@ -21,6 +22,7 @@ int main(int argc, char** argv) {
   talus::app::add_schema_command(app);
 
   try {
+    talus::select_isa_from_environment();  // TALUS_ISA; a command's --isa overrides it
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
     return app.exit(e);
@@ -36,3 +38,16 @@ int main(int argc, char** argv) {
   }
   return 0;
 }
+
+namespace talus::app {
+
+void add_isa_option(CLI::App* command, const std::shared_ptr<std::string>& value) {
+  command->add_option("--isa", *value,
+                      "Vector path of the kernels: auto (the best this CPU has) or one of " + [] {
+                        std::string names;
+                        for (const std::string& n : available_isas()) names += (names.empty() ? "" : ", ") + n;
+                        return names;
+                      }() + " (reference: the plain C++ path). Every path gives the same bits; also TALUS_ISA");
+}
+
+}  // namespace talus::app

@@ -1,6 +1,7 @@
 // `talus run SCENE`: run a scene and write its outputs. `talus check SCENE`: validate it and print
 // what a run would do, writing nothing.
 #include "commands.hpp"
+#include "talus/core/simd_dispatch.hpp"
 #include "talus/core/error.hpp"
 #include "talus/io/checkpoint.hpp"
 #include "talus/driver/run_driver.hpp"
@@ -71,7 +72,9 @@ void add_run_command(CLI::App& app) {
   auto out_dir = std::make_shared<std::string>();
   auto threads = std::make_shared<int>(0);
   auto quiet = std::make_shared<bool>(false);
+  auto isa = std::make_shared<std::string>();
   cmd->add_option("scene", *scene_path, "Scene file (JSON); see docs/scene-reference.md")->required();
+  add_isa_option(cmd, isa);
   cmd->add_option("--out", *out_dir, "Output folder (default: runs/<scene name>)");
   cmd->add_option("--threads", *threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)")->check(CLI::Range(1, 4096));
   cmd->add_flag("--quiet", *quiet, "No progress line");
@@ -89,6 +92,7 @@ void add_run_command(CLI::App& app) {
       ->capture_default_str();
   cmd->callback([=]() {
     set_threads(*threads);
+    if (!isa->empty()) select_isa(*isa);
     Scene scene = read_scene_file(*scene_path);  // validated before anything is written
     print_warnings(scene);
     const MemoryEstimate memory = estimate_memory(scene);
@@ -104,8 +108,8 @@ void add_run_command(CLI::App& app) {
       fmt::print("talus: restart from {} at step {}, t = {:.6g} s\n", *restart, solver.step_count(), solver.time());
     }
     const int threads = omp_get_max_threads();
-    fmt::print("talus: {} particles, {} thread{}, about {} of memory, output in {}\n", solver.particles().size(), threads,
-               threads == 1 ? "" : "s", format_bytes(double(memory.total())), dir);
+    fmt::print("talus: {} particles, {} thread{}, {} kernels, about {} of memory, output in {}\n", solver.particles().size(),
+               threads, threads == 1 ? "" : "s", active_isa(), format_bytes(double(memory.total())), dir);
     RunOptions options;
     options.out_dir = dir;
     options.progress = !*quiet;

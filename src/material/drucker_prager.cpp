@@ -166,7 +166,8 @@ DruckerPragerResult DruckerPrager::plastic_return(Sym6& stress, DruckerPragerSta
       // alpha I1 <= k); written this way (and clamped) it has no cancellation, e.g. it is exactly
       // 0 for associated flow without cohesion.
       const double k_new = k + hi * dl;
-      result.plastic_work = dl * (std::fmax(0.0, k_new - (alpha_ - alpha_g_) * i1_new) + beta_n);
+      const double bracket = k_new - (alpha_ - alpha_g_) * i1_new;
+      result.plastic_work = dl * ((bracket > 0.0 ? bracket : 0.0) + beta_n);  // the kernels' max, +0 at 0
       return result;
     }
   }

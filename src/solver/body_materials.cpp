@@ -1,8 +1,35 @@
 #include "talus/solver/body_materials.hpp"
 
+#include "talus/core/simd_dispatch.hpp"
 #include "talus/core/tensor.hpp"
 
+#include <algorithm>
+
 namespace talus {
+
+namespace {
+
+DruckerPragerKernelConstants lane_constants(const std::vector<DruckerPrager>& models, const GranularOptions& granular) {
+  DruckerPragerKernelConstants c;
+  const DruckerPrager& m = models[0];  // [1] differs only in alpha_g
+  c.shear = m.shear_modulus();
+  c.lame = m.lame_lambda();
+  c.alpha = m.alpha();
+  c.initial_strength = m.initial_strength();
+  c.hardening_isotropic = m.hardening_isotropic();
+  c.shear_plus_kinematic = m.shear_modulus() + m.hardening_kinematic();
+  c.first_invariant_cutoff = m.first_invariant_cutoff();
+  c.separation_volume_ratio = granular.separation_volume_ratio;
+  c.flowing_plastic_strain = granular.flowing_plastic_strain;
+  for (int i = 0; i < 2; ++i) {
+    c.cone_denominator[i] = models[i].cone_denominator();
+    c.dilation_factor[i] = 9.0 * models[i].bulk_modulus() * models[i].alpha_dilatancy();
+    c.alpha_excess[i] = models[i].alpha() - models[i].alpha_dilatancy();
+  }
+  return c;
+}
+
+}  // namespace
 
 BodyMaterials::BodyMaterials(const Scene& scene, ParticleStore& particles) {
   for (const BodySpec& b : scene.bodies) {
@@ -16,6 +43,7 @@ BodyMaterials::BodyMaterials(const Scene& scene, ParticleStore& particles) {
       body.plastic.emplace_back(m.drucker_prager, prefix);
       body.plastic.push_back(body.plastic[0].with_dilatancy(m.granular.flowing_dilatancy_angle_deg));
       body.granular = m.granular;
+      body.drucker_prager_lanes = lane_constants(body.plastic, body.granular);
       any_plastic_ = true;
       // the back stress moves only with kinematic hardening (docs/drucker-prager.md)
       any_kinematic_ = any_kinematic_ || (m.drucker_prager.hardening_modulus > 0.0 && m.drucker_prager.kinematic_fraction > 0.0);
@@ -84,31 +112,74 @@ BodyMaterials::BodyMaterials(const Scene& scene, ParticleStore& particles) {
   return r.plastic_work * P.volume[p];
 }
 
+double BodyMaterials::update_particle(const Body& body, ParticleStore& P, std::size_t p, const StrainIncrements& inc,
+                                      std::size_t k, double dt) const {
+  Sym6 s, de;
+  for (int c = 0; c < 6; ++c) {
+    s[c] = P.stress[c][p];
+    de[c] = inc.strain[c][k];
+  }
+  const double w_yz = inc.spin[0][k], w_xz = inc.spin[1][k], w_xy = inc.spin[2][k];
+  double dissipated = 0.0;
+  P.volume[p] *= 1.0 + trace(de);  // Edo & Matsubara 2015, eq. 35: rho_new = rho / (1 + tr d_eps)
+  if (body.model == MaterialModel::LinearElastic) {
+    rotate_objectively(s, w_yz, w_xz, w_xy);  // Jaumann rate, Hughes-Winget
+    body.elastic.add_increment(s, de);        // Edo & Matsubara 2015, eq. 34
+  } else if (body.model == MaterialModel::DruckerPrager) {
+    dissipated = update_drucker_prager(body, P, p, s, de, w_yz, w_xz, w_xy);
+  } else {
+    dissipated = update_mu_i(body, P, p, s, de, w_yz, w_xz, w_xy, dt);
+  }
+  for (int c = 0; c < 6; ++c) {
+    P.stress[c][p] = s[c];
+    P.strain[c][p] += de[c];
+  }
+  return dissipated;
+}
+
+void BodyMaterials::update_run(const Body& body, ParticleStore& P, std::size_t begin, std::size_t end,
+                               std::size_t chunk_begin, const StrainIncrements& inc, double dt,
+                               double& dissipated) const {
+  // The vector kernels take linear elastic bodies and Drucker-Prager without a back stress; each
+  // lane computes what update_particle would, bit for bit (solver/material_kernels.hpp).
+  const bool lanes = vector_kernels_enabled() &&
+                     (body.model == MaterialModel::LinearElastic ||
+                      (body.model == MaterialModel::DruckerPrager && !P.has_back_stress()));
+  MaterialKernelFields fields;
+  if (lanes) {
+    for (int c = 0; c < 6; ++c) {
+      fields.stress[c] = P.stress[c].data();
+      fields.strain[c] = P.strain[c].data();
+      fields.strain_increment[c] = inc.strain[c].data();
+    }
+    for (int c = 0; c < 3; ++c) fields.spin[c] = inc.spin[c].data();
+    fields.volume = P.volume.data();
+    fields.volume0 = P.volume0.data();
+    fields.plastic_strain = P.plastic_strain.data();
+    fields.chunk_begin = chunk_begin;
+  }
+  std::size_t p = begin;
+  while (p < end) {
+    KernelStop stop{p, end - p};
+    if (lanes)
+      stop = body.model == MaterialModel::LinearElastic
+                 ? update_elastic_lanes(fields, ElasticKernelConstants{body.elastic.lambda, body.elastic.shear}, p, end)
+                 : update_drucker_prager_lanes(fields, body.drucker_prager_lanes, p, end, dissipated);
+    const std::size_t scalar_end = std::min(end, stop.next + stop.scalar_count);
+    for (std::size_t q = stop.next; q < scalar_end; ++q)
+      dissipated += update_particle(body, P, q, inc, q - chunk_begin, dt);
+    p = scalar_end;
+  }
+}
+
 double BodyMaterials::update(ParticleStore& P, std::size_t begin, std::size_t end, const StrainIncrements& inc,
                              double dt) const {
   double dissipated = 0.0;
-  for (std::size_t p = begin; p < end; ++p) {
-    const std::size_t k = p - begin;
-    Sym6 s, de;
-    for (int c = 0; c < 6; ++c) {
-      s[c] = P.stress[c][p];
-      de[c] = inc.strain[c][k];
-    }
-    const double w_yz = inc.spin[0][k], w_xz = inc.spin[1][k], w_xy = inc.spin[2][k];
-    const Body& body = bodies_[P.body[p]];
-    P.volume[p] *= 1.0 + trace(de);  // Edo & Matsubara 2015, eq. 35: rho_new = rho / (1 + tr d_eps)
-    if (body.model == MaterialModel::LinearElastic) {
-      rotate_objectively(s, w_yz, w_xz, w_xy);  // Jaumann rate, Hughes-Winget
-      body.elastic.add_increment(s, de);        // Edo & Matsubara 2015, eq. 34
-    } else if (body.model == MaterialModel::DruckerPrager) {
-      dissipated += update_drucker_prager(body, P, p, s, de, w_yz, w_xz, w_xy);
-    } else {
-      dissipated += update_mu_i(body, P, p, s, de, w_yz, w_xz, w_xy, dt);
-    }
-    for (int c = 0; c < 6; ++c) {
-      P.stress[c][p] = s[c];
-      P.strain[c][p] += de[c];
-    }
+  for (std::size_t p = begin; p < end;) {  // runs of particles of one body
+    std::size_t run_end = p + 1;
+    while (run_end < end && P.body[run_end] == P.body[p]) ++run_end;
+    update_run(bodies_[P.body[p]], P, p, run_end, begin, inc, dt, dissipated);
+    p = run_end;
   }
   return dissipated;
 }

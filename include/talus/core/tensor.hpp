@@ -89,25 +89,29 @@ inline void jaumann_rotate(Sym6& s, double w_yz, double w_xz, double w_xy) {
 /// function; rotate_state() uses this one. Spin (w_yz, w_xz, w_xy) as in core/types.hpp.
 /// Written out (45 multiply-adds, no temporaries): it runs once per particle per step and was 17%
 /// of an elastic step as Eigen 3x3 products.
-inline void rotate_objectively(Sym6& s, double w_yz, double w_xz, double w_xy) {
+/// The same rotation on six stress components of any arithmetic type T (double, or a vector of
+/// doubles in the kernels of solver/material_kernels.cpp): one expression for every path, so the
+/// scalar and the vector updates agree bit for bit. T needs + - * / and T(double).
+template <class T>
+[[gnu::always_inline]] inline void rotate_objectively_values(T s[6], T w_yz, T w_xz, T w_xy) {
   // A = dW/2 with A(0,1) = w_xy/2, A(0,2) = w_xz/2, A(1,2) = w_yz/2; A^2 is symmetric:
   // (A^2)_00 = -(axy^2 + axz^2), (A^2)_01 = -axz ayz, (A^2)_02 = axy ayz, (A^2)_12 = -axy axz, ...
-  const double axy = 0.5 * w_xy, axz = 0.5 * w_xz, ayz = 0.5 * w_yz;
-  const double c = 2.0 / (1.0 + axy * axy + axz * axz + ayz * ayz);  // 2 / (1 + |a|^2)
+  const T axy = T(0.5) * w_xy, axz = T(0.5) * w_xz, ayz = T(0.5) * w_yz;
+  const T c = T(2.0) / (T(1.0) + axy * axy + axz * axz + ayz * ayz);  // 2 / (1 + |a|^2)
   // R = I + c (A + A^2)
-  const double r00 = 1.0 - c * (axy * axy + axz * axz), r11 = 1.0 - c * (axy * axy + ayz * ayz),
-               r22 = 1.0 - c * (axz * axz + ayz * ayz);
-  const double r01 = c * (axy - axz * ayz), r10 = c * (-axy - axz * ayz);
-  const double r02 = c * (axz + axy * ayz), r20 = c * (-axz + axy * ayz);
-  const double r12 = c * (ayz - axy * axz), r21 = c * (-ayz - axy * axz);
-  const double sxx = s[XX], syy = s[YY], szz = s[ZZ], syz = s[YZ], sxz = s[XZ], sxy = s[XY];
+  const T r00 = T(1.0) - c * (axy * axy + axz * axz), r11 = T(1.0) - c * (axy * axy + ayz * ayz),
+          r22 = T(1.0) - c * (axz * axz + ayz * ayz);
+  const T r01 = c * (axy - axz * ayz), r10 = c * (-axy - axz * ayz);
+  const T r02 = c * (axz + axy * ayz), r20 = c * (-axz + axy * ayz);
+  const T r12 = c * (ayz - axy * axz), r21 = c * (-ayz - axy * axz);
+  const T sxx = s[XX], syy = s[YY], szz = s[ZZ], syz = s[YZ], sxz = s[XZ], sxy = s[XY];
   // T = R S
-  const double t00 = r00 * sxx + r01 * sxy + r02 * sxz, t01 = r00 * sxy + r01 * syy + r02 * syz,
-               t02 = r00 * sxz + r01 * syz + r02 * szz;
-  const double t10 = r10 * sxx + r11 * sxy + r12 * sxz, t11 = r10 * sxy + r11 * syy + r12 * syz,
-               t12 = r10 * sxz + r11 * syz + r12 * szz;
-  const double t20 = r20 * sxx + r21 * sxy + r22 * sxz, t21 = r20 * sxy + r21 * syy + r22 * syz,
-               t22 = r20 * sxz + r21 * syz + r22 * szz;
+  const T t00 = r00 * sxx + r01 * sxy + r02 * sxz, t01 = r00 * sxy + r01 * syy + r02 * syz,
+          t02 = r00 * sxz + r01 * syz + r02 * szz;
+  const T t10 = r10 * sxx + r11 * sxy + r12 * sxz, t11 = r10 * sxy + r11 * syy + r12 * syz,
+          t12 = r10 * sxz + r11 * syz + r12 * szz;
+  const T t20 = r20 * sxx + r21 * sxy + r22 * sxz, t21 = r20 * sxy + r21 * syy + r22 * syz,
+          t22 = r20 * sxz + r21 * syz + r22 * szz;
   // S' = T R^T (symmetric: the six upper entries)
   s[XX] = t00 * r00 + t01 * r01 + t02 * r02;
   s[YY] = t10 * r10 + t11 * r11 + t12 * r12;
@@ -115,6 +119,13 @@ inline void rotate_objectively(Sym6& s, double w_yz, double w_xz, double w_xy) {
   s[YZ] = t10 * r20 + t11 * r21 + t12 * r22;
   s[XZ] = t00 * r20 + t01 * r21 + t02 * r22;
   s[XY] = t00 * r10 + t01 * r11 + t02 * r12;
+}
+
+inline void rotate_objectively(Sym6& s, double w_yz, double w_xz, double w_xy) {
+  double v[6];
+  for (int c = 0; c < 6; ++c) v[c] = s[c];
+  rotate_objectively_values(v, w_yz, w_xz, w_xy);
+  for (int c = 0; c < 6; ++c) s[c] = v[c];
 }
 
 }  // namespace talus

@@ -140,6 +140,10 @@ class DruckerPrager {
   double shear_modulus() const { return shear_; }
   double bulk_modulus() const { return bulk_; }
   double lame_lambda() const { return lame_; }
+  double hardening_isotropic() const { return hardening_isotropic_; }  ///< (1 - m) H
+  double hardening_kinematic() const { return hardening_kinematic_; }  ///< m H
+  double first_invariant_cutoff() const { return first_invariant_cutoff_; }  ///< 3 tension_cutoff (may be +inf)
+  double cone_denominator() const { return cone_denominator_; }  ///< G + 9 K alpha alpha_g + H
 
   /// alpha and k of a cone fit for angle phi (degrees) and cohesion c: the formulas above.
   static void cone_coefficients(ConeFit cone, double angle_deg, double cohesion, double& alpha,
@@ -165,6 +169,9 @@ inline DruckerPragerResult DruckerPrager::update(Sym6& stress, DruckerPragerStat
   // caller fills `stress` one component at a time, and Eigen two-wide loads of it, or a Sym6 that
   // escapes into the out-of-line return, kept it on the stack with stalled reloads (store
   // forwarding) that were 7% of a Drucker-Prager step.
+  // The vector kernel of solver/material_kernels.cpp does steps 1-3 (trial, yield test, return to
+  // the cone) lane by lane in exactly these operations; change both together (the ISA test of
+  // tests/solver compares them bit for bit).
   // 1. Elastic trial: sigma += lambda tr(d_eps) I + 2 G d_eps (tensor shear components).
   const double de_v = strain_increment[XX] + strain_increment[YY] + strain_increment[ZZ];
   double trial[6];

@@ -17,6 +17,7 @@
 #include "talus/material/mu_i.hpp"
 #include "talus/particles/particle_store.hpp"
 #include "talus/scene/scene.hpp"
+#include "talus/solver/material_kernels.hpp"
 #include "talus/transfer/transfers.hpp"
 
 #include <cstddef>
@@ -66,6 +67,7 @@ class BodyMaterials {
     std::vector<DruckerPrager> plastic;  // [0] as given, [1] with the flowing dilatancy angle
     GranularOptions granular;  // and μ(I): separation_volume_ratio
     std::vector<MuI> mu_i;     // μ(I) only: one model
+    DruckerPragerKernelConstants drucker_prager_lanes;  // the vector kernel's copy of `plastic`
   };
   static bool separated(const Body& body, const ParticleStore& P, std::size_t p);
   static double release_separated(const Body& body, ParticleStore& P, std::size_t p, Sym6& stress);
@@ -73,6 +75,12 @@ class BodyMaterials {
                      double w_xz, double w_xy, double dt) const;
   double update_drucker_prager(const Body& body, ParticleStore& P, std::size_t p, Sym6& stress, const Sym6& d_eps,
                                double w_yz, double w_xz, double w_xy) const;
+  /// The scalar reference update of particle p (increment k); returns its dissipation.
+  double update_particle(const Body& body, ParticleStore& P, std::size_t p, const StrainIncrements& inc,
+                         std::size_t k, double dt) const;
+  /// Particles [begin, end) of one body: the vector kernel where it applies, else the reference.
+  void update_run(const Body& body, ParticleStore& P, std::size_t begin, std::size_t end, std::size_t chunk_begin,
+                  const StrainIncrements& inc, double dt, double& dissipated) const;
 
   std::vector<Body> bodies_;
   bool any_plastic_ = false;

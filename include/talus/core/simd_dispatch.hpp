@@ -1,0 +1,36 @@
+#pragma once
+// Which instruction set the vectorised kernels run on. One portable binary carries the kernels
+// compiled for every x86-64 level Google Highway attains (emu128, ssse3, sse4, avx2, avx512) and
+// picks the best the CPU has at run time; `reference` runs the plain C++ reference path instead of
+// the Highway kernels. Every path gives bit-identical results (docs/performance.md, "Vector
+// kernels"): the kernels vectorise ACROSS particles, each lane doing the reference's operations
+// in the reference's order, the build never contracts a*b + c into a fused multiply-add
+// (-ffp-contract=off), and sums over particles stay in particle order. tests/solver checks it.
+//
+// The choice is global to the process: `talus run|bench --isa NAME` or the environment variable
+// TALUS_ISA select it; the default is `auto` (the best path available).
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace talus {
+
+/// The paths this build and this CPU can run, worst first: "reference", then the Highway targets
+/// ("emu128", "ssse3", "sse4", "avx2", "avx512", ...).
+std::vector<std::string> available_isas();
+
+/// Select a path by name ("auto" = the best available). Throws input_error naming the allowed
+/// values when `name` is unknown or not available here.
+void select_isa(std::string_view name);
+
+/// Select from the environment variable TALUS_ISA when it is set (the same names); otherwise keep
+/// the current choice.
+void select_isa_from_environment();
+
+/// The path in use ("reference", "avx2", ...).
+std::string active_isa();
+
+/// False when the scalar reference path is selected: callers then skip the vector kernels.
+bool vector_kernels_enabled();
+
+}  // namespace talus

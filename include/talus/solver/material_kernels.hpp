@@ -1,0 +1,61 @@
+#pragma once
+// Vectorised material updates (Google Highway, run-time dispatch; core/simd_dispatch.hpp): the
+// linear elastic update and the Drucker–Prager update of a run of particles of one body, several
+// particles per instruction. Each lane does the operations of the scalar reference
+// (BodyMaterials' per-particle update, DruckerPrager::update) in the same order, so every
+// instruction set gives the reference's bits. A group of particles that needs a branch the kernel
+// does not vectorise (a separated particle, a return to the apex or the tension cut-off, a
+// non-finite value) is left to the scalar reference: the kernel stops before it and says how many
+// particles the reference must take.
+#include <array>
+#include <cstddef>
+
+namespace talus {
+
+/// The particle arrays of one chunk and its increments (increment k belongs to particle chunk_begin + k).
+struct MaterialKernelFields {
+  std::array<double*, 6> stress{}, strain{};
+  double* volume = nullptr;
+  const double* volume0 = nullptr;
+  double* plastic_strain = nullptr;
+  std::array<const double*, 6> strain_increment{};
+  std::array<const double*, 3> spin{};  // w_yz, w_xz, w_xy
+  std::size_t chunk_begin = 0;
+};
+
+struct ElasticKernelConstants {
+  double lambda = 0.0, shear = 0.0;
+};
+
+/// Drucker–Prager without kinematic hardening (the back stress is zero): the constants of the two
+/// models of a granular body, [0] before it flows and [1] once it flows (they differ in alpha_g).
+struct DruckerPragerKernelConstants {
+  double shear = 0.0, lame = 0.0, alpha = 0.0, initial_strength = 0.0, hardening_isotropic = 0.0;
+  double shear_plus_kinematic = 0.0;       // G + H_kin (0 kinematic hardening here: G)
+  double first_invariant_cutoff = 0.0;     // may be +inf
+  double separation_volume_ratio = 0.0;    // 0: no separation rule
+  double flowing_plastic_strain = 0.0;
+  std::array<double, 2> cone_denominator{};  // G + 9 K alpha alpha_g + H
+  std::array<double, 2> dilation_factor{};   // 9 K alpha_g
+  std::array<double, 2> alpha_excess{};      // alpha - alpha_g
+};
+
+/// Where a kernel stopped: particles [begin, next) are done; the scalar reference must take the
+/// next `scalar_count` particles (a group it does not vectorise, or the tail shorter than a group)
+/// before the kernel can go on.
+struct KernelStop {
+  std::size_t next = 0;
+  std::size_t scalar_count = 0;
+};
+
+/// Particles [begin, end) of a linear elastic body: volume, Hughes–Winget rotation, Hooke, strain.
+KernelStop update_elastic_lanes(const MaterialKernelFields& fields, const ElasticKernelConstants& constants,
+                                std::size_t begin, std::size_t end);
+
+/// Particles [begin, end) of a Drucker–Prager body (no back stress): adds each particle's
+/// dissipation V sigma : d_eps^p to `dissipated` in particle order.
+KernelStop update_drucker_prager_lanes(const MaterialKernelFields& fields,
+                                       const DruckerPragerKernelConstants& constants, std::size_t begin,
+                                       std::size_t end, double& dissipated);
+
+}  // namespace talus

@@ -1,0 +1,169 @@
+// Vectorised material updates, compiled once per instruction set by Highway's foreach_target and
+// dispatched at run time (header: solver/material_kernels.hpp). Arithmetic only through Add, Sub,
+// Mul, Div and Sqrt (correctly rounded on every target) and never MulAdd: the scalar reference has
+// no fused multiply-add (the build sets -ffp-contract=off), so neither may the lanes.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "solver/material_kernels.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+
+#include <hwy/highway.h>
+
+#include "talus/core/tensor.hpp"
+#include "talus/solver/material_kernels.hpp"
+
+HWY_BEFORE_NAMESPACE();
+namespace talus {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+using D = hn::ScalableTag<double>;
+using V = hn::Vec<D>;
+
+/// A vector of doubles with the arithmetic operators, so that the templated expressions of the
+/// scalar code (rotate_objectively_values) run on it unchanged.
+struct Lanes {
+  V v;
+  Lanes(V x) : v(x) {}  // NOLINT: implicit from a vector
+  explicit Lanes(double x) : v(hn::Set(D(), x)) {}
+};
+inline Lanes operator+(Lanes a, Lanes b) { return hn::Add(a.v, b.v); }
+inline Lanes operator-(Lanes a, Lanes b) { return hn::Sub(a.v, b.v); }
+inline Lanes operator*(Lanes a, Lanes b) { return hn::Mul(a.v, b.v); }
+inline Lanes operator/(Lanes a, Lanes b) { return hn::Div(a.v, b.v); }
+inline Lanes operator-(Lanes a) { return hn::Neg(a.v); }
+
+// The common part of both models: loads, the volume update V <- V (1 + tr d_eps) (Edo &
+// Matsubara 2015, eq. 35) and the Hughes–Winget rotation of the stress.
+struct LaneState {
+  V s[6], de[6], volume;
+};
+
+HWY_ATTR inline LaneState load_and_rotate(const MaterialKernelFields& f, std::size_t p) {
+  const D d;
+  const std::size_t k = p - f.chunk_begin;
+  LaneState st;
+  for (int c = 0; c < 6; ++c) st.de[c] = hn::LoadU(d, f.strain_increment[c] + k);
+  Lanes s[6] = {hn::LoadU(d, f.stress[0] + p), hn::LoadU(d, f.stress[1] + p), hn::LoadU(d, f.stress[2] + p),
+                hn::LoadU(d, f.stress[3] + p), hn::LoadU(d, f.stress[4] + p), hn::LoadU(d, f.stress[5] + p)};
+  const V trace = hn::Add(hn::Add(st.de[0], st.de[1]), st.de[2]);
+  st.volume = hn::Mul(hn::LoadU(d, f.volume + p), hn::Add(hn::Set(d, 1.0), trace));
+  rotate_objectively_values<Lanes>(s, hn::LoadU(d, f.spin[0] + k), hn::LoadU(d, f.spin[1] + k),
+                                   hn::LoadU(d, f.spin[2] + k));
+  for (int c = 0; c < 6; ++c) st.s[c] = s[c].v;
+  return st;
+}
+
+HWY_ATTR inline void store_stress_strain_volume(const MaterialKernelFields& f, std::size_t p, const LaneState& st) {
+  const D d;
+  for (int c = 0; c < 6; ++c) {
+    hn::StoreU(st.s[c], d, f.stress[c] + p);
+    hn::StoreU(hn::Add(hn::LoadU(d, f.strain[c] + p), st.de[c]), d, f.strain[c] + p);
+  }
+  hn::StoreU(st.volume, d, f.volume + p);
+}
+
+HWY_ATTR KernelStop ElasticLanes(const MaterialKernelFields& f, const ElasticKernelConstants& m, std::size_t begin,
+                                 std::size_t end) {
+  const D d;
+  const std::size_t n = hn::Lanes(d);
+  const V lambda = hn::Set(d, m.lambda), two_shear = hn::Set(d, 2.0 * m.shear);
+  std::size_t p = begin;
+  for (; p + n <= end; p += n) {
+    LaneState st = load_and_rotate(f, p);
+    // LinearElastic::add_increment: s_i += lambda tr(d_eps) + 2 G d_eps_i (Edo & Matsubara 2015, eq. 34)
+    const V lt = hn::Mul(lambda, hn::Add(hn::Add(st.de[0], st.de[1]), st.de[2]));
+    for (int c = 0; c < 3; ++c) st.s[c] = hn::Add(st.s[c], hn::Add(lt, hn::Mul(two_shear, st.de[c])));
+    for (int c = 3; c < 6; ++c) st.s[c] = hn::Add(st.s[c], hn::Mul(two_shear, st.de[c]));
+    store_stress_strain_volume(f, p, st);
+  }
+  return {p, end - p};
+}
+
+HWY_ATTR KernelStop DruckerPragerLanes(const MaterialKernelFields& f, const DruckerPragerKernelConstants& m,
+                                       std::size_t begin, std::size_t end, double& dissipated) {
+  const D d;
+  const std::size_t n = hn::Lanes(d);
+  const V zero = hn::Zero(d), two_shear = hn::Set(d, 2.0 * m.shear), lame = hn::Set(d, m.lame);
+  const V third = hn::Set(d, 3.0), two = hn::Set(d, 2.0), sqrt2 = hn::Set(d, 1.4142135623730951);
+  const V alpha = hn::Set(d, m.alpha), k0 = hn::Set(d, m.initial_strength), hi = hn::Set(d, m.hardening_isotropic);
+  const V gk = hn::Set(d, m.shear_plus_kinematic), cutoff = hn::Set(d, m.first_invariant_cutoff);
+  const V separation = hn::Set(d, m.separation_volume_ratio), flowing_strain = hn::Set(d, m.flowing_plastic_strain);
+  HWY_ALIGN double work[hn::MaxLanes(d)];
+  std::size_t p = begin;
+  for (; p + n <= end; p += n) {
+    LaneState st = load_and_rotate(f, p);
+    // BodyMaterials: a particle beyond the separation volume carries no stress (scalar reference).
+    if (m.separation_volume_ratio > 0.0 &&
+        !hn::AllFalse(d, hn::Gt(st.volume, hn::Mul(separation, hn::LoadU(d, f.volume0 + p)))))
+      return {p, n};
+    const V eps_p = hn::LoadU(d, f.plastic_strain + p);
+    // Abe, Johansson & Konagai 2005, sec. 7: the flowing model (psi = flowing value) once eps_p is past the threshold.
+    const auto flowing = hn::Gt(eps_p, flowing_strain);
+    const V cone_denominator = hn::IfThenElse(flowing, hn::Set(d, m.cone_denominator[1]), hn::Set(d, m.cone_denominator[0]));
+    const V dilation = hn::IfThenElse(flowing, hn::Set(d, m.dilation_factor[1]), hn::Set(d, m.dilation_factor[0]));
+    const V alpha_excess = hn::IfThenElse(flowing, hn::Set(d, m.alpha_excess[1]), hn::Set(d, m.alpha_excess[0]));
+    // DruckerPrager::update, step 1: elastic trial.
+    const V de_v = hn::Add(hn::Add(st.de[0], st.de[1]), st.de[2]);
+    V trial[6];
+    for (int c = 0; c < 6; ++c) trial[c] = hn::Add(st.s[c], hn::Mul(two_shear, st.de[c]));
+    for (int c = 0; c < 3; ++c) trial[c] = hn::Add(trial[c], hn::Mul(lame, de_v));
+    // Step 2: invariants (the back stress is zero) and the yield function, Abe, Johansson & Konagai 2005, eq. 23.
+    const V i1 = hn::Add(hn::Add(trial[0], trial[1]), trial[2]);
+    const V mean = hn::Div(i1, third);
+    V xi[6];
+    for (int c = 0; c < 3; ++c) xi[c] = hn::Sub(trial[c], mean);
+    for (int c = 3; c < 6; ++c) xi[c] = trial[c];
+    const V diagonal = hn::Add(hn::Add(hn::Mul(xi[0], xi[0]), hn::Mul(xi[1], xi[1])), hn::Mul(xi[2], xi[2]));
+    const V shear = hn::Add(hn::Add(hn::Mul(xi[3], xi[3]), hn::Mul(xi[4], xi[4])), hn::Mul(xi[5], xi[5]));
+    const V xi_norm = hn::Sqrt(hn::Add(diagonal, hn::Mul(two, shear)));
+    const V q = hn::Div(xi_norm, sqrt2);
+    const V k = hn::Add(k0, hn::Mul(hi, eps_p));
+    const V fy = hn::Sub(hn::Add(hn::Mul(alpha, i1), q), k);
+    const auto elastic = hn::And(hn::Le(fy, zero), hn::Le(i1, cutoff));
+    // Step 3: return to the cone, f linear in the multiplier dl.
+    const V dl = hn::Div(fy, cone_denominator);
+    const V q_new = hn::Sub(q, hn::Mul(gk, dl));
+    const V i1_new = hn::Sub(i1, hn::Mul(dilation, dl));
+    const auto cone = hn::And(hn::And(hn::Gt(fy, zero), hn::Ge(q_new, zero)), hn::Le(i1_new, cutoff));
+    if (!hn::AllTrue(d, hn::Or(elastic, cone))) return {p, n};  // apex, cut-off or non-finite: reference
+    const V scale = hn::Div(q_new, q);
+    const V m_new = hn::Div(i1_new, third);
+    for (int c = 0; c < 6; ++c) {
+      V returned = hn::Add(hn::Mul(scale, xi[c]), zero);  // + the (zero) back stress, as the reference adds it
+      if (c < 3) returned = hn::Add(returned, m_new);
+      st.s[c] = hn::IfThenElse(cone, returned, trial[c]);
+    }
+    // sigma : d_eps^p = dl (k_new - (alpha - alpha_g) I1_new), clamped at +0 (DruckerPrager::plastic_return)
+    const V bracket = hn::Sub(hn::Add(k, hn::Mul(hi, dl)), hn::Mul(alpha_excess, i1_new));
+    const V plastic_work = hn::Mul(dl, hn::IfThenElse(hn::Gt(bracket, zero), bracket, zero));
+    hn::StoreU(hn::IfThenElse(cone, hn::Add(eps_p, dl), eps_p), d, f.plastic_strain + p);
+    hn::Store(hn::Mul(hn::IfThenElseZero(cone, plastic_work), st.volume), d, work);
+    store_stress_strain_volume(f, p, st);
+    for (std::size_t lane = 0; lane < n; ++lane) dissipated += work[lane];  // in particle order
+  }
+  return {p, end - p};
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace talus
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace talus {
+
+HWY_EXPORT(ElasticLanes);
+HWY_EXPORT(DruckerPragerLanes);
+
+KernelStop update_elastic_lanes(const MaterialKernelFields& fields, const ElasticKernelConstants& constants,
+                                std::size_t begin, std::size_t end) {
+  return HWY_DYNAMIC_DISPATCH(ElasticLanes)(fields, constants, begin, end);
+}
+
+KernelStop update_drucker_prager_lanes(const MaterialKernelFields& fields,
+                                       const DruckerPragerKernelConstants& constants, std::size_t begin,
+                                       std::size_t end, double& dissipated) {
+  return HWY_DYNAMIC_DISPATCH(DruckerPragerLanes)(fields, constants, begin, end, dissipated);
+}
+
+}  // namespace talus
+#endif

@@ -1,0 +1,186 @@
+// Every vector path of the kernels gives the bits of the plain C++ reference (issue 18, item 2;
+// core/simd_dispatch.hpp): the material update on random states in every regime of the
+// Drucker-Prager return, and whole runs of a granular collapse and of two elastic bodies.
+#include "bit_identity.hpp"
+#include "scene_fixtures.hpp"
+#include "talus/core/error.hpp"
+#include "talus/core/simd_dispatch.hpp"
+#include "talus/solver/body_materials.hpp"
+#include "talus/solver/solver.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace talus {
+namespace {
+
+/// Selects an instruction-set path for the test's scope and goes back to "auto" after it.
+struct IsaScope {
+  explicit IsaScope(const std::string& name) { select_isa(name); }
+  ~IsaScope() { select_isa("auto"); }
+};
+
+std::vector<std::string> vector_paths() {
+  std::vector<std::string> paths = available_isas();
+  paths.erase(paths.begin());  // "reference"
+  return paths;
+}
+
+TEST(IsaPaths, TheReferenceAndAtLeastTheBaselineAreAvailable) {
+  const std::vector<std::string> all = available_isas();
+  ASSERT_GE(all.size(), 2u);
+  EXPECT_EQ(all.front(), "reference");
+  {
+    IsaScope scope("reference");
+    EXPECT_EQ(active_isa(), "reference");
+    EXPECT_FALSE(vector_kernels_enabled());
+  }
+  for (const std::string& name : vector_paths()) {
+    IsaScope scope(name);
+    EXPECT_EQ(active_isa(), name);
+    EXPECT_TRUE(vector_kernels_enabled());
+  }
+  EXPECT_EQ(active_isa(), all.back());  // auto: the best
+}
+
+TEST(IsaPaths, AnUnknownPathIsAnInputErrorNamingTheChoices) {
+  try {
+    select_isa("avx1024");
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("avx1024"), std::string::npos) << message;
+    EXPECT_NE(message.find("reference"), std::string::npos) << message;
+    EXPECT_EQ(e.exit_code(), 2);
+  }
+  EXPECT_TRUE(vector_kernels_enabled());
+}
+
+// Particles of a Drucker-Prager sand with cohesion and a tension cut-off in random states: inside
+// the cone, beyond it (cone return), far in tension (apex and cut-off), separated (V > 1.5 V0), some
+// flowing (the second model's alpha_g), and one non-finite increment. One chunk per call, as the
+// solver makes them.
+struct MaterialCase {
+  ParticleStore particles;
+  std::vector<StrainIncrements> chunks;
+};
+
+MaterialCase random_material_case(const Scene& scene, std::size_t n, unsigned seed) {
+  MaterialCase c;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const std::size_t bodies = scene.bodies.size();
+  for (std::size_t p = 0; p < n; ++p)
+    c.particles.add(static_cast<std::int64_t>(p), Vec3::Zero(), Vec3::Zero(), 1.0, 1.0e-3,
+                    static_cast<std::uint16_t>((p / 37) % bodies));  // runs of one body, then the next
+  BodyMaterials(scene, c.particles);  // allocates the plastic state
+  ParticleStore& P = c.particles;
+  for (std::size_t p = 0; p < n; ++p) {
+    // Mostly whole vector groups of one regime, with a few odd particles among them (the kernel
+    // leaves their group to the reference) and runs of them.
+    const bool tension = p % 89 == 0 || (p >= 500 && p < 560);
+    const bool separating = p % 97 == 0 || (p >= 300 && p < 340);
+    const double pressure = 2.0e4 * (0.5 + 0.5 * u(rng)) - (tension ? 3.0e4 : 0.0);
+    const double deviator = (p % 5 == 0 ? 3.0 : 0.8) * 0.6 * std::abs(pressure) * (0.5 + 0.5 * u(rng));
+    for (int k = 0; k < 3; ++k) P.stress[k][p] = -pressure + deviator * u(rng);
+    for (int k = 3; k < 6; ++k) P.stress[k][p] = deviator * u(rng);
+    P.plastic_strain[p] = 0.05 + 0.04 * u(rng);  // either side of flowing_plastic_strain
+    if (separating) P.volume[p] = 1.6e-3;         // separated after the update
+  }
+  for (std::size_t begin = 0; begin < n; begin += StrainIncrements::kCapacity) {
+    StrainIncrements inc;
+    for (std::size_t k = 0; k < StrainIncrements::kCapacity; ++k) {
+      const double scale = (k % 3 == 0 ? 1.0e-2 : 1.0e-4);
+      for (int j = 0; j < 6; ++j) inc.strain[j][k] = scale * u(rng);
+      for (int j = 0; j < 3; ++j) inc.spin[j][k] = scale * u(rng);
+    }
+    c.chunks.push_back(inc);
+  }
+  c.chunks[0].strain[0][5] = std::nan("");  // a non-finite increment goes to the reference too
+  return c;
+}
+
+// Runs the update over all chunks on `isa`; returns the particles and the chunks' dissipation.
+std::pair<ParticleStore, std::vector<double>> update_on(const std::string& isa, const Scene& scene, MaterialCase c) {
+  IsaScope scope(isa);
+  const BodyMaterials materials(scene, c.particles);
+  std::vector<double> dissipated;
+  const std::size_t n = c.particles.size();
+  for (std::size_t b = 0; b * StrainIncrements::kCapacity < n; ++b) {
+    const std::size_t begin = b * StrainIncrements::kCapacity;
+    const std::size_t end = std::min(n, begin + StrainIncrements::kCapacity);
+    dissipated.push_back(materials.update(c.particles, begin, end, c.chunks[b], 1.0e-4));
+  }
+  return {c.particles, dissipated};
+}
+
+Scene sand_and_rock_scene() {
+  const std::string json = R"({
+    "name": "materials",
+    "grid": { "origin": [0, 0, 0], "size": [1, 1, 1], "cell_size": 0.1 },
+    "time": { "end": 0.01 },
+    "materials": {
+      "sand": { "model": "drucker_prager", "density": 1600.0, "young": 2.0e6, "poisson": 0.3,
+                "friction_angle": 30.0, "dilatancy_angle": 10.0, "cohesion": 200.0, "tension_cutoff": 50.0,
+                "flowing_dilatancy_angle": 0.0 },
+      "rock": { "density": 2600.0, "young": 5.0e7, "poisson": 0.25 } },
+    "bodies": [ { "name": "a", "material": "sand", "box": { "min": [0.1, 0.1, 0.1], "max": [0.3, 0.3, 0.3] } },
+                { "name": "b", "material": "rock", "box": { "min": [0.5, 0.5, 0.5], "max": [0.7, 0.7, 0.7] } } ]
+  })";
+  return parse_scene(json, "sand_and_rock_scene");
+}
+
+TEST(IsaPaths, MaterialUpdateGivesTheReferenceBitsInEveryRegime) {
+  const Scene scene = sand_and_rock_scene();
+  const MaterialCase start = random_material_case(scene, 1000, 7);
+  const auto [reference, reference_dissipation] = update_on("reference", scene, start);
+  for (const std::string& isa : vector_paths()) {
+    const auto [lanes, dissipation] = update_on(isa, scene, start);
+    for (int k = 0; k < 6; ++k) {
+      EXPECT_TRUE(test::same_bits(lanes.stress[k], reference.stress[k])) << isa << " stress " << k;
+      EXPECT_TRUE(test::same_bits(lanes.strain[k], reference.strain[k])) << isa << " strain " << k;
+    }
+    EXPECT_TRUE(test::same_bits(lanes.volume, reference.volume)) << isa;
+    EXPECT_TRUE(test::same_bits(lanes.plastic_strain, reference.plastic_strain)) << isa;
+    EXPECT_TRUE(test::same_bits(dissipation, reference_dissipation)) << isa;
+  }
+  // The case reaches every regime: some particles stayed elastic, some returned, some separated.
+  std::size_t returned = 0, unchanged = 0, zero_stress = 0;
+  for (std::size_t p = 0; p < reference.size(); ++p) {
+    if (reference.body[p] != 0) continue;
+    if (reference.plastic_strain[p] != start.particles.plastic_strain[p]) ++returned;
+    else ++unchanged;
+    if (reference.stress[0][p] == 0.0 && reference.stress[3][p] == 0.0) ++zero_stress;
+  }
+  EXPECT_GT(returned, 50u);
+  EXPECT_GT(unchanged, 50u);
+  EXPECT_GT(zero_stress, 10u);
+}
+
+void expect_every_path_matches_the_reference(const Scene& scene) {
+  const Solver reference = [&] {
+    IsaScope scope("reference");
+    return test::run_to_end(scene, 1);
+  }();
+  for (const std::string& isa : vector_paths()) {
+    IsaScope scope(isa);
+    const Solver lanes = test::run_to_end(scene, 2);
+    test::expect_same_particles_and_energies(reference, lanes, isa);
+    EXPECT_TRUE(test::same_bits(lanes.particles().plastic_strain, reference.particles().plastic_strain)) << isa;
+  }
+}
+
+TEST(IsaPaths, GranularCollapseIsBitIdenticalOnEveryPath) {
+  expect_every_path_matches_the_reference(test::column_collapse_scene(0.02, 0.04));
+}
+
+TEST(IsaPaths, ElasticBodiesAreBitIdenticalOnEveryPath) {
+  expect_every_path_matches_the_reference(test::tumbling_block_scene(0.005));
+}
+
+}  // namespace
+}  // namespace talus
