@@ -1,17 +1,46 @@
-#include "talus/transfer/transfers.hpp"
+// The particle-grid transfers, compiled once per instruction set by Highway's foreach_target and
+// dispatched at run time (core/simd_dispatch.hpp). The code is plain C++: compiled for AVX2 or
+// AVX-512 the compiler puts the per-particle tables and the factorised sums in wider registers. It
+// keeps every operation and its order (no fused multiply-add, -ffp-contract=off; no reassociation),
+// so every path gives the same bits; tests/solver/isa_paths_test.cpp checks it.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "transfer/transfers.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
 
+#include <hwy/highway.h>
+
+#include "talus/core/simd_dispatch.hpp"
 #include "talus/grid/terrain.hpp"
 #include "talus/shape/bspline.hpp"
 #include "talus/shape/gimp.hpp"
 #include "talus/shape/linear.hpp"
 #include "talus/transfer/stencil.hpp"
+#include "talus/transfer/transfers.hpp"
 
 #include <omp.h>
 
 #include <cmath>
 #include <type_traits>
 
+#ifndef TALUS_TRANSFER_KIND_DEFINED  // once, not per target
+#define TALUS_TRANSFER_KIND_DEFINED
 namespace talus {
+/// The (shape, terrain) pair as one number, for the exported (non-template) entry points.
+template <class Shape, class Terrain>
+constexpr int transfer_kind() {
+  const int shape = std::is_same_v<Shape, LinearShape>  ? 0
+                    : std::is_same_v<Shape, UGimpShape> ? 1
+                    : std::is_same_v<Shape, CpGimpShape> ? 2
+                                                          : 3;
+  return 2 * shape + (Terrain::kIsFlat ? 0 : 1);
+}
+}  // namespace talus
+#endif
+
+HWY_BEFORE_NAMESPACE();
+namespace talus {
+namespace HWY_NAMESPACE {
+
 
 namespace {
 
@@ -109,8 +138,8 @@ void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid, Co
 }  // namespace
 
 template <class Shape, class Terrain>
-void scatter_to_grid(const ParticleStore& P, const CellSort& sort, Grid& grid, ScatterFields fields,
-                     ColourPassTiming* timing) {
+void scatter_impl(const ParticleStore& P, const CellSort& sort, Grid& grid, ScatterFields fields,
+                  ColourPassTiming* timing) {
   switch (fields) {
     case ScatterFields::MassMomentumForce: scatter_fields<Shape, Terrain, true, true, true>(P, sort, grid, timing); break;
     case ScatterFields::Momentum: scatter_fields<Shape, Terrain, false, true, false>(P, sort, grid, timing); break;
@@ -233,9 +262,9 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::arra
 }  // namespace
 
 template <class Shape, class Terrain>
-GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, Grid& grid,
-                              std::array<std::vector<double>, 3>& displacement, std::vector<double>& block_damping,
-                              const GatherOptions& options, ColourPassTiming* timing) {
+GatherResult gather_impl(ParticleStore& P, const CellSort& sort, Grid& grid,
+                         std::array<std::vector<double>, 3>& displacement, std::vector<double>& block_damping,
+                         const GatherOptions& options, ColourPassTiming* timing) {
   GatherResult result;
   if (!options.remap) {
     // one pass over all blocks; a timing record lists it as colour 0
@@ -263,8 +292,8 @@ GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, Grid& grid
 }
 
 template <class Shape, class Terrain>
-void strain_increments(const ParticleStore& P, const Grid& grid, const NodeVectors& nv,
-                       double dt, std::size_t begin, std::size_t end, StrainIncrements& out) {
+void strain_impl(const ParticleStore& P, const Grid& grid, const NodeVectors& nv,
+                 double dt, std::size_t begin, std::size_t end, StrainIncrements& out) {
   const Terrain& terrain = grid.template terrain<Terrain>();
   const double h = grid.geometry().h;
   ParticleStencil<Shape> stencil;
@@ -313,6 +342,75 @@ void strain_increments(const ParticleStore& P, const Grid& grid, const NodeVecto
   }
 }
 
+// The exported entry points take the (shape, terrain) pair as its transfer_kind number.
+#define TALUS_TRANSFER_CASES(CALL)                                                                   \
+  switch (kind) {                                                                                  \
+    case transfer_kind<LinearShape, FlatTerrain>(): CALL(LinearShape, FlatTerrain);                 \
+    case transfer_kind<UGimpShape, FlatTerrain>(): CALL(UGimpShape, FlatTerrain);                   \
+    case transfer_kind<CpGimpShape, FlatTerrain>(): CALL(CpGimpShape, FlatTerrain);                 \
+    case transfer_kind<QuadraticBSplineShape, FlatTerrain>(): CALL(QuadraticBSplineShape, FlatTerrain); \
+    case transfer_kind<LinearShape, ProfileTerrain>(): CALL(LinearShape, ProfileTerrain);           \
+    case transfer_kind<UGimpShape, ProfileTerrain>(): CALL(UGimpShape, ProfileTerrain);             \
+    case transfer_kind<CpGimpShape, ProfileTerrain>(): CALL(CpGimpShape, ProfileTerrain);           \
+    default: CALL(QuadraticBSplineShape, ProfileTerrain);                                          \
+  }
+
+void ScatterToGrid(int kind, const ParticleStore& P, const CellSort& sort, Grid& grid, ScatterFields fields,
+                   ColourPassTiming* timing) {
+#define TALUS_SCATTER(S, T) return scatter_impl<S, T>(P, sort, grid, fields, timing)
+  TALUS_TRANSFER_CASES(TALUS_SCATTER)
+#undef TALUS_SCATTER
+}
+
+GatherResult GatherFromGrid(int kind, ParticleStore& P, const CellSort& sort, Grid& grid,
+                            std::array<std::vector<double>, 3>& displacement, std::vector<double>& block_damping,
+                            const GatherOptions& options, ColourPassTiming* timing) {
+#define TALUS_GATHER(S, T) return gather_impl<S, T>(P, sort, grid, displacement, block_damping, options, timing)
+  TALUS_TRANSFER_CASES(TALUS_GATHER)
+#undef TALUS_GATHER
+}
+
+void StrainIncrementsOf(int kind, const ParticleStore& P, const Grid& grid, const NodeVectors& nv, double dt,
+                        std::size_t begin, std::size_t end, StrainIncrements& out) {
+#define TALUS_STRAIN(S, T) return strain_impl<S, T>(P, grid, nv, dt, begin, end, out)
+  TALUS_TRANSFER_CASES(TALUS_STRAIN)
+#undef TALUS_STRAIN
+}
+#undef TALUS_TRANSFER_CASES
+}  // namespace HWY_NAMESPACE
+}  // namespace talus
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace talus {
+
+HWY_EXPORT(ScatterToGrid);
+HWY_EXPORT(GatherFromGrid);
+HWY_EXPORT(StrainIncrementsOf);
+
+// The `reference` path runs the baseline build of the same code.
+#define TALUS_TRANSFER_DISPATCH(FUNC) (vector_kernels_enabled() ? HWY_DYNAMIC_DISPATCH(FUNC) : &HWY_STATIC_DISPATCH(FUNC))
+
+template <class Shape, class Terrain>
+void scatter_to_grid(const ParticleStore& P, const CellSort& sort, Grid& grid, ScatterFields fields,
+                     ColourPassTiming* timing) {
+  TALUS_TRANSFER_DISPATCH(ScatterToGrid)(transfer_kind<Shape, Terrain>(), P, sort, grid, fields, timing);
+}
+
+template <class Shape, class Terrain>
+GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, Grid& grid,
+                              std::array<std::vector<double>, 3>& displacement, std::vector<double>& block_damping,
+                              const GatherOptions& options, ColourPassTiming* timing) {
+  return TALUS_TRANSFER_DISPATCH(GatherFromGrid)(transfer_kind<Shape, Terrain>(), P, sort, grid, displacement,
+                                                 block_damping, options, timing);
+}
+
+template <class Shape, class Terrain>
+void strain_increments(const ParticleStore& P, const Grid& grid, const NodeVectors& nv, double dt, std::size_t begin,
+                       std::size_t end, StrainIncrements& out) {
+  TALUS_TRANSFER_DISPATCH(StrainIncrementsOf)(transfer_kind<Shape, Terrain>(), P, grid, nv, dt, begin, end, out);
+}
+
 #define TALUS_INSTANTIATE_TRANSFERS(SHAPE, TERRAIN)                                                          \
   template void scatter_to_grid<SHAPE, TERRAIN>(const ParticleStore&, const CellSort&, Grid&, ScatterFields,  \
                                                 ColourPassTiming*);                                           \
@@ -333,3 +431,4 @@ TALUS_INSTANTIATE_TRANSFERS(CpGimpShape, ProfileTerrain)
 TALUS_INSTANTIATE_TRANSFERS(QuadraticBSplineShape, ProfileTerrain)
 
 }  // namespace talus
+#endif

@@ -179,7 +179,35 @@ TEST(IsaPaths, GranularCollapseIsBitIdenticalOnEveryPath) {
 }
 
 TEST(IsaPaths, ElasticBodiesAreBitIdenticalOnEveryPath) {
-  expect_every_path_matches_the_reference(test::tumbling_block_scene(0.005));
+  expect_every_path_matches_the_reference(test::tumbling_block_scene(0.002));
+}
+
+// The transfers of the other shapes and schemes: cpGIMP with USL, the B-spline with USF.
+TEST(IsaPaths, EveryShapeAndSchemeIsBitIdenticalOnEveryPath) {
+  Scene cpgimp = test::column_collapse_scene(0.02, 0.02);
+  cpgimp.shape = ShapeKind::CpGimp;
+  cpgimp.scheme = SchemeKind::Usl;
+  expect_every_path_matches_the_reference(cpgimp);
+  Scene bspline = test::column_collapse_scene(0.02, 0.02);
+  bspline.shape = ShapeKind::BSpline2;
+  bspline.scheme = SchemeKind::Usf;
+  expect_every_path_matches_the_reference(bspline);
+}
+
+// A block sliding down a terrain (the ProfileTerrain transfers), uGIMP, USAVG.
+TEST(IsaPaths, TerrainTransfersAreBitIdenticalOnEveryPath) {
+  const std::string json = R"({
+    "grid": { "origin": [0, 0, 0], "size": [4, 0.25, 2], "cell_size": 0.25,
+              "terrain": { "points": [[0, 2.0], [4, 0.0]] } },
+    "time": { "end": 0.1, "courant": 0.3 },
+    "solver": { "shape": "ugimp", "scheme": "usavg" },
+    "materials": { "m": { "density": 1000.0, "young": 1.0e6, "poisson": 0.3 } },
+    "bodies": [ { "name": "block", "material": "m", "particles_per_cell": 2,
+                  "box": { "min": [1, 0, 0], "max": [2, 0.25, 0.75], "frame": "terrain" } } ],
+    "boundaries": { "z-": { "type": "friction", "friction_coefficient": 0.2 }, "z+": "open",
+                    "x-": "open", "x+": "open", "y-": "slip", "y+": "slip" }
+  })";
+  expect_every_path_matches_the_reference(parse_scene(json, "terrain_slide"));
 }
 
 }  // namespace

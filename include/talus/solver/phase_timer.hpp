@@ -3,6 +3,7 @@
 // and the end-of-run summary). Timing a phase costs two clock reads.
 #include <array>
 #include <chrono>
+#include <ctime>
 
 namespace talus {
 
@@ -23,20 +24,36 @@ struct PhaseTimes {
   }
 };
 
+/// Which clock times the phases: the wall clock (default), or the CPU time of the whole process
+/// (`talus bench --cpu-time`): on a shared machine a one-thread bench is then not charged for the
+/// time it waited for a core. With several threads CPU time adds up over the threads.
+enum class PhaseClock { Wall, ProcessCpu };
+inline PhaseClock& phase_clock() {
+  static PhaseClock clock = PhaseClock::Wall;
+  return clock;
+}
+/// Seconds on the phase clock (any origin; differences only).
+inline double phase_clock_seconds() {
+  if (phase_clock() == PhaseClock::ProcessCpu) {
+    timespec t{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+  }
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
 /// Adds the lifetime of the object to one phase.
 class ScopedPhase {
  public:
-  ScopedPhase(PhaseTimes& times, Phase phase) : times_(times), phase_(phase), start_(std::chrono::steady_clock::now()) {}
-  ~ScopedPhase() {
-    times_[phase_] += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  }
+  ScopedPhase(PhaseTimes& times, Phase phase) : times_(times), phase_(phase), start_(phase_clock_seconds()) {}
+  ~ScopedPhase() { times_[phase_] += phase_clock_seconds() - start_; }
   ScopedPhase(const ScopedPhase&) = delete;
   ScopedPhase& operator=(const ScopedPhase&) = delete;
 
  private:
   PhaseTimes& times_;
   Phase phase_;
-  std::chrono::steady_clock::time_point start_;
+  double start_;
 };
 
 }  // namespace talus

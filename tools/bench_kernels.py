@@ -1,0 +1,90 @@
+#!/usr/bin/env python3
+"""The vector kernels against the plain C++ reference, back to back (docs/performance.md, "Vector kernels").
+
+For each case of issue 18's table it runs `talus bench` on the reference path and on the vector
+paths, alternating, ROUNDS times, and prints M particle-updates/s and the stress phase; beside them
+the minimal MPM step of ../shared/bench (mpm_limit, USL, 2 colour) and the STREAM triad when their
+binaries are given, in the same sitting. Results also go to a JSON file.
+
+Usage: /usr/bin/python3 tools/bench_kernels.py --talus build/talus [--paths reference,avx2,avx512]
+       [--mpm-limit /tmp/mpm_limit] [--stream /tmp/stream] [--particles 1000000] [--rounds 2] [--json out.json]
+(build the references with g++ -O3 -march=native -fopenmp ../shared/bench/mpm_limit.cpp -o /tmp/mpm_limit, and
+stream.cpp likewise). On a shared machine run it under an exclusive lock and report `uptime`.
+"""
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+import time
+
+CASES = [  # name, talus bench arguments
+    ("shear, B-spline, DP, MUSL", ["--scene", "shear", "--material", "dp", "--shape", "bspline2"]),
+    ("shear, cpGIMP, DP, MUSL", ["--scene", "shear", "--material", "dp", "--shape", "cpgimp"]),
+    ("shear, B-spline, DP, USL", ["--scene", "shear", "--material", "dp", "--shape", "bspline2", "--scheme", "usl"]),
+    ("block, linear, elastic, MUSL", ["--scene", "block", "--material", "elastic", "--shape", "linear"]),
+]
+
+
+def run(cmd, env=None):
+    return subprocess.run(cmd, check=True, capture_output=True, text=True, env=env).stdout
+
+
+def talus_bench(talus, args, path, particles, threads, steps):
+    out = run([talus, "bench", *args, "--particles", str(particles), "--threads", str(threads), "--steps", str(steps),
+               "--isa", path], env=dict(os.environ, OMP_WAIT_POLICY="PASSIVE"))
+    rate = float(re.search(r"([0-9.]+) M particle-updates/s", out).group(1))
+    stress = float(re.search(r"stress\s+([0-9.]+) s", out).group(1))
+    return rate, stress
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--talus", default="build/talus")
+    ap.add_argument("--paths", default="reference,avx2,auto")
+    ap.add_argument("--mpm-limit", help="binary of ../shared/bench/mpm_limit.cpp")
+    ap.add_argument("--stream", help="binary of ../shared/bench/stream.cpp")
+    ap.add_argument("--particles", type=int, default=1000000)
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--steps", type=int, default=5)
+    ap.add_argument("--rounds", type=int, default=2)
+    ap.add_argument("--json")
+    a = ap.parse_args()
+    paths = a.paths.split(",")
+    print(time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()), os.getloadavg(), flush=True)
+    results = {"paths": paths, "threads": a.threads, "particles": a.particles, "cases": {}, "mpm_limit": [], "stream": []}
+    env1 = dict(os.environ, OMP_NUM_THREADS=str(a.threads))
+    for rnd in range(a.rounds):
+        if a.mpm_limit:  # order 2 (B-spline), 8-colour scatter, 20 steps, 50^3 cells x 8 = 1 M particles, resort 10
+            out = run([a.mpm_limit, "2", "colour", "20", "50", "10"], env=env1)
+            rate = float(re.search(r"particle-updates/s: ([0-9.e+]+)", out).group(1)) / 1e6
+            results["mpm_limit"].append(rate)
+            print(f"mpm_limit 2 colour 20 50 10: {rate:.3f} M/s", flush=True)
+        if a.stream:
+            gbs = float(run([a.stream], env=env1).split()[-1])
+            results["stream"].append(gbs)
+            print(f"STREAM triad: {gbs:.2f} GB/s", flush=True)
+        for name, args in CASES:
+            row = results["cases"].setdefault(name, {p: [] for p in paths})
+            for p in paths:
+                rate, stress = talus_bench(a.talus, args, p, a.particles, a.threads, a.steps)
+                row[p].append({"rate": rate, "stress_seconds": stress})
+                print(f"{name:32s} {p:10s} {rate:7.3f} M/s  stress {stress:.3f} s", flush=True)
+    print("summary (median of rounds; ratio to the first path):")
+    for name, row in results["cases"].items():
+        med = {p: sorted(r["rate"] for r in row[p])[len(row[p]) // 2] for p in paths}
+        print(f"  {name:32s} " + "  ".join(f"{p} {med[p]:.3f} ({med[p] / med[paths[0]]:.2f}x)" for p in paths))
+    if results["mpm_limit"]:
+        lim = sorted(results["mpm_limit"])[len(results["mpm_limit"]) // 2]
+        usl = results["cases"]["shear, B-spline, DP, USL"]
+        print(f"  mpm_limit median {lim:.3f} M/s; USL B-spline DP / mpm_limit: " +
+              "  ".join(f"{p} {sorted(r['rate'] for r in usl[p])[len(usl[p]) // 2] / lim:.2f}" for p in paths))
+    print(os.getloadavg())
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump(results, f, indent=1)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
