@@ -31,9 +31,10 @@ def run(cmd, env=None):
     return subprocess.run(cmd, check=True, capture_output=True, text=True, env=env).stdout
 
 
-def talus_bench(talus, args, path, particles, threads, steps):
+def talus_bench(talus, args, path, particles, threads, steps, cpu_time):
+    clock = ["--cpu-time"] if cpu_time else []
     out = run([talus, "bench", *args, "--particles", str(particles), "--threads", str(threads), "--steps", str(steps),
-               "--isa", path], env=dict(os.environ, OMP_WAIT_POLICY="PASSIVE"))
+               "--isa", path, *clock], env=dict(os.environ, OMP_WAIT_POLICY="PASSIVE"))
     rate = float(re.search(r"([0-9.]+) M particle-updates/s", out).group(1))
     stress = float(re.search(r"stress\s+([0-9.]+) s", out).group(1))
     return rate, stress
@@ -49,11 +50,14 @@ def main():
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--steps", type=int, default=5)
     ap.add_argument("--rounds", type=int, default=2)
+    ap.add_argument("--cpu-time", action="store_true",
+                    help="talus bench --cpu-time: phases on the process's CPU time (a shared machine, 1 thread)")
+    ap.add_argument("--skip", default="", help="comma-separated case names to leave out")
     ap.add_argument("--json")
     a = ap.parse_args()
     paths = a.paths.split(",")
     print(time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()), os.getloadavg(), flush=True)
-    results = {"paths": paths, "threads": a.threads, "particles": a.particles, "cases": {}, "mpm_limit": [], "stream": []}
+    results = {"paths": paths, "cpu_time": a.cpu_time, "threads": a.threads, "particles": a.particles, "cases": {}, "mpm_limit": [], "stream": []}
     env1 = dict(os.environ, OMP_NUM_THREADS=str(a.threads))
     for rnd in range(a.rounds):
         if a.mpm_limit:  # order 2 (B-spline), 8-colour scatter, 20 steps, 50^3 cells x 8 = 1 M particles, resort 10
@@ -66,18 +70,20 @@ def main():
             results["stream"].append(gbs)
             print(f"STREAM triad: {gbs:.2f} GB/s", flush=True)
         for name, args in CASES:
+            if name in a.skip.split(","):
+                continue
             row = results["cases"].setdefault(name, {p: [] for p in paths})
             for p in paths:
-                rate, stress = talus_bench(a.talus, args, p, a.particles, a.threads, a.steps)
+                rate, stress = talus_bench(a.talus, args, p, a.particles, a.threads, a.steps, a.cpu_time)
                 row[p].append({"rate": rate, "stress_seconds": stress})
                 print(f"{name:32s} {p:10s} {rate:7.3f} M/s  stress {stress:.3f} s", flush=True)
     print("summary (median of rounds; ratio to the first path):")
     for name, row in results["cases"].items():
         med = {p: sorted(r["rate"] for r in row[p])[len(row[p]) // 2] for p in paths}
         print(f"  {name:32s} " + "  ".join(f"{p} {med[p]:.3f} ({med[p] / med[paths[0]]:.2f}x)" for p in paths))
-    if results["mpm_limit"]:
+    usl = results["cases"].get("shear, B-spline, DP, USL")
+    if results["mpm_limit"] and usl:
         lim = sorted(results["mpm_limit"])[len(results["mpm_limit"]) // 2]
-        usl = results["cases"]["shear, B-spline, DP, USL"]
         print(f"  mpm_limit median {lim:.3f} M/s; USL B-spline DP / mpm_limit: " +
               "  ".join(f"{p} {sorted(r['rate'] for r in usl[p])[len(usl[p]) // 2] / lim:.2f}" for p in paths))
     print(os.getloadavg())

@@ -16,7 +16,7 @@
 namespace talus {
 
 /// The paths this build and this CPU can run, worst first: "reference", then the Highway targets
-/// ("emu128", "ssse3", "sse4", "avx2", "avx512", ...).
+/// ("scalar", "avx2", "avx512").
 std::vector<std::string> available_isas();
 
 /// Select a path by name ("auto" = the best available). Throws input_error naming the allowed
