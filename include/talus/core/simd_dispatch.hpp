@@ -1,6 +1,6 @@
 #pragma once
 // Which instruction set the vectorised kernels run on. One portable binary carries the kernels
-// compiled for every x86-64 level Google Highway attains (emu128, ssse3, sse4, avx2, avx512) and
+// compiled for the baseline x86-64 (scalar: SSE2), AVX2 and AVX-512 by Google Highway and
 // picks the best the CPU has at run time; `reference` runs the plain C++ reference path instead of
 // the Highway kernels. Every path gives bit-identical results (docs/performance.md, "Vector
 // kernels"): the kernels vectorise ACROSS particles, each lane doing the reference's operations
