@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Steady inclined flow of a mu(I) layer against the Bagnold profile (docs/mu-i.md, sec. 5).
+"""Steady inclined flow of a mu(I) layer against the Bagnold profile (docs/mu-i.md, sec. 8).
 
 Runs inputs/inclined_flow_bagnold.json (16 cells over the depth h) and, with --cells, the same
 scene at other resolutions (the cell size h/N; the grid keeps 4 x 4 cells across, 4 above the

@@ -1,4 +1,4 @@
-// Steady inclined flow of a μ(I) layer (issue 21, item 4; docs/mu-i.md sec. 5): a layer of thickness h
+// Steady inclined flow of a μ(I) layer (issue 21, item 4; docs/mu-i.md sec. 8): a layer of thickness h
 // on a rough incline of angle θ, periodic along the slope, reaches the Bagnold profile
 //   u(z) = (2/3) (I_θ / d) √(φ g cos θ) (h^{3/2} − (h − z)^{3/2}),  I_θ = I0 (tan θ − μs)/(μ2 − tan θ)
 // (GDR MiDi 2004; Jop, Forterre & Pouliquen 2005). CI size: 8 cells over the depth, h = 10 d
@@ -34,7 +34,7 @@ double bagnold(double z) {  // GDR MiDi 2004; Jop et al. 2005
 
 // Periodic along the slope (x, 3 cells: one colour block), one cell across y between slip walls
 // (the flow is along x, so they only hold v_y = 0), a fixed floor (no slip: the rough base).
-// E = 25 kPa: the base's elastic shear strain μ p / G is 3.2e-3 (docs/mu-i.md sec. 5).
+// E = 25 kPa: the base's elastic shear strain μ p / G is 3.2e-3 (docs/mu-i.md sec. 8).
 Scene inclined_flow(double end_time) {
   const double cell = kH / kCells;
   return parse_scene(fmt::format(R"({{
@@ -76,7 +76,7 @@ Profile rows_of(const ParticleStore& P) {
 TEST(BagnoldProfile, InclinedMuILayerReachesTheBagnoldProfile) {
   const double u_surface = bagnold(kH);                    // 0.1004 m/s
   // The layer starts at rest; its distance from the steady profile decays with an e-folding time
-  // of about 15 u(h) / (g cos θ) (measured, docs/mu-i.md sec. 5): 6 of them leave 0.25%.
+  // of about 15 u(h) / (g cos θ) (measured, docs/mu-i.md sec. 8): 6 of them leave 0.25%.
   const double relax = 15.0 * u_surface / (kG * std::cos(kTheta));  // 0.17 s
   const double end_time = 6.0 * relax;
   Solver solver(inclined_flow(end_time));
@@ -102,7 +102,7 @@ TEST(BagnoldProfile, InclinedMuILayerReachesTheBagnoldProfile) {
               "%.2f%%, change of the surface over the last 1.2 e-folding times %+.3f%%\n",
               kCells, top, top_analytic, 100.0 * surface_error, 100.0 * l2, 100.0 * drift);
   // At 8 cells over the depth the resolution study measured +2.3% at the surface and 3.9% L2
-  // (docs/mu-i.md sec. 5: 16 cells meet the issue's 3% / 5%); the bounds leave room for that
+  // (docs/mu-i.md sec. 8: 16 cells meet the issue's 3% / 5%); the bounds leave room for that
   // discretisation error and no more.
   EXPECT_LT(std::abs(surface_error), 0.035);
   EXPECT_LT(l2, 0.055);
