@@ -10,7 +10,7 @@ Walls::Walls(const std::array<std::array<WallSpec, 2>, 3>& specs, const GridGeom
   for (int d = 0; d < 3; ++d) {
     lower_[d] = kPad;
     upper_[d] = kPad + geometry.cells[d];
-    for (int side = 0; side < 2; ++side) active_[d][side] = specs[d][side].type != WallType::Open;
+    for (int side = 0; side < 2; ++side) active_[d][side] = specs[d][side].type != WallType::Open && specs[d][side].type != WallType::Periodic;
   }
 }
 
@@ -20,6 +20,7 @@ const char* to_string(WallType type) {
     case WallType::Slip: return "slip";
     case WallType::Fixed: return "fixed";
     case WallType::Friction: return "friction";
+    case WallType::Periodic: return "periodic";
   }
   return "?";
 }

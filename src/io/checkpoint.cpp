@@ -124,6 +124,7 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
       write_attribute(s, "steps_since_sort", static_cast<std::int32_t>(state.steps_since_sort));
       write_attribute(s, "sorts", state.sorts);
       write_attribute(s, "needs_sort", static_cast<std::int32_t>(state.needs_sort));
+      write_attribute(s, "periodic_gravity_shift", state.periodic_gravity_shift);
       for (int d = 0; d < 3; ++d) write_array(s, fmt::format("sort_cell{}", d), state.sort_cell[d]);
 
       H5::Group p = file.createGroup("/particles");
@@ -187,6 +188,9 @@ Checkpoint read_checkpoint(const std::string& path) {
     c.solver.steps_since_sort = read_attribute<std::int32_t>(s, "steps_since_sort");
     c.solver.sorts = read_attribute<std::int64_t>(s, "sorts");
     c.solver.needs_sort = read_attribute<std::int32_t>(s, "needs_sort") != 0;
+    // absent in checkpoints of runs before periodic faces existed: no wraps
+    if (s.attrExists("periodic_gravity_shift"))
+      c.solver.periodic_gravity_shift = read_attribute<double>(s, "periodic_gravity_shift");
     for (int d = 0; d < 3; ++d) c.solver.sort_cell[d] = read_array<std::int32_t>(s, fmt::format("sort_cell{}", d));
 
     H5::Group p = file.openGroup("/particles");

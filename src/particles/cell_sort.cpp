@@ -13,8 +13,7 @@ CellSort::CellSort(const Grid& grid, int reach_low, int reach_high, int block_ce
     : reach_low_(reach_low), reach_high_(reach_high) {
   // Automatic: the smallest block (a multiple of the 4-node tile) that leaves each particle at
   // least one cell of drift between sorts. A requested size must leave that cell as well.
-  block_cells_ = kTileEdge;
-  while ((block_cells_ - reach_low - reach_high) / 2 < 1) block_cells_ += kTileEdge;
+  block_cells_ = block_edge(reach_low, reach_high, 0);
   if (block_cells > 0) {
     if ((block_cells - reach_low - reach_high) / 2 < 1)
       throw input_error(fmt::format("colour blocks of {} cells leave no cell of slack for a support reaching {} + {} cells",
@@ -26,6 +25,15 @@ CellSort::CellSort(const Grid& grid, int reach_low, int reach_high, int block_ce
   for (int d = 0; d < 3; ++d) {
     cells_[d] = g.cells[d] + 2 * kPad;
     block_counts_[d] = (cells_[d] + block_cells_ - 1) / block_cells_;
+    if (g.periodic[d]) {
+      // Periodic axis: the blocks tile the domain's cells exactly, starting at its first cell, so
+      // that the block after the last is block 0 again (the scene checks the count, cell_sort.hpp).
+      block_shift_[d] = kPad;
+      block_counts_[d] = g.cells[d] / block_cells_;
+      if (!periodic_blocks_fit(g.cells[d], block_cells_))
+        throw input_error(fmt::format("{} cells along periodic axis {} do not make 1 or an even number of colour blocks of {} cells",
+                                      g.cells[d], "xyz"[d], block_cells_));
+    }
   }
   bbox_block_index_.assign(static_cast<std::size_t>(block_counts_[0]) * block_counts_[1] * block_counts_[2], 0);
   tile_flag_.assign(grid.tile_count(), 0);
@@ -36,13 +44,25 @@ std::array<int, 3> CellSort::block_origin(std::size_t b) const {
   const int bz = static_cast<int>(index % block_counts_[2]);
   const int by = static_cast<int>((index / block_counts_[2]) % block_counts_[1]);
   const int bx = static_cast<int>(index / (static_cast<std::uint32_t>(block_counts_[2]) * block_counts_[1]));
-  return {bx * block_cells_, by * block_cells_, bz * block_cells_};
+  return {bx * block_cells_ + block_shift_[0], by * block_cells_ + block_shift_[1], bz * block_cells_ + block_shift_[2]};
+}
+
+int CellSort::block_edge(int reach_low, int reach_high, int requested) {
+  if (requested > 0) return requested;
+  int edge = kTileEdge;
+  while ((edge - reach_low - reach_high) / 2 < 1) edge += kTileEdge;
+  return edge;
 }
 
 long long CellSort::active_block_of_cell(int i, int j, int k) const {
-  if (i < 0 || j < 0 || k < 0 || i >= cells_[0] || j >= cells_[1] || k >= cells_[2]) return -1;
-  const std::uint32_t index = static_cast<std::uint32_t>(
-      (static_cast<std::size_t>(i / block_cells_) * block_counts_[1] + j / block_cells_) * block_counts_[2] + k / block_cells_);
+  i -= block_shift_[0];
+  j -= block_shift_[1];
+  k -= block_shift_[2];
+  if (i < 0 || j < 0 || k < 0) return -1;
+  const int bi = i / block_cells_, bj = j / block_cells_, bk = k / block_cells_;
+  if (bi >= block_counts_[0] || bj >= block_counts_[1] || bk >= block_counts_[2]) return -1;
+  const std::uint32_t index =
+      static_cast<std::uint32_t>((static_cast<std::size_t>(bi) * block_counts_[1] + bj) * block_counts_[2] + bk);
   // bbox_block_index_ holds the compact index for active blocks and 0 elsewhere; 0 is also block
   // 0's index, so confirm against blocks_.
   const std::uint32_t b = bbox_block_index_[index];
@@ -71,8 +91,8 @@ void CellSort::sort(ParticleStore& particles, Grid& grid) {
                                 terrain ? particles.x[2][p] - bed.height(particles.x[0][p]) : particles.x[2][p]};
     for (int d = 0; d < 3; ++d) {
       const double xi = g.to_grid(d, position[d]);
-      c[d] = static_cast<int>(std::floor(xi));
-      inside = inside && xi >= 0.0 && c[d] < cells_[d];
+      c[d] = g.cell_of(d, position[d]) - block_shift_[d];  // cells counted from the blocks' first cell
+      inside = inside && xi >= block_shift_[d] && c[d] < block_counts_[d] * bc && xi < cells_[d];
     }
     if (!inside) {
       outside = std::max(outside, static_cast<long long>(p));
@@ -123,7 +143,8 @@ void CellSort::sort(ParticleStore& particles, Grid& grid) {
   for (auto& c : colour_blocks_) c.clear();
   for (std::size_t b = 0; b < blocks_.size(); ++b) {
     const auto o = block_origin(b);
-    const int colour = ((o[0] / bc) & 1) * 4 + ((o[1] / bc) & 1) * 2 + ((o[2] / bc) & 1);
+    const int colour = (((o[0] - block_shift_[0]) / bc) & 1) * 4 + (((o[1] - block_shift_[1]) / bc) & 1) * 2 +
+                       (((o[2] - block_shift_[2]) / bc) & 1);
     colour_blocks_[colour].push_back(static_cast<std::uint32_t>(b));
   }
   order_blocks();
@@ -157,18 +178,28 @@ void CellSort::order_blocks() {
 void CellSort::activate_tiles(Grid& grid) {
   for (std::uint32_t t : grid.active_tiles()) tile_flag_[t] = 0;
   const auto tiles = grid.tiles();
-  const auto nodes = grid.geometry().nodes();
+  const GridGeometry& g = grid.geometry();
+  const auto nodes = g.nodes();
   std::vector<std::uint32_t> active;
+  std::array<std::vector<int>, 3> tile_range;  // the tile coordinates a block may write, per axis
   for (std::size_t b = 0; b < blocks_.size(); ++b) {
     const auto o = block_origin(b);
-    int lo[3], hi[3];
     for (int d = 0; d < 3; ++d) {
-      lo[d] = std::max(0, o[d] - slack_ - reach_low_) / kTileEdge;
-      hi[d] = std::min(nodes[d] - 1, o[d] + block_cells_ - 1 + slack_ + reach_high_) / kTileEdge;
+      const int first = o[d] - slack_ - reach_low_, last = o[d] + block_cells_ - 1 + slack_ + reach_high_;
+      std::vector<int>& r = tile_range[d];
+      r.clear();
+      if (g.periodic[d]) {
+        // the nodes past a periodic face are the wrapped ones (Grid::wrap_node)
+        for (int node = first; node <= last; ++node) r.push_back(g.wrap_node(d, node) / kTileEdge);
+        std::sort(r.begin(), r.end());
+        r.erase(std::unique(r.begin(), r.end()), r.end());
+      } else {
+        for (int t = std::max(0, first) / kTileEdge; t <= std::min(nodes[d] - 1, last) / kTileEdge; ++t) r.push_back(t);
+      }
     }
-    for (int i = lo[0]; i <= hi[0]; ++i)
-      for (int j = lo[1]; j <= hi[1]; ++j)
-        for (int k = lo[2]; k <= hi[2]; ++k) {
+    for (int i : tile_range[0])
+      for (int j : tile_range[1])
+        for (int k : tile_range[2]) {
           const std::size_t t = (static_cast<std::size_t>(i) * tiles[1] + j) * tiles[2] + k;
           if (!tile_flag_[t]) {
             tile_flag_[t] = 1;

@@ -6,6 +6,9 @@
 
 #include "talus/core/polygon.hpp"
 #include "talus/grid/terrain_profile.hpp"
+#include "talus/particles/cell_sort.hpp"
+#include "talus/shape/bspline.hpp"
+#include "talus/shape/linear.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -551,7 +554,8 @@ WallType wall_type(const std::string& t, const std::string& at) {
   if (t == "slip") return WallType::Slip;
   if (t == "fixed") return WallType::Fixed;
   if (t == "friction") return WallType::Friction;
-  throw input_error(fmt::format("{} = \"{}\" is not one of: open, slip, fixed, friction", at, t));
+  if (t == "periodic") return WallType::Periodic;
+  throw input_error(fmt::format("{} = \"{}\" is not one of: open, slip, fixed, friction, periodic", at, t));
 }
 
 WallSpec read_wall(const Json& j, const std::string& path) {
@@ -569,10 +573,51 @@ WallSpec read_wall(const Json& j, const std::string& path) {
   return w;
 }
 
+// Periodic faces (docs/theory.md "Periodic boundaries"): x and y only, in pairs, on a flat grid,
+// without MLS smoothing (its neighbour search does not wrap), and with a cell count the colour
+// blocks tile as 1 or an even number of blocks (CellSort::periodic_blocks_fit). Sets the grid's
+// periodic axes.
+void check_periodic_faces(ObjectReader& r, SceneDraft& d) {
+  Scene& s = d.scene;
+  for (int a = 0; a < 3; ++a) {
+    const bool lower = s.walls[a][0].type == WallType::Periodic, upper = s.walls[a][1].type == WallType::Periodic;
+    if (!lower && !upper) continue;
+    const char* face = kFaceNames[a][lower ? 0 : 1];
+    const std::string at = r.key_path(face);
+    if (a == 2) throw input_error(fmt::format("{} = \"periodic\": only the x and y faces can be periodic", at));
+    if (lower != upper) {
+      const char* other = kFaceNames[a][lower ? 1 : 0];
+      throw input_error(fmt::format("{} = \"{}\": must be \"periodic\" like {} (periodic faces come in pairs)",
+                                    r.key_path(other), to_string(s.walls[a][lower ? 1 : 0].type), at));
+    }
+    if (a == 0 && s.grid.has_terrain())
+      throw input_error(fmt::format("{} = \"periodic\" needs a flat grid: grid.terrain is set (a bed profile does not repeat)", at));
+    if (s.smoothing.enabled)
+      throw input_error(fmt::format(
+          "{} = \"periodic\" cannot run with solver.smoothing (the MLS neighbour search does not wrap): remove it or set "
+          "solver.smoothing.enabled = false",
+          at));
+    const bool linear = s.shape == ShapeKind::Linear;
+    const int edge = CellSort::block_edge(linear ? LinearShape::kReachLow : QuadraticBSplineShape::kReachLow,
+                                          linear ? LinearShape::kReachHigh : QuadraticBSplineShape::kReachHigh,
+                                          s.block_cells);
+    const int cells = s.grid.cells[a];
+    if (!CellSort::periodic_blocks_fit(cells, edge)) {
+      int suggestion = 2 * edge;
+      while (suggestion < cells) suggestion += 2 * edge;
+      throw input_error(fmt::format(
+          "grid.cells[{}] = {} with periodic {} faces: must be {} or a multiple of {} (1 or an even number of colour "
+          "blocks of {} cells, solver.block_cells{}), e.g. {}",
+          a, cells, "xy"[a], edge, 2 * edge, edge, s.block_cells == 0 ? " automatic for this shape" : "", suggestion));
+    }
+    s.grid.periodic[a] = true;
+  }
+}
+
 Table<SceneDraft> make_boundaries_table() {
   const Json wall_schema = {
       {"oneOf",
-       Json::array({{{"type", "string"}, {"enum", {"open", "slip", "fixed"}}},
+       Json::array({{{"type", "string"}, {"enum", {"open", "slip", "fixed", "periodic"}}},
                     {{"type", "object"},
                      {"properties",
                       {{"type", {{"type", "string"}, {"enum", {"open", "slip", "fixed", "friction"}}}},
@@ -601,6 +646,7 @@ Table<SceneDraft> make_boundaries_table() {
       f.info.row = a == 0 && side == 0;  // one docs row for the six faces
       t.fields.push_back(std::move(f));
     }
+  t.fields.push_back(check<SceneDraft>(check_periodic_faces));
   return t;
 }
 constexpr auto boundaries_table = &table_of<SceneDraft, make_boundaries_table>;

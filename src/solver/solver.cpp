@@ -130,6 +130,27 @@ void Solver::remove_outflow() {
   sort_particles();
 }
 
+// A particle that left through a periodic face re-enters through the opposite one: its position
+// moves by one period (GridGeometry::wrap_position, the map G2P used for its next cell). Its
+// gravitational term -m g.x jumps by -m g.(x_wrapped - x) although nothing moved; the jumps are
+// summed into periodic_gravity_shift_, which energies() adds back, so the `gravity` term is that of
+// the unwrapped positions and the budget closes under gravity along a periodic axis (the tilted
+// gravity of an inclined flow). Summed in fixed chunks: the same total for any thread count.
+void Solver::wrap_periodic() {
+  ParticleStore& P = particles_;
+  const GridGeometry& g = scene_.grid;
+  const Vec3& gravity = scene_.gravity;
+  const auto shift = deterministic_sum<1>(P.size(), [&](std::size_t p, std::array<double, 1>& acc) {
+    for (int d = 0; d < 2; ++d) {
+      const double x = P.x[d][p], wrapped = g.wrap_position(d, x);
+      if (wrapped == x) continue;
+      P.x[d][p] = wrapped;
+      acc[0] += P.mass[p] * gravity[d] * (wrapped - x);
+    }
+  });
+  periodic_gravity_shift_ += shift[0];
+}
+
 void Solver::sort_particles() {
   ScopedPhase timer(times_, Phase::Sort);
   sort_.sort(particles_, grid_);
@@ -173,6 +194,7 @@ void Solver::step() {
     step_with_shape<ProfileTerrain>(dt);
   else
     step_with_shape<FlatTerrain>(dt);
+  if (scene_.grid.has_periodic_axes()) recorded(recording(), RegionSchedule::Static, "wrap", particles_.size(), 1, [&] { wrap_periodic(); });
   // G2P flagged these while it computed the displacements and the new positions; the scans that
   // name the particle (CFL guard) or remove the leaving ones run only when flagged.
   if (large_displacement_) check_step_displacement(particles_, displacement_, scene_, step_, time_);  // stability_guards.hpp
@@ -464,7 +486,7 @@ EnergyBudget Solver::energies() const {
   EnergyBudget e = work_;
   e.kinetic = sums[0];
   e.strain = sums[1];
-  e.gravity = sums[2];
+  e.gravity = sums[2] + periodic_gravity_shift_;  // the unwrapped positions' potential (wrap_periodic)
   return e;
 }
 
@@ -491,6 +513,7 @@ SolverState Solver::state() const {
   s.steps_since_sort = steps_since_sort_;
   s.sorts = sorts_;
   s.needs_sort = needs_sort_;
+  s.periodic_gravity_shift = periodic_gravity_shift_;
   // The cell each particle was sorted into, read back from the sort's block and cell offsets.
   const std::size_t n = particles_.size();
   for (auto& c : s.sort_cell) c.assign(n, 0);
@@ -545,6 +568,7 @@ void Solver::restore(ParticleStore particles, const SolverState& s) {
   steps_since_sort_ = s.steps_since_sort;
   sorts_ = s.sorts;
   needs_sort_ = s.needs_sort;
+  periodic_gravity_shift_ = s.periodic_gravity_shift;
 }
 
 }  // namespace talus

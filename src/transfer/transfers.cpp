@@ -238,15 +238,17 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::arra
       int cell[3];
       double next[3];
       for (int d = 0; d < 3; ++d) next[d] = P.x[d][p] + disp[d][p];
+      // periodic axes: the position the solver wraps it to after the move (Solver::wrap_periodic)
+      if (g.has_periodic_axes()) [[unlikely]]
+        for (int d = 0; d < 2; ++d) next[d] = g.wrap_position(d, next[d]);
       // the next step's cell in (x, y, w): the same map as the stencil and the cell sort
       if constexpr (!Terrain::kIsFlat) next[2] -= terrain.height(next[0]);
       for (int d = 0; d < 3; ++d) {
-        const double xi = g.to_grid(d, next[d]);
-        cell[d] = static_cast<int>(std::floor(xi));
+        cell[d] = g.cell_of(d, next[d]);
         // The support of the next step must stay inside the padded arrays.
         inside = inside && cell[d] - Shape::kReachLow >= 0 && cell[d] + Shape::kReachHigh < nodes[d];
       }
-      // After the move x_p = x_p + displacement: exactly next[] (the same sum), in (x, y, w).
+      // After the move x_p = x_p + displacement: exactly next[] (the same sum, then wrapped), in (x, y, w).
       crossing = crossing || options.beyond_open_face(next);
       large = large || disp[0][p] * disp[0][p] + disp[1][p] * disp[1][p] + disp[2][p] * disp[2][p] > max_d2;
       if (!finite) nonfinite = std::max(nonfinite, static_cast<long long>(p));

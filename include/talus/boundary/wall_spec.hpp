@@ -3,7 +3,9 @@
 // own input, which the scene reader fills in for each of the six faces.
 namespace talus {
 
-enum class WallType { Open, Slip, Fixed, Friction };
+// Periodic: paired with the opposite face (x and y only); no wall, the grid wraps instead
+// (GridGeometry::periodic).
+enum class WallType { Open, Slip, Fixed, Friction, Periodic };
 
 struct WallSpec {
   WallType type = WallType::Slip;

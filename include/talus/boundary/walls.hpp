@@ -10,6 +10,8 @@
 //            rule to the step's velocity change is eq. 15-16 integrated over dt, with the cap that
 //            friction never reverses the tangential motion.
 //  open      nothing
+//  periodic  nothing: the face is no wall, the grid wraps its nodes and particles onto the opposite
+//            face (GridGeometry::periodic); inactive here and never mirrored
 // On a terrain grid (grid.terrain) the z- face is the bed: its nodes (w = 0, and the ghosts below)
 // carry the bed normal of their column (ProfileTerrain::node_normal; at a kink the normalised
 // average of the two sides), and every wall type acts along that normal instead of z: friction is
@@ -212,7 +214,8 @@ class Walls {
                                    const double* v_start, const double* contact_velocity, double remap_tolerance) {
     const double vn = v[0] * n[0] + v[1] * n[1] + v[2] * n[2];
     switch (w.type) {
-      case WallType::Open: return 0.0;
+      case WallType::Open:
+      case WallType::Periodic: return 0.0;
       case WallType::Fixed: v[0] = v[1] = v[2] = 0.0; return 0.0;
       case WallType::Slip:
         for (int d = 0; d < 3; ++d) v[d] -= vn * n[d];

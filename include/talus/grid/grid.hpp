@@ -15,6 +15,7 @@
 #include "talus/grid/terrain_profile.hpp"
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -34,7 +35,42 @@ struct GridGeometry {
   /// The bed z_b(x) (grid.terrain). Empty: a flat box, z = w. Otherwise origin[2] and the third
   /// axis are in w = z - z_b(x), and the z- face (w = origin[2]) follows the bed.
   TerrainSpec terrain;
+  /// Periodic axes (x and y only; boundaries "periodic", docs/theory.md "Periodic boundaries"): the
+  /// node at origin + cells*h is the node at origin, and a particle leaving through one face comes
+  /// back through the other. The scene sets it from its walls.
+  std::array<bool, 3> periodic{false, false, false};
   bool has_terrain() const { return !terrain.empty(); }
+  bool has_periodic_axes() const { return periodic[0] || periodic[1] || periodic[2]; }
+  /// A node index along a periodic axis mapped into the domain's nodes [kPad, kPad + cells): shape
+  /// functions whose support reaches past a periodic face land on the nodes of the other side.
+  /// Other axes: unchanged.
+  int wrap_node(int axis, int i) const {
+    if (!periodic[axis]) return i;
+    const int c = cells[axis];
+    const int r = (i - kPad) % c;
+    return kPad + (r < 0 ? r + c : r);
+  }
+  /// A coordinate along a periodic axis mapped into [origin, origin + cells*h) (the wrapped
+  /// position of a particle that left through a periodic face; it moves at most a cell a step, so
+  /// one period is enough). Round-off that would land it on the upper face puts it on the lower one.
+  double wrap_position(int axis, double x) const {
+    if (!periodic[axis]) return x;
+    const double lo = origin[axis], length = cells[axis] * h, hi = lo + length;
+    if (x < lo) {
+      x += length;
+      if (x >= hi) x = lo;
+    } else if (x >= hi) {
+      x -= length;
+      if (x < lo) x = lo;
+    }
+    return x;
+  }
+  /// The padded cell index of a coordinate (axis 2 takes w), floor(to_grid). Along a periodic axis
+  /// a wrapped coordinate whose quotient rounds up to the upper face stays in the last cell.
+  int cell_of(int axis, double x) const {
+    const int c = static_cast<int>(std::floor(to_grid(axis, x)));
+    return periodic[axis] && c >= kPad + cells[axis] ? kPad + cells[axis] - 1 : c;
+  }
   std::array<int, 3> nodes() const {     // nodes per axis including ghosts
     return {cells[0] + 2 * kPad + 1, cells[1] + 2 * kPad + 1, cells[2] + 2 * kPad + 1};
   }

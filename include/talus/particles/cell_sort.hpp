@@ -11,6 +11,12 @@
 // Each colour is then one parallel loop over blocks with no atomics, and every node receives its
 // contributions in the same order for any thread count: results are bit-identical.
 //
+// Periodic axes (GridGeometry::periodic): the blocks start at the domain's first cell and tile its
+// cells exactly, and stencils wrap (Grid::wrap_node), so the block after the last one is the first
+// one. The parity colouring stays race-free around the ring when the axis holds 1 block (it only
+// meets itself) or an even number of blocks (neighbours around the seam differ in parity):
+// periodic_blocks_fit; the scene refuses other cell counts.
+//
 // Work and memory scale with the occupied blocks: the only arrays over the bounding box are one
 // counter per block and one flag per 4^3 node tile.
 #include "talus/grid/grid.hpp"
@@ -38,6 +44,13 @@ class CellSort {
   /// Sort the store by (block, cell), rebuild offsets and colour lists, and activate the grid tiles
   /// the blocks may write until the next sort.
   void sort(ParticleStore& particles, Grid& grid);
+
+  /// The block edge the constructor picks for a support (requested > 0: that one).
+  static int block_edge(int reach_low, int reach_high, int requested);
+  /// Whether `cells` along a periodic axis make 1 block or an even number of blocks of `block_cells`.
+  static bool periodic_blocks_fit(int cells, int block_cells) {
+    return cells % block_cells == 0 && (cells == block_cells || (cells / block_cells) % 2 == 0);
+  }
 
   int block_cells() const { return block_cells_; }
   int slack() const { return slack_; }
@@ -76,6 +89,7 @@ class CellSort {
   int reach_low_ = 0, reach_high_ = 1;
   std::array<int, 3> cells_{};         // cells per axis including ghosts
   std::array<int, 3> block_counts_{};  // blocks per axis over the bounding box
+  std::array<int, 3> block_shift_{};   // padded cell of the first block's origin (kPad along periodic axes)
   std::vector<std::uint32_t> blocks_;       // bounding-box index of each active block, ascending
   std::vector<std::uint32_t> block_start_;  // particle offsets per active block (+1 end)
   std::vector<std::uint32_t> cell_start_;   // particle offsets per cell of active blocks (+1 end)

@@ -32,6 +32,8 @@ struct SolverState {
   int steps_since_sort = 0;
   std::int64_t sorts = 0;
   bool needs_sort = false;
+  /// [J] sum of m g.(x_wrapped - x) over the particles' periodic wraps (Solver::wrap_periodic).
+  double periodic_gravity_shift = 0.0;
   /// Per particle (in the store's order): the padded grid cell it was sorted into at the last sort.
   /// restore() rebuilds the cell sort from these, so the blocks and the summation order match.
   std::array<std::vector<std::int32_t>, 3> sort_cell;
@@ -122,6 +124,7 @@ class Solver {
   /// Remove the particles beyond an open face (after they moved), adding their energy and mass to
   /// the outflow; deterministic (the kept particles keep their order).
   void remove_outflow();
+  void wrap_periodic();
   /// Size the per-particle scratch arrays to the current particle count.
   void size_scratch();
   /// The body force at time t: scene gravity, ramped over scene.gravity_ramp_time.
@@ -147,6 +150,7 @@ class Solver {
   EnergyBudget work_;                  // the accumulated terms of the ledger (energy_budget.hpp)
   std::vector<double> block_damping_;  // per sort block, this step's PIC damping
   double outflow_mass_ = 0.0;
+  double periodic_gravity_shift_ = 0.0;  // SolverState::periodic_gravity_shift
   std::int64_t outflow_particles_ = 0;
   std::int64_t seeded_particles_ = 0;
   GatherOptions gather_limits_;            // the CFL limit and the open faces, for G2P's flags

@@ -44,6 +44,18 @@ struct Stencil {
     Shape::weights((x - g.origin[0]) * inv_h + kPad, half_width[0], bx, wx, gx);
     Shape::weights((y - g.origin[1]) * inv_h + kPad, half_width[1], by, wy, gy);
     Shape::weights((w_coord - g.origin[2]) * inv_h + kPad, half_width[2], bz, wz, gz);
+    if (g.has_periodic_axes()) [[unlikely]] {
+      // periodic boundaries: a support reaching past a periodic face lands on the wrapped nodes
+      for (int a = 0; a < N; ++a) {
+        ix[a] = grid.x_part(g.wrap_node(0, bx + a));
+        iy[a] = grid.y_part(g.wrap_node(1, by + a));
+        iz[a] = grid.z_part(bz + a);
+        gx[a] *= inv_h;
+        gy[a] *= inv_h;
+        gz[a] *= inv_h;
+      }
+      return;
+    }
     for (int a = 0; a < N; ++a) {
       ix[a] = grid.x_part(bx + a);
       iy[a] = grid.y_part(by + a);
