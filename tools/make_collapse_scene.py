@@ -13,15 +13,17 @@ the deposit that Lube et al.'s law predicts with a wide margin (`--margin` times
 runout); its far end is open, so a particle that runs off is removed and counted, never piled up.
 
 Scale: every length is a multiple of L0 (`--length`, 0.1 m) and the cell is L0 / `--cells`.
-The elastic modulus is `--young-ratio` (200) times the pressure at the base of the column, rho g H0:
-the elastic strain of the column is then below 1/(ratio (1+nu)(1-2nu)/(1-nu)) = 0.37% for every a,
-and the step count (dt = courant h / c) grows like H0/h, not faster.
-End time: `--end-factor` (4.5) x sqrt(max(H0, L0)/g) (Lube et al. 2005 report motion times of about
-3 sqrt(H0/g)); the study script checks that the kinetic energy has died out.
+The elastic modulus is `--young-ratio` (100) times the pressure at the base of the column, rho g H0:
+the elastic strain at the base is then p/M = (1+nu)(1-2nu)/((1-nu) ratio) = 0.74% for every a, and the
+step count (dt = courant h / c) grows like H0/h, not faster (the runout changed by 1% between ratios
+100, 400 and 1600; docs/verification.md).
+End time: `--end-factor` (4.5) x sqrt(max(H0, L0)/g); the fronts measured stop moving (to 0.1%) by
+about 4 sqrt(max(H0, L0)/g), and the study script reports how far each front moved over the last 10%.
 
-Materials: Drucker-Prager (the issue's measurement: phi = 32 deg, plane-strain cone, psi = 0,
-cohesion 10 Pa) and mu(I) with the sand parameters of docs/verification.md (`--mu-s`, `--mu-2`,
-`--i0`, `--grain-diameter`, `--grain-density`).
+Materials: Drucker-Prager (issue 21's measurement: phi = 32 deg, plane-strain cone, psi = 0,
+cohesion 10 Pa) and mu(I) with the sand of docs/verification.md (`--mu-s`, `--mu-2`, `--i0`,
+`--grain-diameter`, `--grain-density`): mu_s = tan 32 deg, mu_2 = mu_s + 0.2616 and I0 = 0.279 (the
+rise of Jop, Forterre & Pouliquen 2006), d = 0.5 mm, quartz grains 2650 kg/m^3.
 """
 import argparse
 import json
