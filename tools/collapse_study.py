@@ -51,6 +51,12 @@ def lube_height(a):
     return np.minimum(a, a ** 0.4)
 
 
+def read_csv_columns_rows(path):
+    import csv
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
 def scene_for(model, a, cells, extra):
     argv = ["--aspect", f"{a:g}", "--model", model, "--cells", str(cells), *extra]
     o = make_collapse_scene.parser().parse_args(argv)
@@ -110,7 +116,7 @@ def measure(run_dir, o):
     }
 
 
-def plot(rows, out_png):
+def plot(rows, out_png, overlays=()):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -133,6 +139,10 @@ def plot(rows, out_png):
                 m, col, face = style[(model, label_of[c])]
                 ax.plot([r["aspect"] for r in sel], [r[key] for r in sel], marker=m, color=col, mfc=face, ls="-" if
                         label_of[c] == "fine" else ":", label=f"{MODELS[model]}, h = L0/{c}")
+        for path, label in overlays:  # another study's CSV (e.g. the rate-independent control), grey
+            o = sorted(read_csv_columns_rows(path), key=lambda r: float(r["aspect"]))
+            ax.plot([float(r["aspect"]) for r in o], [float(r[key]) for r in o], "^--", color="0.45", mfc="none",
+                    lw=0.8, label=label)
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("a = H0 / L0")
@@ -156,6 +166,8 @@ def main():
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--scene-args", default="", help="more options for make_collapse_scene.py, e.g. '--shape linear'")
     ap.add_argument("--lock", help="run each talus under `flock -s LOCK` (e.g. /work/quiet.lock on a shared machine)")
+    ap.add_argument("--overlay", nargs=2, action="append", default=[], metavar=("CSV", "LABEL"),
+                    help="also plot the runs of another study's collapse_study.csv (e.g. a control), in grey")
     ap.add_argument("--no-run", action="store_true", help="only measure the runs that are there")
     args = ap.parse_args()
     extra = args.scene_args.split()
@@ -184,7 +196,7 @@ def main():
     os.makedirs(args.out, exist_ok=True)
     write_csv_rows(os.path.join(args.out, "collapse_study.csv"),
                    [{k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows])
-    plot(rows, os.path.join(args.out, "collapse_study.png"))
+    plot(rows, os.path.join(args.out, "collapse_study.png"), args.overlay)
     print("| model | h | a | dL/L0 (0.995 quantile) | Lube | deviation | dL/L0 connected | H/L0 | Lube H/L0 | "
           "E_kin end/peak | front drift last 10% | budget gap |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
