@@ -86,8 +86,8 @@ def main():
         s, thick = centre_line(run_dir, 2 * a.cell)
         bx.plot(s - result["gate_s"], 100 * thick, color=colour, label=MODELS[model])
     plane = runs["drucker_prager"][2]["runout_plane_s"] - runs["drucker_prager"][2]["gate_s"]
-    for axis in (ax, bx):
-        axis.axhline(plane, color="0.5", lw=0.6) if axis is ax else axis.axvline(plane, color="0.5", lw=0.6)
+    ax.axhline(plane, color="0.5", lw=0.6)
+    bx.axvline(plane, color="0.5", lw=0.6)
     finish_axes(ax, "time [s]", "distance from the gate along the flume [m]",
                 f"front and tail (h = {a.cell:g} m; grey: start of the runout plane)", fontsize=7)
     finish_axes(bx, "distance from the gate along the flume [m]", "deposit thickness, centre line [cm]",
