@@ -6,8 +6,8 @@
 
 Writes the two scenes with tools/make_flume_scene.py (the same geometry, bed and cell; only the sand's
 model differs), runs them one after the other into RUNS/<model>_h<cell in 0.1 mm> (a finished run is
-reused), and writes docs/flume/models.csv and models.png (front and tail against time, deposit
-profiles along the centre line).
+reused), and writes docs/flume/models_h<cell in 0.1 mm>.csv and .png (front and tail against time,
+deposit profiles along the centre line).
 """
 import argparse
 import json
@@ -46,8 +46,9 @@ def main():
     os.makedirs(a.runs, exist_ok=True)
     os.makedirs(a.out, exist_ok=True)
     rows, runs = [], {}
+    tag = f"h{round(a.cell * 1e4):04d}"
     for model in MODELS:
-        name = f"{model}_h{round(a.cell * 1e4):04d}"
+        name = f"{model}_{tag}"
         run_dir = os.path.join(a.runs, name)
         wall_path = os.path.join(run_dir, "wall_seconds.txt")
         if not os.path.exists(os.path.join(run_dir, "runout.json")):
@@ -78,7 +79,7 @@ def main():
                "budget_gap": float(f"{(energy['total'][-1] - energy['total'][0]) / abs(energy['total'][0]):.3e}")}
         rows.append(row)
         print(row, flush=True)
-    write_csv_rows(os.path.join(a.out, "models.csv"), rows)
+    write_csv_rows(os.path.join(a.out, f"models_{tag}.csv"), rows)
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 4.2))
     for (model, (run_dir, r, result)), colour in zip(runs.items(), ("tab:blue", "tab:red")):
         ax.plot(r["time"], r["front"] - result["gate_s"], color=colour, label=f"front, {MODELS[model]}")
@@ -92,8 +93,8 @@ def main():
                 f"front and tail (h = {a.cell:g} m; grey: start of the runout plane)", fontsize=7)
     finish_axes(bx, "distance from the gate along the flume [m]", "deposit thickness, centre line [cm]",
                 "deposit at rest", fontsize=7)
-    save_figure(fig, os.path.join(a.out, "models.png"), 120)
-    print("wrote", os.path.join(a.out, "models.csv"), "and models.png")
+    save_figure(fig, os.path.join(a.out, f"models_{tag}.png"), 120)
+    print("wrote", os.path.join(a.out, f"models_{tag}.csv"), "and .png")
 
 
 if __name__ == "__main__":
