@@ -23,6 +23,19 @@ import math
 import sys
 
 
+def material(a):
+    """The sand: Drucker-Prager (the default), or mu(I) (docs/flume.md, "The flume with mu(I)"): mu_s = tan of
+    the internal friction angle, the rise mu_2 - mu_s = 0.2616 and I0 = 0.279 of Jop, Forterre & Pouliquen 2006."""
+    if a.model == "mu_i":
+        mu_s = round(math.tan(math.radians(a.friction)), 6)
+        return {"model": "mu_i", "density": a.density, "young": 2.0e6, "poisson": 0.3,
+                "mu_s": mu_s, "mu_2": round(mu_s + a.mu_rise, 6), "i0": a.i0,
+                "grain_diameter": a.grain_diameter, "grain_density": a.grain_density, "separation_volume_ratio": 1.5}
+    return {"model": "drucker_prager", "density": a.density, "young": 2.0e6, "poisson": 0.3,
+            "friction_angle": a.friction, "dilatancy_angle": 0.0, "cohesion": 10.0,
+            "hardening_modulus": 0.0, "kinematic_fraction": 0.2, "cone": "plane_strain"}
+
+
 def build(a):
     t = math.radians(a.slope)
     h = a.cell
@@ -51,7 +64,8 @@ def build(a):
         "description": (f"Denlinger-style dry sand flume (docs/flume.md): {a.slope} deg slope, {a.slope_length} m gate to "
                         f"transition, transition radius {a.radius} m, {a.runout_length} m runout plane, {a.width} m wide "
                         f"with open sides; a {a.wedge_length} m x {a.wedge_width} m sand wedge ({mass:.2f} kg) behind a "
-                        f"bed-normal gate removed at t = 0; internal friction {a.friction} deg, bed friction {a.bed_friction} deg"),
+                        f"bed-normal gate removed at t = 0; internal friction {a.friction} deg, bed friction {a.bed_friction} deg"
+                        + ("; mu(I) sand, mu_s = tan(internal friction)" if a.model == "mu_i" else "")),
         "comment": "written by tools/make_flume_scene.py " + " ".join(sys.argv[1:]),
         "grid": {
             "origin": [r6(x0), r6(-ny * h / 2), 0.0],
@@ -63,11 +77,7 @@ def build(a):
         "gravity": [0.0, 0.0, -9.81],
         "time": {"end": a.end, "courant": 0.3},
         "solver": {"scheme": "musl", "shape": a.shape, "pic_fraction": a.pic_fraction},
-        "materials": {
-            "sand": {"model": "drucker_prager", "density": a.density, "young": 2.0e6, "poisson": 0.3,
-                     "friction_angle": a.friction, "dilatancy_angle": 0.0, "cohesion": 10.0,
-                     "hardening_modulus": 0.0, "kinematic_fraction": 0.2, "cone": "plane_strain"}
-        },
+        "materials": {"sand": material(a)},
         "bodies": [{
             "name": "wedge", "material": "sand",
             "prism": {"points": [[r6(A[0]), r6(A[1])], [r6(C[0]), r6(C[1])], [r6(B[0]), r6(B[1])]],
@@ -109,7 +119,13 @@ def main():
     p.add_argument("--name", default="denlinger_flume")
     p.add_argument("--slope", type=float, default=31.4, help="slope angle [deg] (experiment: 31.4, Abe, Johansson & Konagai 2005: 30)")
     p.add_argument("--bed-friction", type=float, default=29.0, help="bed friction angle [deg] (29; Abe, Johansson & Konagai 2005: 27)")
-    p.add_argument("--friction", type=float, default=40.0, help="internal friction angle [deg]")
+    p.add_argument("--friction", type=float, default=40.0, help="internal friction angle [deg] (mu(I): mu_s = its tangent)")
+    p.add_argument("--model", default="drucker_prager", choices=["drucker_prager", "mu_i"], help="the sand's material model")
+    p.add_argument("--mu-rise", type=float, default=0.2616,
+                   help="mu(I): mu_2 - mu_s (Jop, Forterre & Pouliquen 2006: tan 32.76 deg - tan 20.9 deg)")
+    p.add_argument("--i0", type=float, default=0.279, help="mu(I): I0 (Jop, Forterre & Pouliquen 2006)")
+    p.add_argument("--grain-diameter", type=float, default=0.5e-3, help="mu(I): grain diameter [m]")
+    p.add_argument("--grain-density", type=float, default=2650.0, help="mu(I): grain density [kg/m^3] (quartz)")
     p.add_argument("--density", type=float, default=1600.0)
     p.add_argument("--slope-length", type=float, default=1.2, help="gate to the start of the transition [m]")
     p.add_argument("--radius", type=float, default=0.2, help="transition radius [m]")

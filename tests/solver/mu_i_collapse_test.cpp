@@ -10,6 +10,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <vector>
 
 namespace talus {
 namespace {
@@ -80,6 +82,47 @@ TEST(MuICollapse, SeparatedParticlesAreStressFree) {
       ASSERT_EQ(P.plastic_strain[p], 0.0);
     }
   EXPECT_GT(separated, 0u);
+}
+
+// The 0.995 mass quantile of x (equal particle masses): the front of the deposit.
+double front_quantile_x(const ParticleStore& P) {
+  std::vector<double> x(P.x[0].begin(), P.x[0].begin() + static_cast<std::ptrdiff_t>(P.size()));
+  std::sort(x.begin(), x.end());
+  return x[static_cast<std::size_t>(std::ceil(0.995 * static_cast<double>(x.size()))) - 1];
+}
+
+TEST(MuICollapse, RateIndependentLimitRunsOutLikeDruckerPragerWithTheSameFriction) {
+  // With mu_2 -> mu_s the rate dependence vanishes and mu(I) is a perfectly plastic cone sqrt(J2) = mu_s p
+  // with isochoric flow: the Drucker-Prager plane-strain cone with 3 alpha = mu_s, psi = 0, c = 0
+  // (docs/drucker-prager.md sec. 2: alpha = tan(phi) / sqrt(9 + 12 tan^2 phi)). The two must run the
+  // column out alike; a mistake in either model's measure of the shear stress (|s| against sqrt(J2), a
+  // factor sqrt(2)) or of the pressure would move the runout by far more than the 1% asserted (measured
+  // 0.25% at cell 0.02 m: the flows differ at round-off and the collapse amplifies it).
+  const double mu_s = 0.38186;
+  const double tan_phi = mu_s / std::sqrt(1.0 - 4.0 / 3.0 * mu_s * mu_s);  // inverts 3 alpha = mu_s
+  const double phi_degrees = std::atan(tan_phi) * 180.0 / M_PI;
+  Solver mu_i(mu_i_column_scene(0.02, 0.6, R"(, "mu_s": 0.38186, "mu_2": 0.3818604)"));
+  const std::string dp_json = fmt::format(R"({{
+    "name": "dp_column",
+    "grid": {{ "origin": [0, 0, 0], "size": [0.6, 0.02, 0.3], "cell_size": 0.02 }},
+    "time": {{ "end": 0.6, "courant": 0.3 }},
+    "materials": {{ "sand": {{ "model": "drucker_prager", "density": 1500.0, "young": 2.0e6, "poisson": 0.3,
+                             "friction_angle": {:.17g}, "dilatancy_angle": 0.0, "cohesion": 0.0,
+                             "cone": "plane_strain" }} }},
+    "bodies": [ {{ "name": "column", "material": "sand", "box": {{ "min": [0, 0, 0], "max": [0.1, 0.02, 0.2] }},
+                  "particles_per_cell": 2 }} ],
+    "boundaries": {{ "x-": "slip", "x+": "slip", "y-": "slip", "y+": "slip",
+                     "z-": {{ "type": "friction", "friction_coefficient": 0.5 }}, "z+": "open" }}
+  }})", phi_degrees);
+  Solver dp(parse_scene(dp_json, "dp_column"));
+  while (!mu_i.finished()) mu_i.step();
+  while (!dp.finished()) dp.step();
+  const double runout_mu_i = front_quantile_x(mu_i.particles()) - 0.1;
+  const double runout_dp = front_quantile_x(dp.particles()) - 0.1;
+  std::printf("[ measured ] runout from the column's edge: mu(I) with mu_2 -> mu_s %.4f m, Drucker-Prager phi = %.3f deg "
+              "%.4f m\n", runout_mu_i, phi_degrees, runout_dp);
+  EXPECT_GT(runout_dp, 0.2);  // the column has collapsed (a = 2: about 4 L0 with this low friction)
+  EXPECT_NEAR(runout_mu_i, runout_dp, 0.01 * runout_dp);
 }
 
 TEST(MuICollapse, BitIdenticalForOneAndTwoThreads) {
