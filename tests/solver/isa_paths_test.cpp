@@ -194,6 +194,22 @@ TEST(IsaPaths, EveryShapeAndSchemeIsBitIdenticalOnEveryPath) {
   expect_every_path_matches_the_reference(bspline);
 }
 
+// A Drucker-Prager block crossing the periodic x seam (the wrapped stencils), B-spline.
+TEST(IsaPaths, PeriodicWrapIsBitIdenticalOnEveryPath) {
+  const std::string json = R"({
+    "grid": { "origin": [0, 0, 0], "size": [1.0, 0.5, 0.5], "cell_size": 0.0625 },
+    "time": { "end": 0.05, "courant": 0.3 },
+    "solver": { "shape": "bspline2" },
+    "materials": { "sand": { "model": "drucker_prager", "density": 1600.0, "young": 2.0e6, "poisson": 0.3,
+                             "friction_angle": 30.0, "cohesion": 10.0 } },
+    "bodies": [ { "name": "block", "material": "sand", "particles_per_cell": 2, "velocity": [4.0, 0.5, 0],
+                  "box": { "min": [0.75, 0, 0], "max": [1.0, 0.25, 0.25] } } ],
+    "boundaries": { "x-": "periodic", "x+": "periodic", "y-": "periodic", "y+": "periodic",
+                    "z-": { "type": "friction", "friction_coefficient": 0.5 }, "z+": "open" }
+  })";
+  expect_every_path_matches_the_reference(parse_scene(json, "periodic_block"));
+}
+
 // A block sliding down a terrain (the ProfileTerrain transfers), uGIMP, USAVG.
 TEST(IsaPaths, TerrainTransfersAreBitIdenticalOnEveryPath) {
   const std::string json = R"({
