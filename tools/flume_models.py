@@ -10,11 +10,8 @@ reused), and writes docs/flume/models_h<cell in 0.1 mm>.csv and .png (front and 
 deposit profiles along the centre line).
 """
 import argparse
-import json
 import os
-import subprocess
 import sys
-import time
 
 import matplotlib
 matplotlib.use("Agg")
@@ -22,7 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
-from talus_plot import ROOT, finish_axes, read_csv_columns, run_talus, save_figure, write_csv_rows  # noqa: E402
+from talus_plot import ROOT, finish_axes, read_csv_columns, run_flume, save_figure, write_csv_rows  # noqa: E402
 
 MODELS = {"drucker_prager": "Drucker-Prager, phi = 40 deg", "mu_i": "mu(I), mu_s = tan 40 deg"}
 
@@ -49,25 +46,11 @@ def main():
     tag = f"h{round(a.cell * 1e4):04d}"
     for model in MODELS:
         name = f"{model}_{tag}"
-        run_dir = os.path.join(a.runs, name)
-        wall_path = os.path.join(run_dir, "wall_seconds.txt")
-        if not os.path.exists(os.path.join(run_dir, "runout.json")):
-            scene = os.path.join(a.runs, name + ".json")
-            with open(scene, "w") as f:
-                subprocess.run([sys.executable, os.path.join(ROOT, "tools", "make_flume_scene.py"), "--cell", str(a.cell),
-                                "--model", model, "--name", "flume_" + name], check=True, stdout=f)
-            t0 = time.perf_counter()
-            run_talus(a.talus, "run", scene, "--out", run_dir, threads=a.threads)
-            with open(wall_path, "w") as f:
-                f.write(f"{time.perf_counter() - t0:.1f}\n")
-        runout = read_csv_columns(os.path.join(run_dir, "runout.csv"))
-        energy = read_csv_columns(os.path.join(run_dir, "energy.csv"))
-        with open(os.path.join(run_dir, "runout.json")) as f:
-            result = json.load(f)
+        run_dir, runout, energy, result, wall = run_flume(a.talus, a.runs, name, a.cell, a.threads, ("--model", model))
         runs[model] = (run_dir, runout, result)
         released = energy["gravity"][0] - energy["gravity"][-1]
         row = {"model": model, "cell_size": a.cell,
-               "wall_seconds": float(open(wall_path).read()) if os.path.exists(wall_path) else None,
+               "wall_seconds": wall,
                "front_from_gate_t1": round(float(np.interp(1.0, runout["time"], runout["front"])) - result["gate_s"], 4),
                "runout_from_gate": round(result["from_gate"], 4),
                "onto_runout_plane": round(result["beyond_runout_plane"], 4),

@@ -11,11 +11,8 @@ Usage: /usr/bin/python3 tools/flume_resolution.py [--talus build/talus] [--cells
                                                   [--threads 2] [--runs runs] [--rerun]
 """
 import argparse
-import json
 import os
-import subprocess
 import sys
-import time
 
 import matplotlib
 matplotlib.use("Agg")
@@ -23,7 +20,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
-from talus_plot import finish_axes, read_csv_columns, run_talus, save_figure, write_csv_rows  # noqa: E402
+from talus_plot import finish_axes, run_flume, save_figure, write_csv_rows  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TIMES = (0.5, 1.0, 2.0)  # [s] front positions compared between resolutions
@@ -42,27 +39,12 @@ def main():
     rows, histories = [], {}
     for h in a.cells:
         name = f"flume_h{round(h * 1e4):04d}"
-        run_dir = os.path.join(a.runs, name)
-        wall_path = os.path.join(run_dir, "wall_seconds.txt")
-        if a.rerun or not os.path.exists(os.path.join(run_dir, "runout.json")):
-            scene = os.path.join(a.runs, name + ".json")
-            os.makedirs(a.runs, exist_ok=True)
-            with open(scene, "w") as f:
-                subprocess.run([sys.executable, os.path.join(ROOT, "tools", "make_flume_scene.py"), "--cell", str(h),
-                                "--name", name], check=True, stdout=f)
-            t0 = time.perf_counter()
-            run_talus(a.talus, "run", scene, "--out", run_dir, threads=a.threads)
-            with open(wall_path, "w") as f:
-                f.write(f"{time.perf_counter() - t0:.1f}\n")
-        runout = read_csv_columns(os.path.join(run_dir, "runout.csv"))
-        energy = read_csv_columns(os.path.join(run_dir, "energy.csv"))
-        with open(os.path.join(run_dir, "runout.json")) as f:
-            result = json.load(f)
+        run_dir, runout, energy, result, wall = run_flume(a.talus, a.runs, name, h, a.threads, rerun=a.rerun)
         histories[h] = runout
         fronts = [float(np.interp(t, runout["time"], runout["front"])) - result["gate_s"] for t in TIMES]
         mass0 = runout["mass"][0]
         kinetic = energy["kinetic"]
-        row = {"cell_size": h, "wall_seconds": float(open(wall_path).read()) if os.path.exists(wall_path) else None,
+        row = {"cell_size": h, "wall_seconds": wall,
                **{f"front_from_gate_t{t:g}": round(v, 4) for t, v in zip(TIMES, fronts)},
                "runout_from_gate": round(result["from_gate"], 4),
                "onto_runout_plane": round(result["beyond_runout_plane"], 4) if result.get("beyond_runout_plane") is not None else None,

@@ -4,8 +4,11 @@ The scripts run as `/usr/bin/python3 tools/X.py` and find this module next to th
 their own folder on sys.path before importing it).
 """
 import csv
+import json
 import os
 import subprocess
+import sys
+import time
 
 import numpy as np
 
@@ -47,6 +50,29 @@ def run_talus(talus, *args, threads=None, quiet=True, capture=False, check=True)
     if not capture and r.stdout and not quiet:
         print(r.stdout, end="")
     return r
+
+
+def run_flume(talus, runs, name, cell, threads=1, scene_args=(), rerun=False):
+    """The flume scene of tools/make_flume_scene.py at cell size `cell` (extra generator arguments in
+    scene_args), run into runs/name unless a finished run is there (or rerun). Returns
+    (run_dir, runout columns, energy columns, runout.json, wall seconds or None)."""
+    run_dir = os.path.join(runs, name)
+    wall_path = os.path.join(run_dir, "wall_seconds.txt")
+    if rerun or not os.path.exists(os.path.join(run_dir, "runout.json")):
+        os.makedirs(runs, exist_ok=True)
+        scene = os.path.join(runs, name + ".json")
+        with open(scene, "w") as f:
+            subprocess.run([sys.executable, os.path.join(ROOT, "tools", "make_flume_scene.py"), "--cell", str(cell),
+                            *map(str, scene_args), "--name", name], check=True, stdout=f)
+        t0 = time.perf_counter()
+        run_talus(talus, "run", scene, "--out", run_dir, threads=threads)
+        with open(wall_path, "w") as f:
+            f.write(f"{time.perf_counter() - t0:.1f}\n")
+    with open(os.path.join(run_dir, "runout.json")) as f:
+        result = json.load(f)
+    wall = float(open(wall_path).read()) if os.path.exists(wall_path) else None
+    return (run_dir, read_csv_columns(os.path.join(run_dir, "runout.csv")),
+            read_csv_columns(os.path.join(run_dir, "energy.csv")), result, wall)
 
 
 def read_csv_columns(path):
