@@ -29,6 +29,19 @@ DruckerPragerKernelConstants lane_constants(const std::vector<DruckerPrager>& mo
   return c;
 }
 
+MuIKernelConstants lane_constants(const MuI& model, const GranularOptions& granular) {
+  MuIKernelConstants c;
+  c.shear = model.shear_modulus();
+  c.lame = model.lame_lambda();
+  c.mu_s = model.parameters().mu_s;
+  c.mu_2 = model.parameters().mu_2;
+  c.i0 = model.parameters().i0;
+  c.friction_rise = model.friction_rise();
+  c.rate_constant = model.rate_constant();
+  c.separation_volume_ratio = granular.separation_volume_ratio;
+  return c;
+}
+
 }  // namespace
 
 BodyMaterials::BodyMaterials(const Scene& scene, ParticleStore& particles) {
@@ -50,6 +63,7 @@ BodyMaterials::BodyMaterials(const Scene& scene, ParticleStore& particles) {
     } else if (m.model == MaterialModel::MuI) {
       body.mu_i.emplace_back(m.mu_i, "materials." + m.name + ".");
       body.granular = m.granular;  // the separation rule only
+      body.mu_i_lanes = lane_constants(body.mu_i[0], body.granular);
       any_plastic_ = true;         // the equivalent plastic shear strain is kept per particle
     }
     bodies_.push_back(std::move(body));
@@ -140,11 +154,13 @@ double BodyMaterials::update_particle(const Body& body, ParticleStore& P, std::s
 void BodyMaterials::update_run(const Body& body, ParticleStore& P, std::size_t begin, std::size_t end,
                                std::size_t chunk_begin, const StrainIncrements& inc, double dt,
                                double& dissipated) const {
-  // The vector kernels take linear elastic bodies and Drucker-Prager without a back stress; each
+  // The vector kernels take linear elastic, μ(I) and Drucker-Prager bodies without a back stress; each
   // lane computes what update_particle would, bit for bit (solver/material_kernels.hpp).
   const bool lanes = vector_kernels_enabled() &&
-                     (body.model == MaterialModel::LinearElastic ||
+                     (body.model == MaterialModel::LinearElastic || body.model == MaterialModel::MuI ||
                       (body.model == MaterialModel::DruckerPrager && !P.has_back_stress()));
+  MuIKernelConstants mu_i_constants = body.mu_i_lanes;
+  mu_i_constants.dt = dt;
   MaterialKernelFields fields;
   if (lanes) {
     for (int c = 0; c < 6; ++c) {
@@ -161,10 +177,14 @@ void BodyMaterials::update_run(const Body& body, ParticleStore& P, std::size_t b
   std::size_t p = begin;
   while (p < end) {
     KernelStop stop{p, end - p};
-    if (lanes)
-      stop = body.model == MaterialModel::LinearElastic
-                 ? update_elastic_lanes(fields, ElasticKernelConstants{body.elastic.lambda, body.elastic.shear}, p, end)
-                 : update_drucker_prager_lanes(fields, body.drucker_prager_lanes, p, end, dissipated);
+    if (lanes) {
+      if (body.model == MaterialModel::LinearElastic)
+        stop = update_elastic_lanes(fields, ElasticKernelConstants{body.elastic.lambda, body.elastic.shear}, p, end);
+      else if (body.model == MaterialModel::DruckerPrager)
+        stop = update_drucker_prager_lanes(fields, body.drucker_prager_lanes, p, end, dissipated);
+      else
+        stop = update_mu_i_lanes(fields, mu_i_constants, p, end, dissipated);
+    }
     const std::size_t scalar_end = std::min(end, stop.next + stop.scalar_count);
     for (std::size_t q = stop.next; q < scalar_end; ++q)
       dissipated += update_particle(body, P, q, inc, q - chunk_begin, dt);

@@ -144,6 +144,63 @@ HWY_ATTR KernelStop DruckerPragerLanes(const MaterialKernelFields& f, const Druc
   return {p, end - p};
 }
 
+HWY_ATTR KernelStop MuILanes(const MaterialKernelFields& f, const MuIKernelConstants& m, std::size_t begin,
+                             std::size_t end, double& dissipated) {
+  const D d;
+  const std::size_t n = hn::Lanes(d);
+  const V zero = hn::Zero(d), half = hn::Set(d, 0.5), two = hn::Set(d, 2.0), third = hn::Set(d, 3.0);
+  const V two_shear = hn::Set(d, 2.0 * m.shear), lame = hn::Set(d, m.lame), shear = hn::Set(d, m.shear);
+  const V mu_s = hn::Set(d, m.mu_s), mu_2 = hn::Set(d, m.mu_2), i0 = hn::Set(d, m.i0), rise = hn::Set(d, m.friction_rise);
+  const V rate_constant = hn::Set(d, m.rate_constant), dt = hn::Set(d, m.dt), mu_s_i0 = hn::Set(d, m.mu_s * m.i0);
+  const V i0_squared = hn::Set(d, m.i0 * m.i0), separation = hn::Set(d, m.separation_volume_ratio);
+  HWY_ALIGN double work[hn::MaxLanes(d)];
+  std::size_t p = begin;
+  for (; p + n <= end; p += n) {
+    LaneState st = load_and_rotate(f, p);
+    if (m.separation_volume_ratio > 0.0 &&
+        !hn::AllFalse(d, hn::Gt(st.volume, hn::Mul(separation, hn::LoadU(d, f.volume0 + p)))))
+      return {p, n};
+    // MuI::update, step 1: elastic trial, pressure and deviator.
+    const V de_v = hn::Add(hn::Add(st.de[0], st.de[1]), st.de[2]);
+    V trial[6], s[6];
+    for (int c = 0; c < 6; ++c) trial[c] = hn::Add(st.s[c], hn::Mul(two_shear, st.de[c]));
+    for (int c = 0; c < 3; ++c) trial[c] = hn::Add(trial[c], hn::Mul(lame, de_v));
+    const V mean = hn::Div(hn::Add(hn::Add(trial[0], trial[1]), trial[2]), third);
+    const V pressure = hn::Neg(mean);
+    if (!hn::AllTrue(d, hn::Gt(pressure, zero))) return {p, n};  // step 2, disconnected: reference
+    for (int c = 0; c < 3; ++c) s[c] = hn::Sub(trial[c], mean);
+    for (int c = 3; c < 6; ++c) s[c] = trial[c];
+    const V normal = hn::Add(hn::Add(hn::Mul(s[0], s[0]), hn::Mul(s[1], s[1])), hn::Mul(s[2], s[2]));
+    const V tau_trial = hn::Sqrt(hn::Add(hn::Add(hn::Add(hn::Mul(half, normal), hn::Mul(s[3], s[3])), hn::Mul(s[4], s[4])),
+                                         hn::Mul(s[5], s[5])));
+    // Step 3: below the static yield cone, elastic. Step 4: flowing, the smaller root of the
+    // quadratic in mu (Jop et al. 2006; docs/mu-i.md).
+    const auto flowing = hn::Not(hn::Le(tau_trial, hn::Mul(mu_s, pressure)));
+    const V ratio = hn::Div(tau_trial, pressure);
+    const V big_b = hn::Div(hn::Mul(rate_constant, hn::Sqrt(pressure)), dt);
+    const V b = hn::Add(hn::Mul(big_b, hn::Add(ratio, mu_2)), i0);
+    const V c = hn::Add(hn::Mul(hn::Mul(big_b, ratio), mu_2), mu_s_i0);
+    const V gap = hn::Sub(ratio, mu_2);
+    const V disc = hn::Add(hn::Add(hn::Mul(hn::Mul(hn::Mul(big_b, big_b), gap), gap),
+                                   hn::Mul(hn::Mul(hn::Mul(two, big_b), i0), hn::Add(hn::Sub(ratio, mu_s), rise))),
+                           i0_squared);
+    const V mu = hn::Div(hn::Mul(two, c), hn::Add(b, hn::Sqrt(disc)));
+    const V tau = hn::Mul(mu, pressure);
+    const V scale = hn::Div(mu, ratio);
+    for (int k = 0; k < 6; ++k) {
+      const V returned = hn::Add(hn::Mul(scale, s[k]), k < 3 ? mean : zero);
+      st.s[k] = hn::IfThenElse(flowing, returned, trial[k]);
+    }
+    const V plastic_shear_strain = hn::IfThenElseZero(flowing, hn::Div(hn::Sub(tau_trial, tau), shear));
+    const V plastic_work = hn::IfThenElseZero(flowing, hn::Mul(tau, plastic_shear_strain));
+    hn::StoreU(hn::Add(hn::LoadU(d, f.plastic_strain + p), plastic_shear_strain), d, f.plastic_strain + p);
+    hn::Store(hn::Mul(plastic_work, st.volume), d, work);
+    store_stress_strain_volume(f, p, st);
+    for (std::size_t lane = 0; lane < n; ++lane) dissipated += work[lane];  // in particle order
+  }
+  return {p, end - p};
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace talus
 HWY_AFTER_NAMESPACE();
@@ -153,6 +210,7 @@ namespace talus {
 
 HWY_EXPORT(ElasticLanes);
 HWY_EXPORT(DruckerPragerLanes);
+HWY_EXPORT(MuILanes);
 
 KernelStop update_elastic_lanes(const MaterialKernelFields& fields, const ElasticKernelConstants& constants,
                                 std::size_t begin, std::size_t end) {
@@ -163,6 +221,11 @@ KernelStop update_drucker_prager_lanes(const MaterialKernelFields& fields,
                                        const DruckerPragerKernelConstants& constants, std::size_t begin,
                                        std::size_t end, double& dissipated) {
   return HWY_DYNAMIC_DISPATCH(DruckerPragerLanes)(fields, constants, begin, end, dissipated);
+}
+
+KernelStop update_mu_i_lanes(const MaterialKernelFields& fields, const MuIKernelConstants& constants, std::size_t begin,
+                             std::size_t end, double& dissipated) {
+  return HWY_DYNAMIC_DISPATCH(MuILanes)(fields, constants, begin, end, dissipated);
 }
 
 }  // namespace talus

@@ -86,6 +86,8 @@ class MuI {
   double shear_modulus() const { return shear_; }
   double bulk_modulus() const { return bulk_; }
   double lame_lambda() const { return lame_; }
+  double friction_rise() const { return delta_mu_; }     ///< mu_2 - mu_s
+  double rate_constant() const { return rate_constant_; }  ///< d sqrt(rho_s) / G
 
  private:
   MuIParameters parameters_;
@@ -95,6 +97,8 @@ class MuI {
 };
 
 inline MuIResult MuI::update(Sym6& stress, const Sym6& strain_increment, double dt) const {
+  // The vector kernel of solver/material_kernels.cpp does steps 1, 3 and 4 lane by lane in exactly
+  // these operations; change both together (IsaPaths compares them bit for bit).
   // 1. Elastic trial (plain arrays, as in DruckerPrager::update, for the same reason).
   const double de_v = strain_increment[XX] + strain_increment[YY] + strain_increment[ZZ];
   double trial[6];

@@ -68,6 +68,7 @@ class BodyMaterials {
     GranularOptions granular;  // and μ(I): separation_volume_ratio
     std::vector<MuI> mu_i;     // μ(I) only: one model
     DruckerPragerKernelConstants drucker_prager_lanes;  // the vector kernel's copy of `plastic`
+    MuIKernelConstants mu_i_lanes;                      // and of `mu_i` (dt set per update)
   };
   static bool separated(const Body& body, const ParticleStore& P, std::size_t p);
   static double release_separated(const Body& body, ParticleStore& P, std::size_t p, Sym6& stress);

@@ -40,6 +40,15 @@ struct DruckerPragerKernelConstants {
   std::array<double, 2> alpha_excess{};      // alpha - alpha_g
 };
 
+/// μ(I) (Jop et al. 2006 in the form of Dunatunga & Kamrin 2015; material/mu_i.hpp) for one time step.
+struct MuIKernelConstants {
+  double shear = 0.0, lame = 0.0, mu_s = 0.0, mu_2 = 0.0, i0 = 0.0;
+  double friction_rise = 0.0;            // mu_2 - mu_s
+  double rate_constant = 0.0;            // d sqrt(rho_s) / G
+  double separation_volume_ratio = 0.0;  // 0: no separation rule
+  double dt = 0.0;
+};
+
 /// Where a kernel stopped: particles [begin, next) are done; the scalar reference must take the
 /// next `scalar_count` particles (a group it does not vectorise, or the tail shorter than a group)
 /// before the kernel can go on.
@@ -57,5 +66,10 @@ KernelStop update_elastic_lanes(const MaterialKernelFields& fields, const Elasti
 KernelStop update_drucker_prager_lanes(const MaterialKernelFields& fields,
                                        const DruckerPragerKernelConstants& constants, std::size_t begin,
                                        std::size_t end, double& dissipated);
+
+/// Particles [begin, end) of a μ(I) body: adds each particle's dissipation to `dissipated` in
+/// particle order; a group with a separated or disconnected (p <= 0) particle goes to the reference.
+KernelStop update_mu_i_lanes(const MaterialKernelFields& fields, const MuIKernelConstants& constants, std::size_t begin,
+                             std::size_t end, double& dissipated);
 
 }  // namespace talus
