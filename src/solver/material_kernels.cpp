@@ -36,6 +36,7 @@ inline Lanes operator-(Lanes a) { return hn::Neg(a.v); }
 // Matsubara 2015, eq. 35) and the Hughes–Winget rotation of the stress.
 struct LaneState {
   V s[6], de[6], volume;
+  V trace;  // tr d_eps = (de_xx + de_yy) + de_zz, in the reference's order
 };
 
 HWY_ATTR inline LaneState load_and_rotate(const MaterialKernelFields& f, std::size_t p) {
@@ -45,8 +46,8 @@ HWY_ATTR inline LaneState load_and_rotate(const MaterialKernelFields& f, std::si
   for (int c = 0; c < 6; ++c) st.de[c] = hn::LoadU(d, f.strain_increment[c] + k);
   Lanes s[6] = {hn::LoadU(d, f.stress[0] + p), hn::LoadU(d, f.stress[1] + p), hn::LoadU(d, f.stress[2] + p),
                 hn::LoadU(d, f.stress[3] + p), hn::LoadU(d, f.stress[4] + p), hn::LoadU(d, f.stress[5] + p)};
-  const V trace = hn::Add(hn::Add(st.de[0], st.de[1]), st.de[2]);
-  st.volume = hn::Mul(hn::LoadU(d, f.volume + p), hn::Add(hn::Set(d, 1.0), trace));
+  st.trace = hn::Add(hn::Add(st.de[0], st.de[1]), st.de[2]);
+  st.volume = hn::Mul(hn::LoadU(d, f.volume + p), hn::Add(hn::Set(d, 1.0), st.trace));
   rotate_objectively_values<Lanes>(s, hn::LoadU(d, f.spin[0] + k), hn::LoadU(d, f.spin[1] + k),
                                    hn::LoadU(d, f.spin[2] + k));
   for (int c = 0; c < 6; ++c) st.s[c] = s[c].v;
@@ -62,6 +63,28 @@ HWY_ATTR inline void store_stress_strain_volume(const MaterialKernelFields& f, s
   hn::StoreU(st.volume, d, f.volume + p);
 }
 
+// BodyMaterials' separation rule: whether any particle of the group is beyond ratio x V0 after the
+// volume update (it carries no stress; the scalar reference takes the group).
+HWY_ATTR inline bool any_separated(const MaterialKernelFields& f, std::size_t p, const LaneState& st, double ratio) {
+  const D d;
+  return ratio > 0.0 && !hn::AllFalse(d, hn::Gt(st.volume, hn::Mul(hn::Set(d, ratio), hn::LoadU(d, f.volume0 + p))));
+}
+
+// The elastic trial of both plastic models: trial = sigma + 2 G d_eps, + lambda tr(d_eps) on the diagonal.
+HWY_ATTR inline void elastic_trial(const LaneState& st, V two_shear, V lame, V (&trial)[6]) {
+  for (int c = 0; c < 6; ++c) trial[c] = hn::Add(st.s[c], hn::Mul(two_shear, st.de[c]));
+  for (int c = 0; c < 3; ++c) trial[c] = hn::Add(trial[c], hn::Mul(lame, st.trace));
+}
+
+// Adds the group's dissipation (per unit volume, times the new volume) in particle order, as the
+// reference's running sum does.
+HWY_ATTR inline void add_in_particle_order(V work_density, const LaneState& st, double& dissipated) {
+  const D d;
+  HWY_ALIGN double work[hn::MaxLanes(d)];
+  hn::Store(hn::Mul(work_density, st.volume), d, work);
+  for (std::size_t lane = 0; lane < hn::Lanes(d); ++lane) dissipated += work[lane];
+}
+
 HWY_ATTR KernelStop ElasticLanes(const MaterialKernelFields& f, const ElasticKernelConstants& m, std::size_t begin,
                                  std::size_t end) {
   const D d;
@@ -71,7 +94,7 @@ HWY_ATTR KernelStop ElasticLanes(const MaterialKernelFields& f, const ElasticKer
   for (; p + n <= end; p += n) {
     LaneState st = load_and_rotate(f, p);
     // LinearElastic::add_increment: s_i += lambda tr(d_eps) + 2 G d_eps_i (Edo & Matsubara 2015, eq. 34)
-    const V lt = hn::Mul(lambda, hn::Add(hn::Add(st.de[0], st.de[1]), st.de[2]));
+    const V lt = hn::Mul(lambda, st.trace);
     for (int c = 0; c < 3; ++c) st.s[c] = hn::Add(st.s[c], hn::Add(lt, hn::Mul(two_shear, st.de[c])));
     for (int c = 3; c < 6; ++c) st.s[c] = hn::Add(st.s[c], hn::Mul(two_shear, st.de[c]));
     store_stress_strain_volume(f, p, st);
@@ -87,15 +110,11 @@ HWY_ATTR KernelStop DruckerPragerLanes(const MaterialKernelFields& f, const Druc
   const V third = hn::Set(d, 3.0), two = hn::Set(d, 2.0), sqrt2 = hn::Set(d, 1.4142135623730951);
   const V alpha = hn::Set(d, m.alpha), k0 = hn::Set(d, m.initial_strength), hi = hn::Set(d, m.hardening_isotropic);
   const V gk = hn::Set(d, m.shear_plus_kinematic), cutoff = hn::Set(d, m.first_invariant_cutoff);
-  const V separation = hn::Set(d, m.separation_volume_ratio), flowing_strain = hn::Set(d, m.flowing_plastic_strain);
-  HWY_ALIGN double work[hn::MaxLanes(d)];
+  const V flowing_strain = hn::Set(d, m.flowing_plastic_strain);
   std::size_t p = begin;
   for (; p + n <= end; p += n) {
     LaneState st = load_and_rotate(f, p);
-    // BodyMaterials: a particle beyond the separation volume carries no stress (scalar reference).
-    if (m.separation_volume_ratio > 0.0 &&
-        !hn::AllFalse(d, hn::Gt(st.volume, hn::Mul(separation, hn::LoadU(d, f.volume0 + p)))))
-      return {p, n};
+    if (any_separated(f, p, st, m.separation_volume_ratio)) return {p, n};
     const V eps_p = hn::LoadU(d, f.plastic_strain + p);
     // Abe, Johansson & Konagai 2005, sec. 7: the flowing model (psi = flowing value) once eps_p is past the threshold.
     const auto flowing = hn::Gt(eps_p, flowing_strain);
@@ -103,10 +122,8 @@ HWY_ATTR KernelStop DruckerPragerLanes(const MaterialKernelFields& f, const Druc
     const V dilation = hn::IfThenElse(flowing, hn::Set(d, m.dilation_factor[1]), hn::Set(d, m.dilation_factor[0]));
     const V alpha_excess = hn::IfThenElse(flowing, hn::Set(d, m.alpha_excess[1]), hn::Set(d, m.alpha_excess[0]));
     // DruckerPrager::update, step 1: elastic trial.
-    const V de_v = hn::Add(hn::Add(st.de[0], st.de[1]), st.de[2]);
     V trial[6];
-    for (int c = 0; c < 6; ++c) trial[c] = hn::Add(st.s[c], hn::Mul(two_shear, st.de[c]));
-    for (int c = 0; c < 3; ++c) trial[c] = hn::Add(trial[c], hn::Mul(lame, de_v));
+    elastic_trial(st, two_shear, lame, trial);
     // Step 2: invariants (the back stress is zero) and the yield function, Abe, Johansson & Konagai 2005, eq. 23.
     const V i1 = hn::Add(hn::Add(trial[0], trial[1]), trial[2]);
     const V mean = hn::Div(i1, third);
@@ -137,9 +154,8 @@ HWY_ATTR KernelStop DruckerPragerLanes(const MaterialKernelFields& f, const Druc
     const V bracket = hn::Sub(hn::Add(k, hn::Mul(hi, dl)), hn::Mul(alpha_excess, i1_new));
     const V plastic_work = hn::Mul(dl, hn::IfThenElse(hn::Gt(bracket, zero), bracket, zero));
     hn::StoreU(hn::IfThenElse(cone, hn::Add(eps_p, dl), eps_p), d, f.plastic_strain + p);
-    hn::Store(hn::Mul(hn::IfThenElseZero(cone, plastic_work), st.volume), d, work);
     store_stress_strain_volume(f, p, st);
-    for (std::size_t lane = 0; lane < n; ++lane) dissipated += work[lane];  // in particle order
+    add_in_particle_order(hn::IfThenElseZero(cone, plastic_work), st, dissipated);
   }
   return {p, end - p};
 }
@@ -152,19 +168,14 @@ HWY_ATTR KernelStop MuILanes(const MaterialKernelFields& f, const MuIKernelConst
   const V two_shear = hn::Set(d, 2.0 * m.shear), lame = hn::Set(d, m.lame), shear = hn::Set(d, m.shear);
   const V mu_s = hn::Set(d, m.mu_s), mu_2 = hn::Set(d, m.mu_2), i0 = hn::Set(d, m.i0), rise = hn::Set(d, m.friction_rise);
   const V rate_constant = hn::Set(d, m.rate_constant), dt = hn::Set(d, m.dt), mu_s_i0 = hn::Set(d, m.mu_s * m.i0);
-  const V i0_squared = hn::Set(d, m.i0 * m.i0), separation = hn::Set(d, m.separation_volume_ratio);
-  HWY_ALIGN double work[hn::MaxLanes(d)];
+  const V i0_squared = hn::Set(d, m.i0 * m.i0);
   std::size_t p = begin;
   for (; p + n <= end; p += n) {
     LaneState st = load_and_rotate(f, p);
-    if (m.separation_volume_ratio > 0.0 &&
-        !hn::AllFalse(d, hn::Gt(st.volume, hn::Mul(separation, hn::LoadU(d, f.volume0 + p)))))
-      return {p, n};
+    if (any_separated(f, p, st, m.separation_volume_ratio)) return {p, n};
     // MuI::update, step 1: elastic trial, pressure and deviator.
-    const V de_v = hn::Add(hn::Add(st.de[0], st.de[1]), st.de[2]);
     V trial[6], s[6];
-    for (int c = 0; c < 6; ++c) trial[c] = hn::Add(st.s[c], hn::Mul(two_shear, st.de[c]));
-    for (int c = 0; c < 3; ++c) trial[c] = hn::Add(trial[c], hn::Mul(lame, de_v));
+    elastic_trial(st, two_shear, lame, trial);
     const V mean = hn::Div(hn::Add(hn::Add(trial[0], trial[1]), trial[2]), third);
     const V pressure = hn::Neg(mean);
     if (!hn::AllTrue(d, hn::Gt(pressure, zero))) return {p, n};  // step 2, disconnected: reference
@@ -194,9 +205,8 @@ HWY_ATTR KernelStop MuILanes(const MaterialKernelFields& f, const MuIKernelConst
     const V plastic_shear_strain = hn::IfThenElseZero(flowing, hn::Div(hn::Sub(tau_trial, tau), shear));
     const V plastic_work = hn::IfThenElseZero(flowing, hn::Mul(tau, plastic_shear_strain));
     hn::StoreU(hn::Add(hn::LoadU(d, f.plastic_strain + p), plastic_shear_strain), d, f.plastic_strain + p);
-    hn::Store(hn::Mul(plastic_work, st.volume), d, work);
     store_stress_strain_volume(f, p, st);
-    for (std::size_t lane = 0; lane < n; ++lane) dissipated += work[lane];  // in particle order
+    add_in_particle_order(plastic_work, st, dissipated);
   }
   return {p, end - p};
 }

@@ -3,9 +3,11 @@
 // compiled for the baseline x86-64 (scalar: SSE2), AVX2 and AVX-512 by Google Highway and
 // picks the best the CPU has at run time; `reference` runs the plain C++ reference path instead of
 // the Highway kernels. Every path gives bit-identical results (docs/performance.md, "Vector
-// kernels"): the kernels vectorise ACROSS particles, each lane doing the reference's operations
-// in the reference's order, the build never contracts a*b + c into a fused multiply-add
-// (-ffp-contract=off), and sums over particles stay in particle order. tests/solver checks it.
+// kernels"): the material kernels vectorise ACROSS particles, each lane doing the reference's
+// operations in the reference's order; the transfers are the same plain C++ compiled per target
+// (the compiler does not reassociate); the build never contracts a*b + c into a fused
+// multiply-add (-ffp-contract=off); sums over particles stay in particle order.
+// tests/solver/isa_paths_test.cpp checks it.
 //
 // The choice is global to the process: `talus run|bench --isa NAME` or the environment variable
 // TALUS_ISA select it; the default is `auto` (the best path available).

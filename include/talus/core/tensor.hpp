@@ -88,10 +88,10 @@ inline void jaumann_rotate(Sym6& s, double w_yz, double w_xz, double w_xy) {
 /// (and dilation) under pure rotation. Rotate the stress and the back stress with the SAME
 /// function; rotate_state() uses this one. Spin (w_yz, w_xz, w_xy) as in core/types.hpp.
 /// Written out (45 multiply-adds, no temporaries): it runs once per particle per step and was 17%
-/// of an elastic step as Eigen 3x3 products.
-/// The same rotation on six stress components of any arithmetic type T (double, or a vector of
-/// doubles in the kernels of solver/material_kernels.cpp): one expression for every path, so the
-/// scalar and the vector updates agree bit for bit. T needs + - * / and T(double).
+/// of an elastic step as Eigen 3x3 products. The arithmetic is rotate_objectively_values below, on
+/// six components of any arithmetic type T (double, or a vector of doubles in the kernels of
+/// solver/material_kernels.cpp): one expression for every path, so the scalar and the vector
+/// updates agree bit for bit. T needs + - * / and T(double).
 template <class T>
 [[gnu::always_inline]] inline void rotate_objectively_values(T s[6], T w_yz, T w_xz, T w_xy) {
   // A = dW/2 with A(0,1) = w_xy/2, A(0,2) = w_xz/2, A(1,2) = w_yz/2; A^2 is symmetric:
