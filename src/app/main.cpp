@@ -1,5 +1,6 @@
 // The talus command-line program: parses the subcommand and reports errors in one line.
 #include "commands.hpp"
+#include "talus/core/comm.hpp"
 #include "talus/core/error.hpp"
 #include "talus/core/simd_dispatch.hpp"
 #include "talus/core/version.hpp"
@@ -9,6 +10,9 @@
 #include <exception>
 
 int main(int argc, char** argv) {
+  // Under mpirun (and with an MPI build) every rank runs this same program; otherwise nothing changes.
+  talus::MpiSession mpi(argc, argv);
+  const talus::Comm world = talus::Comm::world();
   CLI::App app{
       "talus: explicit 3D material point method (MPM) solver for granular runout.\n"
       "Scene files are JSON (SI units); see docs/scene-reference.md."};
@@ -30,7 +34,10 @@ int main(int argc, char** argv) {
     app.exit(e);
     return 2;
   } catch (const talus::Error& e) {
-    fmt::print(stderr, "talus: error: {}\n", e.what());
+    // Errors that reach here are those every rank meets alike (the scene, the options): rank 0
+    // reports them once and every rank exits with the same code. A rank that fails alone during a
+    // run ends the job itself (run_command.cpp).
+    if (world.root()) fmt::print(stderr, "talus: error: {}\n", e.what());
     return e.exit_code();
   } catch (const std::exception& e) {
     fmt::print(stderr, "talus: internal error: {}\n", e.what());

@@ -1,0 +1,202 @@
+#include "talus/core/comm.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <limits>
+
+#ifdef TALUS_HAVE_MPI
+#include <mpi.h>
+#endif
+
+namespace talus {
+
+namespace {
+#ifdef TALUS_HAVE_MPI
+bool mpi_running() {
+  int initialised = 0, finalised = 0;
+  MPI_Initialized(&initialised);
+  MPI_Finalized(&finalised);
+  return initialised && !finalised;
+}
+constexpr int kExchangeTag = 7301;
+#endif
+}  // namespace
+
+bool mpi_built() {
+#ifdef TALUS_HAVE_MPI
+  return true;
+#else
+  return false;
+#endif
+}
+
+Comm Comm::world() {
+  Comm c;
+#ifdef TALUS_HAVE_MPI
+  if (mpi_running()) {
+    MPI_Comm_rank(MPI_COMM_WORLD, &c.rank_);
+    MPI_Comm_size(MPI_COMM_WORLD, &c.size_);
+  }
+#endif
+  return c;
+}
+
+void Comm::allgather_bytes(const void* value, std::size_t bytes, void* out) const {
+  if (size_ == 1) {
+    std::memcpy(out, value, bytes);
+    return;
+  }
+#ifdef TALUS_HAVE_MPI
+  MPI_Allgather(value, static_cast<int>(bytes), MPI_BYTE, out, static_cast<int>(bytes), MPI_BYTE, MPI_COMM_WORLD);
+#endif
+}
+
+std::vector<double> Comm::sum_in_rank_order(const std::vector<double>& local) const {
+  if (size_ == 1) return local;
+  std::vector<double> all(local.size() * size_);
+#ifdef TALUS_HAVE_MPI
+  MPI_Allgather(local.data(), static_cast<int>(local.size()), MPI_DOUBLE, all.data(), static_cast<int>(local.size()),
+                MPI_DOUBLE, MPI_COMM_WORLD);
+#endif
+  std::vector<double> total(local.size(), 0.0);
+  for (int r = 0; r < size_; ++r)
+    for (std::size_t i = 0; i < local.size(); ++i) total[i] += all[r * local.size() + i];
+  return total;
+}
+
+std::vector<std::int64_t> Comm::sum_in_rank_order(const std::vector<std::int64_t>& local) const {
+  if (size_ == 1) return local;
+  std::vector<std::int64_t> all(local.size() * size_);
+#ifdef TALUS_HAVE_MPI
+  MPI_Allgather(local.data(), static_cast<int>(local.size()), MPI_INT64_T, all.data(), static_cast<int>(local.size()),
+                MPI_INT64_T, MPI_COMM_WORLD);
+#endif
+  std::vector<std::int64_t> total(local.size(), 0);
+  for (int r = 0; r < size_; ++r)
+    for (std::size_t i = 0; i < local.size(); ++i) total[i] += all[r * local.size() + i];
+  return total;
+}
+
+double Comm::min(double local) const {
+  const std::vector<double> all = allgather(local);
+  return *std::min_element(all.begin(), all.end());
+}
+
+bool Comm::any(bool local) const {
+  const std::vector<unsigned char> all = allgather(static_cast<unsigned char>(local ? 1 : 0));
+  return std::any_of(all.begin(), all.end(), [](unsigned char f) { return f != 0; });
+}
+
+std::vector<unsigned char> Comm::gather_bytes(const void* data, std::size_t bytes, std::vector<std::int64_t>& counts) const {
+  counts.assign(1, static_cast<std::int64_t>(bytes));
+  if (size_ == 1) {
+    std::vector<unsigned char> out(bytes);
+    if (bytes) std::memcpy(out.data(), data, bytes);
+    return out;
+  }
+  std::vector<unsigned char> out;
+#ifdef TALUS_HAVE_MPI
+  const std::int64_t mine = static_cast<std::int64_t>(bytes);
+  counts.assign(size_, 0);
+  MPI_Gather(&mine, 1, MPI_INT64_T, counts.data(), 1, MPI_INT64_T, 0, MPI_COMM_WORLD);
+  // Point-to-point rather than MPI_Gatherv, whose int counts limit a rank's share to 2 GB.
+  constexpr std::int64_t kChunk = std::numeric_limits<int>::max() / 2;
+  if (rank_ == 0) {
+    std::int64_t total = 0;
+    for (std::int64_t c : counts) total += c;
+    out.resize(static_cast<std::size_t>(total));
+    if (bytes) std::memcpy(out.data(), data, bytes);
+    std::int64_t at = counts[0];
+    for (int r = 1; r < size_; ++r)
+      for (std::int64_t done = 0; done < counts[r]; done += kChunk) {
+        const int n = static_cast<int>(std::min(kChunk, counts[r] - done));
+        MPI_Recv(out.data() + at + done, n, MPI_BYTE, r, kExchangeTag + 1, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+      }
+    for (int r = 1; r < size_; ++r) at += counts[r];
+  } else {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::int64_t done = 0; done < mine; done += kChunk) {
+      const int n = static_cast<int>(std::min(kChunk, mine - done));
+      MPI_Send(p + done, n, MPI_BYTE, 0, kExchangeTag + 1, MPI_COMM_WORLD);
+    }
+    counts.clear();
+  }
+#endif
+  return out;
+}
+
+std::vector<std::vector<unsigned char>> Comm::exchange(const std::vector<int>& peers,
+                                                       const std::vector<std::vector<unsigned char>>& to_peer) const {
+  std::vector<std::vector<unsigned char>> received(peers.size());
+#ifdef TALUS_HAVE_MPI
+  if (peers.empty()) return received;
+  std::vector<MPI_Request> sends(peers.size());
+  for (std::size_t i = 0; i < peers.size(); ++i)
+    MPI_Isend(to_peer[i].data(), static_cast<int>(to_peer[i].size()), MPI_BYTE, peers[i], kExchangeTag, MPI_COMM_WORLD,
+              &sends[i]);
+  for (std::size_t i = 0; i < peers.size(); ++i) {
+    MPI_Status status;
+    MPI_Probe(peers[i], kExchangeTag, MPI_COMM_WORLD, &status);
+    int count = 0;
+    MPI_Get_count(&status, MPI_BYTE, &count);
+    received[i].resize(static_cast<std::size_t>(count));
+    MPI_Recv(received[i].data(), count, MPI_BYTE, peers[i], kExchangeTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+  }
+  MPI_Waitall(static_cast<int>(sends.size()), sends.data(), MPI_STATUSES_IGNORE);
+#else
+  (void)to_peer;
+#endif
+  return received;
+}
+
+std::string Comm::broadcast(const std::string& from_root) const {
+  if (size_ == 1) return from_root;
+  std::string s = from_root;
+#ifdef TALUS_HAVE_MPI
+  std::int64_t n = static_cast<std::int64_t>(s.size());
+  MPI_Bcast(&n, 1, MPI_INT64_T, 0, MPI_COMM_WORLD);
+  s.resize(static_cast<std::size_t>(n));
+  MPI_Bcast(s.data(), static_cast<int>(n), MPI_CHAR, 0, MPI_COMM_WORLD);
+#endif
+  return s;
+}
+
+void Comm::barrier() const {
+#ifdef TALUS_HAVE_MPI
+  if (size_ > 1) MPI_Barrier(MPI_COMM_WORLD);
+#endif
+}
+
+void Comm::abort(int code) const {
+#ifdef TALUS_HAVE_MPI
+  if (mpi_running()) MPI_Abort(MPI_COMM_WORLD, code);
+#endif
+  std::exit(code);
+}
+
+bool MpiSession::launched_by_mpirun() {
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_SIZE"})
+    if (std::getenv(name)) return true;
+  return false;
+}
+
+MpiSession::MpiSession(int& argc, char**& argv) {
+#ifdef TALUS_HAVE_MPI
+  if (!launched_by_mpirun()) return;
+  int provided = 0;
+  // OpenMP threads inside each rank; only the main thread calls MPI.
+  MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+  active_ = true;
+#else
+  (void)argc;
+  (void)argv;
+#endif
+}
+
+MpiSession::~MpiSession() {
+#ifdef TALUS_HAVE_MPI
+  if (active_ && mpi_running()) MPI_Finalize();
+#endif
+}
+
+}  // namespace talus
