@@ -16,6 +16,10 @@ void add_element_test_command(CLI::App& app);
 void add_dem_springs_command(CLI::App& app);
 void add_schema_command(CLI::App& app);
 
+/// The exit code a command sets instead of calling exit(), so that main() returns it after MPI is
+/// finalised (a run stopped by a signal exits with 128 + the signal); 0 by default.
+int& exit_code();
+
 /// The --isa option of the commands that run the solver (core/simd_dispatch.hpp); apply it with
 /// select_isa(*value) in the callback: "auto" (default) or a path of available_isas().
 void add_isa_option(CLI::App* command, const std::shared_ptr<std::string>& value);

@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
   try {
     talus::select_isa_from_environment();  // TALUS_ISA; a command's --isa overrides it
     app.parse(argc, argv);
+    return talus::app::exit_code();
   } catch (const CLI::Success& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
@@ -47,6 +48,11 @@ int main(int argc, char** argv) {
 }
 
 namespace talus::app {
+
+int& exit_code() {
+  static int code = 0;
+  return code;
+}
 
 void add_isa_option(CLI::App* command, const std::shared_ptr<std::string>& value) {
   command->add_option("--isa", *value,

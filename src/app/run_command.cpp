@@ -93,23 +93,31 @@ void add_run_command(CLI::App& app) {
   cmd->callback([=]() {
     set_threads(*threads);
     if (!isa->empty()) select_isa(*isa);
+    // Under mpirun: every rank reads the scene and builds its slab of the solver; rank 0 speaks.
+    const Comm world = Comm::world();
+    if (world.distributed() && !record_path->empty())
+      throw input_error("--record-work: the work recorder times one rank's threads; run it without mpirun");
     Scene scene = read_scene_file(*scene_path);  // validated before anything is written
-    print_warnings(scene);
+    if (world.root()) print_warnings(scene);
     const MemoryEstimate memory = estimate_memory(scene);
     require_memory_fits(scene, memory);  // a scene that cannot fit stops here, before anything is allocated
     std::string dir = out_dir->empty() ? "runs/" + scene.name : *out_dir;
-    Solver solver(std::move(scene));
+    Solver solver(std::move(scene), world);
     std::unique_ptr<Checkpoint> checkpoint;
     if (!restart->empty()) {  // checked against the scene before anything is written
       checkpoint = std::make_unique<Checkpoint>(read_checkpoint(*restart));
       restore_checkpoint(solver, *checkpoint, *restart);
       if (out_dir->empty()) dir = std::filesystem::path(*restart).parent_path().string();
       if (dir.empty()) dir = ".";
-      fmt::print("talus: restart from {} at step {}, t = {:.6g} s\n", *restart, solver.step_count(), solver.time());
+      if (world.root())
+        fmt::print("talus: restart from {} at step {}, t = {:.6g} s\n", *restart, solver.step_count(), solver.time());
     }
     const int threads = omp_get_max_threads();
-    fmt::print("talus: {} particles, {} thread{}, {} kernels, about {} of memory, output in {}\n", solver.particles().size(),
-               threads, threads == 1 ? "" : "s", active_isa(), format_bytes(double(memory.total())), dir);
+    const DistributionStats start = solver.distribution();
+    if (world.root())
+      fmt::print("talus: {} particles, {}{} thread{}, {} kernels, about {} of memory{}, output in {}\n", start.particles,
+                 world.distributed() ? fmt::format("{} ranks x ", world.size()) : "", threads, threads == 1 ? "" : "s",
+                 active_isa(), format_bytes(double(memory.total())), world.distributed() ? " (all ranks)" : "", dir);
     RunOptions options;
     options.out_dir = dir;
     options.progress = !*quiet;
@@ -119,7 +127,30 @@ void add_run_command(CLI::App& app) {
       recorder = std::make_unique<WorkRecorder>(1000, *record_interval);
       options.recorder = recorder.get();
     }
-    const RunSummary summary = run_scene(solver, options);
+    RunSummary summary;
+    try {
+      summary = run_scene(solver, options);
+    } catch (const Error& e) {
+      if (!world.distributed()) throw;
+      // This rank may have failed alone while the others wait in a collective: it names itself and
+      // ends the whole job with its exit code (MPI_Abort), so nothing hangs.
+      fmt::print(stderr, "talus: error on rank {} of {}: {}\n", world.rank(), world.size(), e.what());
+      std::fflush(stderr);
+      world.abort(e.exit_code());
+    } catch (const std::exception& e) {
+      if (!world.distributed()) throw;
+      fmt::print(stderr, "talus: internal error on rank {} of {}: {}\n", world.rank(), world.size(), e.what());
+      std::fflush(stderr);
+      world.abort(4);
+    }
+    const DistributionStats end = solver.distribution();
+    const std::int64_t outflow_particles = solver.outflow_particles();
+    const double outflow_mass = solver.outflow_mass();
+    double mass = outflow_mass;
+    for (double m : solver.particles().mass) mass += m;
+    mass = world.distributed() ? world.sum_in_rank_order(mass - outflow_mass) + outflow_mass : mass;
+    if (summary.interrupted_signal) exit_code() = 128 + summary.interrupted_signal;
+    if (!world.root()) return;
     if (recorder) {
       nlohmann::json meta;
       meta["source"] = "talus run";
@@ -138,13 +169,17 @@ void add_run_command(CLI::App& app) {
       fmt::print("talus: stopped by signal {} at step {}, t = {:.6g} s; checkpoint {}\n", summary.interrupted_signal,
                  summary.steps, summary.time, summary.checkpoint_path);
       fmt::print("talus: resume with: talus run {} --restart {}\n", *scene_path, summary.checkpoint_path);
-      std::fflush(stdout);
-      std::exit(128 + summary.interrupted_signal);
+      return;
     }
     const double e0 = summary.initial.total();
     const double scale = std::max({std::abs(e0), summary.initial.kinetic + summary.initial.strain + std::abs(summary.initial.gravity), 1e-300});
     fmt::print("talus: done: {} steps to t = {:.6g} s in {:.2f} s ({:.2f} M particle-updates/s)\n", summary.steps, summary.time,
-               summary.wall_seconds, summary.steps * double(solver.particles().size()) / summary.wall_seconds / 1e6);
+               summary.wall_seconds, summary.steps * double(end.particles) / summary.wall_seconds / 1e6);
+    if (world.distributed())
+      fmt::print("talus: {} ranks: slabs out of balance by at most {:.2f} (largest rank's particles / mean), {} rebalances, "
+                 "{} particles migrated, {:.3g} MB of node sums exchanged ({:.3g} kB a step)\n",
+                 end.ranks, end.max_imbalance, end.rebalances, end.migrated, end.exchange_bytes / 1e6,
+                 summary.steps > 0 ? end.exchange_bytes / 1e3 / summary.steps : 0.0);
     fmt::print("talus: energy budget closes to {:.3e} of the initial energy\n", (summary.final.total() - e0) / scale);
     if (solver.smoother() && solver.smoothing_passes() > 0) {
       const double passes = static_cast<double>(solver.smoothing_passes());
@@ -155,13 +190,10 @@ void add_run_command(CLI::App& app) {
                  100.0 * solver.unsmoothed_total() / (passes * solver.particles().size()), solver.mean_smoothing_change(),
                  solver.max_smoothing_change());
     }
-    if (solver.outflow_particles() > 0) {
-      double mass = solver.outflow_mass();
-      for (double m : solver.particles().mass) mass += m;
+    if (outflow_particles > 0)
       fmt::print("talus: {} particles ({:.4g} kg, {:.2f}% of the mass) left through open faces (removed; energy column "
                  "'outflow')\n",
-                 solver.outflow_particles(), solver.outflow_mass(), 100.0 * solver.outflow_mass() / mass);
-    }
+                 outflow_particles, outflow_mass, 100.0 * outflow_mass / mass);
     fmt::print("talus: ParaView series: {} ({} frames); energy history: {}/energy.csv\n", summary.pvd_path, summary.frames, dir);
     if (!summary.terrain_path.empty()) fmt::print("talus: terrain surface: {} (open it with the series)\n", summary.terrain_path);
     if (summary.runout) print_runout(*summary.runout, summary);

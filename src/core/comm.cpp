@@ -5,6 +5,9 @@
 #include <limits>
 
 #ifdef TALUS_HAVE_MPI
+// the C API only: Open MPI would otherwise pull in its deprecated C++ bindings
+#define OMPI_SKIP_MPICXX 1
+#define MPICH_SKIP_MPICXX 1
 #include <mpi.h>
 #endif
 

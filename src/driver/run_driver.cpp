@@ -4,6 +4,7 @@
 #include "talus/driver/run_outputs.hpp"
 #include "talus/io/runout_output.hpp"
 #include "talus/io/vtu_writer.hpp"
+#include "talus/particles/particle_migration.hpp"
 #include "talus/scene/scene_json.hpp"
 #include "talus/solver/stability_guards.hpp"
 
@@ -66,11 +67,14 @@ std::string format_duration(double seconds) {
 class ProgressLine {
  public:
   ProgressLine(const Solver& solver, const RunOptions& options)
-      : solver_(solver), enabled_(options.progress), seconds_(options.progress_seconds),
+      : solver_(solver), enabled_(options.progress && solver.comm().root()), seconds_(options.progress_seconds),
         first_step_(solver.step_count()), start_(std::chrono::steady_clock::now()), last_(start_),
         tty_(isatty(fileno(stderr))) {}
 
   double elapsed() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+
+  /// The particles on every rank (a distributed run's rate counts them all); set at the start.
+  void set_particles(std::int64_t n) { particles_ = n; }
 
   void update() {
     const auto now = std::chrono::steady_clock::now();
@@ -82,7 +86,7 @@ class ProgressLine {
     const double fraction = scene.max_steps > 0
                                 ? std::max(solver_.time() / scene.end_time, double(solver_.step_count()) / scene.max_steps)
                                 : solver_.time() / scene.end_time;
-    const double rate = (solver_.step_count() - first_step_) * double(solver_.particles().size()) / std::max(wall, 1e-9);
+    const double rate = (solver_.step_count() - first_step_) * double(particles_) / std::max(wall, 1e-9);
     fmt::print(stderr, "{}talus: step {:>8}  t = {:.4g}/{:.4g} s ({:5.1f}%)  dt = {:.3e} s  {:.2f} M particle-updates/s  ETA {}{}",
                tty_ ? "\r" : "", solver_.step_count(), solver_.time(), scene.end_time, 100.0 * fraction, solver_.last_dt(),
                rate / 1e6, format_duration(wall * (1.0 - fraction) / std::max(fraction, 1e-12)), tty_ ? "   " : "\n");
@@ -94,6 +98,7 @@ class ProgressLine {
   bool enabled_;
   double seconds_;
   std::int64_t first_step_;
+  std::int64_t particles_ = static_cast<std::int64_t>(solver_.particles().size());
   std::chrono::steady_clock::time_point start_, last_;
   bool tty_;
 };
@@ -158,9 +163,9 @@ struct Snapshot {
 class RunLoop {
  public:
   RunLoop(Solver& solver, const RunOptions& options)
-      : solver_(solver), scene_(solver.scene()), dir_(options.out_dir), resuming_(options.resume != nullptr),
-        progress_(resuming_ ? *options.resume : RunProgress{}),
-        history_(dir_, resume_step()), runout_(scene_, dir_, resume_step()),
+      : solver_(solver), scene_(solver.scene()), comm_(solver.comm()), dir_(options.out_dir),
+        resuming_(options.resume != nullptr), progress_(resuming_ ? *options.resume : RunProgress{}),
+        history_(dir_, resume_step(), comm_.root()), runout_(scene_, dir_, resume_step(), comm_),
         frames_(dir_, scene_.output.compress, progress_), checkpoint_(dir_),
         history_schedule_{scene_.output.history_interval, progress_.next_history},
         frame_schedule_{scene_.output.frame_interval, progress_.next_frame},
@@ -193,6 +198,7 @@ class RunLoop {
 
   Solver& solver_;
   const Scene& scene_;
+  Comm comm_;  // a distributed run: rank 0 writes the shared files, every rank its frame piece
   fs::path dir_;
   bool resuming_;
   RunProgress progress_;
@@ -217,13 +223,19 @@ RunSummary RunLoop::run() {
     try {
       keep = step_and_write();
     } catch (const Error& e) {
-      if (e.kind() != Error::Kind::Instability) throw;
+      // A distributed run cannot go back together to its last good state (the other ranks may be
+      // waiting in a collective): the error ends the job (run_command.cpp).
+      if (e.kind() != Error::Kind::Instability || comm_.distributed()) throw;
       fail(e);
     }
     // The snapshot never predates a frame or checkpoint, so the failure path writes in order.
     if (keep) take_snapshot();
     recording_.loop_done();
-    if (const int sig = signals_.caught(); sig != 0 && !solver_.finished()) {
+    int sig = signals_.caught();
+    if (comm_.distributed()) {  // every rank stops at the same step when any was signalled
+      for (int s : comm_.allgather(sig)) sig = std::max(sig, s);
+    }
+    if (sig != 0 && !solver_.finished()) {
       write_checkpoint();
       summary_.interrupted_signal = sig;
       break;
@@ -235,19 +247,24 @@ RunSummary RunLoop::run() {
 }
 
 void RunLoop::start() {
-  write_file_atomically((dir_ / "scene.json").string(), scene_to_json(scene_).dump(2) + "\n");
+  if (comm_.root()) write_file_atomically((dir_ / "scene.json").string(), scene_to_json(scene_).dump(2) + "\n");
   summary_.pvd_path = frames_.pvd_path();
   summary_.checkpoint_path = checkpoint_.path();
   summary_.runout_path = runout_.history_path();
-  write_terrain();
+  if (comm_.root()) write_terrain();
+  progress_line_.set_particles(solver_.distribution().particles);
+  // The energy guard reads the global ledger; in a distributed run rank 0 alone checks it (with
+  // every particle's mass), so its verdict is given once.
+  const ParticleStore everyone = comm_.distributed() ? gather_particles(comm_, solver_.particles()) : ParticleStore();
+  const ParticleStore& all = comm_.distributed() ? everyone : solver_.particles();
   if (resuming_) {
     summary_.initial = progress_.initial;
-    energy_guard_ = EnergyGuard(scene_, solver_.particles(), progress_.initial);
+    energy_guard_ = EnergyGuard(scene_, all, progress_.initial);
     energy_guard_.set_max_released(progress_.energy_max_released);
   } else {
     summary_.initial = solver_.energies();
     progress_.initial = summary_.initial;
-    energy_guard_ = EnergyGuard(scene_, solver_.particles(), summary_.initial);
+    energy_guard_ = EnergyGuard(scene_, all, summary_.initial);
     history_.write(solver_, summary_.initial);
     runout_.write(solver_);
     write_frame();
@@ -301,11 +318,12 @@ void RunLoop::write_history_row() {
   history_.write(solver_, e);
   runout_.write(solver_);
   history_schedule_.advance_past(solver_.time());
-  energy_guard_.check(e, solver_.particles(), scene_, solver_.step_count(), solver_.time());
+  if (comm_.root()) energy_guard_.check(e, solver_.particles(), scene_, solver_.step_count(), solver_.time());
 }
 
 void RunLoop::take_snapshot() {
-  if (scene_.guards.snapshot_interval <= 0) return;
+  // (a distributed run keeps none: an instability ends its job, see run())
+  if (scene_.guards.snapshot_interval <= 0 || comm_.distributed()) return;
   snapshot_.particles = solver_.particles();
   snapshot_.state = solver_.state();
   snapshot_.progress = progress_;
@@ -355,7 +373,9 @@ void RunLoop::finish() {
 }  // namespace
 
 RunSummary run_scene(Solver& solver, const RunOptions& options) {
-  prepare_output_folder(options.out_dir, options.resume);
+  // One rank clears the folder; the others wait so that none writes into it before.
+  if (solver.comm().root()) prepare_output_folder(options.out_dir, options.resume);
+  solver.comm().barrier();
   RunLoop loop(solver, options);
   return loop.run();
 }

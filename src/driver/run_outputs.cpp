@@ -2,6 +2,7 @@
 
 #include "talus/core/error.hpp"
 #include "talus/io/runout_output.hpp"
+#include "talus/particles/particle_migration.hpp"
 
 #include <fmt/core.h>
 
@@ -73,7 +74,9 @@ void prepare_output_folder(const fs::path& dir, const RunProgress* resume) {
 
 // ---- energy.csv ---------------------------------------------------------------------------------
 
-EnergyHistory::EnergyHistory(const fs::path& dir, std::optional<std::int64_t> resume_step) {
+EnergyHistory::EnergyHistory(const fs::path& dir, std::optional<std::int64_t> resume_step, bool writer)
+    : writer_(writer) {
+  if (!writer_) return;
   const fs::path path = dir / "energy.csv";
   const std::string header = energy_header();
   if (resume_step) {
@@ -96,6 +99,7 @@ EnergyHistory::EnergyHistory(const fs::path& dir, std::optional<std::int64_t> re
 }
 
 void EnergyHistory::write(const Solver& solver, const EnergyBudget& e) {
+  if (!writer_) return;
   std::string row = fmt::format("{:.10e},{},{:.6e}", solver.time(), solver.step_count(), solver.last_dt());
   EnergyBudget::for_each_term(e, [&](const char*, double value, bool) { row += fmt::format(",{:.10e}", value); });
   file_ << row << fmt::format(",{:.10e}\n", e.total());
@@ -104,11 +108,13 @@ void EnergyHistory::write(const Solver& solver, const EnergyBudget& e) {
 
 // ---- runout.csv, runout.json, deposit.csv -------------------------------------------------------
 
-RunoutFiles::RunoutFiles(const Scene& scene, const fs::path& dir, std::optional<std::int64_t> resume_step)
-    : scene_(scene), dir_(dir) {
+RunoutFiles::RunoutFiles(const Scene& scene, const fs::path& dir, std::optional<std::int64_t> resume_step,
+                         const Comm& comm)
+    : scene_(scene), dir_(dir), comm_(comm) {
   if (!scene.runout.enabled) return;
   monitor_.emplace(scene.runout, flume_coordinates_of(scene));
   history_path_ = (dir / "runout.csv").string();
+  if (!comm_.root()) return;  // rank 0 measures and writes
   if (resume_step) {
     // Keep the rows up to the checkpoint's step; the monitor continues from the first and last.
     std::optional<RunoutSample> first, last;
@@ -128,22 +134,28 @@ RunoutFiles::RunoutFiles(const Scene& scene, const fs::path& dir, std::optional<
 
 void RunoutFiles::write(const Solver& solver) {
   if (!monitor_) return;
-  file_ << runout_csv_row(monitor_->sample(solver.particles(), solver.time(), solver.step_count())) << "\n";
+  const ParticleStore all = gather_particles(comm_, solver.particles());
+  if (!comm_.root()) return;
+  file_ << runout_csv_row(monitor_->sample(all, solver.time(), solver.step_count())) << "\n";
   file_.flush();
 }
 
 RunoutFiles::Outcome RunoutFiles::finish(Solver& solver) const {
   Outcome out;
-  if (!monitor_ || !monitor_->has_samples()) return out;
+  if (!monitor_) return out;
+  // the deposit needs every particle on rank 0 (collective: every rank takes part)
+  const bool completed = solver.finished();
+  const ParticleStore all = completed ? gather_particles(comm_, solver.particles()) : ParticleStore();
+  if (!comm_.root() || !monitor_->has_samples()) return out;
   out.result = monitor_->result();
   out.summary_path = (dir_ / "runout.json").string();
   write_file_atomically(out.summary_path, runout_result_json(*out.result, solver.time()) + "\n");
-  if (!solver.finished()) return out;  // the deposit of a completed run (not of one stopped by a signal)
+  if (!completed) return out;  // the deposit of a completed run (not of one stopped by a signal)
   ScopedPhase timer(solver.phase_times(), Phase::Output);
   const FlumeCoordinates& c = monitor_->coordinates();
   const GridGeometry& g = scene_.grid;
   const double x1 = g.origin[0] + g.cells[0] * g.h;
-  const DepositRaster deposit = measure_deposit(solver.particles(), c, c.s(g.origin[0]), c.s(x1), g.origin[1],
+  const DepositRaster deposit = measure_deposit(all, c, c.s(g.origin[0]), c.s(x1), g.origin[1],
                                                 g.origin[1] + g.cells[1] * g.h, scene_.runout.deposit_cell);
   out.deposit_path = (dir_ / "deposit.csv").string();
   write_deposit_csv(out.deposit_path, deposit, c);

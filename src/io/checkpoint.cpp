@@ -2,6 +2,7 @@
 
 #include "talus/core/error.hpp"
 #include "talus/core/version.hpp"
+#include "talus/particles/particle_migration.hpp"
 #include "talus/scene/scene_json.hpp"
 
 #include <H5Cpp.h>
@@ -9,6 +10,7 @@
 
 #include <filesystem>
 #include <set>
+#include <type_traits>
 
 namespace talus {
 
@@ -94,10 +96,52 @@ std::string scene_hash(const Scene& scene) {
   return fmt::format("{:016x}", h);
 }
 
+namespace {
+
+/// The scalars of a rank's SolverState kept per rank, by name, in one order.
+template <class State, class F>
+void for_each_rank_scalar(State& s, F&& f) {
+  EnergyBudget::for_each_term(s.work, [&](const char* name, auto& value, bool accumulated) {
+    if (accumulated) f(name, value);
+  });
+  f("outflow_mass", s.outflow_mass);
+  f("periodic_gravity_shift", s.periodic_gravity_shift);
+}
+template <class State, class F>
+void for_each_rank_integer(State& s, F&& f) {
+  f("outflow_particles", s.outflow_particles);
+  f("sorts", s.sorts);
+  f("steps_since_sort", s.steps_since_sort);
+  f("needs_sort", s.needs_sort);
+}
+
+}  // namespace
+
 void write_checkpoint(const std::string& path, const Solver& solver, const RunProgress& run) {
   const std::string tmp = path + ".tmp";
   const Scene& scene = solver.scene();
-  const SolverState state = solver.state();
+  const Comm& comm = solver.comm();
+  SolverState state = solver.state();
+  // A distributed run: every rank's particles (rank after rank), its sort cells and its scalars on
+  // rank 0; the attributes hold the sums over the ranks, so one rank can restart from them too.
+  const ParticleStore P = gather_particles(comm, solver.particles());
+  std::vector<std::int64_t> rank_particles;
+  std::map<std::string, std::vector<double>> rank_scalars;
+  std::map<std::string, std::vector<std::int64_t>> rank_integers;
+  if (comm.distributed()) {
+    for (auto& c : state.sort_cell) c = comm.gather(c);
+    rank_particles = comm.gather(std::vector<std::int64_t>{static_cast<std::int64_t>(solver.particles().size())});
+    for_each_rank_scalar(state, [&](const char* name, double& value) {
+      rank_scalars[name] = comm.gather(std::vector<double>{value});
+      value = comm.sum_in_rank_order(value);
+    });
+    for_each_rank_integer(state, [&](const char* name, auto& value) {
+      rank_integers[name] = comm.gather(std::vector<std::int64_t>{static_cast<std::int64_t>(value)});
+    });
+    state.outflow_particles = comm.sum_in_rank_order(std::vector<std::int64_t>{state.outflow_particles})[0];
+    state.needs_sort = comm.any(state.needs_sort);
+    if (!comm.root()) return;
+  }
   try {
     H5::Exception::dontPrint();
     {
@@ -126,9 +170,16 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
       write_attribute(s, "needs_sort", static_cast<std::int32_t>(state.needs_sort));
       write_attribute(s, "periodic_gravity_shift", state.periodic_gravity_shift);
       for (int d = 0; d < 3; ++d) write_array(s, fmt::format("sort_cell{}", d), state.sort_cell[d]);
+      if (comm.distributed()) {
+        H5::Group ranks = file.createGroup("/solver/ranks");
+        write_array(ranks, "particles", rank_particles);
+        const auto& first = solver.decomposition().first_columns();
+        write_array(ranks, "slab_first_columns", std::vector<std::int32_t>(first.begin(), first.end()));
+        for (const auto& [name, values] : rank_scalars) write_array(ranks, name, values);
+        for (const auto& [name, values] : rank_integers) write_array(ranks, name, values);
+      }
 
       H5::Group p = file.createGroup("/particles");
-      const ParticleStore& P = solver.particles();
       P.for_each_double_array([&](const char* name, const std::vector<double>& a) {
         if (!a.empty()) write_array(p, name, a);
       });
@@ -193,6 +244,21 @@ Checkpoint read_checkpoint(const std::string& path) {
       c.solver.periodic_gravity_shift = read_attribute<double>(s, "periodic_gravity_shift");
     for (int d = 0; d < 3; ++d) c.solver.sort_cell[d] = read_array<std::int32_t>(s, fmt::format("sort_cell{}", d));
 
+    if (s.nameExists("ranks")) {
+      H5::Group ranks = s.openGroup("ranks");
+      c.rank_particles = read_array<std::int64_t>(ranks, "particles");
+      c.slab_first_columns = read_array<std::int32_t>(ranks, "slab_first_columns");
+      c.rank_states.assign(c.rank_particles.size(), c.solver);
+      for (std::size_t r = 0; r < c.rank_states.size(); ++r) {
+        for_each_rank_scalar(c.rank_states[r], [&](const char* name, double& value) {
+          value = read_array<double>(ranks, name).at(r);
+        });
+        for_each_rank_integer(c.rank_states[r], [&](const char* name, auto& value) {
+          value = static_cast<std::remove_reference_t<decltype(value)>>(read_array<std::int64_t>(ranks, name).at(r));
+        });
+      }
+    }
+
     H5::Group p = file.openGroup("/particles");
     c.id = read_array<std::int64_t>(p, "id");
     c.body = read_array<std::uint16_t>(p, "body");
@@ -253,7 +319,40 @@ void restore_checkpoint(Solver& solver, const Checkpoint& c, const std::string& 
   P.body = c.body;
   for (std::uint16_t b : P.body)
     if (b >= solver.scene().bodies.size()) throw bad("a particle's body index is out of range");
-  solver.restore(std::move(P), c.solver);
+  const Comm& comm = solver.comm();
+  const std::size_t saved_ranks = c.rank_particles.empty() ? 1 : c.rank_particles.size();
+  if (saved_ranks == static_cast<std::size_t>(comm.size())) {
+    if (!comm.distributed()) {
+      solver.restore(std::move(P), c.solver);
+      return;
+    }
+    // The same number of ranks: each takes its saved particles, sort cells, counters and ledger.
+    std::int64_t first = 0;
+    for (int r = 0; r < comm.rank(); ++r) first += c.rank_particles[r];
+    const std::int64_t count = c.rank_particles[comm.rank()];
+    if (first + count > static_cast<std::int64_t>(n)) throw bad("the ranks' particle counts exceed the particles");
+    std::vector<std::uint32_t> mine(static_cast<std::size_t>(count));
+    for (std::int64_t i = 0; i < count; ++i) mine[i] = static_cast<std::uint32_t>(first + i);
+    P.permute(mine);
+    SolverState state = c.rank_states[comm.rank()];
+    for (int d = 0; d < 3; ++d)
+      state.sort_cell[d].assign(c.solver.sort_cell[d].begin() + first, c.solver.sort_cell[d].begin() + first + count);
+    solver.set_slab_bounds(std::vector<int>(c.slab_first_columns.begin(), c.slab_first_columns.end()));
+    solver.restore(std::move(P), state);
+    return;
+  }
+  // Another number of ranks: new balanced slabs, a fresh sort; the sums of the ledger and counters
+  // go to rank 0 (every rank's share adds up to them).
+  SolverState state = c.solver;
+  if (!comm.root()) {
+    EnergyBudget::for_each_term(state.work, [](const char*, double& value, bool accumulated) {
+      if (accumulated) value = 0.0;
+    });
+    state.outflow_mass = state.periodic_gravity_shift = 0.0;
+    state.outflow_particles = 0;
+  }
+  for (auto& cells : state.sort_cell) cells.clear();
+  solver.restore(solver.own_particles(std::move(P)), state, Solver::RestoreSort::Fresh);
 }
 
 }  // namespace talus

@@ -10,7 +10,8 @@ namespace {
 /// Runs node_update(n, node_ijk) on every node of every active tile in parallel; sums the returned
 /// energies tile by tile in a fixed order, so the total does not depend on the thread count.
 template <class NodeUpdate>
-double for_active_nodes(const Grid& grid, NodeUpdate node_update, const Walls* only_near_mirrored_walls = nullptr) {
+double for_active_nodes(const Grid& grid, NodeUpdate node_update, const Walls* only_near_mirrored_walls = nullptr,
+                        const std::vector<std::uint8_t>& counted = {}) {
   const auto& tiles = grid.active_tiles();
   const std::size_t count = tiles.size();
   std::vector<double> tile_energy(count, 0.0);
@@ -26,13 +27,15 @@ double for_active_nodes(const Grid& grid, NodeUpdate node_update, const Walls* o
     tile_energy[t] = energy;
   }
   double total = 0.0;
-  for (double e : tile_energy) total += e;
+  for (std::size_t t = 0; t < count; ++t)
+    if (counted.empty() || counted[t]) total += tile_energy[t];
   return total;
 }
 
 }  // namespace
 
-double update_grid(Grid& grid, const Walls& walls, const Vec3& gravity, double dt, double mass_floor) {
+double update_grid(Grid& grid, const Walls& walls, const Vec3& gravity, double dt, double mass_floor,
+                   const std::vector<std::uint8_t>& counted) {
   return for_active_nodes(grid, [&](std::size_t n, std::uint32_t tile, int slot) {
     const double m = grid.mass[n];
     if (m <= mass_floor) {
@@ -53,7 +56,7 @@ double update_grid(Grid& grid, const Walls& walls, const Vec3& gravity, double d
       grid.velocity_l[d][n] = vl[d];
     }
     return removed;
-  });
+  }, nullptr, counted);
 }
 
 namespace {

@@ -3,6 +3,7 @@
 #include "talus/core/deterministic_sum.hpp"
 #include "talus/core/error.hpp"
 #include "talus/core/tensor.hpp"
+#include "talus/particles/particle_migration.hpp"
 #include "talus/particles/seeding.hpp"
 #include "talus/shape/bspline.hpp"
 #include "talus/shape/gimp.hpp"
@@ -54,7 +55,7 @@ void recorded(WorkRecorder* recorder, RegionSchedule schedule, const char* name,
 
 }  // namespace
 
-Solver::Solver(Scene scene) : scene_(std::move(scene)) {
+Solver::Solver(Scene scene, Comm comm) : scene_(std::move(scene)), comm_(comm) {
   particles_ = seed_particles(scene_);
   seeded_particles_ = static_cast<std::int64_t>(particles_.size());
   grid_ = Grid(scene_.grid);
@@ -76,6 +77,25 @@ Solver::Solver(Scene scene) : scene_(std::move(scene)) {
     gather_limits_.lo[d] = scene_.grid.origin[d];
     gather_limits_.hi[d] = scene_.grid.origin[d] + scene_.grid.cells[d] * scene_.grid.h;
     for (int side = 0; side < 2; ++side) gather_limits_.open[d][side] = scene_.walls[d][side].type == WallType::Open;
+  }
+  if (comm_.distributed()) {
+    // Every rank seeded the whole scene (the same particles in the same order); each keeps its slab.
+    if (scene_.smoothing.enabled)
+      throw input_error("smoothing.enabled: MLS smoothing is not available in a distributed run yet (its neighbour "
+                        "search would need the particles of the next slab); run it on one rank");
+    if (scene_.grid.periodic[0])
+      throw input_error("walls: a periodic x axis is not available in a distributed run yet (the slabs cut x); run it "
+                        "on one rank");
+    const int columns = (scene_.grid.cells[0] + 2 * kPad + sort_.block_cells() - 1) / sort_.block_cells();
+    std::vector<std::int64_t> work(columns, 0);
+    for (double x : particles_.x[0]) ++work[std::clamp(scene_.grid.cell_of(0, x) / sort_.block_cells(), 0, columns - 1)];
+    decomposition_ = SlabDecomposition(comm_.size(), sort_.block_cells(), columns, work);
+    imbalance_ = max_imbalance_ = decomposition_.imbalance(work);
+    std::vector<std::uint32_t> mine;
+    for (std::size_t p = 0; p < particles_.size(); ++p)
+      if (owner_of(particles_.x[0][p]) == comm_.rank()) mine.push_back(static_cast<std::uint32_t>(p));
+    particles_.permute(mine);
+    size_scratch();
   }
   sort_particles();
 }
@@ -108,7 +128,7 @@ void Solver::remove_outflow() {
 #pragma omp parallel for schedule(static) reduction(+ : leaving)
   for (std::size_t p = 0; p < n; ++p) leaving += beyond(p) ? 1 : 0;
   if (leaving == 0) return;
-  if (leaving == n)
+  if (leaving == n && !comm_.distributed())  // a distributed run checks the total at the next step
     throw instability_error(fmt::format("step {}, t = {:.6g} s: every particle has left the grid through its open faces",
                                         step_, time_));
   std::vector<std::uint32_t> kept;
@@ -157,7 +177,56 @@ void Solver::sort_particles() {
   needs_sort_ = false;
   steps_since_sort_ = 0;
   ++sorts_;
+  tiles_changed_ = true;
 }
+
+// ---- distributed runs (docs/architecture.md, "Distributed runs") ---------------------------------
+
+std::vector<std::int64_t> Solver::particles_per_column() const {
+  std::vector<std::int64_t> work(decomposition_.columns(), 0);
+  for (double x : particles_.x[0]) ++work[decomposition_.column_of_cell(scene_.grid.cell_of(0, x))];
+  return comm_.sum_in_rank_order(work);
+}
+
+// The threshold of the rebalance: slabs move when the largest holds 10% more than the mean
+// (SlabDecomposition::rebalance adds the hysteresis).
+constexpr double kRebalanceThreshold = 1.10;
+
+void Solver::redistribute() {
+  const std::vector<std::int64_t> work = particles_per_column();
+  if (decomposition_.rebalance(work, kRebalanceThreshold)) ++rebalances_;
+  imbalance_ = decomposition_.imbalance(work);
+  max_imbalance_ = std::max(max_imbalance_, imbalance_);
+  const std::size_t n = particles_.size();
+  std::vector<int> owner(n);
+#pragma omp parallel for schedule(static)
+  for (std::size_t p = 0; p < n; ++p) owner[p] = owner_of(particles_.x[0][p]);
+  migrated_ += static_cast<std::int64_t>(migrate_particles(comm_, particles_, owner));
+  size_scratch();
+}
+
+void Solver::sum_shared_nodes(const std::vector<LazyArray*>& fields) {
+  if (!comm_.distributed()) return;
+  exchange_bytes_ += static_cast<std::int64_t>(exchange_.sum_shared(comm_, fields));
+}
+
+DistributionStats Solver::distribution() const {
+  DistributionStats d;
+  d.ranks = comm_.size();
+  const auto sums = comm_.sum_in_rank_order(std::vector<std::int64_t>{
+      static_cast<std::int64_t>(particles_.size()), exchange_bytes_, static_cast<std::int64_t>(exchange_.shared_tiles())});
+  d.particles = sums[0];
+  d.exchange_bytes = sums[1];
+  d.shared_tiles = sums[2] / 2;
+  d.imbalance = imbalance_;
+  d.max_imbalance = max_imbalance_;
+  d.rebalances = rebalances_;
+  d.migrated = comm_.sum_in_rank_order(std::vector<std::int64_t>{migrated_})[0];
+  return d;
+}
+
+std::int64_t Solver::outflow_particles() const { return comm_.sum_in_rank_order(std::vector<std::int64_t>{outflow_particles_})[0]; }
+double Solver::outflow_mass() const { return comm_.sum_in_rank_order(outflow_mass_); }
 
 bool Solver::finished() const {
   const bool time_done = time_ >= scene_.end_time * (1.0 - 1e-12);
@@ -184,6 +253,29 @@ void Solver::step() {
   const double step_start = recorded_step ? omp_get_wtime() : 0.0;
   double dt = 0.0;
   recorded(recording(), RegionSchedule::Static, "time step", particles_.size(), 1, [&] { dt = stable_time_step(); });
+  if (comm_.distributed()) {
+    // One collective a step: the time step (the smallest; a min has the same bits in any order),
+    // whether any rank must sort (then all sort and migrate), whether any rank's tiles changed.
+    struct StepSync {
+      double dt;
+      std::int64_t particles;
+      std::uint8_t sort, tiles_changed;
+    };
+    const StepSync mine{dt, static_cast<std::int64_t>(particles_.size()),
+                        static_cast<std::uint8_t>(needs_sort_ || steps_since_sort_ >= scene_.sort_interval),
+                        static_cast<std::uint8_t>(tiles_changed_)};
+    std::int64_t particles = 0;
+    collective_sort_ = setup_exchange_ = false;
+    for (const StepSync& r : comm_.allgather(mine)) {
+      dt = std::min(dt, r.dt);
+      particles += r.particles;
+      collective_sort_ = collective_sort_ || r.sort;
+      setup_exchange_ = setup_exchange_ || r.tiles_changed;
+    }
+    if (particles == 0)
+      throw instability_error(fmt::format("step {}, t = {:.6g} s: every particle has left the grid through its open faces",
+                                          step_, time_));
+  }
   if (!std::isfinite(dt) || dt <= 0.0)
     throw instability_error(fmt::format("step {}, t = {:.6g} s: time step {} is not positive and finite", step_, time_, dt));
   const double remaining = scene_.end_time - time_;
@@ -234,8 +326,17 @@ void Solver::step_with(double dt) {
   //    to keep the memory order close to the cell order. With MLS smoothing, every step: the
   //    neighbour search reads the cell offsets, which must be those of the current positions.
   // (recorded as serial: only its first loop, the cell of each particle, is parallel)
-  if (smoother_ || needs_sort_ || steps_since_sort_ >= scene_.sort_interval)
-    recorded(recording(), RegionSchedule::Serial, "sort", 0, 0, [&] { sort_particles(); });
+  const bool sort_now =
+      comm_.distributed() ? collective_sort_ : smoother_ || needs_sort_ || steps_since_sort_ >= scene_.sort_interval;
+  if (sort_now)
+    recorded(recording(), RegionSchedule::Serial, "sort", 0, 0, [&] {
+      if (comm_.distributed()) redistribute();
+      sort_particles();
+    });
+  if (comm_.distributed() && (sort_now || setup_exchange_)) {
+    exchange_.setup(comm_, grid_);
+    tiles_changed_ = false;
+  }
   ++steps_since_sort_;
   WorkRecorder* const rec = recording();
   ColourPassTiming* const timing = rec ? &pass_timing_ : nullptr;
@@ -249,6 +350,8 @@ void Solver::step_with(double dt) {
     recorded(rec, RegionSchedule::Static, "grid clear", tiles, 1, [&] { grid_.clear_active(); });
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentumForce, timing);
     if (rec) rec->add_colour_passes("p2g", pass_timing_, sort_, false);
+    sum_shared_nodes({&grid_.mass, &grid_.momentum[0], &grid_.momentum[1], &grid_.momentum[2], &grid_.force[0],
+                      &grid_.force[1], &grid_.force[2]});
     recorded(rec, RegionSchedule::Static, "fold ghosts", tiles, mirrored,
              [&] { fold_ghost_nodes(grid_, walls_, {.mass = true, .momentum = true, .force = true}, gravity); });
   } else {
@@ -257,6 +360,7 @@ void Solver::step_with(double dt) {
       recorded(rec, RegionSchedule::Static, "grid clear", tiles, 1, [&] { grid_.clear_active(); });
       scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentum, timing);
       if (rec) rec->add_colour_passes("p2g mass momentum", pass_timing_, sort_, false);
+      sum_shared_nodes({&grid_.mass, &grid_.momentum[0], &grid_.momentum[1], &grid_.momentum[2]});
       recorded(rec, RegionSchedule::Static, "start velocities", tiles, 1 + 2 * mirrored, [&] {
         fold_ghost_nodes(grid_, walls_, {.mass = true, .momentum = true}, gravity);
         start_velocities(grid_, walls_, mass_floor_);
@@ -267,6 +371,7 @@ void Solver::step_with(double dt) {
     ScopedPhase timer(times_, Phase::P2G);
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Force, timing);
     if (rec) rec->add_colour_passes("p2g force", pass_timing_, sort_, false);
+    sum_shared_nodes({&grid_.force[0], &grid_.force[1], &grid_.force[2]});
     recorded(rec, RegionSchedule::Static, "fold ghosts", tiles, mirrored,
              [&] { fold_ghost_nodes(grid_, walls_, {.force = true}, gravity); });
   }
@@ -274,7 +379,7 @@ void Solver::step_with(double dt) {
   {
     ScopedPhase timer(times_, Phase::Grid);
     recorded(rec, RegionSchedule::Static, "grid update", tiles, 1 + mirrored, [&] {
-      work_.friction_work += update_grid(grid_, walls_, gravity, dt, mass_floor_);
+      work_.friction_work += update_grid(grid_, walls_, gravity, dt, mass_floor_, exchange_.counted());
       mirror_ghost_nodes(grid_, walls_, GhostFields::AfterGridUpdate);
     });
   }
@@ -305,6 +410,7 @@ void Solver::step_with(double dt) {
   NodeVectors node_velocity = grid_.lagrangian_velocity();
   if (remap) {
     ScopedPhase timer(times_, Phase::Remap);
+    sum_shared_nodes({&grid_.momentum[0], &grid_.momentum[1], &grid_.momentum[2]});
     recorded(rec, RegionSchedule::Static, "remap grid", tiles, 1 + 2 * mirrored, [&] {
       fold_ghost_nodes(grid_, walls_, {.momentum = true}, gravity);
       velocities_from_momentum(grid_, walls_, mass_floor_);
@@ -487,6 +593,13 @@ EnergyBudget Solver::energies() const {
   e.kinetic = sums[0];
   e.strain = sums[1];
   e.gravity = sums[2] + periodic_gravity_shift_;  // the unwrapped positions' potential (wrap_periodic)
+  if (!comm_.distributed()) return e;
+  // Each rank's ledger, added in rank order: the same bits on every rank and in every run.
+  std::vector<double> terms;
+  EnergyBudget::for_each_term(e, [&](const char*, double value, bool) { terms.push_back(value); });
+  const std::vector<double> total = comm_.sum_in_rank_order(terms);
+  std::size_t i = 0;
+  EnergyBudget::for_each_term(e, [&](const char*, double& value, bool) { value = total[i++]; });
   return e;
 }
 
@@ -534,16 +647,36 @@ SolverState Solver::state() const {
   return s;
 }
 
-void Solver::restore(ParticleStore particles, const SolverState& s) {
+ParticleStore Solver::own_particles(ParticleStore all) {
+  if (!comm_.distributed()) return all;
+  std::vector<std::int64_t> work(decomposition_.columns(), 0);
+  for (double x : all.x[0]) ++work[decomposition_.column_of_cell(scene_.grid.cell_of(0, x))];
+  decomposition_.set_first_columns(SlabDecomposition::balanced_first_columns(work, comm_.size()));
+  std::vector<std::uint32_t> mine;
+  for (std::size_t p = 0; p < all.size(); ++p)
+    if (owner_of(all.x[0][p]) == comm_.rank()) mine.push_back(static_cast<std::uint32_t>(p));
+  all.permute(mine);
+  return all;
+}
+
+void Solver::restore(ParticleStore particles, const SolverState& s, RestoreSort mode) {
   const std::size_t n = particles.size();
   // Fewer particles than the scene seeds: the others left through open faces (remove_outflow).
-  if (static_cast<std::int64_t>(n) + s.outflow_particles != seeded_particles_)
-    throw io_error(fmt::format("restart: {} particles saved and {} left through open faces, the scene seeds {}", n,
-                               s.outflow_particles, seeded_particles_));
-  for (const auto& c : s.sort_cell)
-    if (c.size() != n) throw io_error("restart: the saved sort state does not match the particles");
+  const std::vector<std::int64_t> counts =
+      comm_.sum_in_rank_order(std::vector<std::int64_t>{static_cast<std::int64_t>(n), s.outflow_particles});
+  if (counts[0] + counts[1] != seeded_particles_)
+    throw io_error(fmt::format("restart: {} particles saved and {} left through open faces, the scene seeds {}", counts[0],
+                               counts[1], seeded_particles_));
+  if (mode == RestoreSort::Exact)
+    for (const auto& c : s.sort_cell)
+      if (c.size() != n) throw io_error("restart: the saved sort state does not match the particles");
   particles_ = std::move(particles);
   size_scratch();
+  if (mode == RestoreSort::Fresh) {
+    restore_counters(s);
+    sort_particles();
+    return;
+  }
   // Rebuild the cell sort exactly as the saved solver had it: sort with every particle placed at
   // the centre of its saved cell. The particles are already in that key order, so the (stable)
   // sort keeps their order and rebuilds the same blocks, colours and active tiles.
@@ -559,6 +692,11 @@ void Solver::restore(ParticleStore particles, const SolverState& s) {
   sort_.sort(particles_, grid_);
   if (particles_.id != ids) throw io_error("restart: the saved particle order is not the saved sort's order");
   particles_.x = std::move(x);
+  tiles_changed_ = true;
+  restore_counters(s);
+}
+
+void Solver::restore_counters(const SolverState& s) {
   time_ = s.time;
   step_ = s.step;
   last_dt_ = s.last_dt;

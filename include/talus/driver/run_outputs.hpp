@@ -46,21 +46,27 @@ class EnergyHistory {
  public:
   /// A fresh run (no resume_step) starts the file with its header; a resumed one keeps the rows up
   /// to resume_step (the file rewritten atomically) and appends.
-  EnergyHistory(const std::filesystem::path& dir, std::optional<std::int64_t> resume_step);
+  /// In a distributed run only rank 0 writes (`writer`); the others keep no file.
+  EnergyHistory(const std::filesystem::path& dir, std::optional<std::int64_t> resume_step, bool writer = true);
   /// One row, flushed: a killed run leaves only whole rows behind.
   void write(const Solver& solver, const EnergyBudget& energies);
-  void flush() { file_.flush(); }
+  void flush() {
+    if (writer_) file_.flush();
+  }
 
  private:
+  bool writer_;
   std::ofstream file_;
 };
 
 /// runout.csv, runout.json, deposit.csv (docs/flume.md); does nothing without diagnostics.runout.
 class RunoutFiles {
  public:
-  RunoutFiles(const Scene& scene, const std::filesystem::path& dir, std::optional<std::int64_t> resume_step);
+  /// In a distributed run the particles are gathered to rank 0, which measures and writes.
+  RunoutFiles(const Scene& scene, const std::filesystem::path& dir, std::optional<std::int64_t> resume_step,
+              const Comm& comm = Comm());
   bool enabled() const { return monitor_.has_value(); }
-  /// One row of runout.csv, on the history schedule.
+  /// One row of runout.csv, on the history schedule (collective).
   void write(const Solver& solver);
   /// What finish() wrote: the runout after the last step, and the files' paths.
   struct Outcome {
@@ -68,13 +74,15 @@ class RunoutFiles {
     std::string summary_path;  // runout.json
     std::string deposit_path;  // deposit.csv (empty unless the run reached its end)
   };
-  /// runout.json (the front after the last step), and deposit.csv when the run reached its end.
+  /// runout.json (the front after the last step), and deposit.csv when the run reached its end
+  /// (collective; the outcome is rank 0's).
   Outcome finish(Solver& solver) const;
   const std::string& history_path() const { return history_path_; }
 
  private:
   const Scene& scene_;
   std::filesystem::path dir_;
+  Comm comm_;
   std::optional<RunoutMonitor> monitor_;
   std::string history_path_;
   std::ofstream file_;

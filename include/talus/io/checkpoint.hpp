@@ -14,6 +14,10 @@
 //   /particles/<name>      one dataset per allocated particle array, named by
 //                          ParticleStore::for_each_double_array / for_each_integer_array
 //                          (x0.., v0.., mass, volume, volume0, stress0..5, strain0..5, ..., id, body)
+//   /solver/ranks/*        distributed runs only: per rank, in rank order, the particle count
+//                          (`particles`; the particle datasets hold rank 0's particles, then rank
+//                          1's, ...), the rank's counters and accumulated ledger terms; and
+//                          `slab_first_columns`, the slab bounds (docs/architecture.md)
 //   /run                   attributes next_frame, next_history, next_checkpoint, the initial energy
 //                          budget (initial_<term> for every ledger term), energy_max_released; datasets
 //                          frame_times, frame_steps (the frames written so far)
@@ -50,12 +54,20 @@ struct Checkpoint {
   std::vector<std::int64_t> id;
   std::vector<std::uint16_t> body;
   RunProgress run;
+  /// Written by a distributed run (empty for one rank): each rank's particle count (its particles
+  /// are stored one rank after the other), the slab bounds, and each rank's own counters and
+  /// accumulated ledger (the /solver attributes hold their sums), so that a restart on the same
+  /// number of ranks continues bit for bit.
+  std::vector<std::int64_t> rank_particles;
+  std::vector<std::int32_t> slab_first_columns;
+  std::vector<SolverState> rank_states;  // the scalars only (no sort_cell)
 };
 
 /// FNV-1a 64 of scene_to_json(scene).dump(), as 16 hex digits.
 std::string scene_hash(const Scene& scene);
 
 /// Write the solver's state and the run progress to `path` (through path + ".tmp" and a rename).
+/// Collective in a distributed run: the particles are gathered and rank 0 writes one file.
 void write_checkpoint(const std::string& path, const Solver& solver, const RunProgress& run);
 
 /// Read a checkpoint; throws an input Error naming the file if it is missing or unreadable.
@@ -63,6 +75,9 @@ Checkpoint read_checkpoint(const std::string& path);
 
 /// Refuse a checkpoint of another talus version or another scene (input Error, one line, naming
 /// the first key that differs), then put its state into `solver` (built from the same scene).
+/// Any rank count can restart any checkpoint: on the saved number of ranks each rank takes its
+/// saved particles and the run continues bit for bit; on another number the particles are dealt to
+/// new balanced slabs and sorted anew (the run continues to round-off). Collective.
 void restore_checkpoint(Solver& solver, const Checkpoint& checkpoint, const std::string& path);
 
 }  // namespace talus

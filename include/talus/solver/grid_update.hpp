@@ -3,13 +3,19 @@
 #include "talus/boundary/walls.hpp"
 #include "talus/grid/grid.hpp"
 
+#include <cstdint>
+#include <vector>
+
 namespace talus {
 
 /// v_i = p_i / m_i, a_i = f_i / m_i + g, v_i^L = v_i + a_i dt (Edo & Matsubara 2015, eq. 48-49), then the walls.
 /// Leaves momentum = v_i, force = v_i^L - v_i (the particle velocity increment), velocity_l = v_i^L.
 /// Nodes lighter than `mass_floor` are treated as empty (the small-nodal-mass problem, Abe, Johansson & Konagai 2005, §3).
 /// Returns the work dissipated by wall friction (>= 0).
-double update_grid(Grid& grid, const Walls& walls, const Vec3& gravity, double dt, double mass_floor);
+/// `counted` (per active tile, TileExchange::counted; empty: all): the tiles whose wall work this
+/// rank adds to the returned total, so that a tile two ranks update is counted once.
+double update_grid(Grid& grid, const Walls& walls, const Vec3& gravity, double dt, double mass_floor,
+                   const std::vector<std::uint8_t>& counted = {});
 
 /// After the MUSL remap: v_i^{k+1} = p_i / m_i with the walls in the contact state of this step's
 /// grid update (Edo & Matsubara 2015, eq. 52, Abe, Johansson & Konagai 2005, eq. 18; Walls::Stage::Remap).

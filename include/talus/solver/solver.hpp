@@ -2,12 +2,15 @@
 // Solver: owns the particles, the grid and the time, and advances the scene one step at a time.
 // step() is the one place where the order of the phases is written down (solver.cpp).
 #include "talus/boundary/walls.hpp"
+#include "talus/core/comm.hpp"
 #include "talus/grid/grid.hpp"
+#include "talus/grid/tile_exchange.hpp"
 #include "talus/solver/body_materials.hpp"
 #include "talus/solver/energy_budget.hpp"
 #include "talus/transfer/transfers.hpp"
 #include "talus/particles/cell_sort.hpp"
 #include "talus/particles/particle_store.hpp"
+#include "talus/particles/slab_decomposition.hpp"
 #include "talus/scene/scene.hpp"
 #include "talus/smoothing/mls_strain_smoother.hpp"
 #include "talus/solver/phase_timer.hpp"
@@ -39,9 +42,23 @@ struct SolverState {
   std::array<std::vector<std::int32_t>, 3> sort_cell;
 };
 
+/// What a distributed run exchanged and how well its slabs are balanced (Solver::distribution).
+struct DistributionStats {
+  int ranks = 1;
+  std::int64_t particles = 0;             // on every rank together
+  double imbalance = 1.0;                 // largest rank's particles over the mean, now
+  double max_imbalance = 1.0;             // the largest seen at a sort
+  std::int64_t rebalances = 0;            // times the slab bounds moved
+  std::int64_t migrated = 0;              // particles sent to another rank, all ranks, all sorts
+  std::int64_t exchange_bytes = 0;        // node sums sent by every rank, all steps
+  std::int64_t shared_tiles = 0;          // tiles held by two ranks now (each pair once)
+};
+
 class Solver {
  public:
-  explicit Solver(Scene scene);
+  /// A solver over `comm`'s ranks: each holds the particles of its slab (docs/architecture.md,
+  /// "Distributed runs"). The default, one rank, is a serial run.
+  explicit Solver(Scene scene, Comm comm = Comm());
 
   /// Advance one step with the stable time step, clipped so that the run ends at end_time.
   /// Throws an instability Error (step, time, particle, quantity) if the state goes bad.
@@ -63,6 +80,12 @@ class Solver {
   EnergyBudget energies() const;
 
   const Scene& scene() const { return scene_; }
+  const Comm& comm() const { return comm_; }
+  const SlabDecomposition& decomposition() const { return decomposition_; }
+  /// Collective in a distributed run: counts summed over the ranks.
+  DistributionStats distribution() const;
+  /// The rank owning a particle at x (its cell's slab); 0 in a serial run.
+  int owner_of(double x) const { return decomposition_.owner_of_cell(scene_.grid.cell_of(0, x)); }
   const ParticleStore& particles() const { return particles_; }
   ParticleStore& particles() { return particles_; }
   const Grid& grid() const { return grid_; }
@@ -71,9 +94,10 @@ class Solver {
   const PhaseTimes& phase_times() const { return times_; }
   std::int64_t sort_count() const { return sorts_; }
   /// Particles that crossed an open face of the domain are removed at the end of their step (an
-  /// outflow boundary: sand falling off the open side of a flume). Their count and mass so far.
-  std::int64_t outflow_particles() const { return outflow_particles_; }
-  double outflow_mass() const { return outflow_mass_; }
+  /// outflow boundary: sand falling off the open side of a flume). Their count and mass so far,
+  /// over every rank (collective in a distributed run).
+  std::int64_t outflow_particles() const;
+  double outflow_mass() const;
 
   /// MLS smoothing (Edo & Matsubara 2015, eq. 54): the smoother, or null when the scene does not enable it;
   /// the counts of the last smoothing pass and the particle-passes left unsmoothed by its guard.
@@ -93,7 +117,16 @@ class Solver {
   /// Checkpoint/restart: the state besides the particles, and continuing from a saved one. The
   /// particles must be those of the saved solver, in its order (restore() keeps that order).
   SolverState state() const;
-  void restore(ParticleStore particles, const SolverState& state);
+  /// How restore() rebuilds the cell sort: Exact, the saved blocks and order (the particles must be
+  /// in the saved sort's order: a checkpoint of the same rank count), or Fresh, a new sort (a
+  /// checkpoint written by another number of ranks). Collective in a distributed run.
+  enum class RestoreSort { Exact, Fresh };
+  void restore(ParticleStore particles, const SolverState& state, RestoreSort sort = RestoreSort::Exact);
+  /// Distributed restart on the saved rank count: the saved slab bounds (before restore()).
+  void set_slab_bounds(std::vector<int> first_columns) { decomposition_.set_first_columns(std::move(first_columns)); }
+  /// Distributed restart on another rank count: new slab bounds balanced over `all` (every
+  /// particle, the same on every rank), and the particles of `all` this rank owns.
+  ParticleStore own_particles(ParticleStore all);
 
   /// Attach a work recorder (solver/work_recorder.hpp) or detach it (null, the default): the
   /// steps it asks for are timed region by region and block by block. Results are unchanged.
@@ -130,9 +163,26 @@ class Solver {
   /// The body force at time t: scene gravity, ramped over scene.gravity_ramp_time.
   Vec3 gravity_at(double t) const;
   void sort_particles();
+  /// restore(): the time, the counters and the accumulated ledger.
+  void restore_counters(const SolverState& s);
+  /// Distributed runs: move the slab bounds if the work is out of balance, and send every particle
+  /// to the rank owning its cell (collective, at a sort).
+  void redistribute();
+  /// The particles per block column of the slab decomposition, summed over the ranks in rank order.
+  std::vector<std::int64_t> particles_per_column() const;
+  /// Sum `fields` on the tiles shared with other ranks (TileExchange); nothing in a serial run.
+  void sum_shared_nodes(const std::vector<LazyArray*>& fields);
   [[noreturn]] void report_bad_particle(long long index, const char* what) const;
 
   Scene scene_;
+  Comm comm_;
+  SlabDecomposition decomposition_;
+  TileExchange exchange_;
+  bool collective_sort_ = false;   // this step: some rank must sort, so all do (with the migration)
+  bool setup_exchange_ = false;    // this step: some rank's active tiles changed since the last setup
+  bool tiles_changed_ = false;     // this rank sorted since the exchange was last set up
+  double imbalance_ = 1.0, max_imbalance_ = 1.0;
+  std::int64_t rebalances_ = 0, migrated_ = 0, exchange_bytes_ = 0;
   ParticleStore particles_;
   Grid grid_;
   CellSort sort_;

@@ -1,0 +1,27 @@
+#pragma once
+// Moving particles between the ranks of a distributed run (SlabDecomposition says who owns what).
+#include "talus/core/comm.hpp"
+#include "talus/particles/particle_store.hpp"
+
+#include <cstdint>
+#include <string_view>
+#include <vector>
+
+namespace talus {
+
+/// Collective: every particle p whose owner[p] is another rank goes there, with every allocated
+/// array. The particles this rank keeps stay in their order, first; those received follow in the
+/// order of their source ranks, each in its sender's order, so the result is the same from run to
+/// run. Returns the number of particles this rank sent.
+std::size_t migrate_particles(const Comm& comm, ParticleStore& particles, const std::vector<int>& owner);
+
+/// Collective: every rank's particles concatenated in rank order, on rank 0; the other ranks get a
+/// store with no particles. Both have the same allocated field groups as `local`. (For the outputs
+/// that need all particles in one place: runout, deposit, checkpoint.)
+ParticleStore gather_particles(const Comm& comm, const ParticleStore& local);
+
+/// Whether the particle array of this name (ParticleStore's visitors) is in use in `store`: the
+/// optional groups by the store's flags, which every rank sets alike.
+bool particle_array_in_use(const ParticleStore& store, std::string_view name);
+
+}  // namespace talus

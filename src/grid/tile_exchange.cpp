@@ -1,0 +1,126 @@
+#include "talus/grid/tile_exchange.hpp"
+
+#include <algorithm>
+#include <array>
+#include <limits>
+
+namespace talus {
+
+void TileExchange::setup(const Comm& comm, const Grid& grid) {
+  peers_.clear();
+  shared_.clear();
+  union_tiles_.clear();
+  holder_start_.assign(1, 0);
+  holders_.clear();
+  counted_.clear();
+  rank_ = comm.rank();
+  if (!comm.distributed()) return;
+  const std::vector<std::uint32_t>& active = grid.active_tiles();  // ascending (CellSort)
+  // The x-range of tile columns each rank holds: only ranks whose ranges overlap can share a tile.
+  const std::size_t column = static_cast<std::size_t>(grid.tiles()[1]) * grid.tiles()[2];
+  std::array<std::int64_t, 2> range{std::numeric_limits<std::int64_t>::max(), -1};
+  if (!active.empty()) range = {static_cast<std::int64_t>(active.front() / column), static_cast<std::int64_t>(active.back() / column)};
+  const auto ranges = comm.allgather(range);
+  std::vector<std::vector<unsigned char>> lists;
+  for (int r = 0; r < comm.size(); ++r) {
+    if (r == rank_ || ranges[r][1] < range[0] || ranges[r][0] > range[1]) continue;
+    peers_.push_back(r);
+    // my active tiles in the peer's column range (tile ids ascend with their column)
+    const auto first = std::lower_bound(active.begin(), active.end(), static_cast<std::uint32_t>(ranges[r][0] * column));
+    const auto last = std::upper_bound(active.begin(), active.end(), static_cast<std::uint32_t>((ranges[r][1] + 1) * column - 1));
+    std::vector<unsigned char> bytes;
+    append_bytes(bytes, &*first, static_cast<std::size_t>(last - first));
+    lists.push_back(std::move(bytes));
+  }
+  const auto received = comm.exchange(peers_, lists);
+  for (std::size_t i = 0; i < peers_.size(); ++i) {
+    std::vector<std::uint32_t> theirs(received[i].size() / sizeof(std::uint32_t));
+    ByteReader(received[i]).read(theirs.data(), theirs.size());
+    std::vector<std::uint32_t> both;
+    std::set_intersection(active.begin(), active.end(), theirs.begin(), theirs.end(), std::back_inserter(both));
+    shared_.push_back(std::move(both));
+  }
+  // Drop the peers that share nothing; the list stays symmetric (the intersection is).
+  std::vector<int> peers;
+  std::vector<std::vector<std::uint32_t>> shared;
+  for (std::size_t i = 0; i < peers_.size(); ++i)
+    if (!shared_[i].empty()) {
+      peers.push_back(peers_[i]);
+      shared.push_back(std::move(shared_[i]));
+    }
+  peers_ = std::move(peers);
+  shared_ = std::move(shared);
+  // The union of the shared tiles with their holders, peers ascending.
+  struct Entry {
+    std::uint32_t tile, peer, position;
+  };
+  std::vector<Entry> entries;
+  for (std::size_t i = 0; i < peers_.size(); ++i)
+    for (std::size_t j = 0; j < shared_[i].size(); ++j)
+      entries.push_back({shared_[i][j], static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)});
+  std::sort(entries.begin(), entries.end(),
+            [](const Entry& a, const Entry& b) { return a.tile < b.tile || (a.tile == b.tile && a.peer < b.peer); });
+  for (const Entry& e : entries) {
+    if (union_tiles_.empty() || union_tiles_.back() != e.tile) {
+      if (!union_tiles_.empty()) holder_start_.push_back(static_cast<std::uint32_t>(holders_.size()));
+      union_tiles_.push_back(e.tile);
+    }
+    holders_.push_back({e.peer, e.position});
+  }
+  if (!union_tiles_.empty()) holder_start_.push_back(static_cast<std::uint32_t>(holders_.size()));
+  // A tile counts here unless a lower rank holds it too.
+  counted_.assign(active.size(), 1);
+  for (std::size_t u = 0; u < union_tiles_.size(); ++u) {
+    const bool lower = peers_[holders_[holder_start_[u]].peer] < rank_;  // holders ascend by rank
+    if (!lower) continue;
+    const auto at = std::lower_bound(active.begin(), active.end(), union_tiles_[u]) - active.begin();
+    counted_[static_cast<std::size_t>(at)] = 0;
+  }
+}
+
+std::size_t TileExchange::sum_shared(const Comm& comm, const std::vector<LazyArray*>& fields) const {
+  if (!comm.distributed()) return 0;
+  const std::size_t nf = fields.size();
+  std::vector<std::vector<unsigned char>> out(peers_.size());
+  std::size_t sent = 0;
+  for (std::size_t i = 0; i < peers_.size(); ++i) {
+    out[i].reserve(shared_[i].size() * nf * kTileNodes * sizeof(double));
+    for (std::uint32_t t : shared_[i])
+      for (const LazyArray* f : fields) append_bytes(out[i], f->data() + static_cast<std::size_t>(t) * kTileNodes, kTileNodes);
+    sent += out[i].size();
+  }
+  const auto in = comm.exchange(peers_, out);
+  std::vector<const double*> from(peers_.size());
+  for (std::size_t i = 0; i < peers_.size(); ++i) from[i] = reinterpret_cast<const double*>(in[i].data());
+  // Each holder adds the same parts in the same (rank) order: the same bits everywhere.
+#pragma omp parallel for schedule(static)
+  for (std::size_t u = 0; u < union_tiles_.size(); ++u) {
+    const std::size_t base = static_cast<std::size_t>(union_tiles_[u]) * kTileNodes;
+    for (std::size_t f = 0; f < nf; ++f) {
+      double* mine = fields[f]->data() + base;
+      std::array<double, kTileNodes> sum{};
+      bool mine_added = false;
+      for (std::uint32_t h = holder_start_[u]; h < holder_start_[u + 1]; ++h) {
+        const Holder& holder = holders_[h];
+        if (!mine_added && peers_[holder.peer] > rank_) {
+          for (int s = 0; s < kTileNodes; ++s) sum[s] += mine[s];
+          mine_added = true;
+        }
+        const double* theirs = from[holder.peer] + (static_cast<std::size_t>(holder.position) * nf + f) * kTileNodes;
+        for (int s = 0; s < kTileNodes; ++s) sum[s] += theirs[s];
+      }
+      if (!mine_added)
+        for (int s = 0; s < kTileNodes; ++s) sum[s] += mine[s];
+      std::copy(sum.begin(), sum.end(), mine);
+    }
+  }
+  return sent;
+}
+
+std::size_t TileExchange::shared_tiles() const {
+  std::size_t n = 0;
+  for (const auto& s : shared_) n += s.size();
+  return n;
+}
+
+}  // namespace talus
