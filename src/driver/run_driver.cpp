@@ -161,7 +161,7 @@ class RunLoop {
       : solver_(solver), scene_(solver.scene()), dir_(options.out_dir), resuming_(options.resume != nullptr),
         progress_(resuming_ ? *options.resume : RunProgress{}),
         history_(dir_, resume_step()), runout_(scene_, dir_, resume_step()),
-        frames_(dir_, scene_.output.compress, progress_), checkpoint_(dir_),
+        frames_(dir_, scene_.output.compress, progress_, Comm()), checkpoint_(dir_),
         history_schedule_{scene_.output.history_interval, progress_.next_history},
         frame_schedule_{scene_.output.frame_interval, progress_.next_frame},
         checkpoint_schedule_{scene_.output.checkpoint_interval, progress_.next_checkpoint},
