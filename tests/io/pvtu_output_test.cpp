@@ -152,7 +152,8 @@ TEST(PvtuOutput, PiecesReadBackAsOneDataSet) {
     ASSERT_EQ(total, 12u);
     ASSERT_EQ(whole->GetNumberOfPoints(), static_cast<vtkIdType>(total));
     EXPECT_EQ(whole->GetNumberOfCells(), static_cast<vtkIdType>(total));
-    for (const std::string& file : p.files) EXPECT_EQ(point_arrays(whole), point_arrays(read_vtu(p.dir / file))) << file;
+    for (const std::string& file : p.files)
+      EXPECT_EQ(point_arrays(whole), point_arrays(read_vtu(p.dir / file))) << file;
     EXPECT_EQ(std::string(whole->GetPointData()->GetScalars()->GetName()), "speed");
 
     // Every particle, in rank order, with its values.
