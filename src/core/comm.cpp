@@ -5,7 +5,8 @@
 #include <limits>
 
 #ifdef TALUS_HAVE_MPI
-// the C API only: Open MPI would otherwise pull in its deprecated C++ bindings
+// The C API only: in C++ mode Open MPI's header also pulls in its deprecated C++ bindings, whose
+// symbols live in libmpi_cxx, which MPI::MPI_C does not link.
 #define OMPI_SKIP_MPICXX 1
 #define MPICH_SKIP_MPICXX 1
 #include <mpi.h>

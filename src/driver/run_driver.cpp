@@ -166,7 +166,7 @@ class RunLoop {
       : solver_(solver), scene_(solver.scene()), comm_(solver.comm()), dir_(options.out_dir),
         resuming_(options.resume != nullptr), progress_(resuming_ ? *options.resume : RunProgress{}),
         history_(dir_, resume_step(), comm_.root()), runout_(scene_, dir_, resume_step(), comm_),
-        frames_(dir_, scene_.output.compress, progress_), checkpoint_(dir_),
+        frames_(dir_, scene_.output.compress, progress_, comm_), checkpoint_(dir_),
         history_schedule_{scene_.output.history_interval, progress_.next_history},
         frame_schedule_{scene_.output.frame_interval, progress_.next_frame},
         checkpoint_schedule_{scene_.output.checkpoint_interval, progress_.next_checkpoint},
@@ -373,9 +373,8 @@ void RunLoop::finish() {
 }  // namespace
 
 RunSummary run_scene(Solver& solver, const RunOptions& options) {
-  // One rank clears the folder; the others wait so that none writes into it before.
-  if (solver.comm().root()) prepare_output_folder(options.out_dir, options.resume);
-  solver.comm().barrier();
+  // (in a distributed run rank 0 clears the folder while the others wait)
+  prepare_output_folder(options.out_dir, options.resume, solver.comm());
   RunLoop loop(solver, options);
   return loop.run();
 }

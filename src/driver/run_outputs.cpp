@@ -7,7 +7,8 @@
 #include <fmt/core.h>
 
 #include <algorithm>
-#include <cstdio>
+#include <optional>
+#include <regex>
 
 namespace talus {
 
@@ -20,6 +21,48 @@ void remove_temporaries(const fs::path& dir) {
   for (const fs::path& d : {dir, dir / "frames"})
     for (const auto& entry : fs::directory_iterator(d, ec))
       if (entry.path().extension() == ".tmp") fs::remove(entry.path(), ec);
+}
+
+/// The index of a frame file: frames/particles_<i>.vtu, particles_<i>.pvtu or a rank's piece
+/// particles_<i>_<rank>.vtu; nothing for any other name.
+std::optional<unsigned long> frame_index(const std::string& file_name) {
+  static const std::regex pattern(R"(particles_([0-9]+)(_[0-9]+)?\.(vtu|pvtu))");
+  std::smatch match;
+  if (!std::regex_match(file_name, match, pattern) || (match[2].matched && match[3] != "vtu")) return std::nullopt;
+  try {
+    return std::stoul(match[1].str());
+  } catch (const std::exception&) {
+    return std::nullopt;  // an index past unsigned long: no frame of ours
+  }
+}
+
+/// prepare_output_folder on the rank that deletes.
+void clear_output_folder(const fs::path& dir, const RunProgress* resume) {
+  std::error_code ec;
+  fs::create_directories(dir / "frames", ec);
+  if (ec) throw io_error(fmt::format("cannot create output folder {}: {}", dir.string(), ec.message()));
+  remove_temporaries(dir);
+  for (const auto& entry : fs::directory_iterator(dir / "frames")) {
+    const fs::path ext = entry.path().extension();
+    if (ext != ".vtu" && ext != ".pvtu") continue;
+    // A resumed run keeps the frames its checkpoint lists, whatever their kind.
+    const std::optional<unsigned long> index = frame_index(entry.path().filename().string());
+    const bool listed = resume && index && *index < resume->frame_times.size();
+    if (!listed) fs::remove(entry.path(), ec);
+  }
+  if (resume) return;
+  for (const char* f : {"particles.pvd", "energy.csv", "scene.json", "checkpoint.h5", "runout.csv", "runout.json",
+                        "deposit.csv", "terrain.vtu"})
+    fs::remove(dir / f, ec);
+}
+
+/// The file of frame i of a resumed series: the kind this run writes, unless only the other kind
+/// is on disk (a run resumed with another number of ranks keeps its earlier frames).
+std::string kept_frame_name(const fs::path& dir, std::size_t index, bool distributed) {
+  const std::string own = frame_name(index, distributed);
+  const std::string other = frame_name(index, !distributed);
+  std::error_code ec;
+  return !fs::exists(dir / own, ec) && fs::exists(dir / other, ec) ? other : own;
 }
 
 /// The columns of energy.csv: time, step, dt, one per term of the energy ledger, then the total.
@@ -50,26 +93,32 @@ std::size_t cut_csv(const fs::path& path, const std::string& header, Keep keep) 
 
 }  // namespace
 
-std::string frame_name(std::size_t index) { return fmt::format("frames/particles_{:06}.vtu", index); }
+std::string frame_name(std::size_t index, bool distributed) {
+  return fmt::format("frames/particles_{:06}.{}", index, distributed ? "pvtu" : "vtu");
+}
 
-void prepare_output_folder(const fs::path& dir, const RunProgress* resume) {
-  std::error_code ec;
-  fs::create_directories(dir / "frames", ec);
-  if (ec) throw io_error(fmt::format("cannot create output folder {}: {}", dir.string(), ec.message()));
-  remove_temporaries(dir);
-  for (const auto& entry : fs::directory_iterator(dir / "frames")) {
-    if (entry.path().extension() != ".vtu") continue;
-    // A resumed run keeps the frames its checkpoint lists.
-    unsigned long index = 0;
-    const std::string name = entry.path().filename().string();
-    const bool listed = resume && std::sscanf(name.c_str(), "particles_%lu.vtu", &index) == 1 &&
-                        index < resume->frame_times.size();
-    if (!listed) fs::remove(entry.path(), ec);
+std::string frame_piece_name(std::size_t index, int rank) {
+  return fmt::format("frames/particles_{:06}_{:04}.vtu", index, rank);
+}
+
+void prepare_output_folder(const fs::path& dir, const RunProgress* resume, const Comm& comm) {
+  if (!comm.distributed()) {
+    clear_output_folder(dir, resume);
+    return;
   }
-  if (resume) return;
-  for (const char* f : {"particles.pvd", "energy.csv", "scene.json", "checkpoint.h5", "runout.csv", "runout.json",
-                        "deposit.csv", "terrain.vtu"})
-    fs::remove(dir / f, ec);
+  // Rank 0 alone deletes (the ranks share the folder); its error, if any, reaches every rank, so
+  // all stop alike. The broadcast is the barrier: no rank returns before rank 0 is done.
+  std::string error;
+  if (comm.root()) {
+    try {
+      clear_output_folder(dir, resume);
+    } catch (const std::exception& e) {
+      error = e.what();
+      if (error.empty()) error = fmt::format("cannot prepare output folder {}", dir.string());
+    }
+  }
+  error = comm.broadcast(error);
+  if (!error.empty()) throw io_error(error);
 }
 
 // ---- energy.csv ---------------------------------------------------------------------------------
@@ -164,17 +213,34 @@ RunoutFiles::Outcome RunoutFiles::finish(Solver& solver) const {
 
 // ---- frames and the ParaView series -------------------------------------------------------------
 
-FrameSeries::FrameSeries(const fs::path& dir, bool compress, RunProgress& progress)
-    : dir_(dir), compress_(compress), progress_(progress), pvd_path_((dir / "particles.pvd").string()), pvd_(pvd_path_) {
+FrameSeries::FrameSeries(const fs::path& dir, bool compress, RunProgress& progress, const Comm& comm)
+    : dir_(dir),
+      compress_(compress),
+      progress_(progress),
+      comm_(comm),
+      pvd_path_((dir / "particles.pvd").string()),
+      pvd_(pvd_path_, comm.root()) {
   std::vector<std::pair<double, std::string>> entries;
-  for (std::size_t i = 0; i < progress.frame_times.size(); ++i) entries.emplace_back(progress.frame_times[i], frame_name(i));
+  for (std::size_t i = 0; i < progress.frame_times.size(); ++i)
+    entries.emplace_back(progress.frame_times[i], kept_frame_name(dir, i, comm.distributed()));
   if (!entries.empty()) pvd_.assign(std::move(entries));
 }
 
 std::string FrameSeries::write(Solver& solver) {
   ScopedPhase timer(solver.phase_times(), Phase::Output);
-  const std::string name = frame_name(progress_.frame_times.size());
-  write_particles_vtu((dir_ / name).string(), solver.particles(), compress_);
+  const std::size_t index = progress_.frame_times.size();
+  const std::string name = frame_name(index, comm_.distributed());
+  if (!comm_.distributed()) {
+    write_particles_vtu((dir_ / name).string(), solver.particles(), compress_);
+  } else {
+    write_particles_vtu((dir_ / frame_piece_name(index, comm_.rank())).string(), solver.particles(), compress_);
+    comm_.barrier();  // every piece is on disk before the summary names it
+    if (comm_.root()) {
+      std::vector<std::string> pieces;  // relative to frames/, where the summary is
+      for (int r = 0; r < comm_.size(); ++r) pieces.push_back(fs::path(frame_piece_name(index, r)).filename().string());
+      write_particles_pvtu((dir_ / name).string(), pieces, solver.particles());
+    }
+  }
   pvd_.add(solver.time(), name);
   progress_.frame_times.push_back(solver.time());
   progress_.frame_steps.push_back(solver.step_count());

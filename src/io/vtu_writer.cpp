@@ -9,16 +9,20 @@
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
+#include <vtkSmartPointer.h>
+#include <vtkType.h>
 #include <vtkTypeInt32Array.h>
 #include <vtkTypeInt64Array.h>
 #include <vtkUnsignedShortArray.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridWriter.h>
 
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
 
 namespace talus {
 
@@ -37,10 +41,11 @@ void name_voigt_components(vtkDoubleArray* a) {
   for (int c = 0; c < 6; ++c) a->SetComponentName(c, names[c]);
 }
 
-}  // namespace
-
-void write_particles_vtu(const std::string& path, const ParticleStore& P, bool compress) {
-  const auto n = static_cast<vtkIdType>(P.size());
+/// The grid write_particles_vtu writes: one vertex cell and one tuple of each point array per
+/// particle. With `with_particles` false the same arrays are built with no tuples: the layout the
+/// .pvtu summary declares. Both writers build their arrays here, so the two cannot disagree.
+vtkSmartPointer<vtkUnstructuredGrid> particle_grid(const ParticleStore& P, bool with_particles) {
+  const auto n = with_particles ? static_cast<vtkIdType>(P.size()) : vtkIdType{0};
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
   points->SetNumberOfPoints(n);
@@ -85,7 +90,7 @@ void write_particles_vtu(const std::string& path, const ParticleStore& P, bool c
 
   vtkNew<vtkCellArray> cells;
   cells->SetData(offsets, connectivity);
-  vtkNew<vtkUnstructuredGrid> grid;
+  auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
   grid->SetPoints(points);
   grid->SetCells(VTK_VERTEX, cells);
   vtkPointData* pd = grid->GetPointData();
@@ -98,8 +103,92 @@ void write_particles_vtu(const std::string& path, const ParticleStore& P, bool c
   pd->AddArray(volume);
   pd->AddArray(body);
   pd->SetActiveScalars("speed");
+  return grid;
+}
 
-  write_vtu_atomically(grid, path, compress, "particle frame");
+/// The VTK XML name of an array's element type ("Float64", "Int64", "UInt16", ...), as
+/// vtkXMLWriter names it in the pieces.
+std::string xml_type_name(vtkDataArray* a) {
+  const int bits = 8 * a->GetDataTypeSize();
+  switch (a->GetDataType()) {
+    case VTK_FLOAT:
+    case VTK_DOUBLE:
+      return fmt::format("Float{}", bits);
+    case VTK_CHAR:
+    case VTK_SIGNED_CHAR:
+    case VTK_SHORT:
+    case VTK_INT:
+    case VTK_LONG:
+    case VTK_LONG_LONG:
+    case VTK_ID_TYPE:
+      return fmt::format("Int{}", bits);
+    case VTK_UNSIGNED_CHAR:
+    case VTK_UNSIGNED_SHORT:
+    case VTK_UNSIGNED_INT:
+    case VTK_UNSIGNED_LONG:
+    case VTK_UNSIGNED_LONG_LONG:
+      return fmt::format("UInt{}", bits);
+    default:
+      throw std::logic_error(fmt::format("no VTK XML type for array {}", a->GetName()));
+  }
+}
+
+/// `text` with the five XML special characters escaped, for an attribute value.
+std::string xml_escaped(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&apos;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+/// One <PDataArray/> of a .pvtu: the array's type, name, components and component names.
+std::string pdata_array(vtkDataArray* a, const char* indent) {
+  std::string xml = fmt::format("{}<PDataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\"", indent,
+                                xml_type_name(a), xml_escaped(a->GetName()), a->GetNumberOfComponents());
+  for (int c = 0; c < a->GetNumberOfComponents(); ++c)
+    if (const char* name = a->GetComponentName(c))
+      xml += fmt::format(" ComponentName{}=\"{}\"", c, xml_escaped(name));
+  return xml + "/>\n";
+}
+
+}  // namespace
+
+void write_particles_vtu(const std::string& path, const ParticleStore& P, bool compress) {
+  write_vtu_atomically(particle_grid(P, true), path, compress, "particle frame");
+}
+
+void write_particles_pvtu(const std::string& path, const std::vector<std::string>& piece_files,
+                          const ParticleStore& layout) {
+  const vtkSmartPointer<vtkUnstructuredGrid> grid = particle_grid(layout, false);
+  vtkPointData* pd = grid->GetPointData();
+  // The summary declares the pieces' arrays (vtkXMLPUnstructuredGridReader builds its output from
+  // these declarations and copies each piece's values into them), then lists the pieces.
+  std::string xml = fmt::format(
+      "<?xml version=\"1.0\"?>\n"
+      "<VTKFile type=\"PUnstructuredGrid\" version=\"0.1\" byte_order=\"{}\" header_type=\"UInt32\">\n"
+      "  <PUnstructuredGrid GhostLevel=\"0\">\n",
+      std::endian::native == std::endian::little ? "LittleEndian" : "BigEndian");
+  xml += "    <PPointData";
+  if (vtkDataArray* scalars = pd->GetScalars()) xml += fmt::format(" Scalars=\"{}\"", xml_escaped(scalars->GetName()));
+  xml += ">\n";
+  for (int i = 0; i < pd->GetNumberOfArrays(); ++i) xml += pdata_array(pd->GetArray(i), "      ");
+  xml += "    </PPointData>\n";
+  xml += "    <PPoints>\n";
+  vtkDataArray* points = grid->GetPoints()->GetData();
+  points->SetName("Points");  // the name vtkXMLWriter gives the point coordinates
+  xml += pdata_array(points, "      ");
+  xml += "    </PPoints>\n";
+  for (const std::string& piece : piece_files) xml += fmt::format("    <Piece Source=\"{}\"/>\n", xml_escaped(piece));
+  xml += "  </PUnstructuredGrid>\n</VTKFile>\n";
+  write_file_atomically(path, xml);
 }
 
 void write_vtu_atomically(vtkUnstructuredGrid* grid, const std::string& path, bool compress, const char* what) {
@@ -139,6 +228,7 @@ void PvdIndex::assign(std::vector<std::pair<double, std::string>> entries) {
 }
 
 void PvdIndex::write() const {
+  if (!writes_file_) return;
   std::string xml =
       "<?xml version=\"1.0\"?>\n"
       "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"

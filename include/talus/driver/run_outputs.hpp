@@ -6,11 +6,13 @@
 //   EnergyHistory  energy.csv            history schedule (output.history_interval; 0 = every step)
 //   RunoutFiles    runout.csv            history schedule; runout.json and deposit.csv at the end
 //                                        (only with diagnostics.runout)
-//   FrameSeries    frames/*.vtu + .pvd   frame schedule (output.frame_interval; 0 = first and last)
+//   FrameSeries    frames/*.vtu + .pvd   frame schedule (output.frame_interval; 0 = first and last);
+//                                        a distributed run writes one .vtu piece per rank and a .pvtu
 //   CheckpointFile checkpoint.h5         checkpoint schedule (output.checkpoint_interval; 0 = none),
 //                                        and on a signal or an instability
 // Crash safety (docs/reliability.md): frames, the .pvd index, scene.json and checkpoints are written
 // to a temporary name and renamed; history rows are flushed one by one.
+#include "talus/core/comm.hpp"
 #include "talus/diagnostics/runout.hpp"
 #include "talus/io/checkpoint.hpp"
 #include "talus/io/vtu_writer.hpp"
@@ -37,9 +39,11 @@ struct OutputSchedule {
 };
 
 /// Create the output folder. A fresh run removes the outputs of an earlier run there (no stale frame
-/// survives); a resumed run keeps the frames `resume` lists and drops later ones. Both remove
-/// leftover temporary files of a killed writer.
-void prepare_output_folder(const std::filesystem::path& dir, const RunProgress* resume);
+/// survives); a resumed run keeps the frames `resume` lists (index < resume->frame_times.size(),
+/// whether .vtu, .pvtu or a rank's piece) and drops later ones. Both remove leftover temporary files
+/// of a killed writer. In a distributed run rank 0 alone creates and deletes; every rank returns
+/// once it is done (and throws its error, if it met one).
+void prepare_output_folder(const std::filesystem::path& dir, const RunProgress* resume, const Comm& comm = Comm());
 
 /// energy.csv: time, step, dt, every term of the energy ledger, total.
 class EnergyHistory {
@@ -89,12 +93,18 @@ class RunoutFiles {
 };
 
 /// The particle frames and the ParaView series that lists them.
+///
+/// One rank writes frame i as frames/particles_<i:06>.vtu. In a distributed run each rank writes
+/// its own particles as the piece frames/particles_<i:06>_<rank:04>.vtu (a rank may hold none);
+/// once all have, rank 0 writes frames/particles_<i:06>.pvtu, which lists the pieces of ranks
+/// 0..N-1, and adds it to the .pvd. Only rank 0 writes the .pvd; the others keep its entries.
 class FrameSeries {
  public:
   /// `progress` records each frame's time and step (the checkpoint carries them); a resumed run's
-  /// series starts with the frames it lists.
-  FrameSeries(const std::filesystem::path& dir, bool compress, RunProgress& progress);
-  /// Write the solver's particles as the next frame; returns its file name (frames/...).
+  /// series starts with the frames it lists. `comm`: the ranks that hold the particles.
+  FrameSeries(const std::filesystem::path& dir, bool compress, RunProgress& progress, const Comm& comm);
+  /// Write the solver's particles as the next frame; returns the file name the .pvd lists
+  /// (frames/...vtu, or frames/...pvtu in a distributed run). Every rank must call it.
   std::string write(Solver& solver);
   /// Whether the last frame is of this step already.
   bool has_frame_of_step(std::int64_t step) const;
@@ -104,6 +114,7 @@ class FrameSeries {
   std::filesystem::path dir_;
   bool compress_;
   RunProgress& progress_;
+  Comm comm_;
   std::string pvd_path_;
   PvdIndex pvd_;
 };
@@ -119,7 +130,10 @@ class CheckpointFile {
   std::string path_;
 };
 
-/// The name of frame i: frames/particles_<i:06>.vtu.
-std::string frame_name(std::size_t index);
+/// The name of frame i: frames/particles_<i:06>.vtu, or, for a distributed run, the summary of its
+/// pieces frames/particles_<i:06>.pvtu.
+std::string frame_name(std::size_t index, bool distributed = false);
+/// The piece of frame i that `rank` writes in a distributed run: frames/particles_<i:06>_<rank:04>.vtu.
+std::string frame_piece_name(std::size_t index, int rank);
 
 }  // namespace talus

@@ -35,7 +35,7 @@ namespace talus {
 
 /// What the run driver needs to continue its output schedule.
 struct RunProgress {
-  std::vector<double> frame_times;         // frame i is frames/particles_<i:06>.vtu
+  std::vector<double> frame_times;         // frame i is frame_name(i): .vtu, or .pvtu when distributed
   std::vector<std::int64_t> frame_steps;
   double next_frame = 0.0;
   double next_history = 0.0;

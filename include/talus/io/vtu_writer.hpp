@@ -1,6 +1,7 @@
 #pragma once
-// Particle frames as VTK XML unstructured grids (.vtu, appended raw binary, optional LZ4) and the
-// .pvd collection that makes ParaView open the frames as one time series.
+// Particle frames as VTK XML unstructured grids (.vtu, appended raw binary, optional LZ4), the
+// .pvtu summary that makes ParaView open the pieces of a distributed run's frame as one data set,
+// and the .pvd collection that makes it open the frames as one time series.
 #include "talus/particles/particle_store.hpp"
 #include "talus/scene/scene.hpp"
 
@@ -13,22 +14,33 @@ namespace talus {
 
 /// Write the particles to `path` (written to a temporary name, then renamed, so a reader never sees
 /// a half-written frame). Point arrays: id, velocity, speed, stress (6 components xx yy zz yz xz xy),
-/// strain (6), density, volume, body.
+/// strain (6), density, volume, body. A store with no particles (an empty rank of a distributed run)
+/// gives a valid file with 0 points and the same arrays.
 void write_particles_vtu(const std::string& path, const ParticleStore& particles, bool compress);
 
-/// The .pvd index of a frame series; rewritten atomically after every frame.
+/// Write (atomically) the .pvtu summary of one frame written in pieces: a PUnstructuredGrid
+/// (GhostLevel 0) that declares the point arrays and point type write_particles_vtu writes for a
+/// store with the arrays of `layout` (its particles are not read; it may hold none), and lists
+/// `piece_files`, paths relative to the folder of `path`, in the order given.
+void write_particles_pvtu(const std::string& path, const std::vector<std::string>& piece_files,
+                          const ParticleStore& layout);
+
+/// The .pvd index of a frame series; rewritten atomically after every frame. In a distributed run
+/// every rank keeps the entries but only one writes the file: the others pass `writes_file` false.
 class PvdIndex {
  public:
-  explicit PvdIndex(std::string path) : path_(std::move(path)) {}
+  explicit PvdIndex(std::string path, bool writes_file = true) : path_(std::move(path)), writes_file_(writes_file) {}
   void add(double time, const std::string& relative_file);
   /// Replace all entries (a restart: the frames written before the checkpoint) and rewrite.
   void assign(std::vector<std::pair<double, std::string>> entries);
   const std::string& path() const { return path_; }
   std::size_t size() const { return entries_.size(); }
+  bool writes_file() const { return writes_file_; }
 
  private:
   void write() const;
   std::string path_;
+  bool writes_file_;
   std::vector<std::pair<double, std::string>> entries_;
 };
 
