@@ -111,12 +111,13 @@ std::vector<unsigned char> Comm::gather_bytes(const void* data, std::size_t byte
     out.resize(static_cast<std::size_t>(total));
     if (bytes) std::memcpy(out.data(), data, bytes);
     std::int64_t at = counts[0];
-    for (int r = 1; r < size_; ++r)
+    for (int r = 1; r < size_; ++r) {
       for (std::int64_t done = 0; done < counts[r]; done += kChunk) {
         const int n = static_cast<int>(std::min(kChunk, counts[r] - done));
         MPI_Recv(out.data() + at + done, n, MPI_BYTE, r, kExchangeTag + 1, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
       }
-    for (int r = 1; r < size_; ++r) at += counts[r];
+      at += counts[r];
+    }
   } else {
     const auto* p = static_cast<const unsigned char*>(data);
     for (std::int64_t done = 0; done < mine; done += kChunk) {
