@@ -1,6 +1,7 @@
 #include "talus/grid/tile_exchange.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <limits>
 
@@ -81,17 +82,49 @@ void TileExchange::setup(const Comm& comm, const Grid& grid) {
 std::size_t TileExchange::sum_shared(const Comm& comm, const std::vector<LazyArray*>& fields) const {
   if (!comm.distributed()) return 0;
   const std::size_t nf = fields.size();
+  // A tile this rank's particles did not reach holds +0.0 in every field: it is not sent, and the
+  // holders add +0.0 for it, the same bits as if it had been (x + 0.0 is what they would compute).
+  // Each message: one flag byte per shared tile (padded to 8 bytes, so the values stay aligned), then
+  // the fields of the flagged tiles.
+  auto untouched = [&](std::uint32_t t) {
+    for (const LazyArray* f : fields) {
+      const double* v = f->data() + static_cast<std::size_t>(t) * kTileNodes;
+      for (int s = 0; s < kTileNodes; ++s)
+        if (std::signbit(v[s]) || v[s] != 0.0) return false;
+    }
+    return true;
+  };
   std::vector<std::vector<unsigned char>> out(peers_.size());
   std::size_t sent = 0;
   for (std::size_t i = 0; i < peers_.size(); ++i) {
-    out[i].reserve(shared_[i].size() * nf * kTileNodes * sizeof(double));
-    for (std::uint32_t t : shared_[i])
-      for (const LazyArray* f : fields) append_bytes(out[i], f->data() + static_cast<std::size_t>(t) * kTileNodes, kTileNodes);
+    const std::size_t n = shared_[i].size();
+    std::vector<unsigned char> flags((n + 7) / 8 * 8, 0);
+    std::size_t included = 0;
+    for (std::size_t j = 0; j < n; ++j) included += flags[j] = untouched(shared_[i][j]) ? 0 : 1;
+    out[i].reserve(n + included * nf * kTileNodes * sizeof(double));
+    append_bytes(out[i], flags.data(), flags.size());
+    for (std::size_t j = 0; j < n; ++j)
+      if (flags[j])
+        for (const LazyArray* f : fields)
+          append_bytes(out[i], f->data() + static_cast<std::size_t>(shared_[i][j]) * kTileNodes, kTileNodes);
     sent += out[i].size();
   }
   const auto in = comm.exchange(peers_, out);
-  std::vector<const double*> from(peers_.size());
-  for (std::size_t i = 0; i < peers_.size(); ++i) from[i] = reinterpret_cast<const double*>(in[i].data());
+  // Where each peer's values of its j-th shared tile start (null: not sent, it is all +0.0).
+  std::vector<std::vector<const double*>> from(peers_.size());
+  for (std::size_t i = 0; i < peers_.size(); ++i) {
+    const std::size_t n = shared_[i].size();
+    const unsigned char* flags = in[i].data();
+    const double* values = reinterpret_cast<const double*>(in[i].data() + (n + 7) / 8 * 8);
+    from[i].assign(n, nullptr);
+    std::size_t at = 0;
+    for (std::size_t j = 0; j < n; ++j)
+      if (flags[j]) {
+        from[i][j] = values + at;
+        at += nf * kTileNodes;
+      }
+  }
+  static constexpr std::array<double, kTileNodes> kZeros{};
   // Each holder adds the same parts in the same (rank) order: the same bits everywhere.
 #pragma omp parallel for schedule(static)
   for (std::size_t u = 0; u < union_tiles_.size(); ++u) {
@@ -106,7 +139,8 @@ std::size_t TileExchange::sum_shared(const Comm& comm, const std::vector<LazyArr
           for (int s = 0; s < kTileNodes; ++s) sum[s] += mine[s];
           mine_added = true;
         }
-        const double* theirs = from[holder.peer] + (static_cast<std::size_t>(holder.position) * nf + f) * kTileNodes;
+        const double* tile = from[holder.peer][holder.position];
+        const double* theirs = tile ? tile + f * kTileNodes : kZeros.data();
         for (int s = 0; s < kTileNodes; ++s) sum[s] += theirs[s];
       }
       if (!mine_added)
