@@ -130,28 +130,39 @@ std::vector<unsigned char> Comm::gather_bytes(const void* data, std::size_t byte
   return out;
 }
 
-std::vector<std::vector<unsigned char>> Comm::exchange(const std::vector<int>& peers,
-                                                       const std::vector<std::vector<unsigned char>>& to_peer) const {
-  std::vector<std::vector<unsigned char>> received(peers.size());
+std::vector<std::vector<unsigned char>> Comm::exchange(const std::vector<int>& send_to,
+                                                       const std::vector<std::vector<unsigned char>>& to_peer,
+                                                       const std::vector<int>& receive_from) const {
+  std::vector<std::vector<unsigned char>> received(receive_from.size());
 #ifdef TALUS_HAVE_MPI
-  if (peers.empty()) return received;
-  std::vector<MPI_Request> sends(peers.size());
-  for (std::size_t i = 0; i < peers.size(); ++i)
-    MPI_Isend(to_peer[i].data(), static_cast<int>(to_peer[i].size()), MPI_BYTE, peers[i], kExchangeTag, MPI_COMM_WORLD,
+  if (send_to.empty() && receive_from.empty()) return received;
+  std::vector<MPI_Request> sends(send_to.size());
+  for (std::size_t i = 0; i < send_to.size(); ++i)
+    MPI_Isend(to_peer[i].data(), static_cast<int>(to_peer[i].size()), MPI_BYTE, send_to[i], kExchangeTag, MPI_COMM_WORLD,
               &sends[i]);
-  for (std::size_t i = 0; i < peers.size(); ++i) {
+  for (std::size_t i = 0; i < receive_from.size(); ++i) {
     MPI_Status status;
-    MPI_Probe(peers[i], kExchangeTag, MPI_COMM_WORLD, &status);
+    MPI_Probe(receive_from[i], kExchangeTag, MPI_COMM_WORLD, &status);
     int count = 0;
     MPI_Get_count(&status, MPI_BYTE, &count);
     received[i].resize(static_cast<std::size_t>(count));
-    MPI_Recv(received[i].data(), count, MPI_BYTE, peers[i], kExchangeTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    MPI_Recv(received[i].data(), count, MPI_BYTE, receive_from[i], kExchangeTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
   }
   MPI_Waitall(static_cast<int>(sends.size()), sends.data(), MPI_STATUSES_IGNORE);
 #else
+  (void)send_to;
   (void)to_peer;
 #endif
   return received;
+}
+
+std::vector<std::int64_t> Comm::alltoall(const std::vector<std::int64_t>& per_rank) const {
+  if (size_ == 1) return per_rank;
+  std::vector<std::int64_t> out(static_cast<std::size_t>(size_));
+#ifdef TALUS_HAVE_MPI
+  MPI_Alltoall(per_rank.data(), 1, MPI_INT64_T, out.data(), 1, MPI_INT64_T, MPI_COMM_WORLD);
+#endif
+  return out;
 }
 
 std::string Comm::broadcast(const std::string& from_root) const {

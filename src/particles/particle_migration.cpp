@@ -24,13 +24,17 @@ std::size_t migrate_particles(const Comm& comm, ParticleStore& P, const std::vec
     if (owner[p] == me) kept.push_back(static_cast<std::uint32_t>(p));
     else leaving[owner[p]].push_back(static_cast<std::uint32_t>(p));
   }
-  // Every other rank is a peer (the lists must be symmetric); an empty buffer says "none".
-  std::vector<int> peers;
+  // Only the ranks that send or receive talk: an all-to-all of the counts first (MPI_Alltoall).
+  std::vector<std::int64_t> counts_out(comm.size(), 0);
+  for (int r = 0; r < comm.size(); ++r) counts_out[r] = r == me ? 0 : static_cast<std::int64_t>(leaving[r].size());
+  const std::vector<std::int64_t> counts_in = comm.alltoall(counts_out);
+  std::vector<int> send_to, receive_from;
   std::vector<std::vector<unsigned char>> out;
   std::size_t sent = 0;
   for (int r = 0; r < comm.size(); ++r) {
-    if (r == me) continue;
-    peers.push_back(r);
+    if (counts_in[r] > 0) receive_from.push_back(r);
+    if (counts_out[r] == 0) continue;
+    send_to.push_back(r);
     std::vector<unsigned char> bytes;
     const auto& list = leaving[r];
     sent += list.size();
@@ -43,7 +47,7 @@ std::size_t migrate_particles(const Comm& comm, ParticleStore& P, const std::vec
     P.for_each_integer_array(pack);
     out.push_back(std::move(bytes));
   }
-  const auto in = comm.exchange(peers, out);
+  const auto in = comm.exchange(send_to, out, receive_from);  // received in source-rank order
   P.permute(kept);
   const std::size_t n_kept = P.size();
   // The arrays in use (sized n_kept after the permutation) grow by every received particle.

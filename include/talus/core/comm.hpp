@@ -65,7 +65,17 @@ class Comm {
   /// Point-to-point exchange: send to_peer[i] to peers[i] and return what peers[i] sent here. Every
   /// peer must call it with this rank in its list (the lists are symmetric).
   std::vector<std::vector<unsigned char>> exchange(const std::vector<int>& peers,
-                                                   const std::vector<std::vector<unsigned char>>& to_peer) const;
+                                                   const std::vector<std::vector<unsigned char>>& to_peer) const {
+    return exchange(peers, to_peer, peers);
+  }
+  /// The same with lists that need not be symmetric: send to_peer[i] to send_to[i], and return what
+  /// each rank of receive_from sent (in that order). Each rank's send_to must list exactly the ranks
+  /// whose receive_from lists it.
+  std::vector<std::vector<unsigned char>> exchange(const std::vector<int>& send_to,
+                                                   const std::vector<std::vector<unsigned char>>& to_peer,
+                                                   const std::vector<int>& receive_from) const;
+  /// All-to-all of one count per rank: out[r] is what rank r put at this rank's index.
+  std::vector<std::int64_t> alltoall(const std::vector<std::int64_t>& per_rank) const;
 
   /// Rank 0's string on every rank.
   std::string broadcast(const std::string& from_root) const;
