@@ -5,6 +5,7 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace talus {
@@ -130,9 +131,12 @@ std::size_t count_particles(const GridGeometry& grid, const std::vector<BodySpec
 }
 
 ParticleStore seed_particles(const GridGeometry& grid, const std::vector<BodySpec>& bodies,
-                             const std::vector<double>& material_density, const BodyLabel& label) {
+                             const std::vector<double>& material_density, const BodyLabel& label,
+                             const SeedFilter& keep) {
   ParticleStore store;
-  store.reserve(count_particles(grid, bodies, label));  // exact: no array grows past its final size while seeding
+  // exact: no array grows past its final size while seeding (a slab's share is not known in advance)
+  const std::size_t total = count_particles(grid, bodies, label);
+  if (!keep) store.reserve(total);
   const ProfileTerrain bed = grid_bed(grid);
   std::int64_t next_id = 0;
   for (std::size_t b = 0; b < bodies.size(); ++b) {
@@ -140,10 +144,24 @@ ParticleStore seed_particles(const GridGeometry& grid, const std::vector<BodySpe
     const double volume = std::pow(grid.h / body.particles_per_cell, 3);
     const double mass = material_density.at(body.material) * volume;
     BodyCandidates(grid, body, name_of(label, b), bed).for_each_point([&](const Vec3& position) {
-      store.add(next_id++, position, body.velocity, mass, volume, static_cast<std::uint16_t>(b));
+      const std::int64_t id = next_id++;
+      if (!keep || keep(position)) store.add(id, position, body.velocity, mass, volume, static_cast<std::uint16_t>(b));
     });
   }
   return store;
+}
+
+std::vector<std::int64_t> particles_per_x_cell(const GridGeometry& grid, const std::vector<BodySpec>& bodies,
+                                               const BodyLabel& label) {
+  count_particles(grid, bodies, label);  // the same input errors as seeding
+  const ProfileTerrain bed = grid_bed(grid);
+  const int cells = grid.cells[0] + 2 * kPad;
+  std::vector<std::int64_t> counts(cells, 0);
+  for (std::size_t b = 0; b < bodies.size(); ++b)
+    BodyCandidates(grid, bodies[b], name_of(label, b), bed).for_each_point([&](const Vec3& position) {
+      ++counts[std::clamp(grid.cell_of(0, position[0]), 0, cells - 1)];
+    });
+  return counts;
 }
 
 }  // namespace talus

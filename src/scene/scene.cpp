@@ -75,10 +75,14 @@ BodyLabel body_label(const Scene& scene) {
 
 }  // namespace
 
-ParticleStore seed_particles(const Scene& scene) {
+ParticleStore seed_particles(const Scene& scene, const SeedFilter& keep) {
   std::vector<double> densities;
   for (const MaterialSpec& m : scene.materials) densities.push_back(m.density);
-  return seed_particles(scene.grid, scene.bodies, densities, body_label(scene));
+  return seed_particles(scene.grid, scene.bodies, densities, body_label(scene), keep);
+}
+
+std::vector<std::int64_t> particles_per_x_cell(const Scene& scene) {
+  return particles_per_x_cell(scene.grid, scene.bodies, body_label(scene));
 }
 
 std::size_t count_particles(const Scene& scene) { return count_particles(scene.grid, scene.bodies, body_label(scene)); }

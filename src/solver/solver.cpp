@@ -56,15 +56,38 @@ void recorded(WorkRecorder* recorder, RegionSchedule schedule, const char* name,
 }  // namespace
 
 Solver::Solver(Scene scene, Comm comm) : scene_(std::move(scene)), comm_(comm) {
-  particles_ = seed_particles(scene_);
-  seeded_particles_ = static_cast<std::int64_t>(particles_.size());
   grid_ = Grid(scene_.grid);
   sort_ = make_cell_sort(grid_, scene_.shape, scene_.block_cells);
+  if (comm_.distributed()) {
+    // Slabs balanced over the seed points, then each rank seeds its own slab only (the ids are those
+    // of a serial run: every point is counted, only the slab's are kept).
+    if (scene_.smoothing.enabled)
+      throw input_error("smoothing.enabled: MLS smoothing is not available in a distributed run yet (its neighbour "
+                        "search would need the particles of the next slab); run it on one rank");
+    if (scene_.grid.periodic[0])
+      throw input_error("walls: a periodic x axis is not available in a distributed run yet (the slabs cut x); run it "
+                        "on one rank");
+    const int bc = sort_.block_cells();
+    const int columns = (scene_.grid.cells[0] + 2 * kPad + bc - 1) / bc;
+    std::vector<std::int64_t> work(columns, 0);
+    const std::vector<std::int64_t> per_cell = particles_per_x_cell(scene_);
+    for (std::size_t i = 0; i < per_cell.size(); ++i) work[std::min<std::size_t>(i / bc, columns - 1)] += per_cell[i];
+    decomposition_ = SlabDecomposition(comm_.size(), bc, columns, work);
+    imbalance_ = max_imbalance_ = decomposition_.imbalance(work);
+    particles_ = seed_particles(scene_, [&](const Vec3& x) { return owner_of(x[0]) == comm_.rank(); });
+    seeded_particles_ = static_cast<std::int64_t>(count_particles(scene_));
+  } else {
+    particles_ = seed_particles(scene_);
+    seeded_particles_ = static_cast<std::int64_t>(particles_.size());
+  }
   if (scene_.shape == ShapeKind::CpGimp) particles_.enable_domain_state();  // Edo & Matsubara 2015, eq. 57-58
   walls_ = Walls(scene_.walls, scene_.grid, grid_.profile_terrain());
   materials_ = BodyMaterials(scene_, particles_);
-  // Nodes lighter than this are empty: far below any real nodal mass, far above round-off.
-  mass_floor_ = 1e-12 * *std::min_element(particles_.mass.begin(), particles_.mass.end());
+  // Nodes lighter than this are empty: far below any real nodal mass, far above round-off. The
+  // lightest particle of the scene: on every rank the same (a rank may hold none, or not the lightest).
+  double lightest = std::numeric_limits<double>::infinity();
+  for (double m : particles_.mass) lightest = std::min(lightest, m);
+  mass_floor_ = 1e-12 * (comm_.distributed() ? comm_.min(lightest) : lightest);
   if (scene_.smoothing.enabled) {  // Edo & Matsubara 2015, eq. 54; buffers exist only for scenes that smooth
     smoother_.emplace(scene_.smoothing.mls, scene_.grid.h);
     smooth_body_.assign(scene_.bodies.size(), scene_.smoothing.bodies.empty() ? 1 : 0);
@@ -77,25 +100,6 @@ Solver::Solver(Scene scene, Comm comm) : scene_(std::move(scene)), comm_(comm) {
     gather_limits_.lo[d] = scene_.grid.origin[d];
     gather_limits_.hi[d] = scene_.grid.origin[d] + scene_.grid.cells[d] * scene_.grid.h;
     for (int side = 0; side < 2; ++side) gather_limits_.open[d][side] = scene_.walls[d][side].type == WallType::Open;
-  }
-  if (comm_.distributed()) {
-    // Every rank seeded the whole scene (the same particles in the same order); each keeps its slab.
-    if (scene_.smoothing.enabled)
-      throw input_error("smoothing.enabled: MLS smoothing is not available in a distributed run yet (its neighbour "
-                        "search would need the particles of the next slab); run it on one rank");
-    if (scene_.grid.periodic[0])
-      throw input_error("walls: a periodic x axis is not available in a distributed run yet (the slabs cut x); run it "
-                        "on one rank");
-    const int columns = (scene_.grid.cells[0] + 2 * kPad + sort_.block_cells() - 1) / sort_.block_cells();
-    std::vector<std::int64_t> work(columns, 0);
-    for (double x : particles_.x[0]) ++work[std::clamp(scene_.grid.cell_of(0, x) / sort_.block_cells(), 0, columns - 1)];
-    decomposition_ = SlabDecomposition(comm_.size(), sort_.block_cells(), columns, work);
-    imbalance_ = max_imbalance_ = decomposition_.imbalance(work);
-    std::vector<std::uint32_t> mine;
-    for (std::size_t p = 0; p < particles_.size(); ++p)
-      if (owner_of(particles_.x[0][p]) == comm_.rank()) mine.push_back(static_cast<std::uint32_t>(p));
-    particles_.permute(mine);
-    size_scratch();
   }
   sort_particles();
 }

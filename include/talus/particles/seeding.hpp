@@ -18,8 +18,18 @@ using BodyLabel = std::function<std::string(std::size_t body)>;
 
 /// Seed every body on the grid; `material_density[body.material]` is the body's initial density.
 /// Throws input_error for a body that holds no particle, naming it by `label`.
+/// Which seed points to keep (a distributed run's slab: `keep(position)`); null keeps all. A particle
+/// keeps the id it has when every point is kept.
+using SeedFilter = std::function<bool(const Vec3& position)>;
+
 ParticleStore seed_particles(const GridGeometry& grid, const std::vector<BodySpec>& bodies,
-                             const std::vector<double>& material_density, const BodyLabel& label = {});
+                             const std::vector<double>& material_density, const BodyLabel& label = {},
+                             const SeedFilter& keep = {});
+
+/// The seed points per padded cell along x (GridGeometry::cell_of(0, x), clamped to the grid's
+/// cells), without making them: how a distributed run cuts its slabs before it seeds.
+std::vector<std::int64_t> particles_per_x_cell(const GridGeometry& grid, const std::vector<BodySpec>& bodies,
+                                               const BodyLabel& label = {});
 
 /// The number of particles seed_particles would make, with the same input errors, without
 /// allocating them: a scene's size is known before its memory is (solver/memory_estimate.hpp).

@@ -10,6 +10,7 @@
 #include "talus/material/mu_i.hpp"
 #include "talus/particles/body_spec.hpp"
 #include "talus/particles/particle_store.hpp"
+#include "talus/particles/seeding.hpp"
 #include "talus/smoothing/mls_settings.hpp"
 
 #include <array>
@@ -146,7 +147,9 @@ const char* to_string(ConeFit cone);
 
 /// Seed every body of the scene (particles/seeding.hpp with the scene's grid and densities).
 /// Throws input_error for a body that holds no particle.
-ParticleStore seed_particles(const Scene& scene);
+ParticleStore seed_particles(const Scene& scene, const SeedFilter& keep = {});
+/// The seed points per padded cell along x (particles_per_x_cell).
+std::vector<std::int64_t> particles_per_x_cell(const Scene& scene);
 /// The number of particles seed_particles(scene) makes, without making them (same input errors).
 std::size_t count_particles(const Scene& scene);
 
