@@ -311,7 +311,8 @@ void run_update_bench(const BenchOptions& o) {
 /// its exchanges, so the largest is what the run costs and max / mean shows the imbalance.
 struct RankTimes {
   PhaseTimes phases;
-  double wall = 0.0;  // on the phase clock (--cpu-time: this rank process's CPU time)
+  double wall = 0.0;               // on the phase clock (--cpu-time: this rank process's CPU time)
+  std::int64_t particles = 0;      // this rank's, at the end
 };
 
 /// Per phase (and "other": the clock outside the phases, i.e. the time step and the step's
@@ -376,7 +377,7 @@ void run_bench(const BenchOptions& o) {
     solver.step();
   }
   wall += phase_clock_seconds() - start;
-  const std::vector<RankTimes> rank_times = world.allgather(RankTimes{solver.phase_times(), wall});
+  const std::vector<RankTimes> rank_times = world.allgather(RankTimes{solver.phase_times(), wall, static_cast<std::int64_t>(solver.particles().size())});
   const PhaseSpread spread = phase_spread(rank_times);
   const double wall_max = std::max_element(rank_times.begin(), rank_times.end(), [](const RankTimes& a, const RankTimes& b) {
                             return a.wall < b.wall;
@@ -447,6 +448,18 @@ void run_bench(const BenchOptions& o) {
   j["phases"] = phases;
   j["phases_max"] = phases_max;    // over the ranks; "other": outside the phases
   j["phases_mean"] = phases_mean;
+  if (world.distributed()) {  // each rank's own, to see which one waits
+    nlohmann::json per_rank = nlohmann::json::array();
+    for (const RankTimes& r : rank_times) {
+      nlohmann::json e;
+      for (int p = 0; p < other; ++p) e[kPhaseNames[p]] = r.phases.seconds[p];
+      e["other"] = std::max(0.0, r.wall - r.phases.total());
+      e["wall"] = r.wall;
+      e["particles"] = r.particles;
+      per_rank.push_back(e);
+    }
+    j["rank_phases"] = per_rank;
+  }
   j["exchange_bytes_per_step"] = exchange_bytes_per_step;  // node sums sent by all ranks together
   j["imbalance"] = after.imbalance;                         // largest rank's particles / mean, at the end
   j["max_imbalance"] = after.max_imbalance;
