@@ -85,6 +85,12 @@ def main():
                "nproc": os.cpu_count(), "references": [], "message_costs": [], "runs": []}
     print(results["started"], "load", os.getloadavg(), flush=True)
 
+    def busy():  # what else holds a CPU now (a shared machine: the lock keeps out builds, not everything)
+        ps = subprocess.run(["ps", "-eo", "pcpu,etime,args", "--sort=-pcpu"], capture_output=True, text=True).stdout
+        return [line.strip()[:160] for line in ps.splitlines()[1:6]]
+
+    results["busy_at_start"] = busy()
+
     def references(when):
         for threads in (1, 2):
             env = clean_env(PINNED, threads)
@@ -122,6 +128,7 @@ def main():
                       f"({b.get('ranks', 1)} x {b['threads']}, {b.get('exchange_bytes_per_step', 0) / 1e3:.1f} kB/step, "
                       f"load {load[0]:.2f})", flush=True)
     references("after")
+    results["busy_at_end"] = busy()
     results["ended"] = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())
 
     def median(v):
