@@ -7,7 +7,8 @@ not guessed: `talus run` under `mpirun -np 2` and `-np 3` prints "... kB a step"
 sent by all ranks, all steps, over the steps). Per step and per pair of neighbours each side sends its
 copy of every shared tile, 7 fields after P2G and 3 after the MUSL remap, 64 nodes x 8 bytes each:
     bytes a step = 2 x shared tiles x 10 x 512.
-Divided by the tiles of the body's y-z cross-section this gives the band width.
+Divided by the active tiles of the body's y-z cross-section (the tiles its colour blocks reach) this
+gives the width of the shared band in tile columns.
 
 Scenes: a bar of elastic material (constant cross-section, y 0.20 m x z 0.10 m at h = 0.01 m) sliding
 along x at 0.5 m/s on a floor, so that particles cross the slab boundaries; with the linear shape and
@@ -45,10 +46,18 @@ def bar_scene(shape):
     }
 
 
-def tiles_spanned(first_cell, end_cell, reach):
-    """Tiles along one axis holding the nodes that particles in cells [first, end) write to."""
-    lo = first_cell + PAD - (reach - 1)
-    hi = end_cell + PAD + (reach - 1)  # linear: the cell's far node is `end`; B-spline one more each side
+# Colour blocks (CellSort): edge B cells, slack s = (B - reach_low - reach_high) / 2; a block makes active
+# every tile holding a node from its origin - s - reach_low to its end + s + reach_high (activate_tiles).
+SHAPES = {"linear": (4, 0, 1), "bspline2": (8, 1, 2)}  # B (automatic), reach_low, reach_high
+
+
+def tiles_spanned(first_cell, end_cell, shape, domain_cells):
+    """Active tiles along one axis over a body in the scene's cells [first, end)."""
+    B, rl, rh = SHAPES[shape]
+    slack = (B - rl - rh) // 2
+    first_block, last_block = (first_cell + PAD) // B, (end_cell - 1 + PAD) // B
+    lo = max(0, first_block * B - slack - rl)
+    hi = min(domain_cells + 2 * PAD, last_block * B + B - 1 + slack + rh)  # the last node index of the grid
     return hi // TILE - lo // TILE + 1
 
 
@@ -72,11 +81,11 @@ def main():
     a = ap.parse_args()
     results = []
     with tempfile.TemporaryDirectory() as tmp:
-        for shape, reach in (("linear", 1), ("bspline2", 2)):
+        for shape in SHAPES:
             scene = bar_scene(shape)
             path = os.path.join(tmp, scene["name"] + ".json")
             json.dump(scene, open(path, "w"))
-            cross = tiles_spanned(5, 25, reach) * tiles_spanned(0, 10, reach)
+            cross = tiles_spanned(5, 25, shape, 30) * tiles_spanned(0, 10, shape, 20)
             for ranks in (2, 3):
                 r = run(a.talus, path, ranks, os.path.join(tmp, f"out_{shape}_{ranks}"))
                 r.update(scene=scene["name"], shape=shape, cross_section_tiles=cross,

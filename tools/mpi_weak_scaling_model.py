@@ -51,10 +51,12 @@ def intra_node_costs(bench):
 
 
 def pack_add_seconds_per_byte(bench, alpha, beta):
-    """The tile-exchange microbenchmark's time beyond its messages: packing and adding, per byte sent."""
+    """The tile-exchange microbenchmark's time beyond its messages: packing and adding, per byte sent.
+    With buffers kept across calls ("tiles_reused"): talus's own exchange does not pay the fresh-page
+    cost the microbenchmark shows with new buffers on this VM (docs/performance.md: the "+keep" A/B)."""
     per_byte = []
     for r in bench["message_costs"]:
-        for t in r.get("tiles", []):
+        for t in r.get("tiles_reused", []):
             if t["tiles"] in (420, 1000):
                 per_byte.append(max(0.0, t["seconds"] - (alpha + t["bytes"] / beta)) / t["bytes"])
     return median(per_byte)
@@ -97,11 +99,14 @@ def main():
     # efficiency; 4 M between them, interpolated in log N (an assumption).
     eff = {1e6: 0.636, 4e6: 0.636 + (0.848 - 0.636) * math.log(4) / math.log(8)}
     node64 = {N: (a.node_rate_64 or 64 * 4.8e6 * eff[N]) for N in eff}
+    ib = (a.alpha_ib, a.beta_ib, a.alpha_ib)
+    # label, node rate, network, particles per node, imbalance (largest slab / mean)
     cases = [
-        ("this VM (2 cores), intra-node MPI measured", vm_rate, (alpha, beta, coll), 1e6),
-        ("this VM (2 cores), InfiniBand HDR assumed", vm_rate, (a.alpha_ib, a.beta_ib, a.alpha_ib), 1e6),
-        ("64-core node, InfiniBand HDR assumed", node64[1e6], (a.alpha_ib, a.beta_ib, a.alpha_ib), 1e6),
-        ("64-core node, InfiniBand HDR assumed", node64[4e6], (a.alpha_ib, a.beta_ib, a.alpha_ib), 4e6),
+        ("this VM (2 cores), intra-node MPI measured", vm_rate, (alpha, beta, coll), 1e6, imbalance),
+        ("this VM (2 cores), InfiniBand HDR assumed", vm_rate, ib, 1e6, imbalance),
+        ("64-core node, InfiniBand HDR assumed", node64[1e6], ib, 1e6, imbalance),
+        ("64-core node, InfiniBand HDR assumed", node64[4e6], ib, 4e6, imbalance),
+        ("64-core node, IB HDR, slabs 10% out of balance (the rebalance threshold)", node64[4e6], ib, 4e6, 1.10),
     ]
     nodes = [1, 2, 4, 8, 16, 32, 64]
     slab_cell_length = {1e6: 50, 4e6: 200}  # cells along x of a node's slab (50 x 50 cross-section, 8 per cell)
@@ -114,10 +119,10 @@ def main():
           f"pack + add {pack_add * 1e9:.3f} ns/B ({1 / pack_add / 1e9 if pack_add else float('inf'):.2f} GB/s)")
     print("| node, network | particles per node | " + " | ".join(f"{P}" for P in nodes) + " |")
     print("|---|---|" + "---|" * len(nodes))
-    for label, rate, net, N in cases:
-        rows = [step_seconds(P, N, rate, S, imbalance, net, pack_add, slab_cell_length[N] / COLUMN_CELLS) for P in nodes]
+    for label, rate, net, N, imb in cases:
+        rows = [step_seconds(P, N, rate, S, imb, net, pack_add, slab_cell_length[N] / COLUMN_CELLS) for P in nodes]
         e = [rows[0]["total"] / r["total"] for r in rows]
-        out["cases"].append({"label": label, "particles_per_node": N, "rate_per_s": rate,
+        out["cases"].append({"label": label, "particles_per_node": N, "rate_per_s": rate, "imbalance": imb,
                              "network": {"alpha_s": net[0], "beta_B_per_s": net[1], "collective_alpha_s": net[2]},
                              "nodes": nodes, "steps": rows, "efficiency": e})
         print(f"| {label} | {N / 1e6:.0f} M | " + " | ".join(f"{x * 100:.1f}%" for x in e) + " |")
@@ -136,13 +141,15 @@ def main():
         for c in out["cases"]:
             lab = f"{c['label']}, {c['particles_per_node'] / 1e6:.0f} M/node"
             ax1.plot(c["nodes"], [100 * x for x in c["efficiency"]], "o-", label=lab)
-            ax2.plot(c["nodes"], [1e3 * (r["total"] - r["compute"]) for r in c["steps"]], "o-", label=lab)
+            ax2.plot(c["nodes"][1:], [1e3 * (r["messages"] + r["pack_add"] + r["collectives"]) for r in c["steps"][1:]], "o-",
+                     label=lab)
         ax1.set(xscale="log", xlabel="nodes (1 rank each)", ylabel="weak-scaling efficiency [%]", ylim=(0, 105),
                 title="talus weak scaling model (flume 0.5 m x 0.5 m, h = 0.01 m)")
-        ax2.set(xscale="log", yscale="log", xlabel="nodes", ylabel="exchange + collectives per step [ms]",
-                title="communication per step")
+        ax2.set(xscale="log", xlabel="nodes", ylabel="[ms] per step", ylim=(0, None),
+                title="exchange (messages, pack, add) + collectives per step")
         for ax in (ax1, ax2):
             ax.set_xticks(nodes)
+            ax.minorticks_off()
             ax.set_xticklabels([str(n) for n in nodes])
             ax.grid(True, alpha=0.3)
         ax1.legend(fontsize=7, loc="lower left")
