@@ -183,7 +183,9 @@ TEST(Cli, BenchUnderMpirunReportsAllRanks) {
     GTEST_SKIP() << "no MPI build or no mpirun";
   const fs::path dir = temp_dir("bench_mpi");
   fs::create_directories(dir);
+  // (root in a container: Open MPI may run as root, and copies through /dev/shm without cross-memory attach)
   const std::string mpirun = "env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
+                             "OMPI_MCA_btl_vader_single_copy_mechanism=none "
                              "mpirun -np 2 " + std::string(TALUS_BINARY) + " ";
   auto run_mpi = [&](const std::string& args) {
     FILE* pipe = popen((mpirun + args + " 2>&1").c_str(), "r");
