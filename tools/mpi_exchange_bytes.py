@@ -1,14 +1,16 @@
 #!/usr/bin/env python3
 """Bytes of node sums a distributed run exchanges per step, read from `talus run` under mpirun.
 
-The weak-scaling model of docs/performance.md ("Distributed runs (MPI)") needs the width of the band
-of tiles two slab neighbours share, in tile columns (4x4x4-node tiles along x). It is measured here,
-not guessed: `talus run` under `mpirun -np 2` and `-np 3` prints "... kB a step" at the end (node sums
-sent by all ranks, all steps, over the steps). Per step and per pair of neighbours each side sends its
-copy of every shared tile, 7 fields after P2G and 3 after the MUSL remap, 64 nodes x 8 bytes each:
-    bytes a step = 2 x shared tiles x 10 x 512.
-Divided by the active tiles of the body's y-z cross-section (the tiles its colour blocks reach) this
-gives the width of the shared band in tile columns.
+The weak-scaling model of docs/performance.md ("Distributed runs (MPI)") needs the tiles a rank sends
+to a slab neighbour a step. It is measured here, not guessed: `talus run` under `mpirun -np 2` and `-np 3`
+prints "... kB a step" at the end (node sums sent by all ranks, all steps, over the steps). Per step and
+per pair of neighbours each side sends, twice (7 fields after P2G, 3 after the MUSL remap, 64 nodes x
+8 bytes a field), the tiles it shares with the other; since main f6b7c33 only those its own particles
+reached, after one flag byte per shared tile:
+    bytes a step = 2 x (ranks - 1) x sent tiles x 10 x 512 (+ the flags, < 0.2%).
+"sent tiles" below is that figure (per pair and direction, the mean of the two); divided by the active
+tiles of the body's y-z cross-section (the tiles its colour blocks reach) it gives the band in tile
+columns. (All shared tiles were sent before f6b7c33: the band of shared tiles is 2 tile columns.)
 
 Scenes: a bar of elastic material (constant cross-section, y 0.20 m x z 0.10 m at h = 0.01 m) sliding
 along x at 0.5 m/s on a floor, so that particles cross the slab boundaries; with the linear shape and
@@ -71,7 +73,8 @@ def run(talus, scene_path, ranks, out):
     steps = int(re.search(r"done: (\d+) steps", r.stdout).group(1))
     particles = int(re.search(r"talus: (\d+) particles", r.stdout).group(1))
     return {"ranks": ranks, "kB_per_step": kb, "steps": steps, "particles": particles,
-            "shared_tiles_per_interface": kb * 1e3 / (2 * 10 * TILE ** 3 * 8) / (ranks - 1), "stdout_tail": r.stdout[-600:]}
+            "sent_tiles_per_interface_and_direction": kb * 1e3 / (2 * 10 * TILE ** 3 * 8) / (ranks - 1),
+            "stdout_tail": r.stdout[-600:]}
 
 
 def main():
@@ -89,10 +92,11 @@ def main():
             for ranks in (2, 3):
                 r = run(a.talus, path, ranks, os.path.join(tmp, f"out_{shape}_{ranks}"))
                 r.update(scene=scene["name"], shape=shape, cross_section_tiles=cross,
-                         cross_section_m2=0.2 * 0.1, band_tile_columns=r["shared_tiles_per_interface"] / cross)
+                         cross_section_m2=0.2 * 0.1, band_tile_columns=r["sent_tiles_per_interface_and_direction"] / cross)
                 results.append(r)
                 print(f"{scene['name']:16s} {ranks} ranks: {r['kB_per_step']:8.1f} kB a step, "
-                      f"{r['shared_tiles_per_interface']:6.1f} shared tiles per interface, cross-section {cross} tiles, "
+                      f"{r['sent_tiles_per_interface_and_direction']:6.1f} tiles sent per interface and direction, "
+                      f"cross-section {cross} tiles, "
                       f"band {r['band_tile_columns']:.2f} tile columns", flush=True)
         flume = json.load(open(os.path.join(os.path.dirname(__file__), "..", "inputs", "denlinger_flume.json")))
         flume["time"]["end"] = 0.3
@@ -104,7 +108,8 @@ def main():
             r.update(scene="denlinger_flume (0.3 s)", shape="linear")
             results.append(r)
             print(f"{'flume 0.3 s':16s} {ranks} ranks: {r['kB_per_step']:8.1f} kB a step, "
-                  f"{r['shared_tiles_per_interface']:6.1f} shared tiles per interface (mean over the steps)", flush=True)
+                  f"{r['sent_tiles_per_interface_and_direction']:6.1f} tiles sent per interface and direction (mean over the steps)",
+                  flush=True)
     if a.json:
         with open(a.json, "w") as f:
             json.dump(results, f, indent=1)
