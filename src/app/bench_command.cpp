@@ -1,6 +1,9 @@
 // `talus bench`: fixed, documented 3D scenes at a chosen size; prints and writes particle-updates per
-// second, seconds per phase and memory per particle. See docs/performance.md.
+// second, seconds per phase and memory per particle. Under mpirun the scene is split over the ranks
+// as `talus run` splits it (slabs along x); rank 0 prints and writes for all of them. See
+// docs/performance.md, "Distributed runs (MPI)".
 #include "commands.hpp"
+#include "talus/core/comm.hpp"
 #include "talus/core/simd_dispatch.hpp"
 #include "talus/core/error.hpp"
 #include "talus/core/version.hpp"
@@ -13,6 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <omp.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -48,8 +52,10 @@ struct BenchOptions {
 /// The STREAM triad a[i] = b[i] + s c[i] (McCalpin) over three arrays of 2^24 doubles (128 MiB
 /// each, far beyond any cache), first-touched by the threads that use them; the best of 5 passes,
 /// counted as 24 bytes per element as STREAM does. It gives the memory bandwidth the MPM step can
-/// hope for at this thread count, measured in the same process (docs/performance.md).
-double stream_triad_bytes_per_second() {
+/// hope for at this thread count, measured in the same process (docs/performance.md). Under mpirun
+/// every rank runs it at once (a barrier before each pass), and the ranks' rates are summed: the
+/// bandwidth of the node as the ranks share it.
+double stream_triad_bytes_per_second(const Comm& comm) {
   const std::size_t n = std::size_t(1) << 24;
   std::unique_ptr<double[]> a(new double[n]), b(new double[n]), c(new double[n]);
 #pragma omp parallel for schedule(static)
@@ -60,6 +66,7 @@ double stream_triad_bytes_per_second() {
   }
   double best = 1e300;
   for (int pass = 0; pass < 5; ++pass) {
+    comm.barrier();
     const auto start = std::chrono::steady_clock::now();
     const double scalar = 3.0 + pass;
     double* pa = a.get();
@@ -70,7 +77,7 @@ double stream_triad_bytes_per_second() {
     best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
   if (a[n / 2] != 1.0 + 7.0 * 2.0) throw io_error("stream triad: wrong result");  // keeps the loop honest
-  return 24.0 * double(n) / best;
+  return comm.sum_in_rank_order(24.0 * double(n) / best);
 }
 
 /// A memory line of /proc/self/status in bytes: "VmHWM:" (peak resident) or "VmRSS:" (now).
@@ -198,6 +205,8 @@ void start_in_simple_shear(Solver& solver) {
     z_low = std::min(z_low, z);
     z_top = std::max(z_top, z);
   }
+  z_low = solver.comm().min(z_low);  // a distributed run: the body's extent over every rank's slab
+  z_top = -solver.comm().min(-z_top);
   const double z_mid = 0.5 * (z_low + z_top), rate = 1.0, g = std::abs(scene.gravity[2]);
   for (std::size_t p = 0; p < P.size(); ++p) {
     const double pressure = m.density * g * (z_top - P.x[2][p]) + 1.0e3;
@@ -297,8 +306,40 @@ void run_update_bench(const BenchOptions& o) {
   }
 }
 
+/// What each rank measured over the timed steps, gathered to every rank (Comm::allgather) so that
+/// rank 0 can print the largest and the mean of each phase: the step waits for the slowest rank at
+/// its exchanges, so the largest is what the run costs and max / mean shows the imbalance.
+struct RankTimes {
+  PhaseTimes phases;
+  double wall = 0.0;               // on the phase clock (--cpu-time: this rank process's CPU time)
+  std::int64_t particles = 0;      // this rank's, at the end
+};
+
+/// Per phase (and "other": the clock outside the phases, i.e. the time step and the step's
+/// collective, the migration and the exchange setup at a sort) the largest and the mean over the ranks.
+struct PhaseSpread {
+  std::array<double, static_cast<int>(Phase::Count) + 1> max{}, mean{};
+};
+PhaseSpread phase_spread(const std::vector<RankTimes>& ranks) {
+  PhaseSpread s;
+  constexpr int other = static_cast<int>(Phase::Count);
+  for (const RankTimes& r : ranks) {
+    for (int p = 0; p <= other; ++p) {
+      const double seconds = p == other ? std::max(0.0, r.wall - r.phases.total()) : r.phases.seconds[p];
+      s.max[p] = std::max(s.max[p], seconds);
+      s.mean[p] += seconds / double(ranks.size());
+    }
+  }
+  return s;
+}
+
 void run_bench(const BenchOptions& o) {
   refuse_unavailable(o);
+  const Comm world = Comm::world();
+  if (world.distributed() && o.scene == "update")
+    throw input_error("--scene update: one rank only (it has no grid to split); run it without mpirun");
+  if (world.distributed() && !o.record_path.empty())
+    throw input_error("--record-work: one rank only (the record is of one process's threads); run it without mpirun");
   if (o.scene == "update") {
     run_update_bench(o);
     return;
@@ -313,11 +354,14 @@ void run_bench(const BenchOptions& o) {
       o.mls == "off" ? std::string()
                      : fmt::format(R"(, "smoothing": {{ "basis": "{}", "radius_factor": {} }})", o.mls, o.mls_radius);
   Solver solver(o.scene == "column" ? column_scene(o.particles, o.shape, o.scheme, o.material, mls_json)
-                                    : block_scene(o.particles, o.shape, o.scheme, o.material, mls_json));
+                                    : block_scene(o.particles, o.shape, o.scheme, o.material, mls_json),
+                world);
   if (o.scene == "shear") start_in_simple_shear(solver);
-  const std::size_t n = solver.particles().size();
   solver.step();  // first step: first touch of the grid pages; not timed
   solver.phase_times() = PhaseTimes{};
+  const DistributionStats before = solver.distribution();  // collective: before the clock starts
+  const std::int64_t n = before.particles;                  // on every rank together
+  world.barrier();  // the ranks start the clock together
   double start = phase_clock_seconds();
   std::vector<double> plastic_before;  // eps_p before the last timed step (not timed: a copy)
   std::size_t sorts_before = 0, rss_before_copy = 0;
@@ -333,24 +377,48 @@ void run_bench(const BenchOptions& o) {
     solver.step();
   }
   wall += phase_clock_seconds() - start;
+  const std::vector<RankTimes> rank_times = world.allgather(RankTimes{solver.phase_times(), wall, static_cast<std::int64_t>(solver.particles().size())});
+  const PhaseSpread spread = phase_spread(rank_times);
+  const double wall_max = std::max_element(rank_times.begin(), rank_times.end(), [](const RankTimes& a, const RankTimes& b) {
+                            return a.wall < b.wall;
+                          })->wall;
+  const DistributionStats after = solver.distribution();
+  const double exchange_bytes_per_step = double(after.exchange_bytes - before.exchange_bytes) / o.steps;
   // The share of particles whose plastic strain grew in the last step: how much of the Drucker-
   // Prager cost is the return mapping rather than the elastic trial. A sort in that step reorders
-  // the particles: then the share is not reported.
+  // the particles (and moves them between ranks): then the share is not reported. The sort count
+  // is the same on every rank (the sorts are collective).
   double plastic_share = -1.0;
-  if (!plastic_before.empty() && plastic_before.size() == solver.particles().size() &&
-      solver.sort_count() == static_cast<std::int64_t>(sorts_before)) {
-    std::size_t grew = 0;
+  const bool comparable = solver.particles().has_plastic_state() && plastic_before.size() == solver.particles().size() &&
+                          solver.sort_count() == static_cast<std::int64_t>(sorts_before);
+  if (!world.any(!comparable)) {  // every rank alike, so that all take the collective below
+    std::int64_t grew = 0;
     for (std::size_t p = 0; p < plastic_before.size(); ++p)
       grew += solver.particles().plastic_strain[p] > plastic_before[p] ? 1 : 0;
-    plastic_share = double(grew) / n;
+    plastic_share = double(world.sum_in_rank_order(std::vector<std::int64_t>{grew})[0]) / double(after.particles);
   }
-  const double rate = double(n) * o.steps / wall;
+  const double rate = double(n) * o.steps / wall_max;
   // The high-water mark of the steps; with plastic state, as it was before the bench copied eps_p
   // (the steps allocate nothing, so the last step cannot raise it except by a sort's buffers).
-  const std::size_t rss = rss_before_copy > 0 ? rss_before_copy : peak_rss_bytes();
+  // Distributed: memory is summed over the ranks (each holds the program, ~25 MB, once).
+  const std::vector<std::int64_t> memory = world.sum_in_rank_order(std::vector<std::int64_t>{
+      static_cast<std::int64_t>(rss_before_copy > 0 ? rss_before_copy : peak_rss_bytes()),
+      static_cast<std::int64_t>(rss_at_start), static_cast<std::int64_t>(solver.particles().bytes()),
+      static_cast<std::int64_t>(solver.grid().active_bytes())});
+  const std::size_t rss = static_cast<std::size_t>(memory[0]), rss_start = static_cast<std::size_t>(memory[1]);
+  const double field_bytes = double(memory[2]);
+  const std::int64_t grid_bytes = memory[3];
   // after the memory high-water mark is read: the triad's 384 MiB must not count as the solver's
-  const double stream = o.stream ? stream_triad_bytes_per_second() : 0.0;
+  const double stream = o.stream ? stream_triad_bytes_per_second(world) : 0.0;
+  std::int64_t unsmoothed = 0;
+  double smoothing_change = 0.0;
+  if (solver.smoother()) {
+    unsmoothed = world.sum_in_rank_order(std::vector<std::int64_t>{static_cast<std::int64_t>(solver.last_smoothing().unsmoothed)})[0];
+    smoothing_change = -world.min(-solver.last_smoothing_change());  // the largest rank's
+  }
+  if (!world.root()) return;
 
+  const int threads = omp_get_max_threads();
   nlohmann::json j;
   j["talus_version"] = kVersion;
   j["scene"] = o.scene;
@@ -362,44 +430,90 @@ void run_bench(const BenchOptions& o) {
   j["particles"] = n;
   j["block_cells"] = solver.cell_sort().block_cells();
   j["steps"] = o.steps;
-  j["threads"] = omp_get_max_threads();
+  j["ranks"] = world.size();
+  j["threads"] = threads;  // per rank
   j["isa"] = active_isa();
   j["clock"] = o.cpu_time ? "process cpu" : "wall";
   j["cpu"] = cpu_model();
-  j["wall_seconds"] = wall;
+  j["wall_seconds"] = wall_max;  // the slowest rank's
   j["particle_updates_per_second"] = rate;
-  nlohmann::json phases;
-  for (int p = 0; p < static_cast<int>(Phase::Count); ++p) phases[kPhaseNames[p]] = solver.phase_times().seconds[p];
+  constexpr int other = static_cast<int>(Phase::Count);
+  auto phase_name = [](int p) { return p == other ? "other" : kPhaseNames[p]; };
+  nlohmann::json phases, phases_max, phases_mean;
+  for (int p = 0; p < other; ++p) phases[kPhaseNames[p]] = spread.max[p];  // one rank: its phases
+  for (int p = 0; p <= other; ++p) {
+    phases_max[phase_name(p)] = spread.max[p];
+    phases_mean[phase_name(p)] = spread.mean[p];
+  }
   j["phases"] = phases;
+  j["phases_max"] = phases_max;    // over the ranks; "other": outside the phases
+  j["phases_mean"] = phases_mean;
+  if (world.distributed()) {  // each rank's own, to see which one waits
+    nlohmann::json per_rank = nlohmann::json::array();
+    for (const RankTimes& r : rank_times) {
+      nlohmann::json e;
+      for (int p = 0; p < other; ++p) e[kPhaseNames[p]] = r.phases.seconds[p];
+      e["other"] = std::max(0.0, r.wall - r.phases.total());
+      e["wall"] = r.wall;
+      e["particles"] = r.particles;
+      per_rank.push_back(e);
+    }
+    j["rank_phases"] = per_rank;
+  }
+  j["exchange_bytes_per_step"] = exchange_bytes_per_step;  // node sums sent by all ranks together
+  j["imbalance"] = after.imbalance;                         // largest rank's particles / mean, at the end
+  j["max_imbalance"] = after.max_imbalance;
+  j["shared_tiles"] = after.shared_tiles;
+  j["migrated"] = after.migrated - before.migrated;         // in the timed steps
+  j["rebalances"] = after.rebalances - before.rebalances;
   j["sorts"] = solver.sort_count();
   if (plastic_share >= 0.0) j["plastic_share_last_step"] = plastic_share;
   if (const MlsStrainSmoother* mls = solver.smoother()) {
     j["mls_radius"] = mls->radius();
     j["mls_terms"] = mls->term_count();
-    j["mls_unsmoothed_last_step"] = solver.last_smoothing().unsmoothed;
-    j["mls_strain_change_last_step"] = solver.last_smoothing_change();
+    j["mls_unsmoothed_last_step"] = unsmoothed;
+    j["mls_strain_change_last_step"] = smoothing_change;
   }
   j["bytes_per_particle"] = double(rss) / n;
-  j["particle_field_bytes_per_particle"] = double(solver.particles().bytes()) / n;
-  j["grid_active_bytes"] = solver.grid().active_bytes();
+  j["particle_field_bytes_per_particle"] = field_bytes / n;
+  j["grid_active_bytes"] = grid_bytes;
   j["peak_rss_bytes"] = rss;
-  j["rss_at_start_bytes"] = rss_at_start;
-  j["bytes_per_particle_above_start"] = double(rss - std::min(rss, rss_at_start)) / n;
+  j["rss_at_start_bytes"] = rss_start;
+  j["bytes_per_particle_above_start"] = double(rss - std::min(rss, rss_start)) / n;
   if (o.stream) j["stream_triad_bytes_per_second"] = stream;
 
-  fmt::print("talus bench: {} scene, {} particles, {} shape, {} scheme, {} material, MLS {}, {} threads, {} kernels, {} steps\n",
-             o.scene, n, o.shape, o.scheme, o.material, o.mls, omp_get_max_threads(), active_isa(), o.steps);
-  fmt::print("  {:.3f} M particle-updates/s ({:.3f} s)\n", rate / 1e6, wall);
-  const double total = solver.phase_times().total();
-  for (int p = 0; p < static_cast<int>(Phase::Count); ++p)
-    fmt::print("  {:<7} {:8.4f} s  {:5.1f}%\n", kPhaseNames[p], solver.phase_times().seconds[p],
-               100.0 * solver.phase_times().seconds[p] / std::max(total, 1e-300));
+  const std::string workers =
+      world.distributed() ? fmt::format("{} ranks x {} thread{}", world.size(), threads, threads == 1 ? "" : "s")
+                          : fmt::format("{} threads", threads);
+  fmt::print("talus bench: {} scene, {} particles, {} shape, {} scheme, {} material, MLS {}, {}, {} kernels, {} steps\n",
+             o.scene, n, o.shape, o.scheme, o.material, o.mls, workers, active_isa(), o.steps);
+  fmt::print("  {:.3f} M particle-updates/s ({:.3f} s)\n", rate / 1e6, wall_max);
+  if (!world.distributed()) {
+    const double total = solver.phase_times().total();
+    for (int p = 0; p < other; ++p)
+      fmt::print("  {:<7} {:8.4f} s  {:5.1f}%\n", kPhaseNames[p], solver.phase_times().seconds[p],
+                 100.0 * solver.phase_times().seconds[p] / std::max(total, 1e-300));
+  } else {
+    // Shares of the slowest rank's wall; max / mean > 1 is time some rank spent that another did
+    // not (its extra work, or its wait for a neighbour at an exchange, inside p2g and remap).
+    fmt::print("  {:<7} {:>9} {:>9} {:>6} {:>9}\n", "phase", "max s", "mean s", "max %", "max/mean");
+    for (int p = 0; p <= other; ++p)
+      fmt::print("  {:<7} {:9.4f} {:9.4f} {:5.1f}% {:9.2f}\n", phase_name(p), spread.max[p], spread.mean[p],
+                 100.0 * spread.max[p] / std::max(wall_max, 1e-300), spread.max[p] / std::max(spread.mean[p], 1e-300));
+    fmt::print("  (other: outside the phases: the time step and the step's collective, migration and exchange setup at a sort)\n");
+    fmt::print("  slabs: imbalance {:.3f} (largest rank's particles / mean), {:.3f} at most; {} rebalances and {} particles "
+               "migrated in the timed steps; {} shared tiles; {:.1f} kB of node sums exchanged a step (all ranks)\n",
+               after.imbalance, after.max_imbalance, after.rebalances - before.rebalances, after.migrated - before.migrated,
+               after.shared_tiles, exchange_bytes_per_step / 1e3);
+  }
   if (plastic_share >= 0.0) fmt::print("  plastic in the last step: {:.1f}% of the particles\n", 100.0 * plastic_share);
-  if (o.stream) fmt::print("  STREAM triad: {:.2f} GB/s at {} threads\n", stream / 1e9, omp_get_max_threads());
+  if (o.stream)
+    fmt::print("  STREAM triad: {:.2f} GB/s at {}{}\n", stream / 1e9, world.distributed() ? "all ranks, " : "",
+               world.distributed() ? workers : fmt::format("{} threads", threads));
   fmt::print("  memory: {:.0f} B/particle peak RSS, {:.0f} B/particle above the {:.1f} MB the process held before the scene "
-             "({:.0f} B/particle in particle fields), grid {:.1f} MB active\n",
-             double(rss) / n, double(rss - std::min(rss, rss_at_start)) / n, rss_at_start / 1e6,
-             double(solver.particles().bytes()) / n, solver.grid().active_bytes() / 1e6);
+             "({:.0f} B/particle in particle fields), grid {:.1f} MB active{}\n",
+             double(rss) / n, double(rss - std::min(rss, rss_start)) / n, rss_start / 1e6, field_bytes / n, double(grid_bytes) / 1e6,
+             world.distributed() ? " (all ranks)" : "");
   if (!o.json_path.empty()) {
     std::ofstream out(o.json_path);
     if (!out) throw io_error(fmt::format("cannot write {}", o.json_path));
@@ -435,7 +549,8 @@ void record_work(Solver& solver, const BenchOptions& o, const nlohmann::json& be
 
 void add_bench_command(CLI::App& app) {
   auto o = std::make_shared<BenchOptions>();
-  auto* cmd = app.add_subcommand("bench", "Measure speed: particle-updates per second, time per phase, memory per particle");
+  auto* cmd = app.add_subcommand(
+      "bench", "Measure speed: particle-updates per second, time per phase, memory per particle (under mpirun: of all ranks, with the bytes they exchange)");
   cmd->add_option("--scene", o->scene, "block (a cube sliding on a frictional floor) | column (a sand column collapsing, 2:1) | shear (the block's sand in simple shear at yield: every particle plastic every step; --material dp or mu_i) | update (the constitutive update alone, every particle plastic; --material dp or mu_i)")->capture_default_str();
   cmd->add_option("--particles", o->particles, "Approximate particle count")->check(CLI::Range(1000LL, 100000000LL))->capture_default_str();
   cmd->add_option("--shape", o->shape, "linear | ugimp | cpgimp | bspline2")

@@ -1,9 +1,12 @@
 // The talus program as a user meets it: exit codes, one-line errors, no half-written output.
+#include "talus/core/comm.hpp"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -124,6 +127,16 @@ TEST(Cli, BenchWritesTheJsonContract) {
   for (const char* key : {"\"particle_updates_per_second\"", "\"phases\"", "\"bytes_per_particle\"", "\"particles\"", "\"steps\": 2",
                           "\"threads\": 1", "\"p2g\"", "\"g2p\""})
     EXPECT_NE(text.find(key), std::string::npos) << key;
+  // a serial bench is one rank: nothing exchanged, its phases are the largest and the mean alike
+  const nlohmann::json serial = nlohmann::json::parse(text);
+  EXPECT_EQ(serial["ranks"], 1);
+  EXPECT_EQ(serial["exchange_bytes_per_step"].get<double>(), 0.0);
+  EXPECT_EQ(serial["imbalance"].get<double>(), 1.0);
+  for (const auto& [phase, seconds] : serial["phases"].items()) {
+    EXPECT_EQ(serial["phases_max"][phase], seconds) << phase;
+    EXPECT_EQ(serial["phases_mean"][phase], seconds) << phase;
+  }
+  EXPECT_EQ(r.output.find("ranks"), std::string::npos) << r.output;  // the text is as before MPI
   // the granular column with Drucker-Prager, every shape function
   for (const char* shape : {"linear", "ugimp", "cpgimp", "bspline2"}) {
     const Result column = run(std::string("bench --scene column --particles 2000 --material dp --threads 1 --steps 2 --shape ") + shape);
@@ -158,6 +171,64 @@ TEST(Cli, BenchWritesTheJsonContract) {
   const Result refused = run("bench --shape quintic");
   EXPECT_EQ(refused.exit_code, 2);
   EXPECT_NE(refused.output.find("--shape quintic"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+
+// `talus bench` under mpirun (docs/performance.md "Distributed runs (MPI)"): rank 0 alone prints
+// and writes, the rate counts every rank's particles, the phases are the largest and the mean over
+// the ranks, and the slabs' exchange is reported. Skipped without MPI or mpirun.
+TEST(Cli, BenchUnderMpirunReportsAllRanks) {
+  if (!talus::mpi_built() || std::system("command -v mpirun > /dev/null 2>&1") != 0)
+    GTEST_SKIP() << "no MPI build or no mpirun";
+  const fs::path dir = temp_dir("bench_mpi");
+  fs::create_directories(dir);
+  // (root in a container: Open MPI may run as root, and copies through /dev/shm without cross-memory attach)
+  const std::string mpirun = "env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
+                             "OMPI_MCA_btl_vader_single_copy_mechanism=none "
+                             "mpirun -np 2 " + std::string(TALUS_BINARY) + " ";
+  auto run_mpi = [&](const std::string& args) {
+    FILE* pipe = popen((mpirun + args + " 2>&1").c_str(), "r");
+    std::string out;
+    std::array<char, 4096> buffer;
+    while (fgets(buffer.data(), buffer.size(), pipe)) out += buffer.data();
+    const int status = pclose(pipe);
+    return Result{WEXITSTATUS(status), out};
+  };
+  const std::string args = "bench --scene shear --material dp --particles 4000 --threads 1 --steps 2 --json ";
+  const Result one = run(args + (dir / "one.json").string());
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  const Result two = run_mpi(args + (dir / "two.json").string());
+  ASSERT_EQ(two.exit_code, 0) << two.output;
+  std::size_t headers = 0;
+  for (std::size_t at = two.output.find("talus bench:"); at != std::string::npos; at = two.output.find("talus bench:", at + 1))
+    ++headers;
+  EXPECT_EQ(headers, 1u) << two.output;
+  EXPECT_NE(two.output.find("2 ranks x 1 thread"), std::string::npos) << two.output;
+  EXPECT_NE(two.output.find("kB of node sums exchanged a step"), std::string::npos) << two.output;
+  std::ifstream one_in(dir / "one.json"), two_in(dir / "two.json");
+  const nlohmann::json a = nlohmann::json::parse(one_in), b = nlohmann::json::parse(two_in);
+  EXPECT_EQ(b["ranks"], 2);
+  EXPECT_EQ(b["particles"], a["particles"]);  // all ranks' particles, not rank 0's
+  EXPECT_GT(b["exchange_bytes_per_step"].get<double>(), 0.0);
+  EXPECT_GE(b["imbalance"].get<double>(), 1.0);
+  EXPECT_GT(b["shared_tiles"].get<int>(), 0);
+  for (const auto& [phase, seconds] : b["phases_max"].items()) {
+    EXPECT_GE(seconds.get<double>(), b["phases_mean"][phase].get<double>()) << phase;
+    if (phase != "other") {
+      EXPECT_EQ(b["phases"][phase], seconds) << phase;
+    }
+  }
+  // the shear scene's stress from the body's extent over both slabs: nearly every particle plastic
+  ASSERT_TRUE(b.contains("plastic_share_last_step")) << two.output;
+  EXPECT_GT(b["plastic_share_last_step"].get<double>(), 0.8) << two.output;
+  // a mode that cannot be split is refused once, with exit code 2 on every rank
+  const Result update = run_mpi("bench --scene update --material dp --particles 2000");
+  EXPECT_EQ(update.exit_code, 2) << update.output;
+  const std::string refusal = "--scene update: one rank only";
+  const std::size_t first = update.output.find(refusal);
+  EXPECT_NE(first, std::string::npos) << update.output;
+  EXPECT_EQ(update.output.find(refusal, first + 1), std::string::npos) << update.output;
   fs::remove_all(dir);
 }
 
