@@ -28,11 +28,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path temp_dir(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / ("talus_test_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  return dir;
-}
+using test::temp_dir;
 
 /// The names of the files in `dir`, sorted.
 std::vector<std::string> files_in(const fs::path& dir) {

@@ -22,9 +22,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path temp_dir(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / ("talus_test_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
+fs::path temp_dir(const std::string& name) {  // made, not only named
+  const fs::path dir = test::temp_dir(name);
   fs::create_directories(dir);
   return dir;
 }

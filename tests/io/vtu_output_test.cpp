@@ -3,6 +3,7 @@
 #include "../solver/scene_fixtures.hpp"
 #include "talus/driver/run_driver.hpp"
 #include "talus/io/vtu_writer.hpp"
+#include "vtk_xml_headers.hpp"
 #include "talus/solver/solver.hpp"
 
 #include <gtest/gtest.h>
@@ -21,11 +22,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path temp_dir(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / ("talus_test_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  return dir;
-}
+using test::temp_dir;
 
 TEST(VtuOutput, FrameReadsBackWithAllArrays) {
   Solver solver(test::tumbling_block_scene(0.01));
