@@ -9,13 +9,27 @@
 
 namespace talus {
 
-SlabDecomposition::SlabDecomposition(int ranks, int block_cells, int columns, const std::vector<std::int64_t>& work)
-    : block_cells_(block_cells), columns_(columns) {
-  if (ranks > columns)
+SlabDecomposition::SlabDecomposition(int ranks, int block_cells, const std::vector<std::int64_t>& work_per_cell)
+    : block_cells_(block_cells),
+      columns_(static_cast<int>((work_per_cell.size() + static_cast<std::size_t>(block_cells) - 1) / block_cells)) {
+  if (ranks > columns_)
     throw input_error(fmt::format("{} ranks need at least {} colour-block columns along x; the grid has {} (blocks of {} "
                                   "cells): use fewer ranks or more cells along x",
-                                  ranks, ranks, columns, block_cells));
-  first_column_ = balanced_first_columns(work, ranks);
+                                  ranks, ranks, columns_, block_cells));
+  first_column_ = balanced_first_columns(work_per_column(work_per_cell), ranks);
+}
+
+std::vector<std::int64_t> SlabDecomposition::work_per_column(const std::vector<std::int64_t>& work_per_cell) const {
+  std::vector<std::int64_t> work(columns_, 0);
+  for (std::size_t i = 0; i < work_per_cell.size(); ++i) work[column_of_cell(static_cast<int>(i))] += work_per_cell[i];
+  return work;
+}
+
+std::vector<std::int64_t> SlabDecomposition::particles_per_column(const std::vector<double>& x,
+                                                                  const GridGeometry& grid) const {
+  std::vector<std::int64_t> work(columns_, 0);
+  for (double xp : x) ++work[column_of_cell(grid.cell_of(0, xp))];
+  return work;
 }
 
 int SlabDecomposition::column_of_cell(int i) const { return std::clamp(i / block_cells_, 0, columns_ - 1); }

@@ -67,13 +67,9 @@ Solver::Solver(Scene scene, Comm comm) : scene_(std::move(scene)), comm_(comm) {
     if (scene_.grid.periodic[0])
       throw input_error("walls: a periodic x axis is not available in a distributed run yet (the slabs cut x); run it "
                         "on one rank");
-    const int bc = sort_.block_cells();
-    const int columns = (scene_.grid.cells[0] + 2 * kPad + bc - 1) / bc;
-    std::vector<std::int64_t> work(columns, 0);
     const std::vector<std::int64_t> per_cell = particles_per_x_cell(scene_);
-    for (std::size_t i = 0; i < per_cell.size(); ++i) work[std::min<std::size_t>(i / bc, columns - 1)] += per_cell[i];
-    decomposition_ = SlabDecomposition(comm_.size(), bc, columns, work);
-    imbalance_ = max_imbalance_ = decomposition_.imbalance(work);
+    decomposition_ = SlabDecomposition(comm_.size(), sort_.block_cells(), per_cell);
+    imbalance_ = max_imbalance_ = decomposition_.imbalance(decomposition_.work_per_column(per_cell));
     particles_ = seed_particles(scene_, [&](const Vec3& x) { return owner_of(x[0]) == comm_.rank(); });
     seeded_particles_ = static_cast<std::int64_t>(count_particles(scene_));
   } else {
@@ -187,9 +183,7 @@ void Solver::sort_particles() {
 // ---- distributed runs (docs/architecture.md, "Distributed runs") ---------------------------------
 
 std::vector<std::int64_t> Solver::particles_per_column() const {
-  std::vector<std::int64_t> work(decomposition_.columns(), 0);
-  for (double x : particles_.x[0]) ++work[decomposition_.column_of_cell(scene_.grid.cell_of(0, x))];
-  return comm_.sum_in_rank_order(work);
+  return comm_.sum_in_rank_order(decomposition_.particles_per_column(particles_.x[0], scene_.grid));
 }
 
 // The threshold of the rebalance: slabs move when the largest holds 10% more than the mean
@@ -653,9 +647,8 @@ SolverState Solver::state() const {
 
 ParticleStore Solver::own_particles(ParticleStore all) {
   if (!comm_.distributed()) return all;
-  std::vector<std::int64_t> work(decomposition_.columns(), 0);
-  for (double x : all.x[0]) ++work[decomposition_.column_of_cell(scene_.grid.cell_of(0, x))];
-  decomposition_.set_first_columns(SlabDecomposition::balanced_first_columns(work, comm_.size()));
+  decomposition_.set_first_columns(SlabDecomposition::balanced_first_columns(
+      decomposition_.particles_per_column(all.x[0], scene_.grid), comm_.size()));
   std::vector<std::uint32_t> mine;
   for (std::size_t p = 0; p < all.size(); ++p)
     if (owner_of(all.x[0][p]) == comm_.rank()) mine.push_back(static_cast<std::uint32_t>(p));

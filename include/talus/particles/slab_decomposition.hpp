@@ -7,6 +7,8 @@
 // keep every colour block on one rank, so the colouring inside a rank stays as in a serial run.
 // The slab bounds are chosen from the work per column (particles) so that each rank gets an equal
 // share, and moved again as the sand travels (rebalance, with hysteresis).
+#include "talus/grid/grid.hpp"
+
 #include <cstdint>
 #include <vector>
 
@@ -16,9 +18,10 @@ class SlabDecomposition {
  public:
   /// One rank owns every column.
   SlabDecomposition() = default;
-  /// `columns` block columns of `block_cells` cells along x (padded cell index 0 starts column 0),
-  /// shared by `ranks` slabs of nearly equal work.
-  SlabDecomposition(int ranks, int block_cells, int columns, const std::vector<std::int64_t>& work_per_column);
+  /// The padded cells along x (`work_per_cell`, one entry each: the seed points of a scene)
+  /// grouped in block columns of `block_cells` cells (padded cell index 0 starts column 0), shared
+  /// by `ranks` slabs of nearly equal work. Throws input_error when there are fewer columns than ranks.
+  SlabDecomposition(int ranks, int block_cells, const std::vector<std::int64_t>& work_per_cell);
 
   int ranks() const { return static_cast<int>(first_column_.size()) - 1; }
   int columns() const { return columns_; }
@@ -30,6 +33,12 @@ class SlabDecomposition {
   /// First column of each rank's slab, and the end (ranks() + 1 values).
   const std::vector<int>& first_columns() const { return first_column_; }
   void set_first_columns(std::vector<int> first);
+
+  /// The particles at x coordinates `x` per block column of `grid` (this rank's share: a run sums it
+  /// over the ranks).
+  std::vector<std::int64_t> particles_per_column(const std::vector<double>& x, const GridGeometry& grid) const;
+  /// The work per cell of the constructor, summed per column.
+  std::vector<std::int64_t> work_per_column(const std::vector<std::int64_t>& work_per_cell) const;
 
   /// The largest slab's work over the mean (1: perfect balance).
   double imbalance(const std::vector<std::int64_t>& work_per_column) const;
