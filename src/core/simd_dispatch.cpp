@@ -50,7 +50,7 @@ std::vector<std::string> available_isas() {
   return names;
 }
 
-void select_isa(std::string_view name) {
+void select_isa(std::string_view name, std::string_view source) {
   if (name == "auto" || name == "reference") {
     force_target(0);
     g_vector_kernels = name == "auto";
@@ -64,11 +64,12 @@ void select_isa(std::string_view name) {
     }
   std::vector<std::string> allowed = available_isas();
   allowed.insert(allowed.begin(), "auto");
-  throw input_error("isa = '" + std::string(name) + "' is not available on this CPU and build; allowed: " + joined(allowed));
+  throw input_error(std::string(source) + " = '" + std::string(name) + "' is not available on this CPU and build; allowed: " +
+                    joined(allowed));
 }
 
 void select_isa_from_environment() {
-  if (const char* value = std::getenv("TALUS_ISA"); value && *value) select_isa(value);
+  if (const char* value = std::getenv("TALUS_ISA"); value && *value) select_isa(value, "TALUS_ISA");
 }
 
 std::string active_isa() {

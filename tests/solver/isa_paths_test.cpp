@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <random>
 #include <string>
 #include <vector>
@@ -57,6 +58,20 @@ TEST(IsaPaths, AnUnknownPathIsAnInputErrorNamingTheChoices) {
     EXPECT_NE(message.find("reference"), std::string::npos) << message;
     EXPECT_EQ(e.exit_code(), 2);
   }
+  EXPECT_TRUE(vector_kernels_enabled());
+}
+
+TEST(IsaPaths, AnUnknownPathInTheEnvironmentIsAnErrorNamingTheVariable) {
+  ::setenv("TALUS_ISA", "avx1024", 1);
+  try {
+    select_isa_from_environment();
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(message.rfind("TALUS_ISA = 'avx1024'", 0), 0u) << message;
+    EXPECT_EQ(e.exit_code(), 2);
+  }
+  ::unsetenv("TALUS_ISA");
   EXPECT_TRUE(vector_kernels_enabled());
 }
 

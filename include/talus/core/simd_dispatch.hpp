@@ -21,9 +21,10 @@ namespace talus {
 /// ("scalar", "avx2", "avx512").
 std::vector<std::string> available_isas();
 
-/// Select a path by name ("auto" = the best available). Throws input_error naming the allowed
-/// values when `name` is unknown or not available here.
-void select_isa(std::string_view name);
+/// Select a path by name ("auto" = the best available). Throws input_error naming `source` (the
+/// option or variable the name came from) and the allowed values when `name` is unknown or not
+/// available here.
+void select_isa(std::string_view name, std::string_view source = "--isa");
 
 /// Select from the environment variable TALUS_ISA when it is set (the same names); otherwise keep
 /// the current choice.
