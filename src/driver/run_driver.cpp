@@ -324,7 +324,7 @@ void RunLoop::write_history_row() {
 void RunLoop::take_snapshot() {
   // (a distributed run keeps none: an instability ends its job, see run())
   if (scene_.guards.snapshot_interval <= 0 || comm_.distributed()) return;
-  snapshot_.particles = solver_.particles();
+  snapshot_.particles.copy_from(solver_.particles());  // in parallel: a serial copy would be a serial part of the run
   snapshot_.state = solver_.state();
   snapshot_.progress = progress_;
   snapshot_.progress.energy_max_released = energy_guard_.max_released();
