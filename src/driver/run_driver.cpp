@@ -147,9 +147,10 @@ class LoopRecording {
     if (!recorder_) return;
     solver_seconds_ += seconds(step_start_, step_end_);
     if (recorder_->steps().size() > recorded_before_) {
-      recorder_->add_after_step("output and guards", seconds(step_end_, Clock::now()) - snapshot_step_seconds_);
+      const double loop = seconds(step_end_, Clock::now());
       if (snapshot_step_regions_ > 0)
         recorder_->add_after_step("snapshot", snapshot_step_seconds_, solver_.particles().size(), snapshot_step_regions_);
+      recorder_->add_after_step("output and guards", loop - snapshot_step_seconds_);
     }
     snapshot_step_seconds_ = 0.0;
     snapshot_step_regions_ = 0;
