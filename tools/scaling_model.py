@@ -287,9 +287,10 @@ def main():
                     help="per-core slowdown c(T) when T cores work, e.g. 2:1.16 (kept at the largest given T beyond it)")
     ap.add_argument("--measure-contention", nargs=2, metavar=("REC1", "RECT"),
                     help="print c(T) = block seconds per particle of a T-thread record / of a 1-thread record, and exit")
-    ap.add_argument("--output", default="run-mean", choices=["run-mean", "sampled"],
-                    help="the run loop's output, guards and snapshot per step: the run's mean (talus run records) "
-                         "or as sampled in the recorded steps")
+    ap.add_argument("--output", default="run-mean",
+                    help="the run loop's output, guards and snapshot per step: run-mean (the run's mean, talus run "
+                         "records) or sampled (as in the recorded steps: for a record of a run's first steps, whose "
+                         "start and end frames would weigh on the mean); one value, or one per record, comma-separated")
     ap.add_argument("--labels", default="", help="comma-separated labels for the records")
     ap.add_argument("--out", default="", help="write OUT.json and OUT.png")
     a = ap.parse_args()
@@ -307,14 +308,20 @@ def main():
         def bandwidth(particles, threads):
             return particles * a.bytes_per_update / (stream[threads] * 1e9) if threads in stream else 0.0
     results = []
-    for path, label in zip(a.records, labels):
+    outputs = a.output.split(",")
+    if len(outputs) == 1:
+        outputs = outputs * len(a.records)
+    for path, label, output in zip(a.records, labels, outputs):
+        if output not in ("run-mean", "sampled"):
+            sys.exit(f"--output: {output} is not run-mean or sampled")
         record = json.load(open(path))
-        if a.output == "run-mean":
+        if output == "run-mean":
             record = with_run_mean_output(record)
         barrier = Barrier(record["fork_join_seconds"], a.barrier_per_doubling)
         rows = model(record, counts, barrier, a.schedule, a.work, bandwidth, contention)
         info = summary(record)
         results.append({"label": label, "record": path, "source": record.get("source"), "threads_recorded": record["threads"],
+                        "output": output,
                         "contention": contention,
                         "block_cells": record.get("block_cells"), "schedule": a.schedule, "work": a.work,
                         "fork_join_seconds": record["fork_join_seconds"], **info, "prediction": rows})
