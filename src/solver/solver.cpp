@@ -297,10 +297,8 @@ void Solver::step() {
   // the outflow: a parallel count, then a serial rebuild and a sort (recorded as serial)
   if (crosses_open_face_) recorded(recording(), RegionSchedule::Serial, "outflow", 0, 0, [&] { remove_outflow(); });
   if ((step_ + 1) % kFieldCheckInterval == 0) {
-    int loops = 1;  // one parallel scan per particle array in use, and the volume test
-    if (recording())
-      particles_.for_each_double_array([&](const char*, const std::vector<double>& a) { loops += a.size() == particles_.size(); });
-    recorded(recording(), RegionSchedule::Static, "field check", particles_.size(), loops,
+    // one parallel region scans every particle array in use and the volume
+    recorded(recording(), RegionSchedule::Static, "field check", particles_.size(), 1,
              [&] { check_particle_fields(particles_, scene_, step_, time_); });
   }
   time_ += dt;
