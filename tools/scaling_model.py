@@ -24,6 +24,9 @@ The model, per region, for T threads (the record taken at T_rec threads, normall
            ceil(n/T) iterations (what `schedule(static)` does): W ceil(n/T)/n, plus k b(T) for its k
            parallel loops.
   serial:  its time.
+A dynamic region that runs inside a region opened before it (the colour passes after the first share
+one parallel region) adds a barrier B(T) instead: an empty `omp for` in an open region, measured alike
+(`barrier_seconds`; b(T) where a record lacks it).
 b(T) is the measured cost of an empty `omp parallel for schedule(dynamic, 1)` of T iterations
 (the record holds it for 1..nproc threads, `fork_join_seconds`); beyond the measured counts it is
 extrapolated as b(T) = b(Tm) + --barrier-per-doubling (default 1 us) * log2(T / Tm), an assumption
@@ -145,28 +148,31 @@ def contention_factor(contention, threads):
     return contention[below[-1]] if below else 1.0
 
 
-def predict_step(step, threads, barrier, t_rec, schedule, work, contention=1.0):
+def predict_step(step, threads, barrier, t_rec, schedule, work, contention=1.0, inner=None):
     """Terms of the predicted step time at `threads`: ideal, imbalance, sync, serial (seconds).
-    `contention` multiplies the parallel work (the per-core slowdown when `threads` cores work)."""
+    `contention` multiplies the parallel work (the per-core slowdown when `threads` cores work);
+    `inner` is the cost of a barrier inside an open region (the fused colour passes), b(T) if not given."""
+    inner = inner or barrier
     terms = {"ideal": 0.0, "imbalance": 0.0, "sync": 0.0, "serial": 0.0}
     listed = 0.0
     for r in step["regions"]:
         listed += r["seconds"]
         kind = r["schedule"]
         k = r.get("parallel_regions", 0)
+        m = r.get("barriers", 0)  # barriers inside a region opened by an earlier one (fused colour passes)
         if kind == "serial":
             terms["serial"] += r["seconds"]
         elif kind == "dynamic":
             items = region_items(r, work)
             critical_rec = greedy_makespan(r["block_seconds"], t_rec)
-            overhead = max(r["seconds"] - critical_rec - k * barrier(t_rec), 0.0)
+            overhead = max(r["seconds"] - critical_rec - k * barrier(t_rec) - m * inner(t_rec), 0.0)
             if schedule == "lpt":
                 items = sorted(items, reverse=True)
             span = (static_makespan(items, threads) if schedule == "static" else greedy_makespan(items, threads)) * contention
             total = sum(items) * contention
             terms["ideal"] += total / threads
             terms["imbalance"] += max(span - total / threads, 0.0)
-            terms["sync"] += k * barrier(threads)
+            terms["sync"] += k * barrier(threads) + m * inner(threads)
             terms["serial"] += overhead
         else:  # static
             n = max(int(r["items"]), 1)
@@ -179,18 +185,58 @@ def predict_step(step, threads, barrier, t_rec, schedule, work, contention=1.0):
     return terms
 
 
+def inner_barrier(record, per_doubling):
+    """The cost of a barrier inside an open parallel region, where the record measured it."""
+    return Barrier(record["barrier_seconds"], per_doubling) if record.get("barrier_seconds") else None
+
+
 def predict(record, threads, barrier, schedule, work, bandwidth=None, contention=None):
     t_rec = int(record["threads"])
+    inner = inner_barrier(record, barrier.per_doubling)
     total = {"ideal": 0.0, "imbalance": 0.0, "sync": 0.0, "serial": 0.0, "bandwidth": 0.0}
     c = contention_factor(contention, threads) / contention_factor(contention, t_rec)
     for step in record["steps"]:
-        terms = predict_step(step, threads, barrier, t_rec, schedule, work, c)
+        terms = predict_step(step, threads, barrier, t_rec, schedule, work, c, inner)
         compute = sum(terms.values())
         floor = bandwidth(step["particles"], threads) if bandwidth else 0.0
         for k, v in terms.items():
             total[k] += v
         total["bandwidth"] += max(floor - compute, 0.0)
     return total
+
+
+LOOP_REGIONS = ("output and guards", "snapshot")
+
+
+def with_run_mean_output(record):
+    """A `talus run` record with the run loop's work after each step (output, guards, snapshot) replaced by
+    its mean over the whole run. That work is spiky - a frame (30 ms for the default flume) every few
+    hundred steps, a snapshot every 10 - so the recorded sample of steps (every 37th) holds a frame or
+    none by chance: the flume's 176 recorded steps of 6504 held 3 frames where 0.3 were due, 475 us of
+    output per step against the run's 200. The run's totals are exact: run_other_seconds (the loop
+    outside the steps, start and finish included) and, of it, run_snapshot_seconds (the field checks
+    and copies of the snapshots, parallel, in run_snapshot_regions regions). Records without totals
+    come back unchanged."""
+    steps_total = record.get("run_steps", 0)
+    if not steps_total:
+        return record
+    other = record["run_other_seconds"]
+    snapshot = record.get("run_snapshot_seconds", 0.0)
+    regions_per_step = record.get("run_snapshot_regions", 0) / steps_total
+    out = dict(record)
+    out["steps"] = []
+    for step in record["steps"]:
+        kept = [r for r in step["regions"] if r["name"] not in LOOP_REGIONS]
+        removed = sum(r["seconds"] for r in step["regions"] if r["name"] in LOOP_REGIONS)
+        kept.append({"name": "output and guards (run mean)", "schedule": "serial", "parallel_regions": 0,
+                     "seconds": (other - snapshot) / steps_total})
+        added = (other - snapshot) / steps_total
+        if snapshot > 0.0:
+            kept.append({"name": "snapshot (run mean)", "schedule": "static", "items": step["particles"],
+                         "parallel_regions": regions_per_step, "seconds": snapshot / steps_total})
+            added += snapshot / steps_total
+        out["steps"].append(dict(step, regions=kept, seconds=step["seconds"] - removed + added))
+    return out
 
 
 def model(record, counts, barrier, schedule, work, bandwidth=None, contention=None):
@@ -241,6 +287,10 @@ def main():
                     help="per-core slowdown c(T) when T cores work, e.g. 2:1.16 (kept at the largest given T beyond it)")
     ap.add_argument("--measure-contention", nargs=2, metavar=("REC1", "RECT"),
                     help="print c(T) = block seconds per particle of a T-thread record / of a 1-thread record, and exit")
+    ap.add_argument("--output", default="run-mean",
+                    help="the run loop's output, guards and snapshot per step: run-mean (the run's mean, talus run "
+                         "records) or sampled (as in the recorded steps: for a record of a run's first steps, whose "
+                         "start and end frames would weigh on the mean); one value, or one per record, comma-separated")
     ap.add_argument("--labels", default="", help="comma-separated labels for the records")
     ap.add_argument("--out", default="", help="write OUT.json and OUT.png")
     a = ap.parse_args()
@@ -258,12 +308,20 @@ def main():
         def bandwidth(particles, threads):
             return particles * a.bytes_per_update / (stream[threads] * 1e9) if threads in stream else 0.0
     results = []
-    for path, label in zip(a.records, labels):
+    outputs = a.output.split(",")
+    if len(outputs) == 1:
+        outputs = outputs * len(a.records)
+    for path, label, output in zip(a.records, labels, outputs):
+        if output not in ("run-mean", "sampled"):
+            sys.exit(f"--output: {output} is not run-mean or sampled")
         record = json.load(open(path))
+        if output == "run-mean":
+            record = with_run_mean_output(record)
         barrier = Barrier(record["fork_join_seconds"], a.barrier_per_doubling)
         rows = model(record, counts, barrier, a.schedule, a.work, bandwidth, contention)
         info = summary(record)
         results.append({"label": label, "record": path, "source": record.get("source"), "threads_recorded": record["threads"],
+                        "output": output,
                         "contention": contention,
                         "block_cells": record.get("block_cells"), "schedule": a.schedule, "work": a.work,
                         "fork_join_seconds": record["fork_join_seconds"], **info, "prediction": rows})

@@ -11,8 +11,9 @@ Cases: block (talus bench, 1 M particles, linear elastic), shear (talus bench --
 simulated time, with its outputs). Threads are pinned (OMP_PROC_BIND=close, OMP_PLACES=cores unless
 set). The bench rates are those of the timed steps; the flume rate is the run's particle-updates per
 second of wall time, output included. The prediction for the flume is the run's wall time at 1 thread
-split by the record into the steps (scaled by the model's speed-up of the recorded steps) and the rest
-of the run loop (output, guards: kept serial).
+split by the record into the steps (scaled by the model's speed-up of the recorded steps, the run loop's
+work after them left out) and the rest of the run loop (output, guards: kept serial; the last-good-state
+snapshots, copied in parallel: divided by the thread count).
 """
 import argparse
 import json
@@ -64,8 +65,18 @@ def run(talus, scene, threads, out, record=None):
     return float(m.group(3)) * 1e6, float(m.group(2))
 
 
+def solver_steps_only(record):
+    """The recorded steps without the run loop's work after them (output, guards, snapshot)."""
+    steps = []
+    for step in record["steps"]:
+        loop = sum(r["seconds"] for r in step["regions"] if r["name"] in scaling_model.LOOP_REGIONS)
+        steps.append(dict(step, seconds=step["seconds"] - loop,
+                          regions=[r for r in step["regions"] if r["name"] not in scaling_model.LOOP_REGIONS]))
+    return dict(record, steps=steps)
+
+
 def predicted_speedup(record_path, threads, schedule="recorded"):
-    record = json.load(open(record_path))
+    record = solver_steps_only(json.load(open(record_path)))
     barrier = scaling_model.Barrier(record["fork_join_seconds"], 1e-6)
     one = sum(scaling_model.predict(record, 1, barrier, schedule, "robust").values())
     many = sum(scaling_model.predict(record, threads, barrier, schedule, "robust").values())
@@ -137,8 +148,9 @@ def main():
                 manys.append(run(a.talus, scene, a.threads, os.path.join(a.workdir, "flume_run"))[0])
             step_speedup, record = predicted_speedup(rec, a.threads)
             solver_s, other_s = record["run_solver_seconds"], record["run_other_seconds"]
+            snapshot_s = record.get("run_snapshot_seconds", 0.0)  # parallel copies: taken as ideal at T
             share = solver_s / (solver_s + other_s)  # the steps' share of the recorded run's loop
-            speedup = 1.0 / (share / step_speedup + (1.0 - share))
+            speedup = (solver_s + other_s) / (solver_s / step_speedup + (other_s - snapshot_s) + snapshot_s / a.threads)
             base = sum(ones) / len(ones)
             entry.update(command=f"talus run inputs/denlinger_flume.json with time.end = {a.flume_end}",
                          step_speedup=step_speedup, steps_share=share)

@@ -539,6 +539,7 @@ void record_work(Solver& solver, const BenchOptions& o, const nlohmann::json& be
   meta["cpu"] = cpu_model();
   meta["block_cells"] = solver.cell_sort().block_cells();
   meta["fork_join_seconds"] = fork_join;  // index = thread count (0 unused)
+  meta["barrier_seconds"] = WorkRecorder::measure_barrier(std::max(omp_get_max_threads(), omp_get_num_procs()));
   std::ofstream out(o.record_path);
   if (!out) throw io_error(fmt::format("cannot write {}", o.record_path));
   out << recorder.to_json(meta).dump() << "\n";

@@ -126,16 +126,39 @@ class LoopRecording {
   void step_done() {
     if (recorder_) step_end_ = Clock::now();
   }
+  /// Runs f(), a parallel part of the loop's work after a step: the field check before a snapshot
+  /// (one parallel scan per particle array) and the snapshot (parallel copies of the particles and
+  /// the sort state); returns what f returns. Timed apart from the serial rest (output, guards).
+  template <class F>
+  bool parallel_part(F&& f, int regions) {
+    if (!recorder_) return f();
+    const Clock::time_point start = Clock::now();
+    const bool done = f();
+    if (!done) return false;
+    const double s = seconds(start, Clock::now());
+    snapshot_step_seconds_ += s;
+    snapshot_step_regions_ += regions;
+    snapshot_seconds_ += s;
+    snapshot_regions_ += regions;
+    return true;
+  }
   /// The loop's work after the step (outputs, guards, snapshot) is done.
   void loop_done() {
     if (!recorder_) return;
     solver_seconds_ += seconds(step_start_, step_end_);
-    if (recorder_->steps().size() > recorded_before_)
-      recorder_->add_after_step("output and guards", seconds(step_end_, Clock::now()));
+    if (recorder_->steps().size() > recorded_before_) {
+      const double loop = seconds(step_end_, Clock::now());
+      if (snapshot_step_regions_ > 0)
+        recorder_->add_after_step("snapshot", snapshot_step_seconds_, solver_.particles().size(), snapshot_step_regions_);
+      recorder_->add_after_step("output and guards", loop - snapshot_step_seconds_);
+    }
+    snapshot_step_seconds_ = 0.0;
+    snapshot_step_regions_ = 0;
   }
   void finish(double wall_seconds) {
     if (recorder_)
-      recorder_->set_totals(solver_.step_count() - first_step_, solver_seconds_, wall_seconds - solver_seconds_);
+      recorder_->set_totals(solver_.step_count() - first_step_, solver_seconds_, wall_seconds - solver_seconds_,
+                            snapshot_seconds_, snapshot_regions_);
   }
 
  private:
@@ -146,8 +169,10 @@ class LoopRecording {
   WorkRecorder* recorder_;
   std::int64_t first_step_;
   std::size_t recorded_before_ = 0;
-  Clock::time_point step_start_, step_end_;
-  double solver_seconds_ = 0.0;
+  Clock::time_point step_start_, step_end_, snapshot_start_;
+  double solver_seconds_ = 0.0, snapshot_seconds_ = 0.0, snapshot_step_seconds_ = 0.0;
+  std::int64_t snapshot_regions_ = 0;
+  int snapshot_step_regions_ = 0;
 };
 
 /// The last state that passed every guard, kept in memory to be written when a later step fails.
@@ -192,7 +217,8 @@ class RunLoop {
     checkpoint_.write(solver_, progress_);
     ++summary_.checkpoints;
   }
-  void take_snapshot();
+  /// Keeps the current state as the last good one; false when the scene keeps none.
+  bool take_snapshot();
   [[noreturn]] void fail(const Error& e);
   void finish();
 
@@ -229,7 +255,8 @@ RunSummary RunLoop::run() {
       fail(e);
     }
     // The snapshot never predates a frame or checkpoint, so the failure path writes in order.
-    if (keep) take_snapshot();
+    // ParticleStore::copy_from and Solver::state: two parallel loops
+    if (keep) recording_.parallel_part([&] { return take_snapshot(); }, 2);
     recording_.loop_done();
     int sig = signals_.caught();
     if (comm_.distributed()) {  // every rank stops at the same step when any was signalled
@@ -300,7 +327,8 @@ bool RunLoop::step_and_write() {
                              solver_.step_count() - snapshot_.step >= scene_.guards.snapshot_interval);
   // What is written or kept as the last good state is checked in every field first (the solver
   // scans them only every few steps, stability_guards.hpp).
-  if (snapshot_due) solver_.check_particles();
+  // (Solver::check_particles: one parallel region)
+  if (snapshot_due) recording_.parallel_part([&] { solver_.check_particles(); return true; }, 1);
   if (frame_due) {
     write_frame();
     frame_schedule_.advance_past(t);
@@ -321,15 +349,16 @@ void RunLoop::write_history_row() {
   if (comm_.root()) energy_guard_.check(e, solver_.particles(), scene_, solver_.step_count(), solver_.time());
 }
 
-void RunLoop::take_snapshot() {
+bool RunLoop::take_snapshot() {
   // (a distributed run keeps none: an instability ends its job, see run())
-  if (scene_.guards.snapshot_interval <= 0 || comm_.distributed()) return;
-  snapshot_.particles = solver_.particles();
+  if (scene_.guards.snapshot_interval <= 0 || comm_.distributed()) return false;
+  snapshot_.particles.copy_from(solver_.particles());  // in parallel: a serial copy would be a serial part of the run
   snapshot_.state = solver_.state();
   snapshot_.progress = progress_;
   snapshot_.progress.energy_max_released = energy_guard_.max_released();
   snapshot_.valid = true;
   snapshot_.step = solver_.step_count();
+  return true;
 }
 
 // A step failed: go back to the last good state, write it as a frame (unless it is the last frame

@@ -4,7 +4,10 @@
 
 #include <fmt/core.h>
 
+#include <omp.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 namespace talus {
@@ -77,6 +80,7 @@ void CellSort::sort(ParticleStore& particles, Grid& grid) {
   particle_block_.resize(n);
   particle_cell_.resize(n);
   order_.resize(n);
+  by_block_.resize(n);
 
   // 1. Block and local cell of every particle (parallel: independent per particle).
   //    On a terrain grid the third coordinate is w = z - z_b(x), the map of the transfer kernels.
@@ -108,37 +112,116 @@ void CellSort::sort(ParticleStore& particles, Grid& grid) {
                                         particles.id[p], particles.x[0][p], particles.x[1][p], particles.x[2][p]));
   }
 
-  // 2. Active blocks in ascending bounding-box order; bbox_block_index_ then maps a block to its compact index.
+  // 2.-3. The stable counting sort by key = (compact block, local cell), in parallel and with the
+  //    order of a serial one (the results must not depend on the thread count):
+  //    2. active blocks in ascending bounding-box order (flag, then a compaction over the box);
+  //    3. a stable counting sort by block: each thread counts and places a contiguous slice of the
+  //       particles, the slices' offsets within a block follow the slice order;
+  //    4. within each block, a stable counting sort by local cell.
+  //    Ties keep the particles' current order at every stage, as the serial counting sort did.
+  const std::size_t box_blocks = bbox_block_index_.size();
   for (std::uint32_t b : blocks_) bbox_block_index_[b] = 0;  // clear only what the last sort set
-  blocks_.clear();
-  for (std::size_t p = 0; p < n; ++p) {
-    std::uint32_t& seen = bbox_block_index_[particle_block_[p]];
-    if (!seen) {
-      seen = 1;
-      blocks_.push_back(particle_block_[p]);
+  const int max_threads = omp_get_max_threads();
+  slice_blocks_.assign(static_cast<std::size_t>(max_threads) + 1, 0);
+#pragma omp parallel
+  {
+    const std::size_t threads = static_cast<std::size_t>(omp_get_num_threads());
+    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+#pragma omp for schedule(static)
+    for (std::size_t p = 0; p < n; ++p) std::atomic_ref<std::uint32_t>(bbox_block_index_[particle_block_[p]]).store(1, std::memory_order_relaxed);
+    // (the implicit barrier: every flag is set) each thread compacts a contiguous part of the box
+    const std::size_t box_begin = box_blocks * t / threads, box_end = box_blocks * (t + 1) / threads;
+    std::uint32_t found = 0;
+    for (std::size_t i = box_begin; i < box_end; ++i) found += bbox_block_index_[i] != 0;
+    slice_blocks_[t + 1] = found;
+#pragma omp barrier
+#pragma omp single
+    {
+      for (std::size_t u = 0; u < threads; ++u) slice_blocks_[u + 1] += slice_blocks_[u];
+      blocks_.resize(slice_blocks_[threads]);
+    }
+    std::uint32_t next = slice_blocks_[t];
+    for (std::size_t i = box_begin; i < box_end; ++i)
+      if (bbox_block_index_[i]) {
+        blocks_[next] = static_cast<std::uint32_t>(i);
+        bbox_block_index_[i] = next++;
+      }
+  }
+  const std::size_t blocks = blocks_.size();
+  const std::size_t keys = blocks * cells_per_block;
+  cell_start_.resize(keys + 1);
+  block_start_.resize(blocks + 1);
+  int threads_used = 1;
+#pragma omp parallel
+  {
+#pragma omp single
+    {
+      threads_used = omp_get_num_threads();
+      slice_counts_.assign(static_cast<std::size_t>(threads_used) * blocks, 0);
+    }
+    const std::size_t threads = static_cast<std::size_t>(threads_used);
+    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+    const std::size_t begin = n * t / threads, end = n * (t + 1) / threads;
+    std::uint32_t* counts = slice_counts_.data() + t * blocks;
+    for (std::size_t p = begin; p < end; ++p) {
+      const std::uint32_t b = bbox_block_index_[particle_block_[p]];
+      particle_block_[p] = b;  // now the compact block
+      ++counts[b];
+    }
+#pragma omp barrier
+    // Each block's size, then (one thread) the blocks' offsets, then each slice's offset in each block.
+#pragma omp for schedule(static)
+    for (std::size_t b = 0; b < blocks; ++b) {
+      std::uint32_t total = 0;
+      for (std::size_t u = 0; u < threads; ++u) total += slice_counts_[u * blocks + b];
+      block_start_[b + 1] = total;
+    }
+#pragma omp single
+    {
+      block_start_[0] = 0;
+      for (std::size_t b = 0; b < blocks; ++b) block_start_[b + 1] += block_start_[b];
+    }
+#pragma omp for schedule(static)
+    for (std::size_t b = 0; b < blocks; ++b) {
+      std::uint32_t offset = block_start_[b];
+      for (std::size_t u = 0; u < threads; ++u) {
+        const std::uint32_t c = slice_counts_[u * blocks + b];
+        slice_counts_[u * blocks + b] = offset;
+        offset += c;
+      }
+    }
+    // (the implicit barrier: every slice's offsets are known) place the slice, block by block
+    for (std::size_t p = begin; p < end; ++p) by_block_[counts[particle_block_[p]]++] = static_cast<std::uint32_t>(p);
+#pragma omp barrier
+    // 4. Within each block, by local cell (stable).
+    std::vector<std::uint32_t> cell_count(static_cast<std::size_t>(cells_per_block) + 1);
+#pragma omp for schedule(dynamic, 1)
+    for (std::size_t b = 0; b < blocks; ++b) {
+      std::fill(cell_count.begin(), cell_count.end(), 0);
+      const std::uint32_t first = block_start_[b], last = block_start_[b + 1];
+      for (std::uint32_t i = first; i < last; ++i) ++cell_count[particle_cell_[by_block_[i]] + 1];
+      std::uint32_t* starts = cell_start_.data() + b * cells_per_block;
+      std::uint32_t offset = first;
+      for (int l = 0; l < cells_per_block; ++l) {
+        starts[l] = offset;
+        offset += cell_count[l + 1];
+        cell_count[l + 1] = starts[l];  // now the running insert position of cell l
+      }
+      for (std::uint32_t i = first; i < last; ++i) {
+        const std::uint32_t p = by_block_[i];
+        order_[cell_count[particle_cell_[p] + 1]++] = p;
+      }
     }
   }
-  std::sort(blocks_.begin(), blocks_.end());
-  for (std::size_t b = 0; b < blocks_.size(); ++b) bbox_block_index_[blocks_[b]] = static_cast<std::uint32_t>(b);
-
-  // 3. Counting sort by key = compact block * cells_per_block + local cell (stable).
-  const std::size_t keys = blocks_.size() * cells_per_block;
-  cell_start_.assign(keys + 1, 0);
-  for (std::size_t p = 0; p < n; ++p) {
-    const std::size_t key = static_cast<std::size_t>(bbox_block_index_[particle_block_[p]]) * cells_per_block + particle_cell_[p];
-    particle_cell_[p] = static_cast<std::uint32_t>(key);
-    ++cell_start_[key + 1];
-  }
-  for (std::size_t k = 0; k < keys; ++k) cell_start_[k + 1] += cell_start_[k];
-  {
-    std::vector<std::uint32_t>& next = particle_block_;  // reuse as the running insert position
-    next.assign(cell_start_.begin(), cell_start_.end() - 1);
-    for (std::size_t p = 0; p < n; ++p) order_[next[particle_cell_[p]]++] = static_cast<std::uint32_t>(p);
-  }
+  cell_start_[keys] = static_cast<std::uint32_t>(n);
   particles.permute(order_);
+  // The parallel regions of this sort (work recorder): the cell of each particle, the two above, one per permuted array.
+  parallel_regions_ = 3;
+  particles.for_each_integer_array([&](const char*, const auto& a) { parallel_regions_ += !a.empty(); });
+  particles.for_each_double_array([&](const char*, const std::vector<double>& a) { parallel_regions_ += !a.empty(); });
 
-  block_start_.resize(blocks_.size() + 1);
-  for (std::size_t b = 0; b <= blocks_.size(); ++b) block_start_[b] = cell_start_[b * cells_per_block];
+  // What follows is serial bookkeeping over the blocks (timed for the work recorder).
+  const double serial_start = omp_get_wtime();
 
   for (auto& c : colour_blocks_) c.clear();
   for (std::size_t b = 0; b < blocks_.size(); ++b) {
@@ -149,6 +232,7 @@ void CellSort::sort(ParticleStore& particles, Grid& grid) {
   }
   order_blocks();
   activate_tiles(grid);
+  serial_seconds_ = omp_get_wtime() - serial_start;
 }
 
 void CellSort::set_block_order(BlockOrder order) {

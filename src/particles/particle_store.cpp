@@ -2,6 +2,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace talus {
@@ -83,6 +84,46 @@ void ParticleStore::permute(const std::vector<std::uint32_t>& order) {
   permute_field(id, order, id_scratch_);
   permute_field(body, order, body_scratch_);
   for_each_double_array([&](const char*, std::vector<double>& f) { permute_field(f, order, scratch_); });
+}
+
+namespace {
+
+template <class T>
+void resize_for_copy(std::vector<T>& to, const std::vector<T>& from) {
+  if (to.size() != from.size()) to.resize(from.size());
+}
+
+// Copies from[begin, end) into to (sized already).
+template <class T>
+void copy_slice(std::vector<T>& to, const std::vector<T>& from, std::size_t begin, std::size_t end) {
+  const std::size_t e = std::min(end, from.size());
+  if (begin < e) std::copy(from.begin() + begin, from.begin() + e, to.begin() + begin);
+}
+
+}  // namespace
+
+void ParticleStore::copy_from(const ParticleStore& other) {
+  plastic_enabled_ = other.plastic_enabled_;
+  back_stress_enabled_ = other.back_stress_enabled_;
+  domain_enabled_ = other.domain_enabled_;
+  resize_for_copy(id, other.id);
+  resize_for_copy(body, other.body);
+  // (the double arrays of both stores are visited in the same order)
+  std::vector<std::vector<double>*> to;
+  std::vector<const std::vector<double>*> from;
+  for_each_double_array([&](const char*, std::vector<double>& a) { to.push_back(&a); });
+  other.for_each_double_array([&](const char*, const std::vector<double>& a) { from.push_back(&a); });
+  for (std::size_t a = 0; a < to.size(); ++a) resize_for_copy(*to[a], *from[a]);
+  const std::size_t n = other.size();
+#pragma omp parallel
+  {
+    const std::size_t threads = static_cast<std::size_t>(omp_get_num_threads());
+    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+    const std::size_t begin = n * t / threads, end = n * (t + 1) / threads;
+    copy_slice(id, other.id, begin, end);
+    copy_slice(body, other.body, begin, end);
+    for (std::size_t a = 0; a < to.size(); ++a) copy_slice(*to[a], *from[a], begin, end);
+  }
 }
 
 std::size_t ParticleStore::bytes() const {

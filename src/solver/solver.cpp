@@ -291,10 +291,8 @@ void Solver::step() {
   // the outflow: a parallel count, then a serial rebuild and a sort (recorded as serial)
   if (crosses_open_face_) recorded(recording(), RegionSchedule::Serial, "outflow", 0, 0, [&] { remove_outflow(); });
   if ((step_ + 1) % kFieldCheckInterval == 0) {
-    int loops = 1;  // one parallel scan per particle array in use, and the volume test
-    if (recording())
-      particles_.for_each_double_array([&](const char*, const std::vector<double>& a) { loops += a.size() == particles_.size(); });
-    recorded(recording(), RegionSchedule::Static, "field check", particles_.size(), loops,
+    // one parallel region scans every particle array in use and the volume
+    recorded(recording(), RegionSchedule::Static, "field check", particles_.size(), 1,
              [&] { check_particle_fields(particles_, scene_, step_, time_); });
   }
   time_ += dt;
@@ -323,14 +321,21 @@ void Solver::step_with(double dt) {
   // 1. sort: when a particle has drifted beyond its block's slack, and every sort_interval steps
   //    to keep the memory order close to the cell order. With MLS smoothing, every step: the
   //    neighbour search reads the cell offsets, which must be those of the current positions.
-  // (recorded as serial: only its first loop, the cell of each particle, is parallel)
+  // (recorded as its parallel loops, a static region, and its serial bookkeeping over the blocks)
   const bool sort_now =
       comm_.distributed() ? collective_sort_ : smoother_ || needs_sort_ || steps_since_sort_ >= scene_.sort_interval;
-  if (sort_now)
-    recorded(recording(), RegionSchedule::Serial, "sort", 0, 0, [&] {
-      if (comm_.distributed()) redistribute();
+  if (sort_now) {
+    if (comm_.distributed()) recorded(recording(), RegionSchedule::Serial, "redistribute", 0, 0, [&] { redistribute(); });
+    if (WorkRecorder* const r = recording()) {
+      const double start = omp_get_wtime();
       sort_particles();
-    });
+      const double seconds = omp_get_wtime() - start, serial = std::min(sort_.last_serial_seconds(), seconds);
+      r->add_static("sort", particles_.size(), sort_.last_parallel_regions(), seconds - serial);
+      r->add_serial("sort bookkeeping", serial);
+    } else {
+      sort_particles();
+    }
+  }
   if (comm_.distributed() && (sort_now || setup_exchange_)) {
     exchange_.setup(comm_, grid_);
     tiles_changed_ = false;
@@ -627,11 +632,14 @@ SolverState Solver::state() const {
   s.periodic_gravity_shift = periodic_gravity_shift_;
   // The cell each particle was sorted into, read back from the sort's block and cell offsets.
   const std::size_t n = particles_.size();
-  for (auto& c : s.sort_cell) c.assign(n, 0);
+  for (auto& c : s.sort_cell) c.resize(n);  // every particle lies in one cell: every entry is written below
   const int bc = sort_.block_cells();
   const std::size_t cells_per_block = static_cast<std::size_t>(bc) * bc * bc;
   const auto& cell_start = sort_.cell_start();
-  for (std::size_t b = 0; b < sort_.block_count(); ++b) {
+  const std::size_t blocks = sort_.block_count();
+  // (each block writes its own particles: parallel, as the run loop's snapshot takes it every few steps)
+#pragma omp parallel for schedule(static)
+  for (std::size_t b = 0; b < blocks; ++b) {
     const auto o = sort_.block_origin(b);
     for (std::size_t l = 0; l < cells_per_block; ++l) {
       const int li = static_cast<int>(l / (bc * bc)), lj = static_cast<int>((l / bc) % bc), lk = static_cast<int>(l % bc);

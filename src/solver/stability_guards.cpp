@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 namespace talus {
 
@@ -25,24 +26,42 @@ std::string where(const ParticleStore& P, std::size_t p) {
 
 void check_particle_fields(const ParticleStore& P, const Scene& scene, std::int64_t step, double time) {
   const std::size_t n = P.size();
-  // Finite values: one fused pass per array (x * 0 is NaN exactly when x is NaN or Inf); the slow
-  // search for the first bad particle runs only when a pass fails.
+  // Finite values: x * 0 is NaN exactly when x is NaN or Inf; the slow search for the first bad
+  // particle runs only when a scan fails. One parallel region scans every array in use and the volume
+  // (a region per array was a fork/join each, a serial part at many cores); the diagnosis is the same:
+  // the first bad array in visit order, its first bad particle, then the volume.
+  std::vector<const std::vector<double>*> arrays;
+  std::vector<const char*> names;
   P.for_each_double_array([&](const char* name, const std::vector<double>& a) {
     if (a.size() != n) return;  // arrays the scene does not use are empty
-    double probe = 0.0;
-    const double* data = a.data();
-#pragma omp parallel for schedule(static) reduction(+ : probe)
-    for (std::size_t p = 0; p < n; ++p) probe += data[p] * 0.0;
-    if (probe == 0.0) return;
+    arrays.push_back(&a);
+    names.push_back(name);
+  });
+  std::vector<unsigned char> bad(arrays.size(), 0);
+  int inverted = 0;
+#pragma omp parallel reduction(| : inverted)
+  {
+    for (std::size_t a = 0; a < arrays.size(); ++a) {
+      const double* data = arrays[a]->data();
+      double probe = 0.0;
+#pragma omp for schedule(static) nowait
+      for (std::size_t p = 0; p < n; ++p) probe += data[p] * 0.0;
+      if (!(probe == 0.0)) {
+#pragma omp atomic write
+        bad[a] = 1;
+      }
+    }
+#pragma omp for schedule(static) nowait
+    for (std::size_t p = 0; p < n; ++p) inverted |= P.volume[p] > 0.0 ? 0 : 1;
+  }
+  for (std::size_t a = 0; a < arrays.size(); ++a) {
+    if (!bad[a]) continue;
+    const double* data = arrays[a]->data();
     for (std::size_t p = 0; p < n; ++p)
       if (!std::isfinite(data[p]))
         throw instability_error(fmt::format("step {}, t = {:.6g} s: {} field {} = {} is not finite; {}", step, time,
-                                            particle_label(P, scene, p), name, data[p], where(P, p)));
-  });
-  // Positive volume (an inverted or collapsed particle).
-  int inverted = 0;
-#pragma omp parallel for schedule(static) reduction(| : inverted)
-  for (std::size_t p = 0; p < n; ++p) inverted |= P.volume[p] > 0.0 ? 0 : 1;
+                                            particle_label(P, scene, p), names[a], data[p], where(P, p)));
+  }
   if (!inverted) return;
   for (std::size_t p = 0; p < n; ++p)
     if (!(P.volume[p] > 0.0))

@@ -49,7 +49,9 @@ void WorkRecorder::add_colour_passes(const char* name, const ColourPassTiming& t
     WorkRegion r;
     r.name = single_pass ? std::string(name) : std::string(name) + " colour " + std::to_string(c);
     r.schedule = RegionSchedule::Dynamic;
-    r.parallel_regions = 1;
+    // the colours share one parallel region: a fork/join for the first, a barrier after each other
+    r.parallel_regions = c == 0 ? 1 : 0;
+    r.barriers = c == 0 ? 0 : 1;
     r.seconds = timing.wall[c];
     r.block_seconds = timing.block_seconds[c];
     const std::size_t count = r.block_seconds.size();
@@ -79,19 +81,27 @@ void WorkRecorder::add_block_loop(const char* name, const std::vector<double>& b
   steps_.back().regions.push_back(std::move(r));
 }
 
-void WorkRecorder::add_after_step(const char* name, double seconds) {
+void WorkRecorder::add_after_step(const char* name, double seconds, std::size_t items, int parallel_regions) {
   if (steps_.empty()) return;
   WorkRegion r;
   r.name = name;
   r.seconds = seconds;
+  if (items > 0) {
+    r.schedule = RegionSchedule::Static;
+    r.items = items;
+    r.parallel_regions = parallel_regions;
+  }
   steps_.back().regions.push_back(std::move(r));
   steps_.back().seconds += seconds;
 }
 
-void WorkRecorder::set_totals(std::int64_t steps, double solver_seconds, double other_seconds) {
+void WorkRecorder::set_totals(std::int64_t steps, double solver_seconds, double other_seconds, double snapshot_seconds,
+                              std::int64_t snapshot_regions) {
   total_steps_ = steps;
   solver_seconds_ = solver_seconds;
   other_seconds_ = other_seconds;
+  snapshot_seconds_ = snapshot_seconds;
+  snapshot_regions_ = snapshot_regions;
 }
 
 std::vector<double> WorkRecorder::measure_fork_join(int max_threads) {
@@ -109,6 +119,34 @@ std::vector<double> WorkRecorder::measure_fork_join(int max_threads) {
         for (int i = 0; i < t; ++i) sink = sink + i;  // as the colour passes: dynamic, one item per thread
       }
       best = std::min(best, (omp_get_wtime() - start) / kRegions);
+    }
+    cost[t] = best;
+  }
+  omp_set_num_threads(saved);
+  return cost;
+}
+
+std::vector<double> WorkRecorder::measure_barrier(int max_threads) {
+  const int saved = omp_get_max_threads();
+  std::vector<double> cost(static_cast<std::size_t>(max_threads) + 1, 0.0);
+  volatile int sink = 0;
+  for (int t = 1; t <= max_threads; ++t) {
+    omp_set_num_threads(t);
+    double best = 1e300;
+    for (int trial = 0; trial < 5; ++trial) {
+      constexpr int kLoops = 2000;
+      double seconds = 0.0;
+#pragma omp parallel
+      {
+        const double start = omp_get_wtime();
+        for (int r = 0; r < kLoops; ++r) {
+#pragma omp for schedule(dynamic, 1)
+          for (int i = 0; i < t; ++i) sink = sink + i;  // as the fused colour passes: one loop per colour
+        }
+#pragma omp master
+        seconds = omp_get_wtime() - start;
+      }
+      best = std::min(best, seconds / kLoops);
     }
     cost[t] = best;
   }
@@ -138,6 +176,7 @@ nlohmann::json WorkRecorder::to_json(const nlohmann::json& meta) const {
       }
       if (r.schedule == RegionSchedule::Static) jr["items"] = r.items;
       jr["parallel_regions"] = r.parallel_regions;
+      if (r.barriers > 0) jr["barriers"] = r.barriers;
       jr["seconds"] = r.seconds;
       regions.push_back(std::move(jr));
     }
@@ -148,7 +187,9 @@ nlohmann::json WorkRecorder::to_json(const nlohmann::json& meta) const {
   if (total_steps_ > 0) {
     j["run_steps"] = total_steps_;
     j["run_solver_seconds"] = solver_seconds_;
-    j["run_other_seconds"] = other_seconds_;
+    j["run_other_seconds"] = other_seconds_;  // includes the snapshots
+    j["run_snapshot_seconds"] = snapshot_seconds_;  // field checks and copies of the snapshots (parallel)
+    j["run_snapshot_regions"] = snapshot_regions_;
   }
   return j;
 }

@@ -72,12 +72,16 @@ void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid, Co
   double* mom[3] = {grid.momentum[0].data(), grid.momentum[1].data(), grid.momentum[2].data()};
   double* force[3] = {grid.force[0].data(), grid.force[1].data(), grid.force[2].data()};
 
+  if (timing)
+    for (int colour = 0; colour < 8; ++colour) timing->block_seconds[colour].assign(sort.colour(colour).size(), 0.0);
+  double pass_start = timing ? omp_get_wtime() : 0.0;
+  // One parallel region for the 8 colours: a colour's blocks may share nodes with the next colour's,
+  // so each colour ends at the implicit barrier of its loop; a barrier costs less than a fork/join.
+#pragma omp parallel
   for (int colour = 0; colour < 8; ++colour) {
     const auto& blocks = sort.colour(colour);
     const std::size_t count = blocks.size();
-    const double pass_start = timing ? omp_get_wtime() : 0.0;
-    if (timing) timing->block_seconds[colour].assign(count, 0.0);
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp for schedule(dynamic, 1)
     for (std::size_t bi = 0; bi < count; ++bi) {
       const std::size_t b = blocks[bi];
       const double block_start = timing ? omp_get_wtime() : 0.0;
@@ -131,7 +135,14 @@ void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid, Co
       }
       if (timing) timing->block_seconds[colour][bi] = omp_get_wtime() - block_start;
     }
-    if (timing) timing->wall[colour] = omp_get_wtime() - pass_start;
+    if (timing) {
+#pragma omp master
+      {
+        const double now = omp_get_wtime();
+        timing->wall[colour] = now - pass_start;
+        pass_start = now;
+      }
+    }
   }
 }
 
@@ -154,10 +165,12 @@ namespace {
 // particle's new momentum m_p v_p is scattered into grid.momentum with the same stencil right
 // after its gather (the MUSL remap, Edo & Matsubara 2015, eq. 52): that is race-free only when the blocks are
 // one colour's, and it saves the remap's own pass over the particles and its weight evaluation.
+// Called by every thread of a parallel region (an orphaned `omp for`); each thread's flags are its own
+// (merged by gather_impl: OR and max, the same for any thread count).
 template <class Shape, class Terrain, bool remap, class BlockList>
 void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::array<std::vector<double>, 3>& displacement,
                    std::vector<double>& block_damping, const GatherOptions& options, std::size_t count,
-                   BlockList block_list, GatherResult& result, std::vector<double>* block_seconds) {
+                   BlockList block_list, GatherResult& flags, std::vector<double>* block_seconds) {
   const double dt = options.dt, pic_fraction = options.pic_fraction;
   const double max_d2 = options.max_displacement * options.max_displacement;
   const Terrain& terrain = grid.template terrain<Terrain>();
@@ -166,10 +179,9 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::arra
   const NodeVectors dv = grid.velocity_change(), vl = grid.lagrangian_velocity();
   double* mom[3] = {grid.momentum[0].data(), grid.momentum[1].data(), grid.momentum[2].data()};
   double* disp[3] = {displacement[0].data(), displacement[1].data(), displacement[2].data()};
-  bool needs_sort = result.needs_sort, large = result.large_displacement, crossing = result.crosses_open_face;
-  long long nonfinite = result.nonfinite, outside = result.outside;
-#pragma omp parallel for schedule(dynamic, 1) reduction(|| : needs_sort, large, crossing) \
-    reduction(max : nonfinite, outside)
+  bool needs_sort = flags.needs_sort, large = flags.large_displacement, crossing = flags.crosses_open_face;
+  long long nonfinite = flags.nonfinite, outside = flags.outside;
+#pragma omp for schedule(dynamic, 1)
   for (std::size_t bi = 0; bi < count; ++bi) {
     const std::size_t b = block_list(bi);
     const double block_start = block_seconds ? omp_get_wtime() : 0.0;
@@ -258,7 +270,7 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::arra
     if (pic_fraction > 0.0) block_damping[b] = damped;
     if (block_seconds) (*block_seconds)[bi] = omp_get_wtime() - block_start;
   }
-  result = {needs_sort, nonfinite, outside, large, crossing};
+  flags = {needs_sort, nonfinite, outside, large, crossing};
 }
 
 }  // namespace
@@ -268,27 +280,53 @@ GatherResult gather_impl(ParticleStore& P, const CellSort& sort, Grid& grid,
                          std::array<std::vector<double>, 3>& displacement, std::vector<double>& block_damping,
                          const GatherOptions& options, ColourPassTiming* timing) {
   GatherResult result;
-  if (!options.remap) {
-    // one pass over all blocks; a timing record lists it as colour 0
-    const double pass_start = timing ? omp_get_wtime() : 0.0;
-    if (timing) timing->block_seconds[0].assign(sort.block_count(), 0.0);
-    const std::vector<std::uint32_t>& order = sort.blocks_in_work_order();  // pure gather: any order
-    gather_blocks<Shape, Terrain, false>(P, sort, grid, displacement, block_damping, options, sort.block_count(),
-                                         [&order](std::size_t bi) { return static_cast<std::size_t>(order[bi]); }, result,
-                                         timing ? &timing->block_seconds[0] : nullptr);
-    if (timing) timing->wall[0] = omp_get_wtime() - pass_start;
-    return result;
+  if (timing) {
+    if (!options.remap)
+      timing->block_seconds[0].assign(sort.block_count(), 0.0);
+    else
+      for (int colour = 0; colour < 8; ++colour) timing->block_seconds[colour].assign(sort.colour(colour).size(), 0.0);
   }
-  // The remap scatters, so the blocks go colour by colour as in scatter_to_grid: each node sums
-  // its particles in the same order for any thread count.
-  for (int colour = 0; colour < 8; ++colour) {
-    const auto& blocks = sort.colour(colour);
-    const double pass_start = timing ? omp_get_wtime() : 0.0;
-    if (timing) timing->block_seconds[colour].assign(blocks.size(), 0.0);
-    gather_blocks<Shape, Terrain, true>(P, sort, grid, displacement, block_damping, options, blocks.size(),
-                                        [&blocks](std::size_t bi) { return static_cast<std::size_t>(blocks[bi]); },
-                                        result, timing ? &timing->block_seconds[colour] : nullptr);
-    if (timing) timing->wall[colour] = omp_get_wtime() - pass_start;
+  double pass_start = timing ? omp_get_wtime() : 0.0;
+#pragma omp parallel
+  {
+    GatherResult mine;
+    if (!options.remap) {
+      // one pass over all blocks; a timing record lists it as colour 0
+      const std::vector<std::uint32_t>& order = sort.blocks_in_work_order();  // pure gather: any order
+      gather_blocks<Shape, Terrain, false>(P, sort, grid, displacement, block_damping, options, sort.block_count(),
+                                           [&order](std::size_t bi) { return static_cast<std::size_t>(order[bi]); }, mine,
+                                           timing ? &timing->block_seconds[0] : nullptr);
+      if (timing) {
+#pragma omp master
+        timing->wall[0] = omp_get_wtime() - pass_start;
+      }
+    } else {
+      // The remap scatters, so the blocks go colour by colour as in scatter_to_grid (one parallel
+      // region, a barrier after each colour): each node sums its particles in the same order for any
+      // thread count.
+      for (int colour = 0; colour < 8; ++colour) {
+        const auto& blocks = sort.colour(colour);
+        gather_blocks<Shape, Terrain, true>(P, sort, grid, displacement, block_damping, options, blocks.size(),
+                                            [&blocks](std::size_t bi) { return static_cast<std::size_t>(blocks[bi]); },
+                                            mine, timing ? &timing->block_seconds[colour] : nullptr);
+        if (timing) {
+#pragma omp master
+          {
+            const double now = omp_get_wtime();
+            timing->wall[colour] = now - pass_start;
+            pass_start = now;
+          }
+        }
+      }
+    }
+#pragma omp critical(talus_gather_flags)
+    {
+      result.needs_sort = result.needs_sort || mine.needs_sort;
+      result.large_displacement = result.large_displacement || mine.large_displacement;
+      result.crosses_open_face = result.crosses_open_face || mine.crosses_open_face;
+      result.nonfinite = std::max(result.nonfinite, mine.nonfinite);
+      result.outside = std::max(result.outside, mine.outside);
+    }
   }
   return result;
 }

@@ -247,6 +247,7 @@ TEST(Cli, BenchAndRunRecordTheWorkDistribution) {
   EXPECT_EQ(rb["format"], "talus-work-record/1");
   ASSERT_EQ(rb["steps"].size(), 2u);
   EXPECT_GE(rb["fork_join_seconds"].size(), 2u);
+  EXPECT_EQ(rb["barrier_seconds"].size(), rb["fork_join_seconds"].size());
   for (const auto& step : rb["steps"]) {
     std::size_t p2g_particles = 0, stress_particles = 0, passes = 0;
     double listed = 0.0;
@@ -259,6 +260,9 @@ TEST(Cli, BenchAndRunRecordTheWorkDistribution) {
       const std::string name = region["name"];
       if (name.rfind("p2g colour", 0) == 0) {
         p2g_particles += sum;
+        // the 8 colours share one parallel region: a fork/join for the first, a barrier for the others
+        EXPECT_EQ(region["parallel_regions"], passes == 0 ? 1 : 0) << name;
+        EXPECT_EQ(region.value("barriers", 0), passes == 0 ? 0 : 1) << name;
         ++passes;
       }
       if (name == "stress") stress_particles = sum;

@@ -3,6 +3,10 @@
 #include "talus/particles/cell_sort.hpp"
 
 #include <gtest/gtest.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <numeric>
 
 #include <cmath>
 #include <random>
@@ -83,6 +87,79 @@ TEST(CellSort, BlocksOfOneColourAreNeverNeighbours) {
   EXPECT_EQ(all.size(), s.sort.block_count());
   // The colouring's condition (cell_sort.hpp): 2 slack + reach <= block_cells.
   EXPECT_LE(2 * s.sort.slack() + 1, bc);
+}
+
+// The sort runs in parallel (per-thread slices by block, then per block by cell); its order must be
+// that of one stable counting sort by (block, cell) for any thread count, or the results would
+// depend on the thread count. Reference: std::stable_sort of the unsorted particles by that key.
+TEST(CellSort, TheOrderIsTheStableKeyOrderForAnyThreadCount) {
+  GridGeometry g;
+  g.h = 0.1;
+  g.cells = {20, 12, 9};
+  const Grid unsorted_grid(g);
+  ParticleStore cloud;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  // clustered in a corner and spread thin elsewhere: blocks of very different sizes, empty blocks
+  for (int p = 0; p < 5000; ++p) {
+    const double s = p % 3 ? 0.3 : 1.0;
+    cloud.add(p, Vec3(2.0 * s * u(rng), 1.2 * s * u(rng), 0.9 * u(rng)), Vec3::Zero(), 1.0 + p, 1e-3, 0);
+  }
+  const int bc = CellSort::block_edge(0, 1, 0);
+  auto key = [&](std::size_t p) {
+    std::array<int, 6> k{};
+    for (int d = 0; d < 3; ++d) {
+      const int c = static_cast<int>(std::floor(g.to_grid(d, cloud.x[d][p])));
+      k[d] = c / bc;
+      k[3 + d] = c % bc;
+    }
+    return k;
+  };
+  std::vector<std::size_t> expected(cloud.size());
+  std::iota(expected.begin(), expected.end(), 0);
+  std::stable_sort(expected.begin(), expected.end(), [&](std::size_t a, std::size_t b) { return key(a) < key(b); });
+  const int before = omp_get_max_threads();
+  for (int threads : {1, 2, 3, 5}) {
+    omp_set_num_threads(threads);
+    Grid grid(g);
+    ParticleStore particles = cloud;
+    CellSort sort(grid, 0, 1);
+    sort.sort(particles, grid);
+    for (std::size_t p = 0; p < particles.size(); ++p) {
+      ASSERT_EQ(particles.id[p], cloud.id[expected[p]]) << threads << " threads, position " << p;
+      ASSERT_EQ(particles.mass[p], cloud.mass[expected[p]]);
+    }
+    // a second sort of the sorted store keeps its order (stable), also after the blocks changed
+    const std::vector<std::int64_t> ids = particles.id;
+    sort.sort(particles, grid);
+    EXPECT_EQ(particles.id, ids) << threads << " threads";
+    EXPECT_EQ(sort.block_begin(0), 0u);
+    EXPECT_EQ(sort.block_end(sort.block_count() - 1), particles.size());
+  }
+  omp_set_num_threads(before);
+}
+
+// ParticleStore::copy_from (the run loop's snapshot, copied in parallel) equals a plain copy.
+TEST(ParticleStore, ParallelCopyEqualsACopy) {
+  ParticleStore a;
+  for (int p = 0; p < 1001; ++p) a.add(p, Vec3(p, -p, 0.5 * p), Vec3(1.0, 2.0, p), 2.0 + p, 1e-3 * p, p % 3);
+  a.enable_plastic_state(true);
+  for (int p = 0; p < 1001; ++p) a.back_stress[4][p] = 3.0 * p;
+  ParticleStore b;
+  b.add(7, Vec3(1, 1, 1), Vec3(0, 0, 0), 1.0, 1.0, 0);  // a smaller store is resized
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(3);
+  b.copy_from(a);
+  omp_set_num_threads(before);
+  EXPECT_EQ(b.size(), a.size());
+  EXPECT_EQ(b.id, a.id);
+  EXPECT_EQ(b.body, a.body);
+  EXPECT_EQ(b.has_plastic_state(), a.has_plastic_state());
+  EXPECT_EQ(b.has_back_stress(), a.has_back_stress());
+  std::vector<const std::vector<double>*> from;
+  a.for_each_double_array([&](const char*, const std::vector<double>& f) { from.push_back(&f); });
+  std::size_t i = 0;
+  b.for_each_double_array([&](const char* name, const std::vector<double>& f) { EXPECT_EQ(f, *from[i++]) << name; });
 }
 
 }  // namespace

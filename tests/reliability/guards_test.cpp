@@ -49,6 +49,30 @@ TEST(Guards, NonFiniteParticleFieldIsDiagnosedWithItsName) {
   EXPECT_NE(m.find("particle " + std::to_string(id) + " "), std::string::npos) << m;
 }
 
+// The field check scans every array and the volume in one parallel region; its diagnosis stays that
+// of a scan array by array: the first bad array in visit order, then the volume.
+TEST(Guards, FieldCheckNamesTheFirstBadArrayThenTheVolume) {
+  const Scene scene = test::tumbling_block_scene();
+  Solver solver(scene);
+  solver.step();
+  ParticleStore P = solver.particles();
+  P.volume[5] = -1e-9;
+  auto message = [&] {
+    try {
+      check_particle_fields(P, scene, 3, 0.5);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  expect_diagnosis(message(), "field volume");
+  EXPECT_NE(message().find("not positive"), std::string::npos) << message();
+  P.stress[4][9] = std::numeric_limits<double>::quiet_NaN();
+  P.v[1][11] = -std::numeric_limits<double>::infinity();  // v comes before stress in visit order
+  expect_diagnosis(message(), "field v1 = -inf");
+  EXPECT_NE(message().find("particle " + std::to_string(P.id[11]) + " "), std::string::npos) << message();
+}
+
 TEST(Guards, CflBreachIsDiagnosed) {
   // Much faster than the wave speed with a Courant number near 1: the particles move most of a
   // cell per step; a tight guard turns that into a diagnosed CFL breach.

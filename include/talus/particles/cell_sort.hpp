@@ -72,6 +72,11 @@ class CellSort {
   /// floor(GridGeometry::to_grid)), or -1 when no particle was sorted into that block.
   long long active_block_of_cell(int i, int j, int k) const;
 
+  /// The last sort's serial bookkeeping (colour lists, hand-out order, active tiles) in seconds, and
+  /// its number of parallel regions: what the work recorder splits the sort into.
+  double last_serial_seconds() const { return serial_seconds_; }
+  int last_parallel_regions() const { return parallel_regions_; }
+
   /// Whether a particle sorted into block b may sit in cell (i, j, k) without breaking the colouring.
   bool within_slack(std::size_t b, int i, int j, int k) const { return within_slack_of(block_origin(b), i, j, k); }
   /// The same with the block's origin (block_origin(b)) computed once for all its particles.
@@ -99,6 +104,11 @@ class CellSort {
   // Scratch reused between sorts.
   std::vector<std::uint32_t> bbox_block_index_;   // per bounding-box block: count, then compact index + 1
   std::vector<std::uint32_t> particle_block_, particle_cell_, order_;
+  std::vector<std::uint32_t> by_block_;      // particles in block order (stage 3 of the sort)
+  std::vector<std::uint32_t> slice_counts_;  // per thread slice and block: count, then insert position
+  std::vector<std::uint32_t> slice_blocks_;  // active blocks per thread's part of the box, then offsets
+  double serial_seconds_ = 0.0;
+  int parallel_regions_ = 0;
   std::vector<std::uint8_t> tile_flag_;
 };
 

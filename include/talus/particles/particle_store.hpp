@@ -55,6 +55,11 @@ struct ParticleStore {
   /// Reuses internal scratch arrays, so repeated sorts allocate nothing.
   void permute(const std::vector<std::uint32_t>& order);
 
+  /// Make this store a copy of `other` (its arrays and state flags, not its sort scratch), each
+  /// array copied by all threads in static slices: the run loop's last-good-state snapshot copies
+  /// every particle every few steps, and a serial copy is a serial part of every step at many cores.
+  void copy_from(const ParticleStore& other);
+
   /// Bytes held by particle fields (capacity, all allocated groups), for the memory report.
   std::size_t bytes() const;
 

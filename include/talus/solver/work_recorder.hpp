@@ -26,6 +26,7 @@ struct WorkRegion {
   RegionSchedule schedule = RegionSchedule::Serial;
   int chunk = 1;               // dynamic: the chunk size of the schedule
   int parallel_regions = 0;    // fork/join + barrier pairs inside (0 for serial parts)
+  int barriers = 0;            // barriers inside a parallel region opened before (the fused colour passes)
   double seconds = 0.0;        // wall time of the region
   std::size_t items = 0;       // static: iterations of the loop (particles or tiles)
   std::vector<double> block_seconds;           // dynamic: per block, in hand-out order
@@ -57,15 +58,23 @@ class WorkRecorder {
   void add_colour_passes(const char* name, const ColourPassTiming& timing, const CellSort& sort, bool single_pass);
   /// A schedule(dynamic, 1) loop over all blocks in sort.blocks_in_work_order().
   void add_block_loop(const char* name, const std::vector<double>& block_seconds, double seconds, const CellSort& sort);
-  /// Serial time the caller (the run loop) spent after the last recorded step (output, guards).
-  void add_after_step(const char* name, double seconds);
-  /// Time outside the steps over a whole run, for the model's run prediction.
-  void set_totals(std::int64_t steps, double solver_seconds, double other_seconds);
+  /// Time the caller (the run loop) spent after the last recorded step: serial (output, guards), or
+  /// with items > 0 a static region of that many iterations in `parallel_regions` regions (the snapshot).
+  void add_after_step(const char* name, double seconds, std::size_t items = 0, int parallel_regions = 0);
+  /// Time outside the steps over a whole run, for the model's run prediction; of it, the parallel
+  /// parts (the field checks before and the copies of the snapshots, in `snapshot_regions` parallel
+  /// regions). The run loop's output is spiky (a frame every few hundred steps), so the model takes
+  /// its run mean rather than the sampled steps' share.
+  void set_totals(std::int64_t steps, double solver_seconds, double other_seconds, double snapshot_seconds = 0.0,
+                  std::int64_t snapshot_regions = 0);
 
   const std::vector<WorkStep>& steps() const { return steps_; }
   /// Wall time of an empty `omp parallel for` (fork, a loop of `threads` iterations, barrier) at
   /// each thread count 1..max_threads: the per-region cost the model adds (best of 5 x 2000).
   static std::vector<double> measure_fork_join(int max_threads);
+  /// Wall time of an empty `omp for schedule(dynamic, 1)` of `threads` iterations inside a parallel
+  /// region already open (a barrier and the loop's hand-out, no fork): per thread count, as above.
+  static std::vector<double> measure_barrier(int max_threads);
 
   /// The record as JSON ("format": "talus-work-record/1"); `meta` is merged in.
   nlohmann::json to_json(const nlohmann::json& meta) const;
@@ -76,7 +85,8 @@ class WorkRecorder {
   bool active_ = false;
   std::vector<WorkStep> steps_;
   std::int64_t total_steps_ = 0;
-  double solver_seconds_ = 0.0, other_seconds_ = 0.0;
+  double solver_seconds_ = 0.0, other_seconds_ = 0.0, snapshot_seconds_ = 0.0;
+  std::int64_t snapshot_regions_ = 0;
 };
 
 }  // namespace talus
