@@ -51,11 +51,6 @@ class MlsStrainSmoother {
                    const std::vector<std::uint8_t>& smooth_body) const;
 
  private:
-  template <int Degree, int Axes>
-  MlsCounts smooth_with(const ParticleStore& particles, const CellSort& sort, const GridGeometry& grid,
-                        const std::array<const double*, 6>& in, const std::array<double*, 6>& out,
-                        const std::vector<std::uint8_t>& smooth_body) const;
-
   MlsSettings settings_;
   double radius_ = 0.0;
   std::array<int, 3> axis_list_{0, 1, 2};  // the active axes, in order
