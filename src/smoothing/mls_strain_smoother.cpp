@@ -6,9 +6,9 @@
 // lanes at once, with weight exactly zero outside a particle's ball or body. No lane ever reads
 // another, and each lane's sums run over the candidates in the same fixed order (cells in (i, j, k)
 // order, then store order), so a particle's result does not depend on the lane width, on the group
-// it falls in, or on the thread count. The lanes are GCC vector extensions: compiled for AVX-512
-// they are one register, for AVX2 two, for the baseline four, with the same operations in the same
-// order on every path (no fused multiply-add: the build sets -ffp-contract=off).
+// it falls in, or on the thread count. The lanes are GCC vector extensions of one register's
+// width, with the same operations in the same order on every path (no fused multiply-add: the
+// build sets -ffp-contract=off).
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "smoothing/mls_strain_smoother.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
@@ -123,7 +123,10 @@ namespace {
 
 using mls_detail::MlsPass;
 
-constexpr int kGroup = 8;  // particles fitted together, one per lane
+// Particles fitted together, one per lane: one vector register of doubles (8 with AVX-512, 4
+// with AVX2, 2 on the baseline), so that A's sums stay in registers. A particle's result does not
+// depend on its group, so the paths agree although their groups differ.
+constexpr int kGroup = HWY_LANES(double) > 2 ? HWY_LANES(double) : 2;
 typedef double Lanes __attribute__((vector_size(kGroup * sizeof(double)), may_alias));
 
 /// Distance (in cells) from the grid-coordinate interval [lo, hi] to the cell [i, i + 1). With
