@@ -15,10 +15,10 @@
 //
 // Neighbours are found through the cell sort: the cells within the radius, their particle ranges
 // from CellSort::cell_start(). This needs the sort to match the current positions (the solver
-// sorts every step when smoothing is on). Particles are fitted a register's worth at a time, one per vector lane,
-// over the candidates near their group (weight 0 outside a particle's ball); each particle's sums
-// run over its neighbours in a fixed order (cells in (i, j, k) order, then store order), so the
-// output is bit-identical for any thread count and on every instruction-set path
+// sorts every step when smoothing is on). Particles are fitted a register's worth at a time, one
+// per vector lane, over the candidates near their group (weight 0 outside a particle's ball); each
+// particle's sums run over its neighbours in a fixed order (cells in (i, j, k) order, then store
+// order), so the output is bit-identical for any thread count and on every instruction-set path
 // (core/simd_dispatch.hpp).
 #include "talus/grid/grid.hpp"
 #include "talus/particles/cell_sort.hpp"
