@@ -1,6 +1,24 @@
-#include "talus/smoothing/mls_strain_smoother.hpp"
+// The MLS strain smoother (Edo & Matsubara 2015, eq. 38-46), compiled once per instruction set by
+// Highway's foreach_target and dispatched at run time (core/simd_dispatch.hpp).
+//
+// Particles are fitted in groups of kGroup, one particle per lane: a group's candidates (the
+// particles near the group's box) are gathered once, and every candidate is evaluated for all the
+// lanes at once, with weight exactly zero outside a particle's ball or body. No lane ever reads
+// another, and each lane's sums run over the candidates in the same fixed order (cells in (i, j, k)
+// order, then store order), so a particle's result does not depend on the lane width, on the group
+// it falls in, or on the thread count. The lanes are GCC vector extensions of one register's
+// width, with the same operations in the same order on every path (no fused multiply-add: the
+// build sets -ffp-contract=off).
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "smoothing/mls_strain_smoother.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+
+#include <hwy/aligned_allocator.h>
+#include <hwy/highway.h>
 
 #include "talus/core/error.hpp"
+#include "talus/core/simd_dispatch.hpp"
+#include "talus/smoothing/mls_strain_smoother.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
@@ -10,78 +28,23 @@
 #include <cmath>
 #include <vector>
 
+#ifndef TALUS_MLS_SOLVE_DEFINED  // once, not per target
+#define TALUS_MLS_SOLVE_DEFINED
 namespace talus {
+namespace mls_detail {
 
-const char* to_string(MlsBasis basis) {
-  switch (basis) {
-    case MlsBasis::Linear: return "linear";
-    case MlsBasis::Quadratic: return "quadratic";
-    case MlsBasis::Cubic: return "cubic";
-  }
-  return "?";
-}
-
-MlsStrainSmoother::MlsStrainSmoother(const MlsSettings& settings, double cell_size)
-    : settings_(settings), radius_(settings.radius_factor * cell_size) {
-  axis_count_ = 0;
-  for (int d = 0; d < 3; ++d)
-    if (settings_.axes[d]) axis_list_[axis_count_++] = d;
-  if (axis_count_ == 0) throw input_error("MLS smoothing needs at least one axis");
-  if (!(radius_ > 0.0)) throw input_error(fmt::format("MLS radius {} must be positive", radius_));
-}
-
-int MlsStrainSmoother::term_count() const { return mls_term_count(static_cast<int>(settings_.basis), axis_count_); }
-
-MlsCounts MlsStrainSmoother::smooth(const ParticleStore& particles, const CellSort& sort, const GridGeometry& grid,
-                                    const std::array<const double*, 6>& in, const std::array<double*, 6>& out,
-                                    const std::vector<std::uint8_t>& smooth_body) const {
-  // One instantiation per (degree, axes): the inner loops and the factorisation have fixed sizes.
-  auto dispatch = [&]<int Degree>() {
-    switch (axis_count_) {
-      case 1: return smooth_with<Degree, 1>(particles, sort, grid, in, out, smooth_body);
-      case 2: return smooth_with<Degree, 2>(particles, sort, grid, in, out, smooth_body);
-      default: return smooth_with<Degree, 3>(particles, sort, grid, in, out, smooth_body);
-    }
-  };
-  switch (settings_.basis) {
-    case MlsBasis::Linear: return dispatch.template operator()<1>();
-    case MlsBasis::Quadratic: return dispatch.template operator()<2>();
-    case MlsBasis::Cubic: return dispatch.template operator()<3>();
-  }
-  return {};
-}
-
-namespace {
-
-/// Distance (in cells) from the grid-coordinate interval [lo, hi] to the cell [i, i + 1). With
-/// lo = hi = x this is the distance from the point x; it only shrinks as [lo, hi] grows.
-inline double gap_to_cell(int i, double lo, double hi) {
-  const double a = i - hi, b = lo - (i + 1);
-  const double g = a > b ? a : b;
-  return g > 0.0 ? g : 0.0;
-}
-
-/// Cubic spline of Edo & Matsubara 2015, eq. 39 for 0 <= s < 1, the same arithmetic as mls_weight but as one
-/// select, so the loop over neighbours vectorises (callers pass s < 1 only, or zero-weight padding).
-inline double mls_weight_inside(double s) {
-  const double inner = 2.0 / 3.0 - 4.0 * s * s + 4.0 * s * s * s;
-  const double outer = 4.0 / 3.0 - 4.0 * s + 4.0 * s * s - 4.0 / 3.0 * s * s * s;
-  return s < 0.5 ? inner : outer;
-}
-
-/// Thread-local scratch: the candidate particles of one cell, and the neighbours of one particle.
-/// Vectors only grow, so after the first cells a thread allocates nothing.
-struct MlsScratch {
-  // Candidates: every particle in the cells that meet the ball around any particle of the cell.
-  std::vector<double> cx[3], cbody;
-  std::vector<std::uint32_t> cq;  // store index
-  std::vector<double> s2;         // squared scaled distance to the current particle (2 for other bodies)
-  // Neighbours of the current particle, compacted, padded with zero weights to a multiple of kLanes.
-  std::vector<std::uint32_t> nb;  // candidate index
-  std::vector<double> u[3], w;
+/// The arguments of one smoothing pass, for the per-target entry point.
+struct MlsPass {
+  const ParticleStore* particles;
+  const CellSort* sort;
+  const GridGeometry* grid;
+  std::array<const double*, 6> in;
+  std::array<double*, 6> out;
+  const std::vector<std::uint8_t>* smooth_body;
+  int degree, axis_count;
+  std::array<int, 3> axes;
+  double radius, min_rcond;
 };
-
-constexpr int kLanes = 2;  // neighbours per step of the accumulation loops (10 SSE2 accumulators for linear)
 
 /// The fit's solve for a well-conditioned A (the common case), in plain fixed-size loops that the
 /// compiler unrolls: Cholesky A = L L^T, then A^-1 = L^-T L^-1 explicitly, a = A^-1 e_0 its first
@@ -128,65 +91,165 @@ bool solve_well_conditioned(const double (&A)[T][T], double min_rcond, double (&
   return a_norm * ainv_norm * (2.0 * min_rcond) <= 1.0;  // false for NaN or inf
 }
 
-/// The box of a cell's particles to smooth, in grid coordinates (the search) and in metres (the
+/// The fit's coefficients a = A^-1 F(0), F(0) = e_0 (Edo & Matsubara 2015, eq. 42, 45), with the
+/// guard: false for a (nearly) singular A. Compiled once (not per target), so every path decides
+/// the guard with the same code.
+template <int T>
+[[gnu::noinline]] bool solve_fit(const double (&A)[T][T], double min_rcond, double (&a)[T]) {
+  using MatT = Eigen::Matrix<double, T, T>;
+  using VecT = Eigen::Matrix<double, T, 1>;
+  if (solve_well_conditioned<T>(A, min_rcond, a)) return true;
+  const MatT Am = Eigen::Map<const Eigen::Matrix<double, T, T, Eigen::RowMajor>>(&A[0][0]);
+  const Eigen::LLT<MatT> llt(Am);
+  bool ok = llt.info() == Eigen::Success && llt.rcond() >= min_rcond;
+  VecT av;
+  if (ok) av = llt.solve(VecT::Unit(0));
+  ok = ok && av.allFinite();
+  for (int r = 0; r < T; ++r) a[r] = ok ? av[r] : 0.0;
+  return ok;
+}
+
+}  // namespace mls_detail
+}  // namespace talus
+#endif
+
+// Lane vectors live only inside this file's inlined functions: no call passes one by value.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+HWY_BEFORE_NAMESPACE();
+namespace talus {
+namespace HWY_NAMESPACE {
+namespace {
+
+using mls_detail::MlsPass;
+
+// Particles fitted together, one per lane: one vector register of doubles (8 with AVX-512, 4
+// with AVX2, 2 on the baseline), so that A's sums stay in registers. A particle's result does not
+// depend on its group, so the paths agree although their groups differ.
+constexpr int kGroup = HWY_LANES(double) > 2 ? HWY_LANES(double) : 2;
+typedef double Lanes __attribute__((vector_size(kGroup * sizeof(double)), may_alias));
+
+/// Distance (in cells) from the grid-coordinate interval [lo, hi] to the cell [i, i + 1). With
+/// lo = hi = x this is the distance from the point x; it only shrinks as [lo, hi] grows.
+inline double gap_to_cell(int i, double lo, double hi) {
+  const double a = i - hi, b = lo - (i + 1);
+  const double g = a > b ? a : b;
+  return g > 0.0 ? g : 0.0;
+}
+
+/// Cubic spline of Edo & Matsubara 2015, eq. 39 for 0 <= s < 1, the same arithmetic as mls_weight
+/// but as one select, for a lane vector.
+[[gnu::always_inline]] inline Lanes weight_inside(Lanes s) {
+  const Lanes inner = 2.0 / 3.0 - 4.0 * s * s + 4.0 * s * s * s;
+  const Lanes outer = 4.0 / 3.0 - 4.0 * s + 4.0 * s * s - 4.0 / 3.0 * s * s * s;
+  return s < 0.5 ? inner : outer;
+}
+
+/// The square root of every lane (correctly rounded on every target).
+[[gnu::always_inline]] inline Lanes sqrt_lanes(Lanes x) {
+  Lanes r;
+  for (int v = 0; v < kGroup; ++v) r[v] = __builtin_sqrt(x[v]);
+  return r;
+}
+
+/// F(u) of mls_basis for a lane vector, the same products in the same order.
+template <int Degree, int Axes>
+[[gnu::always_inline]] inline void basis_lanes(const Lanes* u, Lanes* F) {
+  int n = 0;
+  F[n++] = Lanes{} + 1.0;
+  for (int a = 0; a < Axes; ++a) F[n++] = u[a];
+  if constexpr (Degree >= 2)
+    for (int a = 0; a < Axes; ++a)
+      for (int b = a; b < Axes; ++b) F[n++] = u[a] * u[b];
+  if constexpr (Degree >= 3)
+    for (int a = 0; a < Axes; ++a)
+      for (int b = a; b < Axes; ++b)
+        for (int c = b; c < Axes; ++c) F[n++] = u[a] * u[b] * u[c];
+}
+
+/// Thread-local scratch of one group. Buffers only grow, so after the first groups a thread
+/// allocates nothing.
+struct GroupScratch {
+  // Candidates: the store indices of the particles within the radius of the group's box.
+  std::vector<std::int64_t> idx;
+  // Per candidate, the lanes' scaled offsets along the basis axes and eq. 39 weights (pass 1 ->
+  // pass 2): 4 x kGroup doubles, aligned for whole-vector loads.
+  hwy::AlignedFreeUniquePtr<double[]> lanes;
+  std::size_t lanes_capacity = 0;  // candidates
+  Lanes* lane_array(int k) { return reinterpret_cast<Lanes*>(lanes.get()) + k * lanes_capacity; }
+};
+
+/// The box of the group's particles, in grid coordinates (the search) and in metres (the
 /// candidate filter). The box, not the cell, bounds the search, so a particle off its sorted cell
 /// still finds all its neighbours.
 struct ParticleBox {
   double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
   double xlo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, xhi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-  bool empty() const { return !(lo[0] <= hi[0]); }
 };
 
-/// The box of the cell's particles [p_begin, p_end) of smoothed bodies; the others are copied.
-[[gnu::always_inline]] inline ParticleBox box_and_copy_unsmoothed(const ParticleStore& P, const GridGeometry& grid,
-                                                                  std::uint32_t p_begin, std::uint32_t p_end,
-                                                                  const std::vector<std::uint8_t>& smooth_body,
-                                                                  const std::array<const double*, 6>& in,
-                                                                  const std::array<double*, 6>& out) {
-  ParticleBox box;
-  for (std::uint32_t p = p_begin; p < p_end; ++p) {
-    if (!smooth_body[P.body[p]]) {
-      for (int c = 0; c < 6; ++c) out[c][p] = in[c][p];
-      continue;
-    }
-    for (int d = 0; d < 3; ++d) {
-      const double x = P.x[d][p], xg = grid.to_grid(d, x);
-      box.lo[d] = xg < box.lo[d] ? xg : box.lo[d];
-      box.hi[d] = xg > box.hi[d] ? xg : box.hi[d];
-      box.xlo[d] = x < box.xlo[d] ? x : box.xlo[d];
-      box.xhi[d] = x > box.xhi[d] ? x : box.xhi[d];
-    }
+/// Squared distance from x to the box [xlo, xhi], NaN for a position that is not finite (the
+/// `0 * sum` term: zero for finite coordinates, so it never changes a finite distance).
+template <class V>
+[[gnu::always_inline]] inline V gap2_to_box(const V (&x)[3], const V (&xlo)[3], const V (&xhi)[3], V zero) {
+  V g2 = zero;
+  for (int d = 0; d < 3; ++d) {
+    const V below = xlo[d] - x[d], above = x[d] - xhi[d];
+    const V gap = below > above ? below : above;
+    g2 += gap > zero ? gap * gap : zero;
   }
-  return box;
+  return g2 + zero * (x[0] + x[1] + x[2]);
 }
 
-/// Append the particles [q0, q1) to the candidates (positions, bodies, store indices).
-[[gnu::always_inline]] inline void append_candidates(MlsScratch& S, std::size_t& nc, const ParticleStore& P,
-                                                     std::uint32_t q0, std::uint32_t q1) {
-  const std::size_t need = nc + (q1 - q0);
-  if (S.cq.size() < need) {
-    const std::size_t cap = std::max<std::size_t>(need, 2 * S.cq.size());
-    for (int d = 0; d < 3; ++d) S.cx[d].resize(cap);
-    S.cbody.resize(cap);
-    S.cq.resize(cap);
+/// Append, to the candidates, the indices of the particles [q0, q1) that lie within the radius of
+/// the box: the others are nobody's neighbour in the group (the cells gathered hold about twice as
+/// many as the ball around the box, at a radius of 1 cell). keep2 has a margin, so a candidate at
+/// the radius stays within round-off; the exact test per lane decides. A particle at a non-finite
+/// position is never kept.
+[[gnu::always_inline]] inline void append_candidates(GroupScratch& S, std::size_t& nc, const ParticleStore& P,
+                                                     const ParticleBox& box, double keep2, std::uint32_t q0,
+                                                     std::uint32_t q1) {
+  namespace hn = hwy::HWY_NAMESPACE;
+  const hn::ScalableTag<double> d;
+  const hn::RebindToSigned<decltype(d)> di;
+  const std::size_t N = hn::Lanes(d);
+  if (S.idx.size() < nc + (q1 - q0) + N) S.idx.resize(std::max<std::size_t>(nc + (q1 - q0) + N, 2 * S.idx.size()));
+  using V = hn::Vec<decltype(d)>;
+  const V zero = hn::Zero(d);
+  const V xlo[3] = {hn::Set(d, box.xlo[0]), hn::Set(d, box.xlo[1]), hn::Set(d, box.xlo[2])};
+  const V xhi[3] = {hn::Set(d, box.xhi[0]), hn::Set(d, box.xhi[1]), hn::Set(d, box.xhi[2])};
+  const V keep = hn::Set(d, keep2);
+  std::uint32_t q = q0;
+  for (; q + N <= q1; q += N) {
+    const V x[3] = {hn::LoadU(d, P.x[0].data() + q), hn::LoadU(d, P.x[1].data() + q), hn::LoadU(d, P.x[2].data() + q)};
+    V g2 = zero;
+    for (int k = 0; k < 3; ++k) {
+      const V below = hn::Sub(xlo[k], x[k]), above = hn::Sub(x[k], xhi[k]);
+      const V gap = hn::IfThenElse(hn::Gt(below, above), below, above);
+      g2 = hn::Add(g2, hn::IfThenElseZero(hn::Gt(gap, zero), hn::Mul(gap, gap)));
+    }
+    g2 = hn::Add(g2, hn::Mul(zero, hn::Add(hn::Add(x[0], x[1]), x[2])));
+    const auto m = hn::RebindMask(di, hn::Lt(g2, keep));
+    nc += hn::CompressStore(hn::Iota(di, static_cast<std::int64_t>(q)), m, di, S.idx.data() + nc);
   }
-  for (std::uint32_t q = q0; q < q1; ++q, ++nc) {
-    for (int d = 0; d < 3; ++d) S.cx[d][nc] = P.x[d][q];
-    S.cbody[nc] = P.body[q];
-    S.cq[nc] = q;
+  for (; q < q1; ++q) {
+    const double x[3] = {P.x[0][q], P.x[1][q], P.x[2][q]};
+    const double g2 = gap2_to_box<double>(x, box.xlo, box.xhi, 0.0);
+    S.idx[nc] = q;
+    nc += g2 < keep2 ? 1 : 0;
   }
 }
 
-/// Gather, into S, the particles of the cells that meet the ball of radius rg (cells) around any
-/// point of the box: the same walk as for a single particle (lo = hi), so each particle's own
-/// search is a subset. Along k the cells of one block are contiguous in the store: one range per
-/// block. Returns the candidate count.
-[[gnu::always_inline]] inline std::size_t gather_candidates(MlsScratch& S, const ParticleStore& P, const CellSort& sort,
-                                                            const ParticleBox& box, double rg) {
+/// Gather, into S, the particles near the box from the cells that meet the ball of radius rg
+/// (cells) around any point of the box: the same walk as for a single particle (lo = hi), so each
+/// particle's own search is a subset, in the same order. Along k the cells of one block are
+/// contiguous in the store: one range per block. Returns the candidate count.
+inline std::size_t gather_candidates(GroupScratch& S, const MlsPass& pass, const ParticleBox& box, double rg) {
+  const CellSort& sort = *pass.sort;
   const int bc = sort.block_cells();
   const std::size_t cells_per_block = static_cast<std::size_t>(bc) * bc * bc;
   const std::vector<std::uint32_t>& cell_start = sort.cell_start();
   const double rg2 = rg * rg;
+  const double keep2 = pass.radius * pass.radius * (1.0 + 1e-9);
   const int reach = static_cast<int>(std::ceil(rg));
   std::size_t nc = 0;
   const int i0 = static_cast<int>(std::floor(box.lo[0])), i1 = static_cast<int>(std::floor(box.hi[0]));
@@ -210,7 +273,7 @@ struct ParticleBox {
           const std::size_t cbase = static_cast<std::size_t>(cb) * cells_per_block;
           const std::size_t l0 = static_cast<std::size_t>(((i % bc) * bc + (j % bc)) * bc + (k % bc));
           const std::size_t l1 = l0 + static_cast<std::size_t>(k_end - k);
-          append_candidates(S, nc, P, cell_start[cbase + l0], cell_start[cbase + l1 + 1]);
+          append_candidates(S, nc, *pass.particles, box, keep2, cell_start[cbase + l0], cell_start[cbase + l1 + 1]);
         }
         k = k_end + 1;
       }
@@ -219,236 +282,296 @@ struct ParticleBox {
   return nc;
 }
 
-/// Keep only the candidates within the radius of the particles' box [xlo, xhi]: the others are
-/// nobody's neighbour here. The cells gathered hold about twice as many as the ball around the box
-/// (radius 1 cell), and every particle would test them all. The margin keeps a candidate at the
-/// radius within round-off; the exact test per particle decides, so the neighbours (and their
-/// order) are unchanged. Returns the new candidate count.
-[[gnu::always_inline]] inline std::size_t keep_near_box(MlsScratch& S, std::size_t nc, const ParticleBox& box,
-                                                        double radius) {
-  const double keep2 = radius * radius * (1.0 + 1e-9);
-  std::size_t kept = 0;
-  for (std::size_t I = 0; I < nc; ++I) {
-    double g2 = 0.0;
-    for (int d = 0; d < 3; ++d) {
-      const double x = S.cx[d][I];
-      const double below = box.xlo[d] - x, above = x - box.xhi[d];
-      const double gap = below > above ? below : above;
-      g2 += gap > 0.0 ? gap * gap : 0.0;
-    }
-    for (int d = 0; d < 3; ++d) S.cx[d][kept] = S.cx[d][I];
-    S.cbody[kept] = S.cbody[I];
-    S.cq[kept] = S.cq[I];
-    kept += g2 < keep2 ? 1 : 0;
-  }
-  // the per-particle buffers hold every candidate, padded to whole steps of kLanes
-  if (S.s2.size() < kept) {
-    S.s2.resize(S.cq.size());
-    S.nb.resize(S.cq.size() + kLanes);
-    for (int d = 0; d < 3; ++d) S.u[d].resize(S.cq.size() + kLanes);
-    S.w.resize(S.cq.size() + kLanes);
-  }
-  return kept;
+template <class V>
+[[gnu::always_inline]] inline V abs_lanes(V x) {
+  V r;
+  for (int v = 0; v < kGroup; ++v) r[v] = __builtin_fabs(x[v]);
+  return r;
 }
 
-/// The neighbours of the particle at xp among the nc candidates: their candidate indices (S.nb),
-/// scaled offsets along the basis axes (S.u) and eq. 39 weights (S.w), padded with zero weights to
-/// whole steps of kLanes (their terms add exactly zero). Strain is discontinuous across bodies, so
-/// another body's particle is never a neighbour (the usual case, candidates of one body only, skips
-/// that test). Returns the neighbour count m; the padded count is m rounded up to kLanes.
-template <int Axes>
-[[gnu::always_inline]] inline std::size_t find_neighbours(MlsScratch& S, std::size_t nc, const double (&xp)[3],
-                                                          double bodyd, bool one_body, double inv_radius,
-                                                          const std::array<int, 3>& axes) {
-  const double* cx[3] = {S.cx[0].data(), S.cx[1].data(), S.cx[2].data()};
-  const double *cx0 = cx[0], *cx1 = cx[1], *cx2 = cx[2];
-  const double* cbody = S.cbody.data();
-  const double xp0 = xp[0], xp1 = xp[1], xp2 = xp[2];
-  double* s2 = S.s2.data();
-  std::uint32_t* nb = S.nb.data();
-  double* u[3] = {S.u[0].data(), S.u[1].data(), S.u[2].data()};
-  double* w = S.w.data();
-  // Distance test over all candidates (vectorised).
-  if (one_body) {
-#pragma omp simd
-    for (std::size_t I = 0; I < nc; ++I) {
-      const double d0 = (cx0[I] - xp0) * inv_radius, d1 = (cx1[I] - xp1) * inv_radius, d2 = (cx2[I] - xp2) * inv_radius;
-      s2[I] = d0 * d0 + d1 * d1 + d2 * d2;
+/// mls_detail::solve_well_conditioned for every lane at once, operation for operation (so each
+/// lane gets the scalar function's bits), from A's upper triangle acc. Returns, per lane, whether
+/// the scalar function would have returned true; a lane's a is then its result.
+template <int T>
+[[gnu::always_inline]] inline auto solve_well_conditioned_lanes(const Lanes* acc, double min_rcond, Lanes (&a)[T]) {
+  auto upper = [](int r, int c) { return r * T - r * (r - 1) / 2 + (c - r); };  // index of A[r][c], r <= c
+  const Lanes zero = {};
+  Lanes L[T][T] = {}, Li[T][T] = {};
+  auto ok = zero == zero;
+  for (int j = 0; j < T; ++j) {
+    Lanes d = acc[upper(j, j)];
+    for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
+    ok &= d > zero;
+    L[j][j] = sqrt_lanes(ok ? d : zero + 1.0);
+    const Lanes inv = 1.0 / L[j][j];
+    for (int i = j + 1; i < T; ++i) {
+      Lanes v = acc[upper(j, i)];
+      for (int k = 0; k < j; ++k) v -= L[i][k] * L[j][k];
+      L[i][j] = v * inv;
     }
-  } else {
-#pragma omp simd
-    for (std::size_t I = 0; I < nc; ++I) {
-      const double d0 = (cx0[I] - xp0) * inv_radius, d1 = (cx1[I] - xp1) * inv_radius, d2 = (cx2[I] - xp2) * inv_radius;
-      const double r2 = d0 * d0 + d1 * d1 + d2 * d2;
-      s2[I] = cbody[I] == bodyd ? r2 : 2.0;
+    Li[j][j] = inv;
+  }
+  for (int j = 0; j < T; ++j)
+    for (int i = j + 1; i < T; ++i) {
+      Lanes v = zero;
+      for (int k = j; k < i; ++k) v += L[i][k] * Li[k][j];
+      Li[i][j] = -v * Li[i][i];
     }
+  Lanes a_norm = zero, ainv_norm = zero;
+  for (int c = 0; c < T; ++c) {
+    Lanes sa = zero, si = zero;
+    for (int r = 0; r < T; ++r) {
+      Lanes v = zero;
+      for (int k = r > c ? r : c; k < T; ++k) v += Li[k][r] * Li[k][c];
+      if (c == 0) a[r] = v;
+      sa += abs_lanes(acc[r <= c ? upper(r, c) : upper(c, r)]);
+      si += abs_lanes(v);
+    }
+    a_norm = sa > a_norm ? sa : a_norm;
+    ainv_norm = si > ainv_norm ? si : ainv_norm;
   }
-  // Compact the neighbours (s < 1) without branches.
-  std::size_t m = 0;
-  for (std::size_t I = 0; I < nc; ++I) {
-    nb[m] = static_cast<std::uint32_t>(I);
-    m += s2[I] < 1.0 ? 1 : 0;
-  }
-  // u holds only the axes the basis spans, in order.
-  for (std::size_t k = 0; k < m; ++k) {
-    const std::uint32_t I = nb[k];
-    for (int ax = 0; ax < Axes; ++ax) u[ax][k] = (cx[axes[ax]][I] - xp[axes[ax]]) * inv_radius;
-    w[k] = s2[I];
-  }
-  const std::size_t m_pad = (m + kLanes - 1) / kLanes * kLanes;
-  for (std::size_t k = m; k < m_pad; ++k) {
-    for (int ax = 0; ax < Axes; ++ax) u[ax][k] = 0.0;
-    w[k] = 1.0;  // s^2 = 1: weight 0
-    nb[k] = 0;
-  }
-#pragma omp simd
-  for (std::size_t k = 0; k < m_pad; ++k) {
-    const double s = std::sqrt(w[k]);
-    w[k] = k < m ? mls_weight_inside(s) : 0.0;  // Edo & Matsubara 2015, eq. 39
-  }
-  return m;
+  return ok & (a_norm * ainv_norm * (2.0 * min_rcond) <= 1.0);
 }
 
-/// The fit's coefficients a = A^-1 F(0), F(0) = e_0 (Edo & Matsubara 2015, eq. 42, 45), for the m
-/// neighbours in S (padded to m_pad). False (the guard) with too few neighbours for the basis, or a
-/// (nearly) singular A.
+/// Smooth the n <= kGroup particles p[] (of smoothed bodies) together (Edo & Matsubara 2015,
+/// eq. 42-46). Pass 1 sums, per lane, A = sum_I W_I F(u_I) F(u_I)^T (eq. 42) over every candidate
+/// I, W_I = 0 outside the lane's ball or body; each lane then solves a = A^-1 e_0 (eq. 45, the
+/// guard); pass 2 sums d_eps_p = sum_I W_I (a^T F(u_I)) d_eps_I (eq. 46, a^T B d_eps per candidate).
+/// Outside a lane's ball W_I = 0 and F(u_I) is finite, so the term is a zero that leaves the sum
+/// unchanged. In pass 2 that holds while the candidates' inputs are finite; a non-finite input
+/// makes every lane's sum non-finite, and pass 2 is then redone with the terms outside the ball
+/// selected away (a NaN input stays inside its own ball, as with a neighbour list).
 template <int Degree, int Axes>
-[[gnu::always_inline]] inline bool fit_coefficients(const MlsScratch& S, std::size_t m, std::size_t m_pad,
-                                                    double min_rcond, double (&a)[mls_term_count(Degree, Axes)]) {
+void smooth_group(GroupScratch& S, std::size_t nc, const MlsPass& pass, const std::uint32_t* p, int n,
+                  std::size_t& smoothed, std::size_t& unsmoothed) {
   constexpr int T = mls_term_count(Degree, Axes);
   constexpr int NA = T * (T + 1) / 2;  // upper triangle of A
-  using MatT = Eigen::Matrix<double, T, T>;
-  using VecT = Eigen::Matrix<double, T, 1>;
-  if (m < static_cast<std::size_t>(T)) return false;
-  const double* u[3] = {S.u[0].data(), S.u[1].data(), S.u[2].data()};
-  const double* w = S.w.data();
-  // A = sum_I W_I F(u_I) F(u_I)^T (eq. 42), upper triangle, kLanes neighbours per step in separate
-  // lanes so the loop body vectorises; lanes are summed at the end.
-  double acc[NA][kLanes] = {};
-  for (std::size_t k0 = 0; k0 < m_pad; k0 += kLanes) {
-    double F[T][kLanes], WF[T][kLanes];
-    for (int v = 0; v < kLanes; ++v) {
-      double uu[Axes], f[T];
-      for (int ax = 0; ax < Axes; ++ax) uu[ax] = u[ax][k0 + v];
-      mls_basis<Degree, Axes>(uu, f);
-      for (int r = 0; r < T; ++r) {
-        F[r][v] = f[r];
-        WF[r][v] = w[k0 + v] * f[r];
-      }
+  const ParticleStore& P = *pass.particles;
+  const double inv_radius = 1.0 / pass.radius;
+  Lanes xp[3], body;
+  for (int v = 0; v < kGroup; ++v) {  // padding lanes repeat the first particle; their results are dropped
+    const std::uint32_t q = p[v < n ? v : 0];
+    for (int d = 0; d < 3; ++d) xp[d][v] = P.x[d][q];
+    body[v] = P.body[q];
+  }
+  if (S.lanes_capacity < nc) {
+    S.lanes_capacity = S.idx.size();
+    S.lanes = hwy::AllocateAligned<double>(4 * kGroup * S.lanes_capacity);
+  }
+  const double *x0 = P.x[0].data(), *x1 = P.x[1].data(), *x2 = P.x[2].data();
+  const std::uint16_t* pbody = P.body.data();
+  const std::int64_t* idx = S.idx.data();
+  Lanes* uu[3] = {S.lane_array(0), S.lane_array(1), S.lane_array(2)};
+  Lanes* ww = S.lane_array(3);
+  const Lanes zero = {};
+  // Pass 1: offsets, weights and the sums of A.
+  Lanes acc[NA] = {}, count = {};
+  for (std::size_t I = 0; I < nc; ++I) {
+    const std::int64_t q = idx[I];
+    const Lanes d0 = (x0[q] - xp[0]) * inv_radius, d1 = (x1[q] - xp[1]) * inv_radius, d2 = (x2[q] - xp[2]) * inv_radius;
+    const Lanes r2 = d0 * d0 + d1 * d1 + d2 * d2;
+    const auto in = (r2 < 1.0) & (static_cast<double>(pbody[q]) == body);
+    const Lanes s = sqrt_lanes(in ? r2 : zero);
+    const Lanes w = in ? weight_inside(s) : zero;  // Edo & Matsubara 2015, eq. 39
+    Lanes u[Axes];  // finite: the lanes and the candidates have finite positions
+    if constexpr (Axes == 3) {
+      u[0] = d0, u[1] = d1, u[2] = d2;
+    } else {
+      const Lanes dd[3] = {d0, d1, d2};
+      for (int ax = 0; ax < Axes; ++ax) u[ax] = dd[pass.axes[ax]];
     }
+    count += in ? zero + 1.0 : zero;
+    for (int ax = 0; ax < Axes; ++ax) uu[ax][I] = u[ax];
+    ww[I] = w;
+    Lanes F[T], WF[T];
+    basis_lanes<Degree, Axes>(u, F);
+    for (int r = 0; r < T; ++r) WF[r] = w * F[r];
     int e = 0;
     for (int r = 0; r < T; ++r)
-      for (int c = r; c < T; ++c, ++e)
-        for (int v = 0; v < kLanes; ++v) acc[e][v] += WF[r][v] * F[c][v];
+      for (int c = r; c < T; ++c, ++e) acc[e] += WF[r] * F[c];
   }
-  double A[T][T];
-  int e = 0;
-  for (int r = 0; r < T; ++r)
-    for (int c = r; c < T; ++c, ++e) {
-      double sum = 0.0;
-      for (int v = 0; v < kLanes; ++v) sum += acc[e][v];
-      A[r][c] = A[c][r] = sum;
+  // Each lane's solve (the guard: too few neighbours, or a (nearly) singular A): all lanes at once
+  // where A is certainly well conditioned, Eigen's LLT and rcond() for the others.
+  Lanes a[T];
+  const auto fast = solve_well_conditioned_lanes<T>(acc, pass.min_rcond, a);
+  bool ok[kGroup];
+  for (int v = 0; v < kGroup; ++v) {
+    ok[v] = v < n && count[v] >= T;
+    if (ok[v] && !fast[v]) {
+      double A[T][T], av[T];
+      int e = 0;
+      for (int r = 0; r < T; ++r)
+        for (int c = r; c < T; ++c, ++e) A[r][c] = A[c][r] = acc[e][v];
+      ok[v] = mls_detail::solve_fit<T>(A, pass.min_rcond, av);
+      for (int r = 0; r < T; ++r) a[r][v] = av[r];
     }
-  if (solve_well_conditioned<T>(A, min_rcond, a)) return true;
-  const MatT Am = Eigen::Map<const Eigen::Matrix<double, T, T, Eigen::RowMajor>>(&A[0][0]);
-  const Eigen::LLT<MatT> llt(Am);
-  bool ok = llt.info() == Eigen::Success && llt.rcond() >= min_rcond;
-  VecT av;
-  if (ok) av = llt.solve(VecT::Unit(0));
-  ok = ok && av.allFinite();
-  for (int r = 0; r < T; ++r) a[r] = ok ? av[r] : 0.0;
-  return ok;
+    if (!ok[v])
+      for (int r = 0; r < T; ++r) a[r][v] = 0.0;
+  }
+  // Pass 2: Phi_I = W_I a^T F(u_I) (eq. 45) times the candidates' increments (eq. 46).
+  Lanes sum[6] = {};
+  const double* in[6];
+  for (int c = 0; c < 6; ++c) in[c] = pass.in[c];
+  for (std::size_t I = 0; I < nc; ++I) {
+    const std::int64_t q = idx[I];
+    Lanes u[Axes], F[T];
+    for (int ax = 0; ax < Axes; ++ax) u[ax] = uu[ax][I];
+    basis_lanes<Degree, Axes>(u, F);
+    Lanes phi = a[0] * F[0];
+    for (int r = 1; r < T; ++r) phi += a[r] * F[r];
+    phi *= ww[I];
+    for (int c = 0; c < 6; ++c) sum[c] += phi * in[c][q];
+  }
+  Lanes check = zero;
+  for (int c = 0; c < 6; ++c) check += zero * sum[c];
+  bool finite = true;
+  for (int v = 0; v < kGroup; ++v) finite = finite && check[v] == 0.0;
+  if (!finite) {
+    for (int c = 0; c < 6; ++c) sum[c] = zero;
+    for (std::size_t I = 0; I < nc; ++I) {
+      const std::int64_t q = idx[I];
+      const Lanes d0 = (x0[q] - xp[0]) * inv_radius, d1 = (x1[q] - xp[1]) * inv_radius,
+                  d2 = (x2[q] - xp[2]) * inv_radius;
+      const Lanes r2 = d0 * d0 + d1 * d1 + d2 * d2;
+      const auto inside = (r2 < 1.0) & (static_cast<double>(pbody[q]) == body);
+      Lanes u[Axes], F[T];
+      for (int ax = 0; ax < Axes; ++ax) u[ax] = uu[ax][I];
+      basis_lanes<Degree, Axes>(u, F);
+      Lanes phi = a[0] * F[0];
+      for (int r = 1; r < T; ++r) phi += a[r] * F[r];
+      phi *= ww[I];
+      for (int c = 0; c < 6; ++c) sum[c] += inside ? phi * in[c][q] : zero;
+    }
+  }
+  for (int v = 0; v < n; ++v) {
+    const std::uint32_t q = p[v];
+    for (int c = 0; c < 6; ++c) pass.out[c][q] = ok[v] ? sum[c][v] : pass.in[c][q];  // the guard: unsmoothed
+    smoothed += ok[v] ? 1 : 0;
+    unsmoothed += ok[v] ? 0 : 1;
+  }
 }
 
-/// The smoothed increment of particle p (Edo & Matsubara 2015, eq. 45-46): Phi_I = W_I a^T F(u_I),
-/// d_eps_p = sum_I Phi_I d_eps_I (a^T B d_eps summed per neighbour: one pass of T + 6 products
-/// instead of T x 6 sums of B d_eps). a^T F is summed term by term across the lanes, so the lanes
-/// vectorise (4 or 8 lanes here measured slower: spills and padding).
 template <int Degree, int Axes>
-[[gnu::always_inline]] inline void apply_fit(const MlsScratch& S, std::size_t m_pad,
-                                             const double (&a)[mls_term_count(Degree, Axes)],
-                                             const std::array<const double*, 6>& in,
-                                             const std::array<double*, 6>& out, std::uint32_t p) {
-  constexpr int T = mls_term_count(Degree, Axes);
-  const double* u[3] = {S.u[0].data(), S.u[1].data(), S.u[2].data()};
-  const double* w = S.w.data();
-  const std::uint32_t* nb = S.nb.data();
-  double sum[6][kLanes] = {};
-  for (std::size_t k0 = 0; k0 < m_pad; k0 += kLanes) {
-    double F[T][kLanes], phi[kLanes] = {};
-    for (int v = 0; v < kLanes; ++v) {
-      double uu[Axes], f[T];
-      for (int ax = 0; ax < Axes; ++ax) uu[ax] = u[ax][k0 + v];
-      mls_basis<Degree, Axes>(uu, f);
-      for (int r = 0; r < T; ++r) F[r][v] = f[r];
-    }
-    for (int r = 0; r < T; ++r)
-      for (int v = 0; v < kLanes; ++v) phi[v] += a[r] * F[r][v];
-    for (int v = 0; v < kLanes; ++v) phi[v] *= w[k0 + v];
-    for (int c = 0; c < 6; ++c) {
-      const double* ec = in[c];
-      for (int v = 0; v < kLanes; ++v) sum[c][v] += phi[v] * ec[S.cq[nb[k0 + v]]];
-    }
-  }
-  for (int c = 0; c < 6; ++c) {
-    double total = 0.0;
-    for (int v = 0; v < kLanes; ++v) total += sum[c][v];
-    out[c][p] = total;
-  }
-}
-
-}  // namespace
-
-// Work goes cell by cell: the candidates of all particles of a cell are gathered once into a
-// contiguous buffer, and each particle then tests them in a loop that vectorises. Every particle's
-// result depends only on the inputs and a fixed visiting order, and is written only by its own
-// iteration: the output is bit-identical for any thread count.
-template <int Degree, int Axes>
-MlsCounts MlsStrainSmoother::smooth_with(const ParticleStore& P, const CellSort& sort, const GridGeometry& grid,
-                                         const std::array<const double*, 6>& in, const std::array<double*, 6>& out,
-                                         const std::vector<std::uint8_t>& smooth_body) const {
-  constexpr int T = mls_term_count(Degree, Axes);
+MlsCounts smooth_impl(const MlsPass& pass) {
+  const ParticleStore& P = *pass.particles;
+  const CellSort& sort = *pass.sort;
+  const GridGeometry& grid = *pass.grid;
+  const std::vector<std::uint8_t>& smooth_body = *pass.smooth_body;
   const int bc = sort.block_cells();
   const std::size_t cells_per_block = static_cast<std::size_t>(bc) * bc * bc;
   const std::vector<std::uint32_t>& cell_start = sort.cell_start();
   const std::int64_t blocks = static_cast<std::int64_t>(sort.block_count());
-  const double inv_radius = 1.0 / radius_;
-  const double rg = radius_ / grid.h;  // radius in cells
+  const double rg = pass.radius / grid.h;  // radius in cells
   std::size_t smoothed = 0, unsmoothed = 0;
 #pragma omp parallel reduction(+ : smoothed, unsmoothed)
   {
-    MlsScratch S;
+    GroupScratch S;
+    std::uint32_t group[kGroup];
+    int n = 0;
+    auto flush = [&] {
+      if (n == 0) return;
+      ParticleBox box;
+      for (int g = 0; g < n; ++g)
+        for (int d = 0; d < 3; ++d) {
+          const double x = P.x[d][group[g]], xg = grid.to_grid(d, x);
+          box.lo[d] = xg < box.lo[d] ? xg : box.lo[d];
+          box.hi[d] = xg > box.hi[d] ? xg : box.hi[d];
+          box.xlo[d] = x < box.xlo[d] ? x : box.xlo[d];
+          box.xhi[d] = x > box.xhi[d] ? x : box.xhi[d];
+        }
+      const std::size_t nc = gather_candidates(S, pass, box, rg);
+      smooth_group<Degree, Axes>(S, nc, pass, group, n, smoothed, unsmoothed);
+      n = 0;
+    };
 #pragma omp for schedule(dynamic, 1)
     for (std::int64_t bi = 0; bi < blocks; ++bi) {
+      // Groups: up to kGroup particles from consecutive cells of one column along k (their box
+      // stays about one cell wide); a cell joins the open group only if all of it fits.
       const std::size_t base = static_cast<std::size_t>(bi) * cells_per_block;
       for (std::size_t l = 0; l < cells_per_block; ++l) {
         const std::uint32_t p_begin = cell_start[base + l], p_end = cell_start[base + l + 1];
         if (p_begin == p_end) continue;
-        const ParticleBox box = box_and_copy_unsmoothed(P, grid, p_begin, p_end, smooth_body, in, out);
-        if (box.empty()) continue;  // nothing to smooth in this cell
-        std::size_t nc = gather_candidates(S, P, sort, box, rg);
-        nc = keep_near_box(S, nc, box, radius_);
-        bool one_body = true;
-        for (std::size_t I = 1; I < nc; ++I) one_body = one_body && S.cbody[I] == S.cbody[0];
-        for (std::uint32_t p = p_begin; p < p_end; ++p) {
-          const std::uint16_t body = P.body[p];
-          if (!smooth_body[body]) continue;  // copied above
-          const double xp[3] = {P.x[0][p], P.x[1][p], P.x[2][p]};
-          const std::size_t m = find_neighbours<Axes>(S, nc, xp, body, one_body, inv_radius, axis_list_);
-          const std::size_t m_pad = (m + kLanes - 1) / kLanes * kLanes;
-          double a[T];
-          if (!fit_coefficients<Degree, Axes>(S, m, m_pad, settings_.min_rcond, a)) {
-            for (int c = 0; c < 6; ++c) out[c][p] = in[c][p];  // the guard: unsmoothed
+        if (n > 0 && (static_cast<std::uint32_t>(n) + (p_end - p_begin) > kGroup || l % bc == 0 ||
+                      cell_start[base + l - 1] == cell_start[base + l]))
+          flush();
+        for (std::uint32_t q = p_begin; q < p_end; ++q) {
+          if (!smooth_body[P.body[q]]) {  // not smoothed: copied, and nobody's neighbour
+            for (int c = 0; c < 6; ++c) pass.out[c][q] = pass.in[c][q];
+            continue;
+          }
+          if (!(std::isfinite(P.x[0][q]) && std::isfinite(P.x[1][q]) && std::isfinite(P.x[2][q]))) {
+            for (int c = 0; c < 6; ++c) pass.out[c][q] = pass.in[c][q];  // no neighbours: the guard
             ++unsmoothed;
             continue;
           }
-          apply_fit<Degree, Axes>(S, m_pad, a, in, out, p);
-          ++smoothed;
+          if (n == kGroup) flush();
+          group[n++] = q;
         }
       }
+      flush();
     }
   }
   return {smoothed, unsmoothed};
 }
 
+}  // namespace
+
+MlsCounts SmoothMls(const mls_detail::MlsPass& pass) {
+  // One instantiation per (degree, axes): the inner loops and the factorisation have fixed sizes.
+  auto dispatch = [&]<int Degree>() {
+    switch (pass.axis_count) {
+      case 1: return smooth_impl<Degree, 1>(pass);
+      case 2: return smooth_impl<Degree, 2>(pass);
+      default: return smooth_impl<Degree, 3>(pass);
+    }
+  };
+  switch (pass.degree) {
+    case 1: return dispatch.template operator()<1>();
+    case 2: return dispatch.template operator()<2>();
+    default: return dispatch.template operator()<3>();
+  }
+}
+
+}  // namespace HWY_NAMESPACE
 }  // namespace talus
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace talus {
+
+HWY_EXPORT(SmoothMls);
+
+const char* to_string(MlsBasis basis) {
+  switch (basis) {
+    case MlsBasis::Linear: return "linear";
+    case MlsBasis::Quadratic: return "quadratic";
+    case MlsBasis::Cubic: return "cubic";
+  }
+  return "?";
+}
+
+MlsStrainSmoother::MlsStrainSmoother(const MlsSettings& settings, double cell_size)
+    : settings_(settings), radius_(settings.radius_factor * cell_size) {
+  axis_count_ = 0;
+  for (int d = 0; d < 3; ++d)
+    if (settings_.axes[d]) axis_list_[axis_count_++] = d;
+  if (axis_count_ == 0) throw input_error("MLS smoothing needs at least one axis");
+  if (!(radius_ > 0.0)) throw input_error(fmt::format("MLS radius {} must be positive", radius_));
+}
+
+int MlsStrainSmoother::term_count() const { return mls_term_count(static_cast<int>(settings_.basis), axis_count_); }
+
+// Every particle's result depends only on the inputs and a fixed visiting order, and is written
+// only by its own lane: the output is bit-identical for any thread count and on every path.
+MlsCounts MlsStrainSmoother::smooth(const ParticleStore& particles, const CellSort& sort, const GridGeometry& grid,
+                                    const std::array<const double*, 6>& in, const std::array<double*, 6>& out,
+                                    const std::vector<std::uint8_t>& smooth_body) const {
+  const mls_detail::MlsPass pass{&particles, &sort, &grid, in, out, &smooth_body,
+                                 static_cast<int>(settings_.basis), axis_count_, axis_list_, radius_,
+                                 settings_.min_rcond};
+  // The `reference` path runs the baseline build of the same code.
+  return (vector_kernels_enabled() ? HWY_DYNAMIC_DISPATCH(SmoothMls) : &HWY_STATIC_DISPATCH(SmoothMls))(pass);
+}
+
+}  // namespace talus
+#endif

@@ -2,6 +2,8 @@
 // the body mask, agreement with a brute-force evaluation of eq. 42-46, and determinism.
 #include "talus/smoothing/mls_strain_smoother.hpp"
 
+#include "talus/core/simd_dispatch.hpp"
+
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 #include <omp.h>
@@ -343,6 +345,61 @@ TEST(MlsStrainSmoother, BitIdenticalForOneAndTwoThreads) {
     }
   }
   omp_set_num_threads(saved);
+}
+
+// The smoother runs on every instruction-set path (core/simd_dispatch.hpp) with the reference's bits:
+// each basis, two bodies, a body that is not smoothed, particles with too few neighbours, and a
+// NaN and an infinite input (a non-finite increment poisons its own neighbours and nobody else).
+TEST(MlsStrainSmoother, EveryInstructionSetPathGivesTheReferenceBits) {
+  Cloud c;
+  c.geometry.h = 1.0;
+  c.geometry.cells = {12, 8, 8};
+  add_lattice(c, {9, 8, 7}, 0.5, 0.45, Vec3(1.0, 1.3, 0.7), 0, 3);
+  add_lattice(c, {5, 5, 5}, 0.5, 0.45, Vec3(5.6, 1.3, 0.7), 1, 4);
+  add_lattice(c, {4, 4, 4}, 0.5, 0.45, Vec3(8.5, 4.0, 4.0), 2, 5);
+  c.particles.add(9999, Vec3(10.5, 1.5, 6.5), Vec3::Zero(), 1.0, 1.0, 0);  // alone: the guard
+  c.finish();
+  c.set_random_inputs(13);
+  c.in[2][17] = std::nan("");
+  c.in[4][300] = HUGE_VAL;
+  const std::vector<std::string> paths = available_isas();
+  ASSERT_GE(paths.size(), 2u);
+  for (MlsBasis basis : {MlsBasis::Linear, MlsBasis::Quadratic, MlsBasis::Cubic}) {
+    MlsSettings s;
+    s.basis = basis;
+    s.radius_factor = basis == MlsBasis::Cubic ? 2.5 : 1.7;
+    const MlsStrainSmoother smoother(s, 1.0);
+    select_isa("reference");
+    const MlsCounts n_ref = smoother.smooth(c.particles, c.sort, c.geometry, c.inputs(), c.outputs(), {1, 1, 0});
+    const auto reference = c.out;
+    EXPECT_GT(n_ref.smoothed, 0u);
+    EXPECT_GT(n_ref.unsmoothed, 0u);
+    // A non-finite result only in the poisoned component, and only within the radius of that input.
+    for (auto [k, source] : {std::pair<int, std::size_t>{2, 17}, {4, 300}}) {
+      std::size_t poisoned = 0;
+      for (std::size_t p = 0; p < c.particles.size(); ++p) {
+        if (std::isfinite(reference[k][p])) continue;
+        ++poisoned;
+        const double r = std::hypot(c.particles.x[0][p] - c.particles.x[0][source],
+                                    c.particles.x[1][p] - c.particles.x[1][source],
+                                    c.particles.x[2][p] - c.particles.x[2][source]);
+        EXPECT_LT(r, smoother.radius()) << p;
+      }
+      EXPECT_GT(poisoned, 1u);
+    }
+    for (int k : {0, 1, 3, 5})
+      for (double v : reference[k]) EXPECT_TRUE(std::isfinite(v));
+    for (std::size_t i = 1; i < paths.size(); ++i) {
+      select_isa(paths[i]);
+      const MlsCounts n = smoother.smooth(c.particles, c.sort, c.geometry, c.inputs(), c.outputs(), {1, 1, 0});
+      EXPECT_EQ(n.smoothed, n_ref.smoothed) << paths[i];
+      EXPECT_EQ(n.unsmoothed, n_ref.unsmoothed) << paths[i];
+      for (int k = 0; k < 6; ++k)
+        EXPECT_EQ(std::memcmp(reference[k].data(), c.out[k].data(), reference[k].size() * sizeof(double)), 0)
+            << paths[i] << " component " << k;
+    }
+    select_isa("auto");
+  }
 }
 
 }  // namespace

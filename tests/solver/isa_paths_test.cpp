@@ -228,6 +228,24 @@ TEST(IsaPaths, EveryShapeAndSchemeIsBitIdenticalOnEveryPath) {
   expect_every_path_matches_the_reference(bspline);
 }
 
+// MLS strain smoothing (Edo & Matsubara 2015, eq. 38-46) in the run: the smoother's lanes are compiled per
+// target too. A 3D linear fit on a cpGIMP column (MUSL), and a quadratic fit over x and z only
+// with a radius that is not a whole number of cells (USAVG).
+TEST(IsaPaths, MlsSmoothedRunsAreBitIdenticalOnEveryPath) {
+  Scene linear = test::column_collapse_scene(0.02, 0.02);
+  linear.shape = ShapeKind::CpGimp;
+  linear.smoothing.enabled = true;
+  linear.smoothing.mls.radius_factor = 1.5;
+  expect_every_path_matches_the_reference(linear);
+  Scene quadratic = test::column_collapse_scene(0.02, 0.01);
+  quadratic.scheme = SchemeKind::Usavg;
+  quadratic.smoothing.enabled = true;
+  quadratic.smoothing.mls.basis = MlsBasis::Quadratic;
+  quadratic.smoothing.mls.axes = {true, false, true};
+  quadratic.smoothing.mls.radius_factor = 2.3;
+  expect_every_path_matches_the_reference(quadratic);
+}
+
 // A Drucker-Prager block crossing the periodic x seam (the wrapped stencils), B-spline.
 TEST(IsaPaths, PeriodicWrapIsBitIdenticalOnEveryPath) {
   const std::string json = R"({

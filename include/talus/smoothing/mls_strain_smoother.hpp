@@ -15,8 +15,11 @@
 //
 // Neighbours are found through the cell sort: the cells within the radius, their particle ranges
 // from CellSort::cell_start(). This needs the sort to match the current positions (the solver
-// sorts every step when smoothing is on). Each particle's result depends only on the inputs, in a
-// fixed visiting order: the output is bit-identical for any thread count.
+// sorts every step when smoothing is on). Particles are fitted a register's worth at a time, one
+// per vector lane, over the candidates near their group (weight 0 outside a particle's ball); each
+// particle's sums run over its neighbours in a fixed order (cells in (i, j, k) order, then store
+// order), so the output is bit-identical for any thread count and on every instruction-set path
+// (core/simd_dispatch.hpp).
 #include "talus/grid/grid.hpp"
 #include "talus/particles/cell_sort.hpp"
 #include "talus/particles/particle_store.hpp"
@@ -51,11 +54,6 @@ class MlsStrainSmoother {
                    const std::vector<std::uint8_t>& smooth_body) const;
 
  private:
-  template <int Degree, int Axes>
-  MlsCounts smooth_with(const ParticleStore& particles, const CellSort& sort, const GridGeometry& grid,
-                        const std::array<const double*, 6>& in, const std::array<double*, 6>& out,
-                        const std::vector<std::uint8_t>& smooth_body) const;
-
   MlsSettings settings_;
   double radius_ = 0.0;
   std::array<int, 3> axis_list_{0, 1, 2};  // the active axes, in order
