@@ -152,21 +152,6 @@ inline double gap_to_cell(int i, double lo, double hi) {
   return r;
 }
 
-/// F(u) of mls_basis for a lane vector, the same products in the same order.
-template <int Degree, int Axes>
-[[gnu::always_inline]] inline void basis_lanes(const Lanes* u, Lanes* F) {
-  int n = 0;
-  F[n++] = Lanes{} + 1.0;
-  for (int a = 0; a < Axes; ++a) F[n++] = u[a];
-  if constexpr (Degree >= 2)
-    for (int a = 0; a < Axes; ++a)
-      for (int b = a; b < Axes; ++b) F[n++] = u[a] * u[b];
-  if constexpr (Degree >= 3)
-    for (int a = 0; a < Axes; ++a)
-      for (int b = a; b < Axes; ++b)
-        for (int c = b; c < Axes; ++c) F[n++] = u[a] * u[b] * u[c];
-}
-
 /// Thread-local scratch of one group. Buffers only grow, so after the first groups a thread
 /// allocates nothing.
 struct GroupScratch {
@@ -384,7 +369,7 @@ void smooth_group(GroupScratch& S, std::size_t nc, const MlsPass& pass, const st
     for (int ax = 0; ax < Axes; ++ax) uu[ax][I] = u[ax];
     ww[I] = w;
     Lanes F[T], WF[T];
-    basis_lanes<Degree, Axes>(u, F);
+    mls_basis<Degree, Axes>(u, F);
     for (int r = 0; r < T; ++r) WF[r] = w * F[r];
     int e = 0;
     for (int r = 0; r < T; ++r)
@@ -412,15 +397,17 @@ void smooth_group(GroupScratch& S, std::size_t nc, const MlsPass& pass, const st
   Lanes sum[6] = {};
   const double* in[6];
   for (int c = 0; c < 6; ++c) in[c] = pass.in[c];
-  for (std::size_t I = 0; I < nc; ++I) {
-    const std::int64_t q = idx[I];
+  auto phi_of = [&](std::size_t I) {  // W_I a^T F(u_I)
     Lanes u[Axes], F[T];
     for (int ax = 0; ax < Axes; ++ax) u[ax] = uu[ax][I];
-    basis_lanes<Degree, Axes>(u, F);
+    mls_basis<Degree, Axes>(u, F);
     Lanes phi = a[0] * F[0];
     for (int r = 1; r < T; ++r) phi += a[r] * F[r];
-    phi *= ww[I];
-    for (int c = 0; c < 6; ++c) sum[c] += phi * in[c][q];
+    return phi * ww[I];
+  };
+  for (std::size_t I = 0; I < nc; ++I) {
+    const Lanes phi = phi_of(I);
+    for (int c = 0; c < 6; ++c) sum[c] += phi * in[c][idx[I]];
   }
   Lanes check = zero;
   for (int c = 0; c < 6; ++c) check += zero * sum[c];
@@ -434,12 +421,7 @@ void smooth_group(GroupScratch& S, std::size_t nc, const MlsPass& pass, const st
                   d2 = (x2[q] - xp[2]) * inv_radius;
       const Lanes r2 = d0 * d0 + d1 * d1 + d2 * d2;
       const auto inside = (r2 < 1.0) & (static_cast<double>(pbody[q]) == body);
-      Lanes u[Axes], F[T];
-      for (int ax = 0; ax < Axes; ++ax) u[ax] = uu[ax][I];
-      basis_lanes<Degree, Axes>(u, F);
-      Lanes phi = a[0] * F[0];
-      for (int r = 1; r < T; ++r) phi += a[r] * F[r];
-      phi *= ww[I];
+      const Lanes phi = phi_of(I);
       for (int c = 0; c < 6; ++c) sum[c] += inside ? phi * in[c][q] : zero;
     }
   }

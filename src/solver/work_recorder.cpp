@@ -104,54 +104,56 @@ void WorkRecorder::set_totals(std::int64_t steps, double solver_seconds, double 
   snapshot_regions_ = snapshot_regions;
 }
 
-std::vector<double> WorkRecorder::measure_fork_join(int max_threads) {
+namespace {
+
+/// For T = 1 .. max_threads threads, the best of 5 trials of `seconds(T)` (the seconds one
+/// operation took in a trial); index 0 is unused.
+template <class Trial>
+std::vector<double> best_per_thread_count(int max_threads, Trial seconds) {
   const int saved = omp_get_max_threads();
   std::vector<double> cost(static_cast<std::size_t>(max_threads) + 1, 0.0);
-  volatile int sink = 0;
   for (int t = 1; t <= max_threads; ++t) {
     omp_set_num_threads(t);
     double best = 1e300;
-    for (int trial = 0; trial < 5; ++trial) {
-      constexpr int kRegions = 2000;
-      const double start = omp_get_wtime();
-      for (int r = 0; r < kRegions; ++r) {
-#pragma omp parallel for schedule(dynamic, 1)
-        for (int i = 0; i < t; ++i) sink = sink + i;  // as the colour passes: dynamic, one item per thread
-      }
-      best = std::min(best, (omp_get_wtime() - start) / kRegions);
-    }
+    for (int trial = 0; trial < 5; ++trial) best = std::min(best, seconds(t));
     cost[t] = best;
   }
   omp_set_num_threads(saved);
   return cost;
 }
 
-std::vector<double> WorkRecorder::measure_barrier(int max_threads) {
-  const int saved = omp_get_max_threads();
-  std::vector<double> cost(static_cast<std::size_t>(max_threads) + 1, 0.0);
+constexpr int kRepeats = 2000;  // regions or loops timed together in one trial
+
+}  // namespace
+
+std::vector<double> WorkRecorder::measure_fork_join(int max_threads) {
   volatile int sink = 0;
-  for (int t = 1; t <= max_threads; ++t) {
-    omp_set_num_threads(t);
-    double best = 1e300;
-    for (int trial = 0; trial < 5; ++trial) {
-      constexpr int kLoops = 2000;
-      double seconds = 0.0;
-#pragma omp parallel
-      {
-        const double start = omp_get_wtime();
-        for (int r = 0; r < kLoops; ++r) {
-#pragma omp for schedule(dynamic, 1)
-          for (int i = 0; i < t; ++i) sink = sink + i;  // as the fused colour passes: one loop per colour
-        }
-#pragma omp master
-        seconds = omp_get_wtime() - start;
-      }
-      best = std::min(best, seconds / kLoops);
+  return best_per_thread_count(max_threads, [&](int t) {
+    const double start = omp_get_wtime();
+    for (int r = 0; r < kRepeats; ++r) {
+#pragma omp parallel for schedule(dynamic, 1)
+      for (int i = 0; i < t; ++i) sink = sink + i;  // as the colour passes: dynamic, one item per thread
     }
-    cost[t] = best;
-  }
-  omp_set_num_threads(saved);
-  return cost;
+    return (omp_get_wtime() - start) / kRepeats;
+  });
+}
+
+std::vector<double> WorkRecorder::measure_barrier(int max_threads) {
+  volatile int sink = 0;
+  return best_per_thread_count(max_threads, [&](int t) {
+    double seconds = 0.0;
+#pragma omp parallel
+    {
+      const double start = omp_get_wtime();
+      for (int r = 0; r < kRepeats; ++r) {
+#pragma omp for schedule(dynamic, 1)
+        for (int i = 0; i < t; ++i) sink = sink + i;  // as the fused colour passes: one loop per colour
+      }
+#pragma omp master
+      seconds = omp_get_wtime() - start;
+    }
+    return seconds / kRepeats;
+  });
 }
 
 nlohmann::json WorkRecorder::to_json(const nlohmann::json& meta) const {

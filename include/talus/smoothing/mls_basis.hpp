@@ -35,10 +35,11 @@ inline double mls_weight(double s) {
 /// F(u): the monomials of u (Axes coordinates) up to total degree Degree, constant term first:
 /// 1, u_a, u_a u_b (a <= b), u_a u_b u_c (a <= b <= c). The smoother evaluates it at positions
 /// relative to the particle and scaled by the radius (|u| < 1), so F(0) = (1, 0, ..., 0).
-template <int Degree, int Axes>
-inline void mls_basis(const double* u, double* F) {
+/// T is double, or a vector of lanes (the smoother's groups): the same products in the same order.
+template <int Degree, int Axes, class T>
+inline void mls_basis(const T* u, T* F) {
   int n = 0;
-  F[n++] = 1.0;
+  F[n++] = T{} + 1.0;  // 1 in every lane
   for (int a = 0; a < Axes; ++a) F[n++] = u[a];
   if constexpr (Degree >= 2)
     for (int a = 0; a < Axes; ++a)
