@@ -169,7 +169,7 @@ class LoopRecording {
   WorkRecorder* recorder_;
   std::int64_t first_step_;
   std::size_t recorded_before_ = 0;
-  Clock::time_point step_start_, step_end_, snapshot_start_;
+  Clock::time_point step_start_, step_end_;
   double solver_seconds_ = 0.0, snapshot_seconds_ = 0.0, snapshot_step_seconds_ = 0.0;
   std::int64_t snapshot_regions_ = 0;
   int snapshot_step_regions_ = 0;
