@@ -1,5 +1,7 @@
 #include "talus/grid/grid.hpp"
 
+#include <algorithm>
+
 namespace talus {
 
 ProfileTerrain grid_bed(const GridGeometry& g) {
@@ -13,11 +15,14 @@ Grid::Grid(const GridGeometry& geometry) : geometry_(geometry), profile_(grid_be
   stride_y_ = static_cast<std::size_t>(tiles_[2]) * kTileNodes;
   stride_x_ = static_cast<std::size_t>(tiles_[1]) * stride_y_;
   const std::size_t count = tile_count() * kTileNodes;
-  mass = LazyArray(count);
+  records_ = LazyArray(count * kNodeRecord);
+  double* r = records_.data();
+  mass = NodeField(r + kMassSlot, kNodeRecord);
   for (int d = 0; d < 3; ++d) {
-    momentum[d] = LazyArray(count);
-    force[d] = LazyArray(count);
-    velocity_l[d] = LazyArray(count);
+    momentum[d] = NodeField(r + kMomentumSlot + d, kNodeRecord);
+    force[d] = NodeField(r + kForceSlot + d, kNodeRecord);
+    lagrangian_[d] = LazyArray(count);
+    velocity_l[d] = NodeField(lagrangian_[d].data(), 1);
   }
 }
 
@@ -31,18 +36,12 @@ std::array<int, 3> Grid::node_of(std::size_t tile, int slot) const {
 void Grid::clear_active() {
   const auto& tiles = active_tiles_;
   const std::size_t count = tiles.size();
+  double* r = records_.data();
 #pragma omp parallel for schedule(static)
   for (std::size_t t = 0; t < count; ++t) {
     const std::size_t begin = static_cast<std::size_t>(tiles[t]) * kTileNodes;
-    for (int s = 0; s < kTileNodes; ++s) {
-      const std::size_t n = begin + s;
-      mass[n] = 0.0;
-      for (int d = 0; d < 3; ++d) {
-        momentum[d][n] = 0.0;
-        force[d][n] = 0.0;
-        velocity_l[d][n] = 0.0;
-      }
-    }
+    std::fill_n(r + begin * kNodeRecord, kTileNodes * kNodeRecord, 0.0);
+    for (int d = 0; d < 3; ++d) std::fill_n(lagrangian_[d].data() + begin, kTileNodes, 0.0);
   }
 }
 
@@ -52,8 +51,10 @@ void Grid::clear_momentum() {
 #pragma omp parallel for schedule(static)
   for (std::size_t t = 0; t < count; ++t) {
     const std::size_t begin = static_cast<std::size_t>(tiles[t]) * kTileNodes;
-    for (int d = 0; d < 3; ++d)
-      for (int s = 0; s < kTileNodes; ++s) momentum[d][begin + s] = 0.0;
+    for (int s = 0; s < kTileNodes; ++s) {
+      double* node = record(begin + s);
+      for (int d = 0; d < 3; ++d) node[kMomentumSlot + d] = 0.0;
+    }
   }
 }
 

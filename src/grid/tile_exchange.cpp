@@ -79,7 +79,7 @@ void TileExchange::setup(const Comm& comm, const Grid& grid) {
   }
 }
 
-std::size_t TileExchange::sum_shared(const Comm& comm, const std::vector<LazyArray*>& fields) const {
+std::size_t TileExchange::sum_shared(const Comm& comm, const std::vector<NodeField>& fields) const {
   if (!comm.distributed()) return 0;
   const std::size_t nf = fields.size();
   // A tile this rank's particles did not reach holds +0.0 in every field: it is not sent, and the
@@ -87,11 +87,10 @@ std::size_t TileExchange::sum_shared(const Comm& comm, const std::vector<LazyArr
   // Each message: one flag byte per shared tile (padded to 8 bytes, so the values stay aligned), then
   // the fields of the flagged tiles.
   auto untouched = [&](std::uint32_t t) {
-    for (const LazyArray* f : fields) {
-      const double* v = f->data() + static_cast<std::size_t>(t) * kTileNodes;
+    const std::size_t base = static_cast<std::size_t>(t) * kTileNodes;
+    for (const NodeField& f : fields)
       for (int s = 0; s < kTileNodes; ++s)
-        if (std::signbit(v[s]) || v[s] != 0.0) return false;
-    }
+        if (std::signbit(f[base + s]) || f[base + s] != 0.0) return false;
     return true;
   };
   std::vector<std::vector<unsigned char>> out(peers_.size());
@@ -105,8 +104,12 @@ std::size_t TileExchange::sum_shared(const Comm& comm, const std::vector<LazyArr
     append_bytes(out[i], flags.data(), flags.size());
     for (std::size_t j = 0; j < n; ++j)
       if (flags[j])
-        for (const LazyArray* f : fields)
-          append_bytes(out[i], f->data() + static_cast<std::size_t>(shared_[i][j]) * kTileNodes, kTileNodes);
+        for (const NodeField& f : fields) {
+          std::array<double, kTileNodes> tile;
+          const std::size_t base = static_cast<std::size_t>(shared_[i][j]) * kTileNodes;
+          for (int s = 0; s < kTileNodes; ++s) tile[s] = f[base + s];
+          append_bytes(out[i], tile.data(), kTileNodes);
+        }
     sent += out[i].size();
   }
   const auto in = comm.exchange(peers_, out);
@@ -130,8 +133,9 @@ std::size_t TileExchange::sum_shared(const Comm& comm, const std::vector<LazyArr
   for (std::size_t u = 0; u < union_tiles_.size(); ++u) {
     const std::size_t base = static_cast<std::size_t>(union_tiles_[u]) * kTileNodes;
     for (std::size_t f = 0; f < nf; ++f) {
-      double* mine = fields[f]->data() + base;
-      std::array<double, kTileNodes> sum{};
+      const NodeField& field = fields[f];
+      std::array<double, kTileNodes> mine, sum{};
+      for (int s = 0; s < kTileNodes; ++s) mine[s] = field[base + s];
       bool mine_added = false;
       for (std::uint32_t h = holder_start_[u]; h < holder_start_[u + 1]; ++h) {
         const Holder& holder = holders_[h];
@@ -145,7 +149,7 @@ std::size_t TileExchange::sum_shared(const Comm& comm, const std::vector<LazyArr
       }
       if (!mine_added)
         for (int s = 0; s < kTileNodes; ++s) sum[s] += mine[s];
-      std::copy(sum.begin(), sum.end(), mine);
+      for (int s = 0; s < kTileNodes; ++s) field[base + s] = sum[s];
     }
   }
   return sent;

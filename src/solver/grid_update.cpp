@@ -64,7 +64,7 @@ namespace {
 /// v = momentum / m with the walls at `stage`, written into `target` (zero on empty nodes). For the
 /// remap, `velocity_l` still holds this step's v^L: the contact state of the grid update.
 void wall_projected_velocities(Grid& grid, const Walls& walls, double mass_floor, Walls::Stage stage,
-                               std::array<LazyArray, 3>& target) {
+                               NodeVectors& target) {
   for_active_nodes(grid, [&](std::size_t n, std::uint32_t tile, int slot) {
     const double m = grid.mass[n];
     if (m <= mass_floor) {
@@ -124,7 +124,7 @@ void fold_ghost_nodes(Grid& grid, const Walls& walls, ScatteredFields fields, co
 
 void mirror_ghost_nodes(Grid& grid, const Walls& walls, GhostFields fields) {
   if (!walls.has_mirrored_walls()) return;
-  std::vector<std::array<LazyArray, 3>*> targets;
+  std::vector<NodeVectors*> targets;
   if (fields == GhostFields::AfterGridUpdate) targets = {&grid.momentum, &grid.force, &grid.velocity_l};
   if (fields == GhostFields::Remapped) targets = {&grid.momentum};
   if (fields == GhostFields::Start) targets = {&grid.velocity_l};

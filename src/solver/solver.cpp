@@ -203,7 +203,7 @@ void Solver::redistribute() {
   size_scratch();
 }
 
-void Solver::sum_shared_nodes(const std::vector<LazyArray*>& fields) {
+void Solver::sum_shared_nodes(const std::vector<NodeField>& fields) {
   if (!comm_.distributed()) return;
   exchange_bytes_ += static_cast<std::int64_t>(exchange_.sum_shared(comm_, fields));
 }
@@ -353,8 +353,8 @@ void Solver::step_with(double dt) {
     recorded(rec, RegionSchedule::Static, "grid clear", tiles, 1, [&] { grid_.clear_active(); });
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentumForce, timing);
     if (rec) rec->add_colour_passes("p2g", pass_timing_, sort_, false);
-    sum_shared_nodes({&grid_.mass, &grid_.momentum[0], &grid_.momentum[1], &grid_.momentum[2], &grid_.force[0],
-                      &grid_.force[1], &grid_.force[2]});
+    sum_shared_nodes({grid_.mass, grid_.momentum[0], grid_.momentum[1], grid_.momentum[2], grid_.force[0],
+                      grid_.force[1], grid_.force[2]});
     recorded(rec, RegionSchedule::Static, "fold ghosts", tiles, mirrored,
              [&] { fold_ghost_nodes(grid_, walls_, {.mass = true, .momentum = true, .force = true}, gravity); });
   } else {
@@ -363,7 +363,7 @@ void Solver::step_with(double dt) {
       recorded(rec, RegionSchedule::Static, "grid clear", tiles, 1, [&] { grid_.clear_active(); });
       scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentum, timing);
       if (rec) rec->add_colour_passes("p2g mass momentum", pass_timing_, sort_, false);
-      sum_shared_nodes({&grid_.mass, &grid_.momentum[0], &grid_.momentum[1], &grid_.momentum[2]});
+      sum_shared_nodes({grid_.mass, grid_.momentum[0], grid_.momentum[1], grid_.momentum[2]});
       recorded(rec, RegionSchedule::Static, "start velocities", tiles, 1 + 2 * mirrored, [&] {
         fold_ghost_nodes(grid_, walls_, {.mass = true, .momentum = true}, gravity);
         start_velocities(grid_, walls_, mass_floor_);
@@ -374,7 +374,7 @@ void Solver::step_with(double dt) {
     ScopedPhase timer(times_, Phase::P2G);
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Force, timing);
     if (rec) rec->add_colour_passes("p2g force", pass_timing_, sort_, false);
-    sum_shared_nodes({&grid_.force[0], &grid_.force[1], &grid_.force[2]});
+    sum_shared_nodes({grid_.force[0], grid_.force[1], grid_.force[2]});
     recorded(rec, RegionSchedule::Static, "fold ghosts", tiles, mirrored,
              [&] { fold_ghost_nodes(grid_, walls_, {.force = true}, gravity); });
   }
@@ -413,7 +413,7 @@ void Solver::step_with(double dt) {
   NodeVectors node_velocity = grid_.lagrangian_velocity();
   if (remap) {
     ScopedPhase timer(times_, Phase::Remap);
-    sum_shared_nodes({&grid_.momentum[0], &grid_.momentum[1], &grid_.momentum[2]});
+    sum_shared_nodes({grid_.momentum[0], grid_.momentum[1], grid_.momentum[2]});
     recorded(rec, RegionSchedule::Static, "remap grid", tiles, 1 + 2 * mirrored, [&] {
       fold_ghost_nodes(grid_, walls_, {.momentum = true}, gravity);
       velocities_from_momentum(grid_, walls_, mass_floor_);

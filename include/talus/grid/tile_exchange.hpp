@@ -31,7 +31,7 @@ class TileExchange {
 
   /// Collective: replace each of `fields` on the shared tiles by the sum over their holders, added
   /// in rank order. Returns the bytes this rank sent.
-  std::size_t sum_shared(const Comm& comm, const std::vector<LazyArray*>& fields) const;
+  std::size_t sum_shared(const Comm& comm, const std::vector<NodeField>& fields) const;
 
   /// Per active tile (in Grid::active_tiles order): 1 where this rank counts the tile's node
   /// energies (no lower rank holds it). Empty in a serial run: every tile counts.
