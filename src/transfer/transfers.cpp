@@ -63,6 +63,128 @@ inline void half_widths(const ParticleStore& P, std::size_t p, double inv_h, dou
 
 namespace {
 
+namespace hn = hwy::HWY_NAMESPACE;
+
+/// One particle's scatter into node records with vector registers: a record's 8 doubles are one
+/// AVX-512 vector (two AVX2, more on narrower targets), and every node gets
+/// record += A wz[c] + B gz[c], with, per (a, b) row,
+///   A = (m, m v) wxy | (-V sigma) . (gxy, wgy, 0)   and   B = 0 | (-V sigma) . (0, 0, wxy) (- slope term).
+/// Bits: each field's operations are the scalar scatter's (Mul and Add, no FMA) plus additions of
+/// exact zeros from the lanes of the other fields (0 wxy, 0 gz, ...). Those can only turn a -0 into
+/// +0, and a node sum that starts at +0 never holds -0, so every node ends with the same bits
+/// (tests/solver/isa_paths_test.cpp and the bit-identity tests check it). Fields not scattered
+/// keep their lanes (a blend).
+template <bool with_mass, bool with_momentum, bool with_force>
+class RecordScatter {
+  using D = hn::ScalableTag<double>;
+  using V = hn::Vec<D>;
+  static constexpr int kLanes = static_cast<int>(HWY_LANES(double));
+  static constexpr int kParts = kNodeRecord / kLanes;
+  static_assert(kNodeRecord % kLanes == 0, "a node record is a whole number of vectors");
+  static constexpr bool kAllFields = with_mass && with_momentum && with_force;
+
+ public:
+  RecordScatter() {
+    alignas(64) double written[kNodeRecord] = {};
+    if (with_mass) written[kMassSlot] = 1.0;
+    for (int d = 0; d < 3; ++d) {
+      if (with_momentum) written[kMomentumSlot + d] = 1.0;
+      if (with_force) written[kForceSlot + d] = 1.0;
+    }
+    for (int i = 0; i < kParts; ++i) keep_[i] = hn::Ne(hn::Load(D(), written + i * kLanes), hn::Zero(D()));
+  }
+
+  /// The particle's mass, momentum and -V sigma (Voigt: xx, yy, zz, yz, xz, xy).
+  void set_particle(double m, const double mv[3], const double s[6]) {
+    alignas(64) double p0[kNodeRecord] = {}, s1[kNodeRecord] = {}, s2[kNodeRecord] = {}, s3[kNodeRecord] = {};
+    p0[kMassSlot] = m;
+    for (int d = 0; d < 3; ++d) p0[kMomentumSlot + d] = mv[d];
+    const double rows[3][3] = {{s[0], s[5], s[4]}, {s[5], s[1], s[3]}, {s[4], s[3], s[2]}};  // sigma_dj
+    for (int d = 0; d < 3; ++d) {
+      s1[kForceSlot + d] = rows[d][0];
+      s2[kForceSlot + d] = rows[d][1];
+      s3[kForceSlot + d] = rows[d][2];
+    }
+    for (int i = 0; i < kParts; ++i) {
+      p0_[i] = hn::Load(D(), p0 + i * kLanes);
+      s1_[i] = hn::Load(D(), s1 + i * kLanes);
+      s2_[i] = hn::Load(D(), s2 + i * kLanes);
+      s3_[i] = hn::Load(D(), s3 + i * kLanes);
+    }
+  }
+
+  /// The (a, b) row's factors: wxy = wx wy, gxy = gx wy, wgy = wx gy, and for a terrain grid
+  /// t = z_b' wxy (dN/dx_phys = dN/dx - z_b' dN/dw).
+  template <bool kTerrain>
+  void set_row(double wxy, double gxy, double wgy, double t) {
+    const V w = hn::Set(D(), wxy);
+    [[maybe_unused]] const V g = hn::Set(D(), gxy), wg = hn::Set(D(), wgy);
+    for (int i = 0; i < kParts; ++i) {
+      if constexpr (with_force)
+        a_[i] = hn::Add(hn::Add(hn::Mul(p0_[i], w), hn::Mul(s1_[i], g)), hn::Mul(s2_[i], wg));
+      else
+        a_[i] = hn::Mul(p0_[i], w);
+      if constexpr (with_force) {
+        b_[i] = hn::Mul(s3_[i], w);
+        if constexpr (kTerrain) b_[i] = hn::Sub(b_[i], hn::Mul(s1_[i], hn::Set(D(), t)));
+      }
+    }
+  }
+
+  /// record += A wz + B gz (B only with the force).
+  void add_to(double* record, double wz, double gz) const {
+    const V vw = hn::Set(D(), wz), vg = hn::Set(D(), gz);
+    for (int i = 0; i < kParts; ++i) {
+      const V old = hn::Load(D(), record + i * kLanes);
+      V add = hn::Mul(a_[i], vw);
+      if constexpr (with_force) add = hn::Add(add, hn::Mul(b_[i], vg));
+      const V sum = hn::Add(old, add);
+      hn::Store(kAllFields ? sum : hn::IfThenElse(keep_[i], sum, old), D(), record + i * kLanes);
+    }
+  }
+
+ private:
+  V p0_[kParts], s1_[kParts], s2_[kParts], s3_[kParts], a_[kParts], b_[kParts];
+  hn::Mask<D> keep_[kParts];
+};
+
+/// The velocity change v^L - v (the records' force slots after the grid update) of one particle,
+/// gathered with vector registers: each (a, b) row sums wz[c] record over its nodes, the particle
+/// wxy row. Only the vectors that hold the force slots are loaded; every lane does the scalar
+/// gather's operations in its order, so the force lanes get the same bits (the others are unused).
+class RecordGather {
+  using D = hn::ScalableTag<double>;
+  using V = hn::Vec<D>;
+  static constexpr int kLanes = static_cast<int>(HWY_LANES(double));
+  static constexpr int kFirst = kForceSlot / kLanes, kLast = (kForceSlot + 2) / kLanes;
+  static constexpr int kParts = kLast - kFirst + 1;
+
+ public:
+  void start_particle() {
+    for (int i = 0; i < kParts; ++i) particle_[i] = hn::Zero(D());
+  }
+  void start_row() {
+    for (int i = 0; i < kParts; ++i) row_[i] = hn::Zero(D());
+  }
+  void add_node(const double* record, double wz) {
+    const V w = hn::Set(D(), wz);
+    for (int i = 0; i < kParts; ++i) row_[i] = hn::Add(row_[i], hn::Mul(w, hn::Load(D(), record + (kFirst + i) * kLanes)));
+  }
+  void end_row(double wxy) {
+    const V w = hn::Set(D(), wxy);
+    for (int i = 0; i < kParts; ++i) particle_[i] = hn::Add(particle_[i], hn::Mul(w, row_[i]));
+  }
+  /// sum_i N_i (v^L - v)_i
+  void velocity_change(double out[3]) const {
+    alignas(64) double lanes[kParts * kLanes];
+    for (int i = 0; i < kParts; ++i) hn::Store(particle_[i], D(), lanes + i * kLanes);
+    for (int d = 0; d < 3; ++d) out[d] = lanes[kForceSlot + d - kFirst * kLanes];
+  }
+
+ private:
+  V row_[kParts], particle_[kParts];
+};
+
 // The fields to scatter are template parameters, so each combination compiles to a loop without
 // the tests (the innermost loop runs 8-64 times per particle).
 template <class Shape, class Terrain, bool with_mass, bool with_momentum, bool with_force>
@@ -85,6 +207,7 @@ void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid, Co
       const std::size_t b = blocks[bi];
       const double block_start = timing ? omp_get_wtime() : 0.0;
       ParticleStencil<Shape> stencil;
+      RecordScatter<with_mass, with_momentum, with_force> scatter;
       for (std::size_t p = sort.block_begin(b); p < sort.block_end(b); ++p) {
         double hw[3];
         half_widths<Shape>(P, p, inv_h, hw);
@@ -92,8 +215,9 @@ void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid, Co
         const double mv[3] = {m * P.v[0][p], m * P.v[1][p], m * P.v[2][p]};
         // -V sigma, for f_int = -sum V_p sigma_p grad N (Edo & Matsubara 2015, eq. 22)
         const double vol = P.volume[p];
-        const double sxx = -vol * P.stress[XX][p], syy = -vol * P.stress[YY][p], szz = -vol * P.stress[ZZ][p];
-        const double syz = -vol * P.stress[YZ][p], sxz = -vol * P.stress[XZ][p], sxy = -vol * P.stress[XY][p];
+        double minus_v_sigma[6];
+        for (int c = 0; c < 6; ++c) minus_v_sigma[c] = -vol * P.stress[c][p];
+        scatter.set_particle(m, mv, minus_v_sigma);
         stencil.visit(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw, [&](const auto& s) {
           constexpr int N = std::decay_t<decltype(s)>::N;
           // Sum factorisation: with grad N = (gx wy wz, wx gy wz, wx wy gz) (Stencil::gradient) the
@@ -103,32 +227,9 @@ void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid, Co
             for (int bb = 0; bb < N; ++bb) {
               const std::size_t row = s.ix[a] + s.iy[bb];
               const double wxy = s.wx[a] * s.wy[bb];
-              const double gxy = s.gx[a] * s.wy[bb], wgy = s.wx[a] * s.gy[bb];
-              const double mw = m * wxy;
-              const double mvw[3] = {mv[0] * wxy, mv[1] * wxy, mv[2] * wxy};
-              double fa[3], fb[3];  // f_d = sum_j s_dj dN/dx_j = wz fa_d + gz fb_d
-              if constexpr (with_force) {
-                fa[0] = sxx * gxy + sxy * wgy;
-                fa[1] = sxy * gxy + syy * wgy;
-                fa[2] = sxz * gxy + syz * wgy;
-                fb[0] = sxz * wxy;
-                fb[1] = syz * wxy;
-                fb[2] = szz * wxy;
-                if constexpr (!Terrain::kIsFlat) {  // dN/dx_phys = dN/dx - z_b' dN/dw
-                  const double t = s.terrain_slope * wxy;
-                  fb[0] -= t * sxx;
-                  fb[1] -= t * sxy;
-                  fb[2] -= t * sxz;
-                }
-              }
-              for (int c = 0; c < N; ++c) {
-                double* node = records + (row + s.iz[c]) * kNodeRecord;
-                if constexpr (with_mass) node[kMassSlot] += mw * s.wz[c];
-                if constexpr (with_force)
-                  for (int d = 0; d < 3; ++d) node[kForceSlot + d] += fa[d] * s.wz[c] + fb[d] * s.gz[c];
-                if constexpr (with_momentum)
-                  for (int d = 0; d < 3; ++d) node[kMomentumSlot + d] += mvw[d] * s.wz[c];
-              }
+              scatter.template set_row<!Terrain::kIsFlat>(wxy, s.gx[a] * s.wy[bb], s.wx[a] * s.gy[bb],
+                                                          s.terrain_slope * wxy);
+              for (int c = 0; c < N; ++c) scatter.add_to(records + (row + s.iz[c]) * kNodeRecord, s.wz[c], s.gz[c]);
             }
         });
       }
@@ -186,6 +287,9 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::arra
     const std::size_t b = block_list(bi);
     const double block_start = block_seconds ? omp_get_wtime() : 0.0;
     ParticleStencil<Shape> stencil;
+    RecordGather dv_gather;
+    RecordScatter<false, true, false> remap_scatter;
+    static constexpr double kNoStress[6] = {0, 0, 0, 0, 0, 0};
     const auto origin = sort.block_origin(b);
     double damped = 0.0;  // kinetic energy the PIC share removed in this block
     for (std::size_t p = sort.block_begin(b); p < sort.block_end(b); ++p) {
@@ -194,26 +298,24 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::arra
       bool finite = true;
       stencil.visit(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw, [&](const auto& s) {
         constexpr int N = std::decay_t<decltype(s)>::N;
-        double dvp[3] = {0, 0, 0}, vlp[3] = {0, 0, 0};
+        double dvp[3], vlp[3] = {0, 0, 0};
         // Sum factorisation: N = wx wy wz, so each (a, b) row sums wz-weighted values first.
+        dv_gather.start_particle();
         for (int a = 0; a < N; ++a)
           for (int bb = 0; bb < N; ++bb) {
             const std::size_t row = s.ix[a] + s.iy[bb];
-            double row_dv[3] = {0, 0, 0}, row_vl[3] = {0, 0, 0};
+            double row_vl[3] = {0, 0, 0};
+            dv_gather.start_row();
             for (int c = 0; c < N; ++c) {
               const std::size_t n = row + s.iz[c];
-              const double* dv = records + n * kNodeRecord + kForceSlot;
-              for (int d = 0; d < 3; ++d) {
-                row_dv[d] += s.wz[c] * dv[d];
-                row_vl[d] += s.wz[c] * vl[d][n];
-              }
+              dv_gather.add_node(records + n * kNodeRecord, s.wz[c]);
+              for (int d = 0; d < 3; ++d) row_vl[d] += s.wz[c] * vl[d][n];
             }
             const double wxy = s.wx[a] * s.wy[bb];
-            for (int d = 0; d < 3; ++d) {
-              dvp[d] += wxy * row_dv[d];
-              vlp[d] += wxy * row_vl[d];
-            }
+            dv_gather.end_row(wxy);
+            for (int d = 0; d < 3; ++d) vlp[d] += wxy * row_vl[d];
           }
+        dv_gather.velocity_change(dvp);
         if (pic_fraction > 0.0) {
           // v_p = (1 - beta) (v_p + sum N dv) + beta sum N v^L: the PIC share beta damps the particle
           // velocity's part that the grid cannot represent; the kinetic energy it removes is counted
@@ -235,15 +337,12 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::arra
         if constexpr (remap) {
           const double m = P.mass[p];
           const double mv[3] = {m * P.v[0][p], m * P.v[1][p], m * P.v[2][p]};
+          remap_scatter.set_particle(m, mv, kNoStress);  // as scatter_to_grid's Momentum
           for (int a = 0; a < N; ++a)
             for (int bb = 0; bb < N; ++bb) {
               const std::size_t row = s.ix[a] + s.iy[bb];
-              const double wxy = s.wx[a] * s.wy[bb];
-              const double mvw[3] = {mv[0] * wxy, mv[1] * wxy, mv[2] * wxy};
-              for (int c = 0; c < N; ++c) {
-                double* node = records + (row + s.iz[c]) * kNodeRecord;
-                for (int d = 0; d < 3; ++d) node[kMomentumSlot + d] += mvw[d] * s.wz[c];  // as scatter_to_grid's Momentum
-              }
+              remap_scatter.template set_row<false>(s.wx[a] * s.wy[bb], 0.0, 0.0, 0.0);
+              for (int c = 0; c < N; ++c) remap_scatter.add_to(records + (row + s.iz[c]) * kNodeRecord, s.wz[c], 0.0);
             }
         }
       });
