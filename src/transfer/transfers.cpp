@@ -433,46 +433,127 @@ GatherResult gather_impl(ParticleStore& P, const CellSort& sort, Grid& grid,
 
 namespace {
 
-// The node velocities' stride is a template parameter (kNodeRecord for the records' momentum
-// slots after the MUSL remap, 1 for v^L's arrays): with a run-time stride the compiler keeps a
-// multiply per load and the loop ran 20% slower.
-template <class Shape, class Terrain, std::size_t kStride>
-void strain_loop(const ParticleStore& P, const Grid& grid, const NodeVectors& nv,
+/// The velocity gradient's sums for the strain pass (Stencil::gradient, sum-factorised): per (a, b)
+/// row S_i = sum_c v_i wz[c] and G_i = sum_c v_i gz[c], then L_i. += (gxy S_i - slope wxy G_i,
+/// wgy S_i, wxy G_i). Two implementations with one interface: node velocities in plain arrays of a
+/// given stride (scalar), and the records' momentum slots (vectors; every lane does the scalar
+/// operations in their order, so the three velocity lanes get the same bits).
+template <std::size_t kStride>
+class StridedVelocityGradient {
+ public:
+  explicit StridedVelocityGradient(const NodeVectors& nv) : velocity_{nv[0].data(), nv[1].data(), nv[2].data()} {}
+  void start_particle() {
+    for (auto& row : L_) row[0] = row[1] = row[2] = 0.0;
+  }
+  void start_row() {
+    for (int i = 0; i < 3; ++i) sw_[i] = sg_[i] = 0.0;
+  }
+  void add_node(std::size_t n, double wz, double gz) {
+    for (int i = 0; i < 3; ++i) {
+      const double vi = velocity_[i][n * kStride];
+      sw_[i] += vi * wz;
+      sg_[i] += vi * gz;
+    }
+  }
+  template <bool kTerrain>
+  void end_row(double gxy, double wgy, double wxy, double slope) {
+    for (int i = 0; i < 3; ++i) {
+      double dx = gxy * sw_[i];
+      const double dz = wxy * sg_[i];
+      if constexpr (kTerrain) dx -= slope * dz;  // dN/dx_phys = dN/dx - z_b' dN/dw
+      L_[i][0] += dx;
+      L_[i][1] += wgy * sw_[i];
+      L_[i][2] += dz;
+    }
+  }
+  void gradient(double L[3][3]) const {
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) L[i][j] = L_[i][j];
+  }
+
+ private:
+  const double* velocity_[3];
+  double sw_[3], sg_[3], L_[3][3];
+};
+
+class RecordVelocityGradient {
+  using D = hn::ScalableTag<double>;
+  using V = hn::Vec<D>;
+  static constexpr int kLanes = static_cast<int>(HWY_LANES(double));
+  static constexpr int kFirst = kMomentumSlot / kLanes, kLast = (kMomentumSlot + 2) / kLanes;
+  static constexpr int kParts = kLast - kFirst + 1;
+
+ public:
+  explicit RecordVelocityGradient(const Grid& grid) : records_(grid.records()) {}
+  void start_particle() {
+    for (int i = 0; i < kParts; ++i) lx_[i] = ly_[i] = lz_[i] = hn::Zero(D());
+  }
+  void start_row() {
+    for (int i = 0; i < kParts; ++i) sw_[i] = sg_[i] = hn::Zero(D());
+  }
+  void add_node(std::size_t n, double wz, double gz) {
+    const V w = hn::Set(D(), wz), g = hn::Set(D(), gz);
+    const double* record = records_ + n * kNodeRecord;
+    for (int i = 0; i < kParts; ++i) {
+      const V v = hn::Load(D(), record + (kFirst + i) * kLanes);
+      sw_[i] = hn::Add(sw_[i], hn::Mul(v, w));
+      sg_[i] = hn::Add(sg_[i], hn::Mul(v, g));
+    }
+  }
+  template <bool kTerrain>
+  void end_row(double gxy, double wgy, double wxy, double slope) {
+    const V gx = hn::Set(D(), gxy), wg = hn::Set(D(), wgy), w = hn::Set(D(), wxy);
+    for (int i = 0; i < kParts; ++i) {
+      V dx = hn::Mul(gx, sw_[i]);
+      const V dz = hn::Mul(w, sg_[i]);
+      if constexpr (kTerrain) dx = hn::Sub(dx, hn::Mul(hn::Set(D(), slope), dz));
+      lx_[i] = hn::Add(lx_[i], dx);
+      ly_[i] = hn::Add(ly_[i], hn::Mul(wg, sw_[i]));
+      lz_[i] = hn::Add(lz_[i], dz);
+    }
+  }
+  void gradient(double L[3][3]) const {
+    alignas(64) double x[kParts * kLanes], y[kParts * kLanes], z[kParts * kLanes];
+    for (int i = 0; i < kParts; ++i) {
+      hn::Store(lx_[i], D(), x + i * kLanes);
+      hn::Store(ly_[i], D(), y + i * kLanes);
+      hn::Store(lz_[i], D(), z + i * kLanes);
+    }
+    for (int i = 0; i < 3; ++i) {
+      const int lane = kMomentumSlot + i - kFirst * kLanes;
+      L[i][0] = x[lane];
+      L[i][1] = y[lane];
+      L[i][2] = z[lane];
+    }
+  }
+
+ private:
+  const double* records_;
+  V sw_[kParts], sg_[kParts], lx_[kParts], ly_[kParts], lz_[kParts];
+};
+
+template <class Shape, class Terrain, class Gradient>
+void strain_loop(const ParticleStore& P, const Grid& grid, Gradient gradient,
                  double dt, std::size_t begin, std::size_t end, StrainIncrements& out) {
-  const double* const velocity[3] = {nv[0].data(), nv[1].data(), nv[2].data()};
   const Terrain& terrain = grid.template terrain<Terrain>();
   const double h = grid.geometry().h;
   ParticleStencil<Shape> stencil;
   for (std::size_t p = begin; p < end; ++p) {
     double hw[3];
     half_widths<Shape>(P, p, 1.0 / h, hw);
-    double L[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  // L_ij = dv_i / dx_j
+    double L[3][3];  // L_ij = dv_i / dx_j
     stencil.visit(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw, [&](const auto& s) {
       constexpr int N = std::decay_t<decltype(s)>::N;
-      // Sum factorisation: with grad N = (gx wy wz, wx gy wz, wx wy gz) (Stencil::gradient),
-      // L_i. = sum_(a,b) (gxy S_i, wgy S_i, wxy G_i) with S_i = sum_c v_i wz[c], G_i = sum_c v_i gz[c].
+      gradient.start_particle();
       for (int a = 0; a < N; ++a)
         for (int bb = 0; bb < N; ++bb) {
           const std::size_t row = s.ix[a] + s.iy[bb];
-          double sw[3] = {0, 0, 0}, sg[3] = {0, 0, 0};
-          for (int c = 0; c < N; ++c) {
-            const std::size_t n = row + s.iz[c];
-            for (int i = 0; i < 3; ++i) {
-              const double vi = velocity[i][n * kStride];
-              sw[i] += vi * s.wz[c];
-              sg[i] += vi * s.gz[c];
-            }
-          }
-          const double gxy = s.gx[a] * s.wy[bb], wgy = s.wx[a] * s.gy[bb], wxy = s.wx[a] * s.wy[bb];
-          for (int i = 0; i < 3; ++i) {
-            double dx = gxy * sw[i];
-            const double dz = wxy * sg[i];
-            if constexpr (!Terrain::kIsFlat) dx -= s.terrain_slope * dz;  // dN/dx_phys = dN/dx - z_b' dN/dw
-            L[i][0] += dx;
-            L[i][1] += wgy * sw[i];
-            L[i][2] += dz;
-          }
+          gradient.start_row();
+          for (int c = 0; c < N; ++c) gradient.add_node(row + s.iz[c], s.wz[c], s.gz[c]);
+          gradient.template end_row<!Terrain::kIsFlat>(s.gx[a] * s.wy[bb], s.wx[a] * s.gy[bb], s.wx[a] * s.wy[bb],
+                                                       s.terrain_slope);
         }
+      gradient.gradient(L);
     });
     const std::size_t k = p - begin;
     // Edo & Matsubara 2015, eq. 33: d_eps = dt/2 (L + L^T); spin dW = dt/2 (L - L^T)
@@ -493,10 +574,17 @@ void strain_loop(const ParticleStore& P, const Grid& grid, const NodeVectors& nv
 template <class Shape, class Terrain>
 void strain_impl(const ParticleStore& P, const Grid& grid, const NodeVectors& nv,
                  double dt, std::size_t begin, std::size_t end, StrainIncrements& out) {
-  if (nv[0].stride() == kNodeRecord && nv[1].stride() == kNodeRecord && nv[2].stride() == kNodeRecord)
-    strain_loop<Shape, Terrain, kNodeRecord>(P, grid, nv, dt, begin, end, out);
-  else if (nv[0].stride() == 1 && nv[1].stride() == 1 && nv[2].stride() == 1)
-    strain_loop<Shape, Terrain, 1>(P, grid, nv, dt, begin, end, out);
+  auto strides_are = [&nv](std::size_t stride) {
+    return nv[0].stride() == stride && nv[1].stride() == stride && nv[2].stride() == stride;
+  };
+  const bool record_velocity = strides_are(kNodeRecord) && nv[0].data() == grid.records() + kMomentumSlot &&
+                               nv[1].data() == nv[0].data() + 1 && nv[2].data() == nv[0].data() + 2;
+  if (record_velocity)  // the remapped v (MUSL)
+    strain_loop<Shape, Terrain>(P, grid, RecordVelocityGradient(grid), dt, begin, end, out);
+  else if (strides_are(1))  // v^L's arrays
+    strain_loop<Shape, Terrain>(P, grid, StridedVelocityGradient<1>(nv), dt, begin, end, out);
+  else if (strides_are(kNodeRecord))
+    strain_loop<Shape, Terrain>(P, grid, StridedVelocityGradient<kNodeRecord>(nv), dt, begin, end, out);
   else
     throw std::logic_error("strain_increments: node velocities of mixed strides");
 }
