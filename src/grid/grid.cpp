@@ -16,13 +16,13 @@ Grid::Grid(const GridGeometry& geometry) : geometry_(geometry), profile_(grid_be
   stride_x_ = static_cast<std::size_t>(tiles_[1]) * stride_y_;
   const std::size_t count = tile_count() * kTileNodes;
   records_ = LazyArray(count * kNodeRecord);
+  lagrangian_ = LazyArray(count * kLagrangianRecord);
   double* r = records_.data();
   mass = NodeField(r + kMassSlot, kNodeRecord);
   for (int d = 0; d < 3; ++d) {
     momentum[d] = NodeField(r + kMomentumSlot + d, kNodeRecord);
     force[d] = NodeField(r + kForceSlot + d, kNodeRecord);
-    lagrangian_[d] = LazyArray(count);
-    velocity_l[d] = NodeField(lagrangian_[d].data(), 1);
+    velocity_l[d] = NodeField(lagrangian_.data() + d, kLagrangianRecord);
   }
 }
 
@@ -41,7 +41,7 @@ void Grid::clear_active() {
   for (std::size_t t = 0; t < count; ++t) {
     const std::size_t begin = static_cast<std::size_t>(tiles[t]) * kTileNodes;
     std::fill_n(r + begin * kNodeRecord, kTileNodes * kNodeRecord, 0.0);
-    for (int d = 0; d < 3; ++d) std::fill_n(lagrangian_[d].data() + begin, kTileNodes, 0.0);
+    std::fill_n(lagrangian_.data() + begin * kLagrangianRecord, kTileNodes * kLagrangianRecord, 0.0);
   }
 }
 

@@ -148,40 +148,45 @@ class RecordScatter {
   hn::Mask<D> keep_[kParts];
 };
 
-/// The velocity change v^L - v (the records' force slots after the grid update) of one particle,
-/// gathered with vector registers: each (a, b) row sums wz[c] record over its nodes, the particle
-/// wxy row. Only the vectors that hold the force slots are loaded; every lane does the scalar
-/// gather's operations in its order, so the force lanes get the same bits (the others are unused).
+/// One node vector (3 doubles at `kSlot` of records of `kStride` doubles: v^L - v in the node
+/// records' force slots after the grid update, or v^L in its own records) interpolated to a particle
+/// with vector registers: each (a, b) row sums wz[c] record over its nodes, the particle wxy row.
+/// Only the vectors that hold the three slots are loaded; every lane does the scalar gather's
+/// operations in its order, so those lanes get the same bits (the others are unused).
+template <int kStride, int kSlot>
 class RecordGather {
-  using D = hn::ScalableTag<double>;
+  using D = hn::CappedTag<double, kStride>;
   using V = hn::Vec<D>;
-  static constexpr int kLanes = static_cast<int>(HWY_LANES(double));
-  static constexpr int kFirst = kForceSlot / kLanes, kLast = (kForceSlot + 2) / kLanes;
+  static constexpr int kLanes = static_cast<int>(hn::MaxLanes(D()));
+  static constexpr int kFirst = kSlot / kLanes, kLast = (kSlot + 2) / kLanes;
   static constexpr int kParts = kLast - kFirst + 1;
 
  public:
+  explicit RecordGather(const double* records) : records_(records) {}
   void start_particle() {
     for (int i = 0; i < kParts; ++i) particle_[i] = hn::Zero(D());
   }
   void start_row() {
     for (int i = 0; i < kParts; ++i) row_[i] = hn::Zero(D());
   }
-  void add_node(const double* record, double wz) {
+  void add_node(std::size_t n, double wz) {
     const V w = hn::Set(D(), wz);
+    const double* record = records_ + n * kStride;
     for (int i = 0; i < kParts; ++i) row_[i] = hn::Add(row_[i], hn::Mul(w, hn::Load(D(), record + (kFirst + i) * kLanes)));
   }
   void end_row(double wxy) {
     const V w = hn::Set(D(), wxy);
     for (int i = 0; i < kParts; ++i) particle_[i] = hn::Add(particle_[i], hn::Mul(w, row_[i]));
   }
-  /// sum_i N_i (v^L - v)_i
-  void velocity_change(double out[3]) const {
+  /// sum_i N_i u_i
+  void value(double out[3]) const {
     alignas(64) double lanes[kParts * kLanes];
     for (int i = 0; i < kParts; ++i) hn::Store(particle_[i], D(), lanes + i * kLanes);
-    for (int d = 0; d < 3; ++d) out[d] = lanes[kForceSlot + d - kFirst * kLanes];
+    for (int d = 0; d < 3; ++d) out[d] = lanes[kSlot + d - kFirst * kLanes];
   }
 
  private:
+  const double* records_;
   V row_[kParts], particle_[kParts];
 };
 
@@ -278,7 +283,7 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::arra
   const auto nodes = g.nodes();
   // v^L - v is the force slots of the node records (grid.velocity_change()), v^L its own arrays
   double* const records = grid.records();
-  const double* vl[3] = {grid.velocity_l[0].data(), grid.velocity_l[1].data(), grid.velocity_l[2].data()};
+
   double* disp[3] = {displacement[0].data(), displacement[1].data(), displacement[2].data()};
   bool needs_sort = flags.needs_sort, large = flags.large_displacement, crossing = flags.crosses_open_face;
   long long nonfinite = flags.nonfinite, outside = flags.outside;
@@ -287,7 +292,8 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::arra
     const std::size_t b = block_list(bi);
     const double block_start = block_seconds ? omp_get_wtime() : 0.0;
     ParticleStencil<Shape> stencil;
-    RecordGather dv_gather;
+    RecordGather<kNodeRecord, kForceSlot> dv_gather(records);              // v^L - v
+    RecordGather<kLagrangianRecord, 0> vl_gather(grid.lagrangian_records());  // v^L
     RecordScatter<false, true, false> remap_scatter;
     static constexpr double kNoStress[6] = {0, 0, 0, 0, 0, 0};
     const auto origin = sort.block_origin(b);
@@ -298,24 +304,26 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::arra
       bool finite = true;
       stencil.visit(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw, [&](const auto& s) {
         constexpr int N = std::decay_t<decltype(s)>::N;
-        double dvp[3], vlp[3] = {0, 0, 0};
+        double dvp[3], vlp[3];
         // Sum factorisation: N = wx wy wz, so each (a, b) row sums wz-weighted values first.
         dv_gather.start_particle();
+        vl_gather.start_particle();
         for (int a = 0; a < N; ++a)
           for (int bb = 0; bb < N; ++bb) {
             const std::size_t row = s.ix[a] + s.iy[bb];
-            double row_vl[3] = {0, 0, 0};
             dv_gather.start_row();
+            vl_gather.start_row();
             for (int c = 0; c < N; ++c) {
               const std::size_t n = row + s.iz[c];
-              dv_gather.add_node(records + n * kNodeRecord, s.wz[c]);
-              for (int d = 0; d < 3; ++d) row_vl[d] += s.wz[c] * vl[d][n];
+              dv_gather.add_node(n, s.wz[c]);
+              vl_gather.add_node(n, s.wz[c]);
             }
             const double wxy = s.wx[a] * s.wy[bb];
             dv_gather.end_row(wxy);
-            for (int d = 0; d < 3; ++d) vlp[d] += wxy * row_vl[d];
+            vl_gather.end_row(wxy);
           }
-        dv_gather.velocity_change(dvp);
+        dv_gather.value(dvp);
+        vl_gather.value(vlp);
         if (pic_fraction > 0.0) {
           // v_p = (1 - beta) (v_p + sum N dv) + beta sum N v^L: the PIC share beta damps the particle
           // velocity's part that the grid cannot represent; the kinetic energy it removes is counted
@@ -476,15 +484,16 @@ class StridedVelocityGradient {
   double sw_[3], sg_[3], L_[3][3];
 };
 
+template <int kStride, int kSlot>
 class RecordVelocityGradient {
-  using D = hn::ScalableTag<double>;
+  using D = hn::CappedTag<double, kStride>;
   using V = hn::Vec<D>;
-  static constexpr int kLanes = static_cast<int>(HWY_LANES(double));
-  static constexpr int kFirst = kMomentumSlot / kLanes, kLast = (kMomentumSlot + 2) / kLanes;
+  static constexpr int kLanes = static_cast<int>(hn::MaxLanes(D()));
+  static constexpr int kFirst = kSlot / kLanes, kLast = (kSlot + 2) / kLanes;
   static constexpr int kParts = kLast - kFirst + 1;
 
  public:
-  explicit RecordVelocityGradient(const Grid& grid) : records_(grid.records()) {}
+  explicit RecordVelocityGradient(const double* records) : records_(records) {}
   void start_particle() {
     for (int i = 0; i < kParts; ++i) lx_[i] = ly_[i] = lz_[i] = hn::Zero(D());
   }
@@ -493,7 +502,7 @@ class RecordVelocityGradient {
   }
   void add_node(std::size_t n, double wz, double gz) {
     const V w = hn::Set(D(), wz), g = hn::Set(D(), gz);
-    const double* record = records_ + n * kNodeRecord;
+    const double* record = records_ + n * kStride;
     for (int i = 0; i < kParts; ++i) {
       const V v = hn::Load(D(), record + (kFirst + i) * kLanes);
       sw_[i] = hn::Add(sw_[i], hn::Mul(v, w));
@@ -520,7 +529,7 @@ class RecordVelocityGradient {
       hn::Store(lz_[i], D(), z + i * kLanes);
     }
     for (int i = 0; i < 3; ++i) {
-      const int lane = kMomentumSlot + i - kFirst * kLanes;
+      const int lane = kSlot + i - kFirst * kLanes;
       L[i][0] = x[lane];
       L[i][1] = y[lane];
       L[i][2] = z[lane];
@@ -577,14 +586,18 @@ void strain_impl(const ParticleStore& P, const Grid& grid, const NodeVectors& nv
   auto strides_are = [&nv](std::size_t stride) {
     return nv[0].stride() == stride && nv[1].stride() == stride && nv[2].stride() == stride;
   };
-  const bool record_velocity = strides_are(kNodeRecord) && nv[0].data() == grid.records() + kMomentumSlot &&
-                               nv[1].data() == nv[0].data() + 1 && nv[2].data() == nv[0].data() + 2;
-  if (record_velocity)  // the remapped v (MUSL)
-    strain_loop<Shape, Terrain>(P, grid, RecordVelocityGradient(grid), dt, begin, end, out);
-  else if (strides_are(1))  // v^L's arrays
+  const bool remapped = strides_are(kNodeRecord) && nv[0].data() == grid.records() + kMomentumSlot &&
+                        nv[1].data() == nv[0].data() + 1 && nv[2].data() == nv[0].data() + 2;
+  const bool lagrangian = strides_are(kLagrangianRecord) && nv[0].data() == grid.lagrangian_records() &&
+                          nv[1].data() == nv[0].data() + 1 && nv[2].data() == nv[0].data() + 2;
+  if (remapped)  // v after the MUSL remap: the node records' momentum slots
+    strain_loop<Shape, Terrain>(P, grid, RecordVelocityGradient<kNodeRecord, kMomentumSlot>(grid.records()), dt, begin,
+                                end, out);
+  else if (lagrangian)  // v^L (USL), the start velocities (USF, USAVG)
+    strain_loop<Shape, Terrain>(P, grid, RecordVelocityGradient<kLagrangianRecord, 0>(grid.lagrangian_records()), dt,
+                                begin, end, out);
+  else if (strides_are(1))
     strain_loop<Shape, Terrain>(P, grid, StridedVelocityGradient<1>(nv), dt, begin, end, out);
-  else if (strides_are(kNodeRecord))
-    strain_loop<Shape, Terrain>(P, grid, StridedVelocityGradient<kNodeRecord>(nv), dt, begin, end, out);
   else
     throw std::logic_error("strain_increments: node velocities of mixed strides");
 }

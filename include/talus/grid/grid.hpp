@@ -34,6 +34,8 @@ inline constexpr int kTileNodes = kTileEdge * kTileEdge * kTileEdge;
 /// Doubles per node record: mass, momentum (3), force (3) and one unused slot (64 bytes, a cache line).
 inline constexpr int kNodeRecord = 8;
 inline constexpr int kMassSlot = 0, kMomentumSlot = 1, kForceSlot = 4;
+/// Doubles per Lagrangian-velocity record: v^L (3) and one unused slot (two nodes a cache line).
+inline constexpr int kLagrangianRecord = 4;
 
 /// One scalar node field: node n's value is base[n * stride] (stride kNodeRecord inside the node
 /// records, 1 for a plain array). A view: it does not own the memory.
@@ -167,13 +169,15 @@ class Grid {
   NodeVectors force;
   NodeVectors velocity_l;
   /// Doubles stored per node: the record (with its unused slot) and the Lagrangian velocity.
-  static constexpr int kFieldCount = kNodeRecord + 3;
+  static constexpr int kFieldCount = kNodeRecord + kLagrangianRecord;
 
   /// The record of node n: mass, momentum and force at kMassSlot, kMomentumSlot, kForceSlot.
   double* record(std::size_t n) { return records_.data() + n * kNodeRecord; }
   const double* record(std::size_t n) const { return records_.data() + n * kNodeRecord; }
   double* records() { return records_.data(); }
   const double* records() const { return records_.data(); }
+  /// v^L of node n is lagrangian_records()[n * kLagrangianRecord + d].
+  const double* lagrangian_records() const { return lagrangian_.data(); }
 
   /// v_i: `momentum` after update_grid, velocities_from_momentum (the remap) or start_velocities' input.
   const NodeVectors& velocity() const { return momentum; }
@@ -192,7 +196,7 @@ class Grid {
   std::size_t stride_x_ = 0, stride_y_ = 0;
   std::vector<std::uint32_t> active_tiles_;
   LazyArray records_;                         // kNodeRecord doubles per node
-  std::array<LazyArray, 3> lagrangian_;       // velocity_l's arrays
+  LazyArray lagrangian_;                      // kLagrangianRecord doubles per node
 };
 
 }  // namespace talus
