@@ -13,7 +13,8 @@
 // Node records. The fields the scatter writes together (mass, momentum, force) sit side by side in
 // one 64-byte record per node, so that a particle's P2G touches one cache line per node instead of
 // seven, and the gather reads the velocity change from the same line; the Lagrangian velocity
-// keeps its own arrays (a fourth field would need a second line). NodeField is one field's strided
+// v^L has records of its own (4 doubles: two nodes a line). The transfers load and store records
+// as vectors (transfer/transfers.cpp); NodeField is one field's strided
 // view of the records (or of a plain array, stride 1).
 #include "talus/core/lazy_array.hpp"
 #include "talus/core/types.hpp"
@@ -161,8 +162,8 @@ class Grid {
   std::size_t active_bytes() const;
 
   // Node fields, as scattered: mass, momentum m v, force f (views of the node records), and the
-  // Lagrangian velocity (own arrays). The grid update turns them in place into velocities (10
-  // doubles a node, not 16), so after it read them through the views below, which name what each
+  // Lagrangian velocity (its own records). The grid update turns them in place into velocities
+  // (12 doubles a node, not 18), so after it read them through the views below, which name what each
   // field holds at that point of the step (grid_update.hpp).
   NodeField mass;
   NodeVectors momentum;
