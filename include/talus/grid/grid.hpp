@@ -179,6 +179,7 @@ class Grid {
   const double* records() const { return records_.data(); }
   /// v^L of node n is lagrangian_records()[n * kLagrangianRecord + d].
   const double* lagrangian_records() const { return lagrangian_.data(); }
+  double* lagrangian_record(std::size_t n) { return lagrangian_.data() + n * kLagrangianRecord; }
 
   /// v_i: `momentum` after update_grid, velocities_from_momentum (the remap) or start_velocities' input.
   const NodeVectors& velocity() const { return momentum; }
