@@ -19,6 +19,10 @@ DruckerPragerKernelConstants lane_constants(const std::vector<DruckerPrager>& mo
   c.hardening_isotropic = m.hardening_isotropic();
   c.shear_plus_kinematic = m.shear_modulus() + m.hardening_kinematic();
   c.first_invariant_cutoff = m.first_invariant_cutoff();
+  const double g = m.shear_modulus(), hk = m.hardening_kinematic(), hi = m.hardening_isotropic();
+  c.three_bulk = 3.0 * m.bulk_modulus();
+  c.corner_denominator = g + hk + hi;
+  c.two_shear_plus_kinematic = 2.0 * (g + hk);
   c.separation_volume_ratio = granular.separation_volume_ratio;
   c.flowing_plastic_strain = granular.flowing_plastic_strain;
   for (int i = 0; i < 2; ++i) {

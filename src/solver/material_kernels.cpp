@@ -8,6 +8,8 @@
 
 #include <hwy/highway.h>
 
+#include <limits>
+
 #include "talus/core/tensor.hpp"
 #include "talus/solver/material_kernels.hpp"
 
@@ -102,6 +104,66 @@ HWY_ATTR KernelStop ElasticLanes(const MaterialKernelFields& f, const ElasticKer
   return {p, end - p};
 }
 
+// DruckerPrager::plastic_return, steps 4-5, for the lanes in `rest` (outside the elastic domain and
+// not returned to the cone), without a back stress (H_kin = 0: it stays +0, and the reference's
+// terms with it are kept as it writes them, so every lane gets its bits): the tension cut-off
+// alone, the cone/cut-off corner, or the apex. Writes those lanes of stress, eps_p and the work
+// density; false where an apex lane's k_new / alpha equals the cut-off (std::fmin's choice between
+// +0 and -0 is not Min's).
+template <class Mask>
+HWY_ATTR bool return_to_cutoff_or_apex(const DruckerPragerKernelConstants& m, Mask rest, V i1, V xi_norm, V q, V k,
+                                       const V (&xi)[6],
+                                       const V (&trial)[6], V (&stress)[6], V& eps_p, V& plastic_work) {
+  const D d;
+  const V zero = hn::Zero(d), third = hn::Set(d, 3.0), sqrt2 = hn::Set(d, 1.4142135623730951);
+  const V alpha = hn::Set(d, m.alpha), hi = hn::Set(d, m.hardening_isotropic), gk = hn::Set(d, m.shear_plus_kinematic);
+  const V cutoff = hn::Set(d, m.first_invariant_cutoff), three_bulk = hn::Set(d, m.three_bulk);
+  // beta : xi with beta = +0, as double_contract(beta, xi) sums it
+  const V beta_xi = hn::Add(hn::Add(hn::Add(hn::Mul(zero, xi[0]), hn::Mul(zero, xi[1])), hn::Mul(zero, xi[2])),
+                            hn::Mul(hn::Set(d, 2.0), hn::Add(hn::Add(hn::Mul(zero, xi[3]), hn::Mul(zero, xi[4])),
+                                                              hn::Mul(zero, xi[5]))));
+  auto apex = rest;
+  if (m.first_invariant_cutoff < std::numeric_limits<double>::infinity()) {
+    // 4. Tension cut-off: I1 = 3 p_t with purely volumetric flow
+    const V de_v_plastic = hn::Div(hn::Sub(i1, cutoff), three_bulk);
+    const V t = hn::Sub(hn::Add(hn::Mul(alpha, cutoff), q), k);
+    const auto alone = hn::And(rest, hn::Le(t, zero));
+    const V shift = hn::Div(hn::Sub(cutoff, i1), third);
+    const V cutoff_work = hn::Mul(hn::Div(cutoff, third), de_v_plastic);
+    //    ... or at the cone/cut-off corner: dl from f = 0 on the plane, a radial return of xi
+    const V dl = hn::Div(t, hn::Set(d, m.corner_denominator));
+    const V q_new = hn::Sub(q, hn::Mul(gk, dl));
+    const auto corner = hn::AndNot(alone, hn::And(rest, hn::Ge(q_new, zero)));
+    const V scale = hn::Div(q_new, q);
+    const V m_new = hn::Div(cutoff, third);
+    for (int c = 0; c < 6; ++c) {
+      V at_corner = hn::Add(hn::Mul(scale, xi[c]), zero);
+      if (c < 3) at_corner = hn::Add(at_corner, m_new);
+      const V cut = c < 3 ? hn::Add(trial[c], shift) : trial[c];
+      stress[c] = hn::IfThenElse(alone, cut, hn::IfThenElse(corner, at_corner, stress[c]));
+    }
+    const V beta_n = hn::Div(beta_xi, hn::Mul(sqrt2, xi_norm));  // beta : n / sqrt2
+    const V corner_work = hn::Add(cutoff_work, hn::Mul(dl, hn::Add(q_new, beta_n)));
+    plastic_work = hn::IfThenElse(alone, cutoff_work, hn::IfThenElse(corner, corner_work, plastic_work));
+    eps_p = hn::IfThenElse(corner, hn::Add(eps_p, dl), eps_p);
+    apex = hn::AndNot(hn::Or(alone, corner), rest);
+  }
+  if (hn::AllFalse(d, apex)) return true;
+  // 5. Apex: xi -> 0, dl = q / (G + H_kin), I1 = min(k_new / alpha, 3 p_t)
+  const V dl = hn::Div(q, gk);
+  const V k_new = hn::Add(k, hn::Mul(hi, dl));
+  const V on_cone = hn::Div(k_new, alpha);
+  if (!hn::AllFalse(d, hn::And(apex, hn::Eq(on_cone, cutoff)))) return false;
+  const V i1_new = hn::Min(on_cone, cutoff);
+  const V de_v_plastic = hn::Div(hn::Sub(i1, i1_new), three_bulk);
+  const V m_new = hn::Div(i1_new, third);
+  for (int c = 0; c < 6; ++c) stress[c] = hn::IfThenElse(apex, c < 3 ? hn::Add(zero, m_new) : zero, stress[c]);
+  const V apex_work = hn::Add(hn::Mul(m_new, de_v_plastic), hn::Div(beta_xi, hn::Set(d, m.two_shear_plus_kinematic)));
+  plastic_work = hn::IfThenElse(apex, apex_work, plastic_work);
+  eps_p = hn::IfThenElse(apex, hn::Add(eps_p, dl), eps_p);
+  return true;
+}
+
 HWY_ATTR KernelStop DruckerPragerLanes(const MaterialKernelFields& f, const DruckerPragerKernelConstants& m,
                                        std::size_t begin, std::size_t end, double& dissipated) {
   const D d;
@@ -142,20 +204,27 @@ HWY_ATTR KernelStop DruckerPragerLanes(const MaterialKernelFields& f, const Druc
     const V q_new = hn::Sub(q, hn::Mul(gk, dl));
     const V i1_new = hn::Sub(i1, hn::Mul(dilation, dl));
     const auto cone = hn::And(hn::And(hn::Gt(fy, zero), hn::Ge(q_new, zero)), hn::Le(i1_new, cutoff));
-    if (!hn::AllTrue(d, hn::Or(elastic, cone))) return {p, n};  // apex, cut-off or non-finite: reference
+    if (!hn::AllTrue(d, hn::IsFinite(fy))) return {p, n};  // a non-finite input: reference
     const V scale = hn::Div(q_new, q);
     const V m_new = hn::Div(i1_new, third);
+    V stress[6];
     for (int c = 0; c < 6; ++c) {
       V returned = hn::Add(hn::Mul(scale, xi[c]), zero);  // + the (zero) back stress, as the reference adds it
       if (c < 3) returned = hn::Add(returned, m_new);
-      st.s[c] = hn::IfThenElse(cone, returned, trial[c]);
+      stress[c] = hn::IfThenElse(cone, returned, trial[c]);
     }
     // sigma : d_eps^p = dl (k_new - (alpha - alpha_g) I1_new), clamped at +0 (DruckerPrager::plastic_return)
     const V bracket = hn::Sub(hn::Add(k, hn::Mul(hi, dl)), hn::Mul(alpha_excess, i1_new));
-    const V plastic_work = hn::Mul(dl, hn::IfThenElse(hn::Gt(bracket, zero), bracket, zero));
-    hn::StoreU(hn::IfThenElse(cone, hn::Add(eps_p, dl), eps_p), d, f.plastic_strain + p);
+    V plastic_work = hn::IfThenElseZero(cone, hn::Mul(dl, hn::IfThenElse(hn::Gt(bracket, zero), bracket, zero)));
+    V eps_new = hn::IfThenElse(cone, hn::Add(eps_p, dl), eps_p);
+    const auto rest = hn::Not(hn::Or(elastic, cone));
+    if (!hn::AllFalse(d, rest) &&
+        !return_to_cutoff_or_apex(m, rest, i1, xi_norm, q, k, xi, trial, stress, eps_new, plastic_work))
+      return {p, n};  // a tie the reference's fmin may break otherwise: reference
+    for (int c = 0; c < 6; ++c) st.s[c] = stress[c];
+    hn::StoreU(eps_new, d, f.plastic_strain + p);
     store_stress_strain_volume(f, p, st);
-    add_in_particle_order(hn::IfThenElseZero(cone, plastic_work), st, dissipated);
+    add_in_particle_order(plastic_work, st, dissipated);
   }
   return {p, end - p};
 }

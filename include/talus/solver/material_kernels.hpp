@@ -38,6 +38,10 @@ struct DruckerPragerKernelConstants {
   std::array<double, 2> cone_denominator{};  // G + 9 K alpha alpha_g + H
   std::array<double, 2> dilation_factor{};   // 9 K alpha_g
   std::array<double, 2> alpha_excess{};      // alpha - alpha_g
+  // the tension cut-off and the apex (DruckerPrager::plastic_return, steps 4-5), as it writes them
+  double three_bulk = 0.0;                   // 3.0 * K
+  double corner_denominator = 0.0;           // G + H_kin + H_iso
+  double two_shear_plus_kinematic = 0.0;     // 2.0 * (G + H_kin)
 };
 
 /// μ(I) (Jop et al. 2006 in the form of Dunatunga & Kamrin 2015; material/mu_i.hpp) for one time step.
