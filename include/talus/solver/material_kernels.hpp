@@ -3,9 +3,10 @@
 // linear elastic update and the Drucker–Prager update of a run of particles of one body, several
 // particles per instruction. Each lane does the operations of the scalar reference
 // (BodyMaterials' per-particle update, DruckerPrager::update) in the same order, so every
-// instruction set gives the reference's bits. A group of particles that needs a branch the kernel
-// does not vectorise (a separated particle, a return to the apex or the tension cut-off, a
-// non-finite value) is left to the scalar reference: the kernel stops before it and says how many
+// instruction set gives the reference's bits. Drucker–Prager's returns to the cone, the tension
+// cut-off, their corner and the apex all run in the lanes. A group of particles that needs a branch
+// the kernel does not vectorise (a separated particle, a non-finite value, an apex value that ties
+// with the cut-off) is left to the scalar reference: the kernel stops before it and says how many
 // particles the reference must take.
 #include <array>
 #include <cstddef>
