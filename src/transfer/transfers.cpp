@@ -120,13 +120,12 @@ class RecordScatter {
     const V w = hn::Set(D(), wxy);
     [[maybe_unused]] const V g = hn::Set(D(), gxy), wg = hn::Set(D(), wgy);
     for (int i = 0; i < kParts; ++i) {
-      if constexpr (with_force)
-        a_[i] = hn::Add(hn::Add(hn::Mul(p0_[i], w), hn::Mul(s1_[i], g)), hn::Mul(s2_[i], wg));
-      else
-        a_[i] = hn::Mul(p0_[i], w);
       if constexpr (with_force) {
+        a_[i] = hn::Add(hn::Add(hn::Mul(p0_[i], w), hn::Mul(s1_[i], g)), hn::Mul(s2_[i], wg));
         b_[i] = hn::Mul(s3_[i], w);
         if constexpr (kTerrain) b_[i] = hn::Sub(b_[i], hn::Mul(s1_[i], hn::Set(D(), t)));
+      } else {
+        a_[i] = hn::Mul(p0_[i], w);
       }
     }
   }
