@@ -39,6 +39,7 @@ struct BenchOptions {
   std::string material = "elastic";
   std::string mls = "off";
   double mls_radius = 2.0;
+  std::string mls_variant = "particle";
   int threads = 0;
   int steps = 20;
   bool stream = false;  // also measure the STREAM triad bandwidth at the same thread count
@@ -175,6 +176,8 @@ void refuse_unavailable(const BenchOptions& o) {
     throw input_error(fmt::format("--material {}: unknown; available: elastic, dp, mu_i", o.material));
   if (!one_of(o.mls, {"off", "linear", "quadratic", "cubic"}))
     throw input_error(fmt::format("--mls {}: unknown; available: off, linear, quadratic, cubic", o.mls));
+  if (!one_of(o.mls_variant, {"particle", "cell"}))
+    throw input_error(fmt::format("--mls-variant {}: unknown; available: particle, cell", o.mls_variant));
 }
 
 /// The shear scene: the block scene's sand put into steady simple shear at its yield stress, so that
@@ -352,7 +355,8 @@ void run_bench(const BenchOptions& o) {
   const std::size_t rss_at_start = status_bytes("VmRSS:");
   const std::string mls_json =
       o.mls == "off" ? std::string()
-                     : fmt::format(R"(, "smoothing": {{ "basis": "{}", "radius_factor": {} }})", o.mls, o.mls_radius);
+                     : fmt::format(R"(, "smoothing": {{ "basis": "{}", "radius_factor": {}, "variant": "{}" }})", o.mls,
+                                   o.mls_radius, o.mls_variant);
   Solver solver(o.scene == "column" ? column_scene(o.particles, o.shape, o.scheme, o.material, mls_json)
                                     : block_scene(o.particles, o.shape, o.scheme, o.material, mls_json),
                 world);
@@ -425,7 +429,10 @@ void run_bench(const BenchOptions& o) {
   j["shape"] = o.shape;
   j["material"] = o.material;
   j["mls"] = o.mls;
-  if (o.mls != "off") j["mls_radius_factor"] = o.mls_radius;
+  if (o.mls != "off") {
+    j["mls_radius_factor"] = o.mls_radius;
+    j["mls_variant"] = o.mls_variant;
+  }
   j["scheme"] = to_string(solver.scene().scheme);
   j["particles"] = n;
   j["block_cells"] = solver.cell_sort().block_cells();
@@ -486,7 +493,8 @@ void run_bench(const BenchOptions& o) {
       world.distributed() ? fmt::format("{} ranks x {} thread{}", world.size(), threads, threads == 1 ? "" : "s")
                           : fmt::format("{} threads", threads);
   fmt::print("talus bench: {} scene, {} particles, {} shape, {} scheme, {} material, MLS {}, {}, {} kernels, {} steps\n",
-             o.scene, n, o.shape, o.scheme, o.material, o.mls, workers, active_isa(), o.steps);
+             o.scene, n, o.shape, o.scheme, o.material,
+             o.mls == "off" ? o.mls : fmt::format("{} ({} fit)", o.mls, o.mls_variant), workers, active_isa(), o.steps);
   fmt::print("  {:.3f} M particle-updates/s ({:.3f} s)\n", rate / 1e6, wall_max);
   if (!world.distributed()) {
     const double total = solver.phase_times().total();
@@ -562,6 +570,9 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("--mls", o->mls, "off | linear | quadratic | cubic")->capture_default_str();
   cmd->add_option("--mls-radius", o->mls_radius, "MLS radius in cells (solver.smoothing.radius_factor)")
       ->check(CLI::Range(0.5, 8.0))
+      ->capture_default_str();
+  cmd->add_option("--mls-variant", o->mls_variant,
+                  "particle (one fit per particle, the reference) | cell (one fit per cell: solver.smoothing.variant)")
       ->capture_default_str();
   cmd->add_option("--threads", o->threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)")->check(CLI::Range(1, 4096));
   cmd->add_option("--steps", o->steps, "Timed steps (after one untimed step)")->check(CLI::Range(1, 1000000))->capture_default_str();

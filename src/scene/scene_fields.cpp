@@ -167,6 +167,11 @@ Table<SceneDraft> make_smoothing_table() {
       choice<SceneDraft>("basis", TALUS_AT(scene.smoothing.mls.basis),
                          named({MlsBasis::Linear, MlsBasis::Quadratic, MlsBasis::Cubic}),
                          "polynomial basis: 4 / 10 / 20 terms in 3D (2 / 3 / 4 along one axis)"),
+      choice<SceneDraft>("variant", TALUS_AT(scene.smoothing.mls.variant),
+                         named({MlsVariant::Particle, MlsVariant::Cell}),
+                         "`particle`: one fit per particle, centred on it (Edo & Matsubara 2015, the reference). "
+                         "`cell`: one fit per cell, centred on the cell, evaluated at each of its particles: about "
+                         "half the cost at 1 and 2 cells, a different smoothing (docs/verification.md, \"MLS, one fit per cell\")"),
       number<SceneDraft>("radius_factor", TALUS_AT(scene.smoothing.mls.radius_factor), {0.5, 8.0},
                          "support radius h = factor × cell size (eq. 39). Above 2.5, `run` and `check` warn: 3 cells "
                          "and more went unstable on the benchmarks (docs/verification.md, \"MLS radius\")"),
@@ -212,6 +217,14 @@ Table<SceneDraft> make_smoothing_table() {
                 names.push_back(s.bodies[b].name);
             j["bodies"] = names;
           }),
+      // The neighbour search walks the sort's cells, which on a terrain grid are cells in w = z - z_b(x):
+      // a ball in (x, y, z) is not a ball of those cells where the bed slopes. The grid is read above.
+      check<SceneDraft>([](ObjectReader&, SceneDraft& d) {
+        if (d.scene.smoothing.enabled && d.scene.grid.has_terrain())
+          throw input_error(
+              "solver.smoothing cannot run on a terrain grid (grid.terrain is set: the MLS neighbour search works in the "
+              "bed-following cells): remove it or set solver.smoothing.enabled = false");
+      }),
   }};
 }
 constexpr auto smoothing_table = &table_of<SceneDraft, make_smoothing_table>;
@@ -257,7 +270,8 @@ Table<SceneDraft> make_solver_table() {
       object<SceneDraft>(
           "smoothing", smoothing_table, "absent (off)",
           "MLS smoothing of the strain increments between the strain pass and the material update (Edo & Matsubara "
-          "2015, eq. 38–46, 54; docs/theory.md \"MLS strain smoothing\"). Present = on unless `enabled` is false",
+          "2015, eq. 38–46, 54; docs/theory.md \"MLS strain smoothing\"). Present = on unless `enabled` is false. Not "
+          "on a terrain grid or with periodic faces (the neighbour search works in the sort's cells)",
           {.present = [](const SceneDraft&) { return true; }}),
   }};
 }

@@ -26,6 +26,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #ifndef TALUS_MLS_SOLVE_DEFINED  // once, not per target
@@ -44,6 +45,7 @@ struct MlsPass {
   int degree, axis_count;
   std::array<int, 3> axes;
   double radius, min_rcond;
+  bool cell_fit;  // MlsVariant::Cell: one fit per cell
 };
 
 /// The fit's solve for a well-conditioned A (the common case), in plain fixed-size loops that the
@@ -54,7 +56,7 @@ struct MlsPass {
 /// guard passes for certain. Returns false otherwise (not positive definite, or ill-conditioned,
 /// or not finite): the caller then decides with Eigen's LLT and rcond() as before.
 template <int T>
-bool solve_well_conditioned(const double (&A)[T][T], double min_rcond, double (&a)[T]) {
+bool solve_well_conditioned(const double (&A)[T][T], double min_rcond, double (&a)[T], double (*inverse)[T] = nullptr) {
   double L[T][T] = {}, Li[T][T] = {};
   for (int j = 0; j < T; ++j) {
     double d = A[j][j];
@@ -82,6 +84,7 @@ bool solve_well_conditioned(const double (&A)[T][T], double min_rcond, double (&
       double v = 0.0;  // (A^-1)_rc = sum_k (L^-1)_kr (L^-1)_kc, k >= max(r, c)
       for (int k = r > c ? r : c; k < T; ++k) v += Li[k][r] * Li[k][c];
       if (c == 0) a[r] = v;
+      if (inverse) inverse[r][c] = v;
       sa += std::abs(A[r][c]);
       si += std::abs(v);
     }
@@ -106,6 +109,24 @@ template <int T>
   if (ok) av = llt.solve(VecT::Unit(0));
   ok = ok && av.allFinite();
   for (int r = 0; r < T; ++r) a[r] = ok ? av[r] : 0.0;
+  return ok;
+}
+
+/// A^-1 for the one-fit-per-cell variant, with solve_fit's guard: the well-conditioned case in
+/// the plain loops, the others decided by Eigen's LLT and rcond(). False for a (nearly) singular A.
+template <int T>
+[[gnu::noinline]] bool invert_fit(const double (&A)[T][T], double min_rcond, double (&inverse)[T][T]) {
+  using MatT = Eigen::Matrix<double, T, T>;
+  double a[T];
+  if (solve_well_conditioned<T>(A, min_rcond, a, inverse)) return true;
+  const MatT Am = Eigen::Map<const Eigen::Matrix<double, T, T, Eigen::RowMajor>>(&A[0][0]);
+  const Eigen::LLT<MatT> llt(Am);
+  bool ok = llt.info() == Eigen::Success && llt.rcond() >= min_rcond;
+  MatT inv = MatT::Zero();
+  if (ok) inv = llt.solve(MatT::Identity());
+  ok = ok && inv.allFinite();
+  for (int r = 0; r < T; ++r)
+    for (int c = 0; c < T; ++c) inverse[r][c] = ok ? inv(r, c) : 0.0;
   return ok;
 }
 
@@ -139,16 +160,18 @@ inline double gap_to_cell(int i, double lo, double hi) {
 
 /// Cubic spline of Edo & Matsubara 2015, eq. 39 for 0 <= s < 1, the same arithmetic as mls_weight
 /// but as one select, for a lane vector.
-[[gnu::always_inline]] inline Lanes weight_inside(Lanes s) {
-  const Lanes inner = 2.0 / 3.0 - 4.0 * s * s + 4.0 * s * s * s;
-  const Lanes outer = 4.0 / 3.0 - 4.0 * s + 4.0 * s * s - 4.0 / 3.0 * s * s * s;
+template <class V>
+[[gnu::always_inline]] inline V weight_inside(V s) {
+  const V inner = 2.0 / 3.0 - 4.0 * s * s + 4.0 * s * s * s;
+  const V outer = 4.0 / 3.0 - 4.0 * s + 4.0 * s * s - 4.0 / 3.0 * s * s * s;
   return s < 0.5 ? inner : outer;
 }
 
 /// The square root of every lane (correctly rounded on every target).
-[[gnu::always_inline]] inline Lanes sqrt_lanes(Lanes x) {
-  Lanes r;
-  for (int v = 0; v < kGroup; ++v) r[v] = __builtin_sqrt(x[v]);
+template <class V>
+[[gnu::always_inline]] inline V sqrt_lanes(V x) {
+  V r;
+  for (int v = 0; v < static_cast<int>(sizeof(V) / sizeof(double)); ++v) r[v] = __builtin_sqrt(x[v]);
   return r;
 }
 
@@ -162,6 +185,8 @@ struct GroupScratch {
   hwy::AlignedFreeUniquePtr<double[]> lanes;
   std::size_t lanes_capacity = 0;  // candidates
   Lanes* lane_array(int k) { return reinterpret_cast<Lanes*>(lanes.get()) + k * lanes_capacity; }
+  // The one-fit-per-cell variant: the candidates' x, y, z, six increments and body flag as columns.
+  std::array<std::vector<double>, 10> cand;
 };
 
 /// The box of the group's particles, in grid coordinates (the search) and in metres (the
@@ -203,6 +228,7 @@ template <class V>
   const V xlo[3] = {hn::Set(d, box.xlo[0]), hn::Set(d, box.xlo[1]), hn::Set(d, box.xlo[2])};
   const V xhi[3] = {hn::Set(d, box.xhi[0]), hn::Set(d, box.xhi[1]), hn::Set(d, box.xhi[2])};
   const V keep = hn::Set(d, keep2);
+  const auto iota = hn::Iota(di, 0);  // hoisted: Iota(di, q) is built through memory on some targets
   std::uint32_t q = q0;
   for (; q + N <= q1; q += N) {
     const V x[3] = {hn::LoadU(d, P.x[0].data() + q), hn::LoadU(d, P.x[1].data() + q), hn::LoadU(d, P.x[2].data() + q)};
@@ -214,7 +240,7 @@ template <class V>
     }
     g2 = hn::Add(g2, hn::Mul(zero, hn::Add(hn::Add(x[0], x[1]), x[2])));
     const auto m = hn::RebindMask(di, hn::Lt(g2, keep));
-    nc += hn::CompressStore(hn::Iota(di, static_cast<std::int64_t>(q)), m, di, S.idx.data() + nc);
+    nc += hn::CompressStore(hn::Add(iota, hn::Set(di, static_cast<std::int64_t>(q))), m, di, S.idx.data() + nc);
   }
   for (; q < q1; ++q) {
     const double x[3] = {P.x[0][q], P.x[1][q], P.x[2][q]};
@@ -224,19 +250,18 @@ template <class V>
   }
 }
 
-/// Gather, into S, the particles near the box from the cells that meet the ball of radius rg
-/// (cells) around any point of the box: the same walk as for a single particle (lo = hi), so each
-/// particle's own search is a subset, in the same order. Along k the cells of one block are
-/// contiguous in the store: one range per block. Returns the candidate count.
-inline std::size_t gather_candidates(GroupScratch& S, const MlsPass& pass, const ParticleBox& box, double rg) {
+/// Visit the particle ranges [q0, q1) of the cells that meet the ball of radius rg (cells) around
+/// any point of the box, in a fixed order: columns in (i, j) order, along k in store order. Along
+/// k the cells of one block are contiguous in the store: one range per block.
+template <class Visit>
+[[gnu::always_inline]] inline void for_each_candidate_range(const MlsPass& pass, const ParticleBox& box, double rg,
+                                                            Visit&& visit) {
   const CellSort& sort = *pass.sort;
   const int bc = sort.block_cells();
   const std::size_t cells_per_block = static_cast<std::size_t>(bc) * bc * bc;
   const std::vector<std::uint32_t>& cell_start = sort.cell_start();
   const double rg2 = rg * rg;
-  const double keep2 = pass.radius * pass.radius * (1.0 + 1e-9);
   const int reach = static_cast<int>(std::ceil(rg));
-  std::size_t nc = 0;
   const int i0 = static_cast<int>(std::floor(box.lo[0])), i1 = static_cast<int>(std::floor(box.hi[0]));
   const int j0 = static_cast<int>(std::floor(box.lo[1])), j1 = static_cast<int>(std::floor(box.hi[1]));
   for (int i = std::max(0, i0 - reach); i <= i1 + reach; ++i) {
@@ -258,12 +283,23 @@ inline std::size_t gather_candidates(GroupScratch& S, const MlsPass& pass, const
           const std::size_t cbase = static_cast<std::size_t>(cb) * cells_per_block;
           const std::size_t l0 = static_cast<std::size_t>(((i % bc) * bc + (j % bc)) * bc + (k % bc));
           const std::size_t l1 = l0 + static_cast<std::size_t>(k_end - k);
-          append_candidates(S, nc, *pass.particles, box, keep2, cell_start[cbase + l0], cell_start[cbase + l1 + 1]);
+          visit(cell_start[cbase + l0], cell_start[cbase + l1 + 1]);
         }
         k = k_end + 1;
       }
     }
   }
+}
+
+/// Gather, into S, the particles near the box from the cells that meet the ball of radius rg
+/// (cells) around any point of the box: the same walk as for a single particle (lo = hi), so each
+/// particle's own search is a subset, in the same order. Returns the candidate count.
+inline std::size_t gather_candidates(GroupScratch& S, const MlsPass& pass, const ParticleBox& box, double rg) {
+  const double keep2 = pass.radius * pass.radius * (1.0 + 1e-9);
+  std::size_t nc = 0;
+  for_each_candidate_range(pass, box, rg, [&](std::uint32_t q0, std::uint32_t q1) {
+    append_candidates(S, nc, *pass.particles, box, keep2, q0, q1);
+  });
   return nc;
 }
 
@@ -496,15 +532,236 @@ MlsCounts smooth_impl(const MlsPass& pass) {
   return {smoothed, unsmoothed};
 }
 
+// ---- One fit per cell (MlsVariant::Cell) ---------------------------------------------------------
+// One fit per cell and body, centred at the cell's centre x_c: A and the right-hand sides
+// B_c = sum_I W_I F(u_I) d_eps_I,c (u_I = (x_I - x_c) / h, the weight centred at x_c), then the
+// coefficients C = A^-1 B and, at each of the cell's particles, d_eps_p = F(u_p)^T C (Edo &
+// Matsubara 2015, eq. 42-46 with x_c in place of x_p). Only the candidates within the radius of x_c
+// are gathered (about 34 at a radius of 1 cell and 8 particles per cell, against the 216 of the
+// 27 cells around it), and they run along the lanes: 8 at a time on every path (a vector of 8
+// doubles: one AVX-512 register, two AVX2 or four SSE2 registers), each lane keeping its own
+// partial sums, which are added in one fixed order at the end. So the sums, and the results, are
+// bit-identical on every path and for any thread count.
+constexpr int kCellLanes = 8;
+typedef double CellLanes __attribute__((vector_size(kCellLanes * sizeof(double)), may_alias));
+
+/// The lanes' partial sums added in a fixed order.
+[[gnu::always_inline]] inline double lane_total(CellLanes v) {
+  return ((v[0] + v[4]) + (v[2] + v[6])) + ((v[1] + v[5]) + (v[3] + v[7]));
+}
+
+/// Gather, into S.cand, the particles within the radius of the cell centre xc (with keep2's
+/// margin: the kernel's exact test decides) from the store ranges of the cells that meet the ball:
+/// x, y, z, the six increments, and 1 for a particle of `body` (0 otherwise), in walk order,
+/// padded with zero-weight lanes to whole vectors of kCellLanes. Returns the padded count.
+inline std::size_t gather_cell_candidates(GroupScratch& S, const MlsPass& pass, double rg, const double (&xc)[3],
+                                          std::uint16_t body) {
+  namespace hn = hwy::HWY_NAMESPACE;
+  const hn::ScalableTag<double> d;
+  const hn::RebindToSigned<decltype(d)> di;
+  const std::size_t N = hn::Lanes(d);
+  const ParticleStore& P = *pass.particles;
+  const GridGeometry& grid = *pass.grid;
+  ParticleBox box;  // the centre alone
+  for (int k = 0; k < 3; ++k) box.lo[k] = box.hi[k] = grid.to_grid(k, xc[k]);
+  const double keep2 = pass.radius * pass.radius * (1.0 + 1e-9);
+  const double* field[9] = {P.x[0].data(), P.x[1].data(), P.x[2].data(), pass.in[0], pass.in[1],
+                            pass.in[2],    pass.in[3],    pass.in[4],    pass.in[5]};
+  const std::uint16_t* pbody = P.body.data();
+  using V = hn::Vec<decltype(d)>;
+  const V c0 = hn::Set(d, xc[0]), c1 = hn::Set(d, xc[1]), c2 = hn::Set(d, xc[2]), keep = hn::Set(d, keep2);
+  const auto iota = hn::Iota(di, 0);  // hoisted: Iota(di, q) is built through memory on some targets
+  std::size_t nk = 0, nc = 0;
+  for_each_candidate_range(pass, box, rg, [&](std::uint32_t q0, std::uint32_t q1) {
+    const std::size_t need = nk + (q1 - q0) + N;
+    if (S.idx.size() < need) S.idx.resize(std::max(need, 2 * S.idx.size()));
+    std::uint32_t q = q0;
+    for (; q + N <= q1; q += N) {
+      const V x = hn::LoadU(d, field[0] + q), y = hn::LoadU(d, field[1] + q), z = hn::LoadU(d, field[2] + q);
+      const V dx = hn::Sub(x, c0), dy = hn::Sub(y, c1), dz = hn::Sub(z, c2);
+      const V r2 = hn::Add(hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy)), hn::Mul(dz, dz));
+      // false for a non-finite position; the indices kept (about 1 in 6 at a radius of 1 cell)
+      const auto m = hn::RebindMask(di, hn::Lt(r2, keep));
+      nk += hn::CompressStore(hn::Add(iota, hn::Set(di, static_cast<std::int64_t>(q))), m, di, S.idx.data() + nk);
+    }
+    for (; q < q1; ++q) {
+      const double dx = field[0][q] - xc[0], dy = field[1][q] - xc[1], dz = field[2][q] - xc[2];
+      S.idx[nk] = q;
+      nk += dx * dx + dy * dy + dz * dz < keep2 ? 1 : 0;
+    }
+  });
+  // Their fields as columns: one predictable loop (a branch per kept lane mispredicts).
+  nc = nk;
+  if (S.cand[0].size() < nc + kCellLanes)
+    for (auto& column : S.cand) column.resize(std::max(nc + kCellLanes, 2 * column.size()));
+  for (std::size_t J = 0; J < nc; ++J) {
+    const std::int64_t q = S.idx[J];
+    for (int k = 0; k < 9; ++k) S.cand[k][J] = field[k][q];
+    S.cand[9][J] = pbody[q] == body ? 1.0 : 0.0;
+  }
+  const std::size_t padded = (nc + kCellLanes - 1) / kCellLanes * kCellLanes;
+  for (std::size_t J = nc; J < padded; ++J) {
+    for (int k = 0; k < 3; ++k) S.cand[k][J] = xc[k];
+    for (int k = 3; k < 10; ++k) S.cand[k][J] = 0.0;
+  }
+  return padded;
+}
+
+/// Fit the particles [p_begin, p_end) of one cell that belong to `body` (of a smoothed body, at
+/// finite positions: the caller's `fits`) with one fit centred at the cell's centre xc.
+template <int Degree, int Axes>
+void smooth_cell(GroupScratch& S, const MlsPass& pass, double rg, const double (&xc)[3], std::uint16_t body,
+                 std::uint32_t p_begin, std::uint32_t p_end, const std::uint8_t* fits, std::size_t& smoothed,
+                 std::size_t& unsmoothed) {
+  constexpr int T = mls_term_count(Degree, Axes);
+  constexpr int NA = T * (T + 1) / 2;  // upper triangle of A
+  const ParticleStore& P = *pass.particles;
+  const std::size_t padded = gather_cell_candidates(S, pass, rg, xc, body);
+  const double inv_radius = 1.0 / pass.radius;
+  const CellLanes zero = {};
+  CellLanes acc[NA], rhs[T][6], count = zero;  // zeroed one by one (an aggregate = {} becomes a slow rep stos)
+  for (int k = 0; k < NA; ++k) acc[k] = zero;
+  for (int r = 0; r < T; ++r)
+    for (int c = 0; c < 6; ++c) rhs[r][c] = zero;
+  const double* cand[10];
+  for (int k = 0; k < 10; ++k) cand[k] = S.cand[k].data();
+  for (std::size_t I0 = 0; I0 < padded; I0 += kCellLanes) {
+    CellLanes f[10];
+    for (int k = 0; k < 10; ++k) std::memcpy(&f[k], cand[k] + I0, sizeof(CellLanes));
+    const CellLanes d0 = (f[0] - xc[0]) * inv_radius, d1 = (f[1] - xc[1]) * inv_radius,
+                    d2 = (f[2] - xc[2]) * inv_radius;
+    const CellLanes r2 = d0 * d0 + d1 * d1 + d2 * d2;
+    const auto in = (r2 < 1.0) & (f[9] != 0.0);
+    const CellLanes s = sqrt_lanes(in ? r2 : zero);
+    const CellLanes w = in ? weight_inside(s) : zero;  // Edo & Matsubara 2015, eq. 39
+    CellLanes u[Axes];  // finite: the candidates have finite positions
+    if constexpr (Axes == 3) {
+      u[0] = d0, u[1] = d1, u[2] = d2;
+    } else {
+      const CellLanes dd[3] = {d0, d1, d2};
+      for (int ax = 0; ax < Axes; ++ax) u[ax] = dd[pass.axes[ax]];
+    }
+    count += in ? zero + 1.0 : zero;
+    CellLanes F[T], WF[T];
+    mls_basis<Degree, Axes>(u, F);
+    for (int r = 0; r < T; ++r) WF[r] = w * F[r];
+    int k = 0;
+    for (int r = 0; r < T; ++r)
+      for (int c = r; c < T; ++c, ++k) acc[k] += WF[r] * F[c];  // eq. 42
+    for (int c = 0; c < 6; ++c) {
+      const CellLanes ec = in ? f[3 + c] : zero;  // a non-finite increment outside the ball stays out
+      for (int r = 0; r < T; ++r) rhs[r][c] += WF[r] * ec;
+    }
+  }
+  double A[T][T], Ainv[T][T], B[T][6], C[T][6];
+  int k = 0;
+  for (int r = 0; r < T; ++r)
+    for (int c = r; c < T; ++c, ++k) A[r][c] = A[c][r] = lane_total(acc[k]);
+  const bool ok = lane_total(count) >= T && mls_detail::invert_fit<T>(A, pass.min_rcond, Ainv);  // the guard
+  if (ok) {
+    for (int r = 0; r < T; ++r)
+      for (int c = 0; c < 6; ++c) B[r][c] = lane_total(rhs[r][c]);
+    for (int r = 0; r < T; ++r)
+      for (int c = 0; c < 6; ++c) {
+        double v = Ainv[r][0] * B[0][c];
+        for (int t = 1; t < T; ++t) v += Ainv[r][t] * B[t][c];
+        C[r][c] = v;
+      }
+  }
+  for (std::uint32_t q = p_begin; q < p_end; ++q) {
+    if (!fits[q - p_begin] || P.body[q] != body) continue;
+    if (!ok) {
+      for (int c = 0; c < 6; ++c) pass.out[c][q] = pass.in[c][q];
+      ++unsmoothed;
+      continue;
+    }
+    double u[Axes], F[T];
+    for (int ax = 0; ax < Axes; ++ax) u[ax] = (P.x[pass.axes[ax]][q] - xc[pass.axes[ax]]) * inv_radius;
+    mls_basis<Degree, Axes>(u, F);
+    for (int c = 0; c < 6; ++c) {
+      double v = F[0] * C[0][c];
+      for (int r = 1; r < T; ++r) v += F[r] * C[r][c];
+      pass.out[c][q] = v;
+    }
+    ++smoothed;
+  }
+}
+
+template <int Degree, int Axes>
+MlsCounts smooth_cells_impl(const MlsPass& pass) {
+  const ParticleStore& P = *pass.particles;
+  const CellSort& sort = *pass.sort;
+  const GridGeometry& grid = *pass.grid;
+  const std::vector<std::uint8_t>& smooth_body = *pass.smooth_body;
+  const int bc = sort.block_cells();
+  const std::size_t cells_per_block = static_cast<std::size_t>(bc) * bc * bc;
+  const std::vector<std::uint32_t>& cell_start = sort.cell_start();
+  const std::int64_t blocks = static_cast<std::int64_t>(sort.block_count());
+  const double rg = pass.radius / grid.h;  // radius in cells
+  std::size_t smoothed = 0, unsmoothed = 0;
+#pragma omp parallel reduction(+ : smoothed, unsmoothed)
+  {
+    GroupScratch S;
+    std::vector<std::uint8_t> fits;  // per particle of the cell: fitted (smoothed body, finite position)
+#pragma omp for schedule(dynamic, 1)
+    for (std::int64_t bi = 0; bi < blocks; ++bi) {
+      const std::array<int, 3> origin = sort.block_origin(static_cast<std::size_t>(bi));
+      const std::size_t base = static_cast<std::size_t>(bi) * cells_per_block;
+      for (std::size_t l = 0; l < cells_per_block; ++l) {
+        const std::uint32_t p_begin = cell_start[base + l], p_end = cell_start[base + l + 1];
+        if (p_begin == p_end) continue;
+        fits.assign(p_end - p_begin, 0);
+        for (std::uint32_t q = p_begin; q < p_end; ++q) {
+          if (!smooth_body[P.body[q]]) {  // not smoothed: copied, and nobody's neighbour
+            for (int c = 0; c < 6; ++c) pass.out[c][q] = pass.in[c][q];
+            continue;
+          }
+          if (!(std::isfinite(P.x[0][q]) && std::isfinite(P.x[1][q]) && std::isfinite(P.x[2][q]))) {
+            for (int c = 0; c < 6; ++c) pass.out[c][q] = pass.in[c][q];  // no neighbours: the guard
+            ++unsmoothed;
+            continue;
+          }
+          fits[q - p_begin] = 1;
+        }
+        // The cell's centre (local cell l = (li bc + lj) bc + lk, as CellSort lays out a block).
+        const int cell[3] = {origin[0] + static_cast<int>(l / (bc * bc)), origin[1] + static_cast<int>((l / bc) % bc),
+                             origin[2] + static_cast<int>(l % bc)};
+        double xc[3];
+        for (int d = 0; d < 3; ++d) xc[d] = grid.node_position(d, cell[d]) + 0.5 * grid.h;
+        // One fit per body present (almost always one), in the order the bodies first appear.
+        std::uint32_t first_fit = p_begin;
+        while (first_fit < p_end && !fits[first_fit - p_begin]) ++first_fit;
+        bool one_body = true;
+        for (std::uint32_t q = first_fit; q < p_end; ++q)
+          one_body = one_body && (!fits[q - p_begin] || P.body[q] == P.body[first_fit]);
+        if (one_body) {
+          if (first_fit < p_end)
+            smooth_cell<Degree, Axes>(S, pass, rg, xc, P.body[first_fit], p_begin, p_end, fits.data(), smoothed,
+                                      unsmoothed);
+          continue;
+        }
+        for (std::uint32_t q = p_begin; q < p_end; ++q) {
+          if (!fits[q - p_begin]) continue;
+          bool first = true;
+          for (std::uint32_t o = p_begin; o < q && first; ++o) first = !(fits[o - p_begin] && P.body[o] == P.body[q]);
+          if (first)
+            smooth_cell<Degree, Axes>(S, pass, rg, xc, P.body[q], p_begin, p_end, fits.data(), smoothed, unsmoothed);
+        }
+      }
+    }
+  }
+  return {smoothed, unsmoothed};
+}
+
 }  // namespace
 
 MlsCounts SmoothMls(const mls_detail::MlsPass& pass) {
   // One instantiation per (degree, axes): the inner loops and the factorisation have fixed sizes.
   auto dispatch = [&]<int Degree>() {
     switch (pass.axis_count) {
-      case 1: return smooth_impl<Degree, 1>(pass);
-      case 2: return smooth_impl<Degree, 2>(pass);
-      default: return smooth_impl<Degree, 3>(pass);
+      case 1: return pass.cell_fit ? smooth_cells_impl<Degree, 1>(pass) : smooth_impl<Degree, 1>(pass);
+      case 2: return pass.cell_fit ? smooth_cells_impl<Degree, 2>(pass) : smooth_impl<Degree, 2>(pass);
+      default: return pass.cell_fit ? smooth_cells_impl<Degree, 3>(pass) : smooth_impl<Degree, 3>(pass);
     }
   };
   switch (pass.degree) {
@@ -532,6 +789,8 @@ const char* to_string(MlsBasis basis) {
   return "?";
 }
 
+const char* to_string(MlsVariant variant) { return variant == MlsVariant::Cell ? "cell" : "particle"; }
+
 MlsStrainSmoother::MlsStrainSmoother(const MlsSettings& settings, double cell_size)
     : settings_(settings), radius_(settings.radius_factor * cell_size) {
   axis_count_ = 0;
@@ -550,7 +809,7 @@ MlsCounts MlsStrainSmoother::smooth(const ParticleStore& particles, const CellSo
                                     const std::vector<std::uint8_t>& smooth_body) const {
   const mls_detail::MlsPass pass{&particles, &sort, &grid, in, out, &smooth_body,
                                  static_cast<int>(settings_.basis), axis_count_, axis_list_, radius_,
-                                 settings_.min_rcond};
+                                 settings_.min_rcond, settings_.variant == MlsVariant::Cell};
   // The `reference` path runs the baseline build of the same code.
   return (vector_kernels_enabled() ? HWY_DYNAMIC_DISPATCH(SmoothMls) : &HWY_STATIC_DISPATCH(SmoothMls))(pass);
 }

@@ -229,8 +229,8 @@ TEST(IsaPaths, EveryShapeAndSchemeIsBitIdenticalOnEveryPath) {
 }
 
 // MLS strain smoothing (Edo & Matsubara 2015, eq. 38-46) in the run: the smoother's lanes are compiled per
-// target too. A 3D linear fit on a cpGIMP column (MUSL), and a quadratic fit over x and z only
-// with a radius that is not a whole number of cells (USAVG).
+// target too. A 3D linear fit on a cpGIMP column (MUSL), a quadratic fit over x and z only
+// with a radius that is not a whole number of cells (USAVG), and one linear fit per cell (B-spline).
 TEST(IsaPaths, MlsSmoothedRunsAreBitIdenticalOnEveryPath) {
   Scene linear = test::column_collapse_scene(0.02, 0.02);
   linear.shape = ShapeKind::CpGimp;
@@ -244,6 +244,12 @@ TEST(IsaPaths, MlsSmoothedRunsAreBitIdenticalOnEveryPath) {
   quadratic.smoothing.mls.axes = {true, false, true};
   quadratic.smoothing.mls.radius_factor = 2.3;
   expect_every_path_matches_the_reference(quadratic);
+  Scene by_cell = test::column_collapse_scene(0.02, 0.02);  // the one-fit-per-cell variant
+  by_cell.shape = ShapeKind::BSpline2;
+  by_cell.smoothing.enabled = true;
+  by_cell.smoothing.mls.variant = MlsVariant::Cell;
+  by_cell.smoothing.mls.radius_factor = 1.5;
+  expect_every_path_matches_the_reference(by_cell);
 }
 
 // A Drucker-Prager block crossing the periodic x seam (the wrapped stencils), B-spline.

@@ -6,8 +6,17 @@
 
 namespace talus {
 
+/// Where the fit is centred. Particle: Edo & Matsubara's (2015) own fit, one per particle, the
+/// reference. Cell: one fit per cell, centred at the cell's centre and evaluated at each of its
+/// particles (a cheaper variant; its accuracy against the per-particle fit: docs/verification.md,
+/// "MLS, one fit per cell").
+enum class MlsVariant { Particle, Cell };
+
+const char* to_string(MlsVariant variant);
+
 struct MlsSettings {
   MlsBasis basis = MlsBasis::Linear;
+  MlsVariant variant = MlsVariant::Particle;
   double radius_factor = 2.0;              // h = radius_factor * cell size
   /// The axes the basis spans. A body one or two particle layers thick along an axis cannot
   /// resolve a quadratic along it (A is singular); leaving that axis out fits a 1D or 2D
