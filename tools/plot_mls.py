@@ -8,7 +8,10 @@ and with MLS smoothing of the strain increments, and writes into docs/verificati
     mls_block_between_walls.png  total and strain energy / initial vs time (Fig. 12-13)
     mls_benchmarks.csv           the numbers (L2, roughness, bar ratio, energy drift, wall time)
 Usage:  /usr/bin/python3 tools/plot_mls.py [--talus build/talus] [--threads 1] [--basis cubic]
-        [--radius 2.0] [--skip-walls]
+        [--radius 2.0] [--skip-walls] [--variants particle,cell --tag _variants]
+With --variants particle,cell every "with MLS" run is made with both fits (the reference, one per
+particle, and the cheaper one per cell: solver.smoothing.variant) and --tag is appended to the output
+names (docs/verification.md "MLS, one fit per cell" uses mls_*_variants.png/.csv).
 Needs numpy, matplotlib and VTK's Python module (Debian: python3-numpy python3-matplotlib python3-vtk9).
 """
 import json
@@ -27,14 +30,21 @@ from talus_plot import finish_axes, save_figure, write_csv_rows  # noqa: E402
 SHAPES = ["linear", "ugimp", "cpgimp"]
 
 
-def with_mls(scene, basis, radius, axes):
+def with_mls(scene, mode, radius, axes):
+    """mode: "off", a basis (the per-particle fit) or "<basis>-cell" (one fit per cell)."""
     s = json.loads(json.dumps(scene))
     # The wall-contact energy gain (docs/verification.md) would trip the run's energy guard; these
     # runs are here to show it, so the guard is opened wide.
     s.setdefault("guards", {})["energy_growth_factor"] = 1.0e6
-    if basis != "off":
-        s["solver"]["smoothing"] = {"basis": basis, "radius_factor": radius, "axes": axes}
+    if mode != "off":
+        basis, _, fit = mode.partition("-")
+        s["solver"]["smoothing"] = {"basis": basis, "radius_factor": radius, "axes": axes,
+                                    "variant": fit or "particle"}
     return s
+
+
+def marker(mode):
+    return "o-" if mode == "off" else "^-" if mode.endswith("-cell") else "s-"
 
 
 def shape_runs(talus, base, axes, modes, a, what):
@@ -57,10 +67,17 @@ def main():
     ap.add_argument("--radius", type=float, default=2.0, help="radius factor (h / cell size)")
     ap.add_argument("--axes", default="x", help="basis axes; the bars are 2 particles across, so 1D: x")
     ap.add_argument("--skip-walls", action="store_true", help="leave out the block between walls (the longest runs)")
+    ap.add_argument("--variants", default="particle", help="the MLS fits to run: particle, cell or particle,cell")
+    ap.add_argument("--tag", default="", help="appended to the names of the plots and the CSV")
     a, talus = parse_benchmark_args(ap)
     rows = []
-    modes = ["off", a.basis]
-    label = {"off": "without MLS", a.basis: f"MLS {a.basis} ({a.axes}), h = {a.radius:g} cells"}
+    fits = a.variants.split(",")
+    modes = ["off"] + [a.basis if fit == "particle" else f"{a.basis}-{fit}" for fit in fits]
+    label = {"off": "without MLS", a.basis: f"MLS {a.basis} ({a.axes}), h = {a.radius:g} cells",
+             f"{a.basis}-cell": f"MLS {a.basis} ({a.axes}), one fit per cell"}
+
+    def out(name, ext):
+        return os.path.join(OUT, f"{name}{a.tag}.{ext}")
 
     # 1. Column W = 12500 (Edo & Matsubara 2015, Fig. 6-7).
     base = load("column_w12500")
@@ -75,13 +92,13 @@ def main():
                          "wall_s": round(res["wall"], 3)})
             print(f"column {shape:7s} {mode:9s} L2 {l2:.5f} roughness {rough:.5f} ({res['wall']:.1f} s)", flush=True)
             xp, sp = profile(res["x"], res["stress"][:, 0])
-            ax.plot(xp / delta, sp / s0, "o-" if mode == "off" else "s-", ms=2.5, lw=0.8,
+            ax.plot(xp / delta, sp / s0, marker(mode), ms=2.5, lw=0.8,
                     label=f"{label[mode]}: L2 {100 * l2:.2f}%, rough. {rough:.2g}")
         xs = np.linspace(0, 1, 200)
         ax.plot(xs, E * (np.sqrt(2 * RHO0 * b * (delta - xs * delta) / E + 1) - 1) / s0, "k--", lw=1, label="exact (eq. 61)")
         finish_axes(ax, "x / Delta", title=f"column W = 12500, {shape}", fontsize=7)
     axes[0].set_ylabel("sigma / s0")
-    save_figure(fig, os.path.join(OUT, "mls_column_w12500.png"), 110)
+    save_figure(fig, out("mls_column_w12500", "png"), 110)
 
     # 2. Dynamic bar (Fig. 9-10).
     base = load("dynamic_bar")
@@ -99,12 +116,12 @@ def main():
             rows.append({"benchmark": "dynamic_bar", "shape": shape, "mls": mode, "ratio": ratio, "roughness": rough,
                          "wall_s": round(res["wall"], 3)})
             print(f"bar    {shape:7s} {mode:9s} mean/exact {ratio:.4f} roughness {rough:.4f}", flush=True)
-            ax.plot(xp, sp / abs(exact), "o-" if mode == "off" else "s-", ms=2.5, lw=0.8,
+            ax.plot(xp, sp / abs(exact), marker(mode), ms=2.5, lw=0.8,
                     label=f"{label[mode]}: mean/exact {ratio:.3f}")
         ax.axhline(-1.0, color="k", ls="--", lw=1, label="exact behind the front (eq. 63)")
         finish_axes(ax, "x [m]", title=f"dynamic bar at 80% crossing, {shape}", fontsize=7)
     axes[0].set_ylabel("sigma / (E |v0| / c)")
-    save_figure(fig, os.path.join(OUT, "mls_dynamic_bar.png"), 110)
+    save_figure(fig, out("mls_dynamic_bar", "png"), 110)
 
     # 3. Block between walls (Fig. 12-13): energy histories.
     if not a.skip_walls:
@@ -122,12 +139,12 @@ def main():
                 ax.plot(e["time"], e["strain"] / e["total"][0], lw=0.7, ls=":", label=f"strain, {label[mode]}")
             finish_axes(ax, "time [s]", title=f"block between walls, {shape}", fontsize=6)
         axes[0].set_ylabel("energy / initial")
-        save_figure(fig, os.path.join(OUT, "mls_block_between_walls.png"), 110)
+        save_figure(fig, out("mls_block_between_walls", "png"), 110)
 
     keys = []
     for r in rows:
         keys += [k for k in r if k not in keys]
-    write_csv_rows(os.path.join(OUT, "mls_benchmarks.csv"), rows, keys)
+    write_csv_rows(out("mls_benchmarks", "csv"), rows, keys)
 
 
 if __name__ == "__main__":

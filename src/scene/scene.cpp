@@ -95,6 +95,11 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
         "solver.smoothing.radius_factor = {} is above {} cells: MLS smoothing at 3 cells and more went unstable on "
         "the column (1.2 s) and the sliding block (docs/verification.md, \"MLS radius\")",
         radius, kMlsStableRadiusFactor));
+  if (scene.smoothing.enabled && scene.smoothing.mls.variant == MlsVariant::Cell)
+    warnings.push_back(
+        "solver.smoothing.variant = \"cell\" is not energy-stable: one fit per cell fed energy into the elastic block "
+        "between walls at radii of 1.5 to 3 cells (docs/verification.md, \"MLS, one fit per cell\"); compare with "
+        "\"particle\" before relying on it");
   return warnings;
 }
 

@@ -171,7 +171,9 @@ Table<SceneDraft> make_smoothing_table() {
                          named({MlsVariant::Particle, MlsVariant::Cell}),
                          "`particle`: one fit per particle, centred on it (Edo & Matsubara 2015, the reference). "
                          "`cell`: one fit per cell, centred on the cell, evaluated at each of its particles: about "
-                         "half the cost at 1 and 2 cells, a different smoothing (docs/verification.md, \"MLS, one fit per cell\")"),
+                         "half the cost at 1 and 2 cells, a different smoothing, and not energy-stable: it fed energy into "
+                         "the elastic block between walls (`run` and `check` warn; docs/verification.md, \"MLS, one fit "
+                         "per cell\")"),
       number<SceneDraft>("radius_factor", TALUS_AT(scene.smoothing.mls.radius_factor), {0.5, 8.0},
                          "support radius h = factor × cell size (eq. 39). Above 2.5, `run` and `check` warn: 3 cells "
                          "and more went unstable on the benchmarks (docs/verification.md, \"MLS radius\")"),

@@ -1,6 +1,7 @@
 // MLS smoothing in the scene file (docs/scene-reference.md `solver.smoothing`): the fit variant, and
 // where smoothing is refused, each a one-line error naming the key.
 #include "../solver/scene_fixtures.hpp"
+#include "talus/scene/scene.hpp"
 #include "talus/scene/scene_json.hpp"
 
 #include <gtest/gtest.h>
@@ -27,6 +28,17 @@ TEST(SmoothingScene, TheFitVariantIsReadAndWrittenBack) {
   const Scene by_default =
       parse_scene(test::replace_once(kSmoothed, ", \"variant\": \"cell\"", ""), "default");
   EXPECT_EQ(by_default.smoothing.mls.variant, MlsVariant::Particle);  // the reference fit
+}
+
+TEST(SmoothingScene, TheCellFitIsWarnedAbout) {
+  const auto warned = [](const Scene& s) {
+    for (const std::string& w : scene_warnings(s))
+      if (w.find("variant = \"cell\" is not energy-stable") != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(warned(parse_scene(kSmoothed, "t")));
+  EXPECT_FALSE(warned(parse_scene(test::replace_once(kSmoothed, "\"cell\"", "\"particle\""), "t")));
+  EXPECT_FALSE(warned(parse_scene(test::replace_once(kSmoothed, "\"basis\"", "\"enabled\": false, \"basis\""), "t")));
 }
 
 TEST(SmoothingScene, BadUseNamesTheKey) {
