@@ -196,6 +196,21 @@ void BodyMaterials::update_run(const Body& body, ParticleStore& P, std::size_t b
   }
 }
 
+bool BodyMaterials::shared_wave_rate_rule(WaveRateRule& rule) const {
+  auto rule_of = [](const Body& b) {  // wave_speed_volume's cap, as one number (0: no cap)
+    const double ratio = b.granular.separation_volume_ratio;
+    const bool capped = (b.model == MaterialModel::DruckerPrager || b.model == MaterialModel::MuI) && ratio > 0.0;
+    return WaveRateRule{b.p_wave_modulus, capped ? ratio : 0.0};
+  };
+  if (bodies_.empty()) return false;
+  rule = rule_of(bodies_[0]);
+  for (const Body& b : bodies_) {
+    const WaveRateRule r = rule_of(b);
+    if (r.modulus != rule.modulus || r.cap_ratio != rule.cap_ratio) return false;
+  }
+  return true;
+}
+
 double BodyMaterials::update(ParticleStore& P, std::size_t begin, std::size_t end, const StrainIncrements& inc,
                              double dt) const {
   double dissipated = 0.0;

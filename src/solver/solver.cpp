@@ -2,6 +2,7 @@
 
 #include "talus/core/deterministic_sum.hpp"
 #include "talus/core/error.hpp"
+#include "talus/core/simd_dispatch.hpp"
 #include "talus/core/tensor.hpp"
 #include "talus/particles/particle_migration.hpp"
 #include "talus/particles/seeding.hpp"
@@ -236,6 +237,20 @@ double Solver::stable_time_step() const {
   const ParticleStore& P = particles_;
   const std::size_t n = P.size();
   double max_rate = 0.0;  // max (c_p + |v_p|)
+  WaveRateRule rule;
+  if (vector_kernels_enabled() && materials_.shared_wave_rate_rule(rule)) {
+    // Every body has the same rule (the usual scene): the lanes do the same arithmetic per
+    // particle, and a maximum has no rounding, so the time step has the same bits.
+    const WaveRateFields fields{P.volume.data(), P.volume0.data(), P.mass.data(), {P.v[0].data(), P.v[1].data(), P.v[2].data()}};
+    constexpr std::size_t kChunk = 4096;
+    const std::int64_t chunks = static_cast<std::int64_t>((n + kChunk - 1) / kChunk);
+#pragma omp parallel for schedule(static) reduction(max : max_rate)
+    for (std::int64_t c = 0; c < chunks; ++c) {
+      const std::size_t begin = static_cast<std::size_t>(c) * kChunk;
+      max_rate = std::max(max_rate, max_wave_rate_lanes(fields, rule, begin, std::min(n, begin + kChunk)));
+    }
+    return scene_.courant * scene_.grid.h / max_rate;  // Edo & Matsubara 2015, eq. 60
+  }
 #pragma omp parallel for schedule(static) reduction(max : max_rate)
   for (std::size_t p = 0; p < n; ++p) {
     const double volume = materials_.wave_speed_volume(P.body[p], P.volume[p], P.volume0[p]);

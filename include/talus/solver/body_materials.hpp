@@ -18,6 +18,7 @@
 #include "talus/particles/particle_store.hpp"
 #include "talus/scene/scene.hpp"
 #include "talus/solver/material_kernels.hpp"
+#include "talus/solver/time_step_scan.hpp"
 #include "talus/transfer/transfers.hpp"
 
 #include <cstddef>
@@ -56,6 +57,9 @@ class BodyMaterials {
                ? ratio * volume0
                : volume;
   }
+  /// Whether every body has the same wave-speed rule (the same P-wave modulus and the same cap on
+  /// the volume); then `rule` is that rule, for the time step's vectorised scan.
+  bool shared_wave_rate_rule(WaveRateRule& rule) const;
   bool any_plastic() const { return any_plastic_; }
 
  private:
