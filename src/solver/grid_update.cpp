@@ -35,7 +35,7 @@ double for_active_nodes(const Grid& grid, NodeUpdate node_update, const Walls* o
 }  // namespace
 
 double update_grid(Grid& grid, const Walls& walls, const Vec3& gravity, double dt, double mass_floor,
-                   const std::vector<std::uint8_t>& counted) {
+                   const std::vector<std::uint8_t>& counted, bool zero_momentum) {
   return for_active_nodes(grid, [&](std::size_t n, std::uint32_t tile, int slot) {
     // the node's record and its v^L record, read and written in place (NodeField's run-time
     // stride made this loop 1.8x slower)
@@ -55,7 +55,7 @@ double update_grid(Grid& grid, const Walls& walls, const Vec3& gravity, double d
     const auto node = grid.node_of(tile, slot);
     if (walls.touches(node)) removed = walls.apply(node, vl, Walls::Stage::GridUpdate, m, v);
     for (int d = 0; d < 3; ++d) {
-      record[kMomentumSlot + d] = v[d];
+      record[kMomentumSlot + d] = zero_momentum ? 0.0 : v[d];
       record[kForceSlot + d] = vl[d] - v[d];
       lagrangian[d] = vl[d];
     }
@@ -130,6 +130,7 @@ void mirror_ghost_nodes(Grid& grid, const Walls& walls, GhostFields fields) {
   if (!walls.has_mirrored_walls()) return;
   std::vector<NodeVectors*> targets;
   if (fields == GhostFields::AfterGridUpdate) targets = {&grid.momentum, &grid.force, &grid.velocity_l};
+  if (fields == GhostFields::AfterGridUpdateForRemap) targets = {&grid.force, &grid.velocity_l};
   if (fields == GhostFields::Remapped) targets = {&grid.momentum};
   if (fields == GhostFields::Start) targets = {&grid.velocity_l};
   for_active_nodes(grid, [&](std::size_t n, std::uint32_t tile, int slot) {

@@ -394,19 +394,20 @@ void Solver::step_with(double dt) {
              [&] { fold_ghost_nodes(grid_, walls_, {.force = true}, gravity); });
   }
   // 3. grid: velocities, accelerations with gravity, walls.
+  // With a remap the grid update leaves the momentum at zero (ghost nodes included, and the
+  // mirror leaves it so) for the remap's scatter: one pass over the active tiles instead of two.
+  const bool remap = scheme.remap;
   {
     ScopedPhase timer(times_, Phase::Grid);
     recorded(rec, RegionSchedule::Static, "grid update", tiles, 1 + mirrored, [&] {
-      work_.friction_work += update_grid(grid_, walls_, gravity, dt, mass_floor_, exchange_.counted());
-      mirror_ghost_nodes(grid_, walls_, GhostFields::AfterGridUpdate);
+      work_.friction_work += update_grid(grid_, walls_, gravity, dt, mass_floor_, exchange_.counted(), remap);
+      mirror_ghost_nodes(grid_, walls_, remap ? GhostFields::AfterGridUpdateForRemap : GhostFields::AfterGridUpdate);
     });
   }
   // 4. G2P: particle velocities and this step's displacement. MUSL and USAVG scatter the new
   //    momentum for the remap in the same pass (the weights are those of x_p^k in both).
-  const bool remap = scheme.remap;
   {
     ScopedPhase timer(times_, Phase::G2P);
-    if (remap) recorded(rec, RegionSchedule::Static, "momentum clear", tiles, 1, [&] { grid_.clear_momentum(); });
     GatherOptions options = gather_limits_;
     options.dt = dt;
     options.pic_fraction = scene_.pic_fraction;

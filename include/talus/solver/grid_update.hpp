@@ -14,8 +14,10 @@ namespace talus {
 /// Returns the work dissipated by wall friction (>= 0).
 /// `counted` (per active tile, TileExchange::counted; empty: all): the tiles whose wall work this
 /// rank adds to the returned total, so that a tile two ranks update is counted once.
+/// `zero_momentum`: leave momentum = 0 instead of v_i, ready for the remap's scatter (MUSL, USAVG),
+/// in the same pass instead of a second one over the active tiles.
 double update_grid(Grid& grid, const Walls& walls, const Vec3& gravity, double dt, double mass_floor,
-                   const std::vector<std::uint8_t>& counted = {});
+                   const std::vector<std::uint8_t>& counted = {}, bool zero_momentum = false);
 
 /// After the MUSL remap: v_i^{k+1} = p_i / m_i with the walls in the contact state of this step's
 /// grid update (Edo & Matsubara 2015, eq. 52, Abe, Johansson & Konagai 2005, eq. 18; Walls::Stage::Remap).
@@ -42,7 +44,9 @@ struct ScatteredFields {
 void fold_ghost_nodes(Grid& grid, const Walls& walls, ScatteredFields fields, const Vec3& gravity);
 
 /// Which node velocity fields mirror_ghost_nodes reflects.
-enum class GhostFields { AfterGridUpdate, Remapped, Start };
+/// AfterGridUpdateForRemap: as AfterGridUpdate, but the momentum is left alone (update_grid with
+/// zero_momentum zeroed it, ghosts included, for the remap's scatter).
+enum class GhostFields { AfterGridUpdate, AfterGridUpdateForRemap, Remapped, Start };
 
 /// Overwrite the ghost nodes beyond fixed and slip walls with the reflection of the interior nodes
 /// (Walls::mirror): after update_grid (v, v^L - v, v^L), after the MUSL remap (v^{k+1}) or after
