@@ -73,14 +73,22 @@ long long CellSort::active_block_of_cell(int i, int j, int k) const {
 }
 
 void CellSort::sort(ParticleStore& particles, Grid& grid) {
+  own_scratch_.reserve(particles.size());
+  sort(particles, grid, own_scratch_);
+}
+
+void CellSort::sort(ParticleStore& particles, Grid& grid, ParticleScratch& scratch) {
   const std::size_t n = particles.size();
   const auto& g = grid.geometry();
   const int bc = block_cells_;
   const int cells_per_block = bc * bc * bc;
-  particle_block_.resize(n);
-  particle_cell_.resize(n);
-  order_.resize(n);
-  by_block_.resize(n);
+  // The scratch's planes: each particle's block (0) and local cell (1), the particles in block
+  // order (2), in (block, cell) order (3); the permutation's buffer (4-5).
+  scratch.reserve(n);
+  const std::span<std::uint32_t> particle_block = scratch.plane<std::uint32_t>(0, n);
+  const std::span<std::uint32_t> particle_cell = scratch.plane<std::uint32_t>(1, n);
+  const std::span<std::uint32_t> by_block = scratch.plane<std::uint32_t>(2, n);
+  const std::span<std::uint32_t> order = scratch.plane<std::uint32_t>(3, n);
 
   // 1. Block and local cell of every particle (parallel: independent per particle).
   //    On a terrain grid the third coordinate is w = z - z_b(x), the map of the transfer kernels.
@@ -103,8 +111,8 @@ void CellSort::sort(ParticleStore& particles, Grid& grid) {
       c[0] = c[1] = c[2] = 0;
     }
     const int b[3] = {c[0] / bc, c[1] / bc, c[2] / bc};
-    particle_block_[p] = static_cast<std::uint32_t>((static_cast<std::size_t>(b[0]) * block_counts_[1] + b[1]) * block_counts_[2] + b[2]);
-    particle_cell_[p] = static_cast<std::uint32_t>(((c[0] - b[0] * bc) * bc + (c[1] - b[1] * bc)) * bc + (c[2] - b[2] * bc));
+    particle_block[p] = static_cast<std::uint32_t>((static_cast<std::size_t>(b[0]) * block_counts_[1] + b[1]) * block_counts_[2] + b[2]);
+    particle_cell[p] = static_cast<std::uint32_t>(((c[0] - b[0] * bc) * bc + (c[1] - b[1] * bc)) * bc + (c[2] - b[2] * bc));
   }
   if (outside >= 0) {
     const auto p = static_cast<std::size_t>(outside);
@@ -128,7 +136,7 @@ void CellSort::sort(ParticleStore& particles, Grid& grid) {
     const std::size_t threads = static_cast<std::size_t>(omp_get_num_threads());
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
 #pragma omp for schedule(static)
-    for (std::size_t p = 0; p < n; ++p) std::atomic_ref<std::uint32_t>(bbox_block_index_[particle_block_[p]]).store(1, std::memory_order_relaxed);
+    for (std::size_t p = 0; p < n; ++p) std::atomic_ref<std::uint32_t>(bbox_block_index_[particle_block[p]]).store(1, std::memory_order_relaxed);
     // (the implicit barrier: every flag is set) each thread compacts a contiguous part of the box
     const std::size_t box_begin = box_blocks * t / threads, box_end = box_blocks * (t + 1) / threads;
     std::uint32_t found = 0;
@@ -164,8 +172,8 @@ void CellSort::sort(ParticleStore& particles, Grid& grid) {
     const std::size_t begin = n * t / threads, end = n * (t + 1) / threads;
     std::uint32_t* counts = slice_counts_.data() + t * blocks;
     for (std::size_t p = begin; p < end; ++p) {
-      const std::uint32_t b = bbox_block_index_[particle_block_[p]];
-      particle_block_[p] = b;  // now the compact block
+      const std::uint32_t b = bbox_block_index_[particle_block[p]];
+      particle_block[p] = b;  // now the compact block
       ++counts[b];
     }
 #pragma omp barrier
@@ -191,7 +199,7 @@ void CellSort::sort(ParticleStore& particles, Grid& grid) {
       }
     }
     // (the implicit barrier: every slice's offsets are known) place the slice, block by block
-    for (std::size_t p = begin; p < end; ++p) by_block_[counts[particle_block_[p]]++] = static_cast<std::uint32_t>(p);
+    for (std::size_t p = begin; p < end; ++p) by_block[counts[particle_block[p]]++] = static_cast<std::uint32_t>(p);
 #pragma omp barrier
     // 4. Within each block, by local cell (stable).
     std::vector<std::uint32_t> cell_count(static_cast<std::size_t>(cells_per_block) + 1);
@@ -199,7 +207,7 @@ void CellSort::sort(ParticleStore& particles, Grid& grid) {
     for (std::size_t b = 0; b < blocks; ++b) {
       std::fill(cell_count.begin(), cell_count.end(), 0);
       const std::uint32_t first = block_start_[b], last = block_start_[b + 1];
-      for (std::uint32_t i = first; i < last; ++i) ++cell_count[particle_cell_[by_block_[i]] + 1];
+      for (std::uint32_t i = first; i < last; ++i) ++cell_count[particle_cell[by_block[i]] + 1];
       std::uint32_t* starts = cell_start_.data() + b * cells_per_block;
       std::uint32_t offset = first;
       for (int l = 0; l < cells_per_block; ++l) {
@@ -208,13 +216,13 @@ void CellSort::sort(ParticleStore& particles, Grid& grid) {
         cell_count[l + 1] = starts[l];  // now the running insert position of cell l
       }
       for (std::uint32_t i = first; i < last; ++i) {
-        const std::uint32_t p = by_block_[i];
-        order_[cell_count[particle_cell_[p] + 1]++] = p;
+        const std::uint32_t p = by_block[i];
+        order[cell_count[particle_cell[p] + 1]++] = p;
       }
     }
   }
   cell_start_[keys] = static_cast<std::uint32_t>(n);
-  particles.permute(order_);
+  particles.permute(order, scratch, 4);
   // The parallel regions of this sort (work recorder): the cell of each particle, the two above, one per permuted array.
   parallel_regions_ = 3;
   particles.for_each_integer_array([&](const char*, const auto& a) { parallel_regions_ += !a.empty(); });

@@ -65,25 +65,40 @@ void ParticleStore::enable_domain_state() {
 
 namespace {
 
+// new[i] = old[order[i]] through `buffer` (order.size() elements): gathered in one parallel loop,
+// copied back in another, and the field shortened to the order's length.
 template <class T>
-void permute_field(std::vector<T>& field, const std::vector<std::uint32_t>& order,
-                   std::vector<T>& scratch) {
+void permute_field(std::vector<T>& field, std::span<const std::uint32_t> order, std::span<T> buffer) {
   if (field.empty()) return;
   const std::size_t n = order.size();
-  scratch.resize(n);
-  const T* src = field.data();
-  T* dst = scratch.data();
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i) dst[i] = src[order[i]];
-  field.swap(scratch);
+  const T* const src = field.data();
+  T* const tmp = buffer.data();
+  const std::uint32_t* const at = order.data();
+#pragma omp parallel
+  {
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) tmp[i] = src[at[i]];
+    // (the implicit barrier: every gather has read the old field)
+    T* const dst = field.data();
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) dst[i] = tmp[i];
+  }
+  field.resize(n);
 }
 
 }  // namespace
 
-void ParticleStore::permute(const std::vector<std::uint32_t>& order) {
-  permute_field(id, order, id_scratch_);
-  permute_field(body, order, body_scratch_);
-  for_each_double_array([&](const char*, std::vector<double>& f) { permute_field(f, order, scratch_); });
+void ParticleStore::permute(std::span<const std::uint32_t> order, ParticleScratch& scratch, int plane) {
+  const std::size_t n = order.size();  // (plane() throws when the scratch holds fewer)
+  permute_field(id, order, scratch.plane<std::int64_t>(plane, n));
+  permute_field(body, order, scratch.plane<std::uint16_t>(plane, n));
+  for_each_double_array([&](const char*, std::vector<double>& f) { permute_field(f, order, scratch.plane<double>(plane, n)); });
+}
+
+void ParticleStore::permute(std::span<const std::uint32_t> order) {
+  ParticleScratch scratch;
+  scratch.reserve(order.size());
+  permute(order, scratch, 0);
 }
 
 namespace {

@@ -2,6 +2,7 @@
 
 #include "talus/core/error.hpp"
 #include "talus/grid/grid.hpp"
+#include "talus/particles/particle_scratch.hpp"
 #include "talus/particles/seeding.hpp"
 
 #include <fmt/core.h>
@@ -17,14 +18,14 @@ namespace talus {
 
 namespace {
 
-// Per-particle arrays, in bytes (particles/particle_store.hpp, particles/cell_sort.hpp, solver.hpp).
+// Per-particle arrays, in bytes (particles/particle_store.hpp, particles/particle_scratch.hpp, solver.hpp).
 constexpr std::size_t kAlwaysFields = 8 /* id */ + 2 /* body */ + 8 * (3 + 3 + 1 + 1 + 1 + 6 + 6);
 constexpr std::size_t kPlasticStrain = 8;
 constexpr std::size_t kBackStress = 6 * 8;
 constexpr std::size_t kGimpDomain = 3 * 8;
-constexpr std::size_t kPermuteScratch = 8 + 8 + 2;        // one double array, ids, bodies
-constexpr std::size_t kCellSort = 3 * 4;                  // block, cell, order (uint32)
-constexpr std::size_t kDisplacement = 3 * 8;              // the step's displacement
+// The scratch the phases borrow in turn (particles/particle_scratch.hpp): the sort's keys and
+// orders with the permutation's buffer, then the step's displacement.
+constexpr std::size_t kParticleScratch = ParticleScratch::kPlanes * 4;
 constexpr std::size_t kSmoothing = (6 + 6 + 3) * 8;       // raw and smoothed strain, raw spin
 constexpr std::size_t kSortCell = 3 * 4;                  // the sort state a snapshot keeps
 // The largest transient buffer: a particle frame's VTK arrays (points, velocity, speed, stress,
@@ -45,7 +46,7 @@ std::size_t bytes_per_particle(const Scene& scene) {
   if (plastic) fields += kPlasticStrain;
   if (kinematic) fields += kBackStress;
   if (scene.shape == ShapeKind::CpGimp) fields += kGimpDomain;
-  std::size_t bytes = fields + kPermuteScratch + kCellSort + kDisplacement + kFrameArrays;
+  std::size_t bytes = fields + kParticleScratch + kFrameArrays;
   if (scene.smoothing.enabled) bytes += kSmoothing;
   if (scene.guards.snapshot_interval > 0) bytes += fields + kSortCell;  // the last good state
   return bytes;

@@ -101,9 +101,14 @@ Solver::Solver(Scene scene, Comm comm) : scene_(std::move(scene)), comm_(comm) {
   sort_particles();
 }
 
+std::array<std::span<double>, 3> Solver::displacement() {
+  const std::size_t n = particles_.size();
+  return {scratch_.plane<double>(0, n), scratch_.plane<double>(2, n), scratch_.plane<double>(4, n)};
+}
+
 void Solver::size_scratch() {
   const std::size_t n = particles_.size();
-  for (auto& d : displacement_) d.assign(n, 0.0);
+  scratch_.reserve(n);
   if (smoother_) {
     for (int c = 0; c < 6; ++c) {
       raw_strain_[c].assign(n, 0.0);
@@ -174,7 +179,7 @@ void Solver::wrap_periodic() {
 
 void Solver::sort_particles() {
   ScopedPhase timer(times_, Phase::Sort);
-  sort_.sort(particles_, grid_);
+  sort_.sort(particles_, grid_, scratch_);
   needs_sort_ = false;
   steps_since_sort_ = 0;
   ++sorts_;
@@ -302,7 +307,7 @@ void Solver::step() {
   if (scene_.grid.has_periodic_axes()) recorded(recording(), RegionSchedule::Static, "wrap", particles_.size(), 1, [&] { wrap_periodic(); });
   // G2P flagged these while it computed the displacements and the new positions; the scans that
   // name the particle (CFL guard) or remove the leaving ones run only when flagged.
-  if (large_displacement_) check_step_displacement(particles_, displacement_, scene_, step_, time_);  // stability_guards.hpp
+  if (large_displacement_) check_step_displacement(particles_, displacement(), scene_, step_, time_);  // stability_guards.hpp
   // the outflow: a parallel count, then a serial rebuild and a sort (recorded as serial)
   if (crosses_open_face_) recorded(recording(), RegionSchedule::Serial, "outflow", 0, 0, [&] { remove_outflow(); });
   if ((step_ + 1) % kFieldCheckInterval == 0) {
@@ -414,7 +419,7 @@ void Solver::step_with(double dt) {
     options.remap = remap;
     if (options.pic_fraction > 0.0) block_damping_.assign(sort_.block_count(), 0.0);
     const GatherResult r =
-        gather_from_grid<Shape, Terrain>(particles_, sort_, grid_, displacement_, block_damping_, options, timing);
+        gather_from_grid<Shape, Terrain>(particles_, sort_, grid_, displacement(), block_damping_, options, timing);
     if (rec) rec->add_colour_passes("g2p", pass_timing_, sort_, !remap);
     if (options.pic_fraction > 0.0)
       for (double d : block_damping_) work_.damping += d;  // in block order: thread-independent
@@ -457,9 +462,10 @@ Vec3 Solver::gravity_at(double t) const {
 void Solver::move_particles() {
   ParticleStore& P = particles_;
   const std::size_t n = P.size();
+  const std::array<std::span<double>, 3> dx = displacement();
 #pragma omp parallel for schedule(static)
   for (std::size_t p = 0; p < n; ++p)
-    for (int d = 0; d < 3; ++d) P.x[d][p] += displacement_[d][p];
+    for (int d = 0; d < 3; ++d) P.x[d][p] += dx[d][p];
 }
 
 // Strain increments are gathered for a chunk of particles into a small buffer, then the material
@@ -525,9 +531,11 @@ double Solver::update_chunk(std::size_t begin, std::size_t end, const StrainIncr
     for (std::size_t p = begin; p < end; ++p)
       for (int d = 0; d < 3; ++d) P.domain[d][p] *= 1.0 + inc.strain[d][p - begin];
   }
-  if (move)
+  if (move) {
+    const std::array<std::span<double>, 3> dx = displacement();
     for (std::size_t p = begin; p < end; ++p)
-      for (int d = 0; d < 3; ++d) P.x[d][p] += displacement_[d][p];
+      for (int d = 0; d < 3; ++d) P.x[d][p] += dx[d][p];
+  }
   return dissipated;
 }
 
@@ -710,7 +718,7 @@ void Solver::restore(ParticleStore particles, const SolverState& s, RestoreSort 
   if (grid_.has_terrain())
     for (std::size_t p = 0; p < n; ++p) particles_.x[2][p] = grid_.z_of(particles_.x[0][p], particles_.x[2][p]);
   const std::vector<std::int64_t> ids = particles_.id;
-  sort_.sort(particles_, grid_);
+  sort_.sort(particles_, grid_, scratch_);
   if (particles_.id != ids) throw io_error("restart: the saved particle order is not the saved sort's order");
   particles_.x = std::move(x);
   tiles_changed_ = true;

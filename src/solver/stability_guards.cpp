@@ -3,6 +3,7 @@
 #include "talus/core/error.hpp"
 
 #include <fmt/core.h>
+#include <span>
 
 #include <cmath>
 #include <string>
@@ -70,7 +71,7 @@ void check_particle_fields(const ParticleStore& P, const Scene& scene, std::int6
                                           step, time, particle_label(P, scene, p), P.volume[p], where(P, p)));
 }
 
-void check_step_displacement(const ParticleStore& P, const std::array<std::vector<double>, 3>& displacement,
+void check_step_displacement(const ParticleStore& P, const std::array<std::span<double>, 3>& displacement,
                              const Scene& scene, std::int64_t step, double time) {
   const std::size_t n = P.size();
   const double h = scene.grid.h;

@@ -20,6 +20,7 @@
 #include <omp.h>
 
 #include <cmath>
+#include <span>
 #include <stdexcept>
 #include <type_traits>
 
@@ -272,7 +273,7 @@ namespace {
 // Called by every thread of a parallel region (an orphaned `omp for`); each thread's flags are its own
 // (merged by gather_impl: OR and max, the same for any thread count).
 template <class Shape, class Terrain, bool remap, class BlockList>
-void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::array<std::vector<double>, 3>& displacement,
+void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std::array<std::span<double>, 3>& displacement,
                    std::vector<double>& block_damping, const GatherOptions& options, std::size_t count,
                    BlockList block_list, GatherResult& flags, std::vector<double>* block_seconds) {
   const double dt = options.dt, pic_fraction = options.pic_fraction;
@@ -384,7 +385,7 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, std::arra
 
 template <class Shape, class Terrain>
 GatherResult gather_impl(ParticleStore& P, const CellSort& sort, Grid& grid,
-                         std::array<std::vector<double>, 3>& displacement, std::vector<double>& block_damping,
+                         const std::array<std::span<double>, 3>& displacement, std::vector<double>& block_damping,
                          const GatherOptions& options, ColourPassTiming* timing) {
   GatherResult result;
   if (timing) {
@@ -622,7 +623,7 @@ void ScatterToGrid(int kind, const ParticleStore& P, const CellSort& sort, Grid&
 }
 
 GatherResult GatherFromGrid(int kind, ParticleStore& P, const CellSort& sort, Grid& grid,
-                            std::array<std::vector<double>, 3>& displacement, std::vector<double>& block_damping,
+                            const std::array<std::span<double>, 3>& displacement, std::vector<double>& block_damping,
                             const GatherOptions& options, ColourPassTiming* timing) {
 #define TALUS_GATHER(S, T) return gather_impl<S, T>(P, sort, grid, displacement, block_damping, options, timing)
   TALUS_TRANSFER_CASES(TALUS_GATHER)
@@ -658,7 +659,7 @@ void scatter_to_grid(const ParticleStore& P, const CellSort& sort, Grid& grid, S
 
 template <class Shape, class Terrain>
 GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, Grid& grid,
-                              std::array<std::vector<double>, 3>& displacement, std::vector<double>& block_damping,
+                              const std::array<std::span<double>, 3>& displacement, std::vector<double>& block_damping,
                               const GatherOptions& options, ColourPassTiming* timing) {
   return TALUS_TRANSFER_DISPATCH(GatherFromGrid)(transfer_kind<Shape, Terrain>(), P, sort, grid, displacement,
                                                  block_damping, options, timing);
@@ -674,7 +675,7 @@ void strain_increments(const ParticleStore& P, const Grid& grid, const NodeVecto
   template void scatter_to_grid<SHAPE, TERRAIN>(const ParticleStore&, const CellSort&, Grid&, ScatterFields,  \
                                                 ColourPassTiming*);                                           \
   template GatherResult gather_from_grid<SHAPE, TERRAIN>(ParticleStore&, const CellSort&, Grid&,                \
-                                                         std::array<std::vector<double>, 3>&, std::vector<double>&, \
+                                                         const std::array<std::span<double>, 3>&, std::vector<double>&, \
                                                          const GatherOptions&, ColourPassTiming*);                  \
   template void strain_increments<SHAPE, TERRAIN>(const ParticleStore&, const Grid&,                          \
                                                   const NodeVectors&, double, std::size_t,    \

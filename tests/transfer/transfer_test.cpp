@@ -15,6 +15,7 @@
 
 #include <cmath>
 #include <random>
+#include <span>
 
 namespace talus {
 namespace {
@@ -48,8 +49,9 @@ void check_fused_remap() {
         grid.velocity_l[d][n] = std::cos(0.11 * n + 2 * d);
       }
     }
-  std::array<std::vector<double>, 3> displacement;
-  for (auto& a : displacement) a.assign(P.size(), 0.0);
+  std::array<std::vector<double>, 3> displacement_arrays;
+  for (auto& a : displacement_arrays) a.assign(P.size(), 0.0);
+  const std::array<std::span<double>, 3> displacement = {displacement_arrays[0], displacement_arrays[1], displacement_arrays[2]};
   std::vector<double> damping(sort.block_count(), 0.0);
   ParticleStore separate = P;
   GatherOptions options;

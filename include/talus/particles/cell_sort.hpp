@@ -20,6 +20,7 @@
 // Work and memory scale with the occupied blocks: the only arrays over the bounding box are one
 // counter per block and one flag per 4^3 node tile.
 #include "talus/grid/grid.hpp"
+#include "talus/particles/particle_scratch.hpp"
 #include "talus/particles/particle_store.hpp"
 
 #include <array>
@@ -42,7 +43,10 @@ class CellSort {
   CellSort(const Grid& grid, int reach_low, int reach_high, int block_cells = 0);
 
   /// Sort the store by (block, cell), rebuild offsets and colour lists, and activate the grid tiles
-  /// the blocks may write until the next sort.
+  /// the blocks may write until the next sort. The per-particle keys and orders, and the buffer of
+  /// the permutation, live in `scratch` (all 6 planes; its contents before and after mean nothing).
+  void sort(ParticleStore& particles, Grid& grid, ParticleScratch& scratch);
+  /// The same with a scratch of the sort's own (kept between sorts): tests and tools.
   void sort(ParticleStore& particles, Grid& grid);
 
   /// The block edge the constructor picks for a support (requested > 0: that one).
@@ -103,8 +107,7 @@ class CellSort {
   BlockOrder block_order_ = BlockOrder::LargestFirst;
   // Scratch reused between sorts.
   std::vector<std::uint32_t> bbox_block_index_;   // per bounding-box block: count, then compact index + 1
-  std::vector<std::uint32_t> particle_block_, particle_cell_, order_;
-  std::vector<std::uint32_t> by_block_;      // particles in block order (stage 3 of the sort)
+  ParticleScratch own_scratch_;              // only for sort(particles, grid)
   std::vector<std::uint32_t> slice_counts_;  // per thread slice and block: count, then insert position
   std::vector<std::uint32_t> slice_blocks_;  // active blocks per thread's part of the box, then offsets
   double serial_seconds_ = 0.0;

@@ -4,9 +4,11 @@
 // cell_sort.hpp); the permutation is applied to every field, and `id` keeps each particle's
 // identity across sorts. Field groups a scene does not need are left empty (size 0).
 #include "talus/core/types.hpp"
+#include "talus/particles/particle_scratch.hpp"
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace talus {
@@ -51,11 +53,15 @@ struct ParticleStore {
   /// Allocate the cpGIMP domain half widths, each set to its initial value V0^(1/3)/2.
   void enable_domain_state();
 
-  /// Apply a gather permutation to every allocated field: new[i] = old[order[i]].
-  /// Reuses internal scratch arrays, so repeated sorts allocate nothing.
-  void permute(const std::vector<std::uint32_t>& order);
+  /// Apply a gather permutation to every allocated field: new[i] = old[order[i]]. `order` may be
+  /// shorter than the store (a subset: the particles that stay). Each field is gathered into planes
+  /// `plane` and `plane` + 1 of `scratch` (even `plane`; `order` must not lie there) and copied back,
+  /// so the fields keep their memory and a sort allocates nothing.
+  void permute(std::span<const std::uint32_t> order, ParticleScratch& scratch, int plane);
+  /// The same with a scratch of its own (rare reorders: outflow, migration, a checkpoint's subset).
+  void permute(std::span<const std::uint32_t> order);
 
-  /// Make this store a copy of `other` (its arrays and state flags, not its sort scratch), each
+  /// Make this store a copy of `other` (its arrays and state flags), each
   /// array copied by all threads in static slices: the run loop's last-good-state snapshot copies
   /// every particle every few steps, and a serial copy is a serial part of every step at many cores.
   void copy_from(const ParticleStore& other);
@@ -114,9 +120,6 @@ struct ParticleStore {
   bool plastic_enabled_ = false;
   bool back_stress_enabled_ = false;
   bool domain_enabled_ = false;
-  std::vector<double> scratch_;
-  std::vector<std::int64_t> id_scratch_;
-  std::vector<std::uint16_t> body_scratch_;
 };
 
 }  // namespace talus

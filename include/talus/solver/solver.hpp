@@ -9,6 +9,7 @@
 #include "talus/solver/energy_budget.hpp"
 #include "talus/transfer/transfers.hpp"
 #include "talus/particles/cell_sort.hpp"
+#include "talus/particles/particle_scratch.hpp"
 #include "talus/particles/particle_store.hpp"
 #include "talus/particles/slab_decomposition.hpp"
 #include "talus/scene/scene.hpp"
@@ -19,6 +20,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <vector>
 
 namespace talus {
@@ -160,6 +162,8 @@ class Solver {
   void wrap_periodic();
   /// Size the per-particle scratch arrays to the current particle count.
   void size_scratch();
+  /// This step's displacement, in the scratch (valid from G2P until the next sort).
+  std::array<std::span<double>, 3> displacement();
   /// The body force at time t: scene gravity, ramped over scene.gravity_ramp_time.
   Vec3 gravity_at(double t) const;
   void sort_particles();
@@ -189,7 +193,9 @@ class Solver {
   Walls walls_;
   BodyMaterials materials_;                   // the constitutive model of each body
   std::vector<double> block_dissipation_;     // per sort block, this step's material dissipation
-  std::array<std::vector<double>, 3> displacement_;  // this step's dt sum N v^L, applied after the strain pass
+  // Per-particle working memory lent to one phase at a time: the sort's keys and orders, then this
+  // step's displacement dt sum N v^L (planes 0, 2, 4; written by G2P, applied after the strain pass).
+  ParticleScratch scratch_;
   double mass_floor_ = 0.0;
   double time_ = 0.0;
   std::int64_t step_ = 0;

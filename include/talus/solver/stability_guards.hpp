@@ -19,6 +19,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace talus {
@@ -32,7 +33,7 @@ void check_particle_fields(const ParticleStore& particles, const Scene& scene, s
 /// No particle moved more than guards.max_step_displacement cells in the step (CFL breach). G2P
 /// flags a breach while it computes the displacements; the solver calls this only then, to name
 /// the particle.
-void check_step_displacement(const ParticleStore& particles, const std::array<std::vector<double>, 3>& displacement,
+void check_step_displacement(const ParticleStore& particles, const std::array<std::span<double>, 3>& displacement,
                              const Scene& scene, std::int64_t step, double time);
 
 /// Energy growth: with E the total of EnergyBudget (kinetic + strain + gravity + friction work +

@@ -17,6 +17,7 @@
 #include <array>
 #include <cstddef>
 #include <limits>
+#include <span>
 #include <vector>
 
 namespace talus {
@@ -69,7 +70,7 @@ struct GatherOptions {
 /// are moved only after the strain pass, so every transfer of a step uses the weights at x_p^k.
 template <class Shape, class Terrain>
 GatherResult gather_from_grid(ParticleStore& particles, const CellSort& sort, Grid& grid,
-                              std::array<std::vector<double>, 3>& displacement, std::vector<double>& block_damping,
+                              const std::array<std::span<double>, 3>& displacement, std::vector<double>& block_damping,
                               const GatherOptions& options, ColourPassTiming* timing = nullptr);
 
 /// Per-particle strain and spin increments of a range, structure of arrays.
