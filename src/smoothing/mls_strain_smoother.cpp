@@ -178,8 +178,9 @@ template <class V>
 /// Thread-local scratch of one group. Buffers only grow, so after the first groups a thread
 /// allocates nothing.
 struct GroupScratch {
-  // Candidates: the store indices of the particles within the radius of the group's box.
-  std::vector<std::int64_t> idx;
+  // Candidates: the store indices of the particles within the radius of the box of the group's
+  // cells (idx), and of those the ones within the radius of the group's own box (group_idx).
+  std::vector<std::int64_t> idx, group_idx;
   // Per candidate, the lanes' scaled offsets along the basis axes and eq. 39 weights (pass 1 ->
   // pass 2): 4 x kGroup doubles, aligned for whole-vector loads.
   hwy::AlignedFreeUniquePtr<double[]> lanes;
@@ -363,8 +364,8 @@ template <int T>
 /// makes every lane's sum non-finite, and pass 2 is then redone with the terms outside the ball
 /// selected away (a NaN input stays inside its own ball, as with a neighbour list).
 template <int Degree, int Axes>
-void smooth_group(GroupScratch& S, std::size_t nc, const MlsPass& pass, const std::uint32_t* p, int n,
-                  std::size_t& smoothed, std::size_t& unsmoothed) {
+void smooth_group(GroupScratch& S, const std::int64_t* idx, std::size_t nc, const MlsPass& pass, const std::uint32_t* p,
+                  int n, std::size_t& smoothed, std::size_t& unsmoothed) {
   constexpr int T = mls_term_count(Degree, Axes);
   constexpr int NA = T * (T + 1) / 2;  // upper triangle of A
   const ParticleStore& P = *pass.particles;
@@ -376,12 +377,11 @@ void smooth_group(GroupScratch& S, std::size_t nc, const MlsPass& pass, const st
     body[v] = P.body[q];
   }
   if (S.lanes_capacity < nc) {
-    S.lanes_capacity = S.idx.size();
+    S.lanes_capacity = std::max(nc, S.idx.size());
     S.lanes = hwy::AllocateAligned<double>(4 * kGroup * S.lanes_capacity);
   }
   const double *x0 = P.x[0].data(), *x1 = P.x[1].data(), *x2 = P.x[2].data();
   const std::uint16_t* pbody = P.body.data();
-  const std::int64_t* idx = S.idx.data();
   Lanes* uu[3] = {S.lane_array(0), S.lane_array(1), S.lane_array(2)};
   Lanes* ww = S.lane_array(3);
   const Lanes zero = {};
@@ -486,19 +486,53 @@ MlsCounts smooth_impl(const MlsPass& pass) {
     GroupScratch S;
     std::uint32_t group[kGroup];
     int n = 0;
+    // The group's cells as a store range [range_begin, range_end). The candidates are gathered for
+    // the box of every particle in those cells that can be fitted, and kept for the next group
+    // while its cells are the same: a cell of more particles than lanes (8 per cell on AVX2's 4
+    // lanes) is then searched once, not once per group. A superset of a lane's neighbours changes
+    // none of its bits (zero weights; see smooth_group), as between the paths' group sizes.
+    std::uint32_t range_begin = 0, range_end = 0, gathered_begin = 0, gathered_end = 0;
+    std::size_t nc = 0;
+    const double keep2 = pass.radius * pass.radius * (1.0 + 1e-9);  // as gather_candidates
+    auto fittable = [&](std::uint32_t q) {
+      return smooth_body[P.body[q]] && std::isfinite(P.x[0][q]) && std::isfinite(P.x[1][q]) && std::isfinite(P.x[2][q]);
+    };
     auto flush = [&] {
       if (n == 0) return;
-      ParticleBox box;
+      if (range_begin != gathered_begin || range_end != gathered_end) {
+        ParticleBox box;
+        for (std::uint32_t q = range_begin; q < range_end; ++q) {
+          if (!fittable(q)) continue;
+          for (int d = 0; d < 3; ++d) {
+            const double x = P.x[d][q], xg = grid.to_grid(d, x);
+            box.lo[d] = xg < box.lo[d] ? xg : box.lo[d];
+            box.hi[d] = xg > box.hi[d] ? xg : box.hi[d];
+            box.xlo[d] = x < box.xlo[d] ? x : box.xlo[d];
+            box.xhi[d] = x > box.xhi[d] ? x : box.xhi[d];
+          }
+        }
+        nc = gather_candidates(S, pass, box, rg);
+        gathered_begin = range_begin;
+        gathered_end = range_end;
+      }
+      // The group's own box keeps its list short: the candidates within the radius of it, in the
+      // cells' order, are those a search from the group's box alone would find, in its order.
+      double xlo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, xhi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
       for (int g = 0; g < n; ++g)
         for (int d = 0; d < 3; ++d) {
-          const double x = P.x[d][group[g]], xg = grid.to_grid(d, x);
-          box.lo[d] = xg < box.lo[d] ? xg : box.lo[d];
-          box.hi[d] = xg > box.hi[d] ? xg : box.hi[d];
-          box.xlo[d] = x < box.xlo[d] ? x : box.xlo[d];
-          box.xhi[d] = x > box.xhi[d] ? x : box.xhi[d];
+          const double x = P.x[d][group[g]];
+          xlo[d] = x < xlo[d] ? x : xlo[d];
+          xhi[d] = x > xhi[d] ? x : xhi[d];
         }
-      const std::size_t nc = gather_candidates(S, pass, box, rg);
-      smooth_group<Degree, Axes>(S, nc, pass, group, n, smoothed, unsmoothed);
+      if (S.group_idx.size() < nc) S.group_idx.resize(S.idx.size());
+      std::size_t ng = 0;
+      for (std::size_t I = 0; I < nc; ++I) {
+        const std::int64_t q = S.idx[I];
+        const double x[3] = {P.x[0][q], P.x[1][q], P.x[2][q]};
+        S.group_idx[ng] = q;
+        ng += gap2_to_box<double>(x, xlo, xhi, 0.0) < keep2 ? 1 : 0;
+      }
+      smooth_group<Degree, Axes>(S, S.group_idx.data(), ng, pass, group, n, smoothed, unsmoothed);
       n = 0;
     };
 #pragma omp for schedule(dynamic, 1)
@@ -523,6 +557,8 @@ MlsCounts smooth_impl(const MlsPass& pass) {
             continue;
           }
           if (n == kGroup) flush();
+          if (n == 0) range_begin = p_begin;
+          range_end = p_end;
           group[n++] = q;
         }
       }
