@@ -149,7 +149,7 @@ void Solver::remove_outflow() {
     outflow_mass_ += P.mass[p];
     ++outflow_particles_;
   }
-  P.permute(kept);
+  P.permute(kept, scratch_, 0);  // the step's displacement is spent: the scratch is free
   size_scratch();
   // Sort now: the cell offsets describe the old particle set, and state() (a checkpoint, the last
   // good state) reads them before the next step would sort.
