@@ -48,6 +48,7 @@ struct BenchOptions {
   std::string record_path;  // --record-work: the work-distribution record of extra steps
   int record_steps = 3;
   int block_cells = 0;  // solver.block_cells (0: automatic)
+  std::string scatter = "colour_passes";  // solver.scatter
 };
 
 /// The STREAM triad a[i] = b[i] + s c[i] (McCalpin) over three arrays of 2^24 doubles (128 MiB
@@ -109,6 +110,7 @@ const char* const kSand = R"("model": "drucker_prager", "density": 1600.0, "youn
 const char* const kBeads = R"("model": "mu_i", "density": 1600.0, "young": 2.0e6, "poisson": 0.3)";
 constexpr double kBenchCell = 0.01;  // [m]
 int g_block_cells = 0;               // --block-cells, for every bench scene
+std::string g_scatter = "colour_passes";  // --scatter, for every bench scene
 const char* const kElastic = R"("model": "linear_elastic", "density": 2000.0, "young": 1.0e7, "poisson": 0.3)";
 
 /// The scene of both benches: one box body of the bench material (2x2x2 particles per 1 cm cell)
@@ -121,14 +123,14 @@ Scene bench_scene(const std::string& name, double grid_xy, double grid_z, double
     "name": "{0}",
     "grid": {{ "origin": [0, 0, 0], "size": [{1}, {1}, {2}], "cell_size": {3} }},
     "time": {{ "end": 1.0e9, "courant": 0.3 }},
-    "solver": {{ "shape": "{4}", "scheme": "{5}", "block_cells": {13}{6} }},
+    "solver": {{ "shape": "{4}", "scheme": "{5}", "block_cells": {13}, "scatter": "{14}"{6} }},
     "materials": {{ "m": {{ {7} }} }},
     "bodies": [ {{ "name": "body", "material": "m", "box": {{ "min": [{8}, {8}, 0], "max": [{9}, {9}, {10}] }},
                   "particles_per_cell": 2{11} }} ],
     "boundaries": {{ "z-": {{ "type": "friction", "friction_coefficient": {12} }}, "z+": "open" }}
   }})", name, grid_xy, grid_z, kBenchCell, shape, scheme, mls_json,
                                        material == "dp" ? kSand : material == "mu_i" ? kBeads : kElastic, body_lo,
-                                       body_hi, body_top, body_extra, floor_friction, g_block_cells);
+                                       body_hi, body_top, body_extra, floor_friction, g_block_cells, g_scatter);
   return parse_scene(json, name);
 }
 
@@ -350,6 +352,7 @@ void run_bench(const BenchOptions& o) {
   if (o.threads > 0) omp_set_num_threads(o.threads);
   phase_clock() = o.cpu_time ? PhaseClock::ProcessCpu : PhaseClock::Wall;
   g_block_cells = o.block_cells;
+  g_scatter = o.scatter;
   // What the process holds before the scene exists (the program and its libraries, ~25 MB): the
   // per-particle figure without it is what a larger run costs per particle.
   const std::size_t rss_at_start = status_bytes("VmRSS:");
@@ -436,6 +439,7 @@ void run_bench(const BenchOptions& o) {
   j["scheme"] = to_string(solver.scene().scheme);
   j["particles"] = n;
   j["block_cells"] = solver.cell_sort().block_cells();
+  j["scatter"] = to_string(solver.scene().scatter);
   j["steps"] = o.steps;
   j["ranks"] = world.size();
   j["threads"] = threads;  // per rank
@@ -546,6 +550,7 @@ void record_work(Solver& solver, const BenchOptions& o, const nlohmann::json& be
   meta["threads"] = omp_get_max_threads();
   meta["cpu"] = cpu_model();
   meta["block_cells"] = solver.cell_sort().block_cells();
+  meta["scatter"] = to_string(solver.scene().scatter);
   meta["fork_join_seconds"] = fork_join;  // index = thread count (0 unused)
   meta["barrier_seconds"] = WorkRecorder::measure_barrier(std::max(omp_get_max_threads(), omp_get_num_procs()));
   std::ofstream out(o.record_path);
@@ -582,6 +587,11 @@ void add_bench_command(CLI::App& app) {
                   "(tools/scaling_model.py)");
   cmd->add_option("--block-cells", o->block_cells, "solver.block_cells: colour-block edge in cells (0: automatic)")
       ->check(CLI::Range(0, 64))
+      ->capture_default_str();
+  cmd->add_option("--scatter", o->scatter,
+                  "solver.scatter: colour_passes (8 passes over the colour blocks) or block_buffers (one pass into "
+                  "per-block node boxes, then their sum)")
+      ->check(CLI::IsMember({"colour_passes", "block_buffers"}))
       ->capture_default_str();
   cmd->add_option("--record-steps", o->record_steps, "Steps recorded by --record-work")
       ->check(CLI::Range(1, 1000))

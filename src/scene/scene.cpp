@@ -34,6 +34,14 @@ const char* to_string(SchemeKind scheme) {
   return "?";
 }
 
+const char* to_string(ScatterOrder order) {
+  switch (order) {
+    case ScatterOrder::ColourPasses: return "colour_passes";
+    case ScatterOrder::BlockBuffers: return "block_buffers";
+  }
+  return "?";
+}
+
 const char* to_string(ShapeKind shape) {
   switch (shape) {
     case ShapeKind::Linear: return "linear";

@@ -259,6 +259,13 @@ Table<SceneDraft> make_solver_table() {
               fmt::format("{} = {}: must be 0 (automatic) or {}..64 for the {} shape (two cells of slack + its reach)",
                           r.key_path("block_cells"), s.block_cells, smallest_block, to_string(s.shape)));
       }),
+      choice<SceneDraft>("scatter", TALUS_AT(scene.scatter), named({ScatterOrder::ColourPasses, ScatterOrder::BlockBuffers}),
+                         "how P2G and the MUSL remap add the particles into the nodes without races: colour_passes (8 "
+                         "passes over the colour blocks, a barrier after each) or block_buffers (every block into node "
+                         "records of its own in one pass, then the boxes added tile by tile; more work per particle, "
+                         "fewer and larger parallel loops: for small scenes on many threads, docs/performance.md "
+                         "\"Scaling\"). Both give the same results for any thread count; they differ from each other at "
+                         "round-off. block_buffers does not support periodic boundaries"),
       number<SceneDraft>("gravity_ramp_time", TALUS_AT(scene.gravity_ramp_time), {0.0, kHuge},
                          "gravity grows linearly from 0 to its full value over this time (0: applied at once); for "
                          "quasi-static loading such as the column benchmark. While it ramps, the energy budget's "
@@ -608,6 +615,11 @@ void check_periodic_faces(ObjectReader& r, SceneDraft& d) {
     }
     if (a == 0 && s.grid.has_terrain())
       throw input_error(fmt::format("{} = \"periodic\" needs a flat grid: grid.terrain is set (a bed profile does not repeat)", at));
+    if (s.scatter == ScatterOrder::BlockBuffers)
+      throw input_error(fmt::format(
+          "{} = \"periodic\" cannot run with solver.scatter = \"block_buffers\" (the boxes do not wrap): use "
+          "\"colour_passes\"",
+          at));
     if (s.smoothing.enabled)
       throw input_error(fmt::format(
           "{} = \"periodic\" cannot run with solver.smoothing (the MLS neighbour search does not wrap): remove it or set "

@@ -2,8 +2,12 @@
 
 #include "talus/core/error.hpp"
 #include "talus/grid/grid.hpp"
+#include "talus/particles/cell_sort.hpp"
 #include "talus/particles/particle_scratch.hpp"
 #include "talus/particles/seeding.hpp"
+#include "talus/shape/bspline.hpp"
+#include "talus/shape/linear.hpp"
+#include "talus/transfer/block_buffers.hpp"
 
 #include <fmt/core.h>
 
@@ -64,9 +68,16 @@ std::size_t tiles_in(const std::array<int, 3>& lo, const std::array<int, 3>& hi,
 }
 
 /// The node data of the tiles each body's box (in the grid's x, y, w) covers, widened by the
-/// largest shape function's reach (2 nodes). Overlapping bodies count twice: an upper estimate.
+/// largest shape function's reach (2 nodes), and with solver.scatter = "block_buffers" the node
+/// boxes of the blocks those boxes meet (BlockBuffers). Overlapping bodies count twice: an upper estimate.
 std::size_t start_grid_bytes(const Scene& scene) {
   const GridGeometry& g = scene.grid;
+  const bool linear = scene.shape == ShapeKind::Linear;
+  const int reach_low = linear ? LinearShape::kReachLow : QuadraticBSplineShape::kReachLow;
+  const int reach_high = linear ? LinearShape::kReachHigh : QuadraticBSplineShape::kReachHigh;
+  const int block = CellSort::block_edge(reach_low, reach_high, scene.block_cells);
+  const int box_edge = block + 2 * ((block - reach_low - reach_high) / 2) + reach_low + reach_high;
+  std::size_t box_bytes = 0;
   const ProfileTerrain bed = grid_bed(g);
   const std::array<int, 3> nodes = g.nodes();
   std::size_t tiles = 0;
@@ -95,8 +106,13 @@ std::size_t start_grid_bytes(const Scene& scene) {
       b[d] = static_cast<int>(std::ceil(std::min(g.to_grid(d, hi[d]), double(nodes[d])))) + 2;
     }
     tiles += tiles_in(a, b, nodes);
+    if (scene.scatter == ScatterOrder::BlockBuffers) {
+      std::size_t blocks = 1;
+      for (int d = 0; d < 3; ++d) blocks *= static_cast<std::size_t>(std::max(b[d] - a[d], 0) / block + 2);
+      box_bytes += BlockBuffers::bytes_for(blocks, box_edge);
+    }
   }
-  return tiles * kTileNodes * kNodeBytes;
+  return tiles * kTileNodes * kNodeBytes + box_bytes;
 }
 
 std::optional<std::size_t> parse_size(std::string text) {

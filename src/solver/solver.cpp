@@ -177,9 +177,17 @@ void Solver::wrap_periodic() {
   periodic_gravity_shift_ += shift[0];
 }
 
+void Solver::prepare_block_buffers() {
+  if (!block_buffers()) return;
+  const double start = omp_get_wtime();
+  block_buffers_.prepare(sort_, grid_);
+  buffers_prepare_seconds_ = omp_get_wtime() - start;
+}
+
 void Solver::sort_particles() {
   ScopedPhase timer(times_, Phase::Sort);
   sort_.sort(particles_, grid_, scratch_);
+  prepare_block_buffers();
   needs_sort_ = false;
   steps_since_sort_ = 0;
   ++sorts_;
@@ -349,7 +357,7 @@ void Solver::step_with(double dt) {
     if (WorkRecorder* const r = recording()) {
       const double start = omp_get_wtime();
       sort_particles();
-      const double seconds = omp_get_wtime() - start, serial = std::min(sort_.last_serial_seconds(), seconds);
+      const double seconds = omp_get_wtime() - start, serial = std::min(sort_.last_serial_seconds() + (block_buffers() ? buffers_prepare_seconds_ : 0.0), seconds);
       r->add_static("sort", particles_.size(), sort_.last_parallel_regions(), seconds - serial);
       r->add_serial("sort bookkeeping", serial);
     } else {
@@ -365,14 +373,22 @@ void Solver::step_with(double dt) {
   ColourPassTiming* const timing = rec ? &pass_timing_ : nullptr;
   const std::size_t tiles = grid_.active_tiles().size();
   const int mirrored = walls_.has_mirrored_walls() ? 1 : 0;
+  BlockBuffers* const buffers = block_buffers();
+  // After a scatter: its record, and with block buffers the sum of the boxes into the grid.
+  auto add_block_buffers = [&](WorkRecorder* r, const char* name, ScatteredFields fields) {
+    if (r) r->add_colour_passes(name, pass_timing_, sort_, buffers != nullptr);
+    if (buffers)
+      recorded(r, RegionSchedule::Static, (std::string(name) + " box sum").c_str(), tiles, 1,
+               [&] { buffers->add_to_grid(grid_, fields); });
+  };
 
   // 2. P2G: nodal mass, momentum and internal force. USF / USAVG update the stress in between,
   //    from the start-of-step nodal velocities (walls applied), before scattering the force.
   if (!scheme.stress_first) {
     ScopedPhase timer(times_, Phase::P2G);
     recorded(rec, RegionSchedule::Static, "grid clear", tiles, 1, [&] { grid_.clear_active(); });
-    scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentumForce, timing);
-    if (rec) rec->add_colour_passes("p2g", pass_timing_, sort_, false);
+    scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentumForce, timing, buffers);
+    add_block_buffers(rec, "p2g", {.mass = true, .momentum = true, .force = true});
     sum_shared_nodes({grid_.mass, grid_.momentum[0], grid_.momentum[1], grid_.momentum[2], grid_.force[0],
                       grid_.force[1], grid_.force[2]});
     recorded(rec, RegionSchedule::Static, "fold ghosts", tiles, mirrored,
@@ -381,8 +397,8 @@ void Solver::step_with(double dt) {
     {
       ScopedPhase timer(times_, Phase::P2G);
       recorded(rec, RegionSchedule::Static, "grid clear", tiles, 1, [&] { grid_.clear_active(); });
-      scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentum, timing);
-      if (rec) rec->add_colour_passes("p2g mass momentum", pass_timing_, sort_, false);
+      scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentum, timing, buffers);
+      add_block_buffers(rec, "p2g mass momentum", {.mass = true, .momentum = true});
       sum_shared_nodes({grid_.mass, grid_.momentum[0], grid_.momentum[1], grid_.momentum[2]});
       recorded(rec, RegionSchedule::Static, "start velocities", tiles, 1 + 2 * mirrored, [&] {
         fold_ghost_nodes(grid_, walls_, {.mass = true, .momentum = true}, gravity);
@@ -392,8 +408,8 @@ void Solver::step_with(double dt) {
     }
     update_stress<Shape, Terrain>(grid_.start_velocity(), stress_dt, false);
     ScopedPhase timer(times_, Phase::P2G);
-    scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Force, timing);
-    if (rec) rec->add_colour_passes("p2g force", pass_timing_, sort_, false);
+    scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Force, timing, buffers);
+    add_block_buffers(rec, "p2g force", {.force = true});
     sum_shared_nodes({grid_.force[0], grid_.force[1], grid_.force[2]});
     recorded(rec, RegionSchedule::Static, "fold ghosts", tiles, mirrored,
              [&] { fold_ghost_nodes(grid_, walls_, {.force = true}, gravity); });
@@ -419,8 +435,12 @@ void Solver::step_with(double dt) {
     options.remap = remap;
     if (options.pic_fraction > 0.0) block_damping_.assign(sort_.block_count(), 0.0);
     const GatherResult r =
-        gather_from_grid<Shape, Terrain>(particles_, sort_, grid_, displacement(), block_damping_, options, timing);
-    if (rec) rec->add_colour_passes("g2p", pass_timing_, sort_, !remap);
+        gather_from_grid<Shape, Terrain>(particles_, sort_, grid_, displacement(), block_damping_, options, timing,
+                                         remap ? buffers : nullptr);
+    if (remap)
+      add_block_buffers(rec, "g2p", {.momentum = true});
+    else if (rec)
+      rec->add_colour_passes("g2p", pass_timing_, sort_, true);
     if (options.pic_fraction > 0.0)
       for (double d : block_damping_) work_.damping += d;  // in block order: thread-independent
     if (r.nonfinite >= 0) report_bad_particle(r.nonfinite, "velocity is not finite");
@@ -719,6 +739,7 @@ void Solver::restore(ParticleStore particles, const SolverState& s, RestoreSort 
     for (std::size_t p = 0; p < n; ++p) particles_.x[2][p] = grid_.z_of(particles_.x[0][p], particles_.x[2][p]);
   const std::vector<std::int64_t> ids = particles_.id;
   sort_.sort(particles_, grid_, scratch_);
+  prepare_block_buffers();
   if (particles_.id != ids) throw io_error("restart: the saved particle order is not the saved sort's order");
   particles_.x = std::move(x);
   tiles_changed_ = true;

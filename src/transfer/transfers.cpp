@@ -19,6 +19,8 @@
 
 #include <omp.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <span>
 #include <stdexcept>
@@ -190,17 +192,98 @@ class RecordGather {
   V row_[kParts], particle_[kParts];
 };
 
+/// The node indices of a stencil's rows and columns where a scatter writes: the grid's (the
+/// stencil's own tables) or, with `kBox`, those of a block's box of `edge`^3 node records whose first
+/// node is `box_first` (BlockBuffers).
+template <bool kBox, int N>
+struct ScatterIndex {
+  std::size_t x[N], y[N], z[N];
+  const std::size_t *ix, *iy, *iz;
+  template <class S>
+  ScatterIndex(const S& s, const std::array<int, 3>& box_first, int edge) {
+    if constexpr (kBox) {
+      for (int a = 0; a < N; ++a) {
+        x[a] = static_cast<std::size_t>(s.first[0] + a - box_first[0]) * edge * edge;
+        y[a] = static_cast<std::size_t>(s.first[1] + a - box_first[1]) * edge;
+        z[a] = static_cast<std::size_t>(s.first[2] + a - box_first[2]);
+      }
+      ix = x;
+      iy = y;
+      iz = z;
+    } else {
+      (void)box_first;
+      (void)edge;
+      ix = s.ix;
+      iy = s.iy;
+      iz = s.iz;
+    }
+  }
+};
+
 // The fields to scatter are template parameters, so each combination compiles to a loop without
-// the tests (the innermost loop runs 8-64 times per particle).
-template <class Shape, class Terrain, bool with_mass, bool with_momentum, bool with_force>
-void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid, ColourPassTiming* timing) {
+// the tests (the innermost loop runs 8-64 times per particle). One block's particles into
+// `records`: the grid's, or with `kBox` the block's box (BlockBuffers).
+template <class Shape, class Terrain, bool with_mass, bool with_momentum, bool with_force, bool kBox>
+void scatter_block(const ParticleStore& P, const CellSort& sort, const Grid& grid, std::size_t b, double* records,
+                   const std::array<int, 3>& box_first, int edge) {
   const Terrain& terrain = grid.template terrain<Terrain>();
   const double inv_h = 1.0 / grid.geometry().h;
-  double* const records = grid.records();
+  ParticleStencil<Shape> stencil;
+  RecordScatter<with_mass, with_momentum, with_force> scatter;
+  for (std::size_t p = sort.block_begin(b); p < sort.block_end(b); ++p) {
+    double hw[3];
+    half_widths<Shape>(P, p, inv_h, hw);
+    const double m = P.mass[p];
+    const double mv[3] = {m * P.v[0][p], m * P.v[1][p], m * P.v[2][p]};
+    // -V sigma, for f_int = -sum V_p sigma_p grad N (Edo & Matsubara 2015, eq. 22)
+    const double vol = P.volume[p];
+    double minus_v_sigma[6];
+    for (int c = 0; c < 6; ++c) minus_v_sigma[c] = -vol * P.stress[c][p];
+    scatter.set_particle(m, mv, minus_v_sigma);
+    stencil.visit(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw, [&](const auto& s) {
+      constexpr int N = std::decay_t<decltype(s)>::N;
+      const ScatterIndex<kBox, N> index(s, box_first, edge);
+      // Sum factorisation: with grad N = (gx wy wz, wx gy wz, wx wy gz) (Stencil::gradient) the
+      // force on node (a, b, c) is wz[c] A + gz[c] B with A, B fixed per (a, b) row, so the
+      // innermost loop does 2 multiply-adds per component instead of forming the gradient.
+      for (int a = 0; a < N; ++a)
+        for (int bb = 0; bb < N; ++bb) {
+          const std::size_t row = index.ix[a] + index.iy[bb];
+          const double wxy = s.wx[a] * s.wy[bb];
+          scatter.template set_row<!Terrain::kIsFlat>(wxy, s.gx[a] * s.wy[bb], s.wx[a] * s.gy[bb],
+                                                      s.terrain_slope * wxy);
+          for (int c = 0; c < N; ++c) scatter.add_to(records + (row + index.iz[c]) * kNodeRecord, s.wz[c], s.gz[c]);
+        }
+    });
+  }
+}
 
+template <class Shape, class Terrain, bool with_mass, bool with_momentum, bool with_force>
+void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid, BlockBuffers* buffers,
+                    ColourPassTiming* timing) {
+  double* const records = grid.records();
+  double pass_start = timing ? omp_get_wtime() : 0.0;
+  if (buffers) {
+    // Without colour passes: every block into its own box, all blocks in one pass (any order);
+    // BlockBuffers::add_to_grid adds the boxes afterwards. A timing record lists it as colour 0.
+    const std::vector<std::uint32_t>& order = sort.blocks_in_work_order();
+    const std::size_t count = order.size();
+    if (timing) timing->block_seconds[0].assign(count, 0.0);
+#pragma omp parallel for schedule(dynamic, 1)
+    for (std::size_t bi = 0; bi < count; ++bi) {
+      const std::size_t b = order[bi];
+      const double block_start = timing ? omp_get_wtime() : 0.0;
+      double* box = buffers->records(b);
+      std::fill_n(box, buffers->box_doubles(), 0.0);
+      scatter_block<Shape, Terrain, with_mass, with_momentum, with_force, true>(P, sort, grid, b, box,
+                                                                              buffers->first_node(b), buffers->edge());
+      if (timing) timing->block_seconds[0][bi] = omp_get_wtime() - block_start;
+    }
+    if (timing) timing->wall[0] = omp_get_wtime() - pass_start;
+    return;
+  }
   if (timing)
     for (int colour = 0; colour < 8; ++colour) timing->block_seconds[colour].assign(sort.colour(colour).size(), 0.0);
-  double pass_start = timing ? omp_get_wtime() : 0.0;
   // One parallel region for the 8 colours: a colour's blocks may share nodes with the next colour's,
   // so each colour ends at the implicit barrier of its loop; a barrier costs less than a fork/join.
 #pragma omp parallel
@@ -211,33 +294,7 @@ void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid, Co
     for (std::size_t bi = 0; bi < count; ++bi) {
       const std::size_t b = blocks[bi];
       const double block_start = timing ? omp_get_wtime() : 0.0;
-      ParticleStencil<Shape> stencil;
-      RecordScatter<with_mass, with_momentum, with_force> scatter;
-      for (std::size_t p = sort.block_begin(b); p < sort.block_end(b); ++p) {
-        double hw[3];
-        half_widths<Shape>(P, p, inv_h, hw);
-        const double m = P.mass[p];
-        const double mv[3] = {m * P.v[0][p], m * P.v[1][p], m * P.v[2][p]};
-        // -V sigma, for f_int = -sum V_p sigma_p grad N (Edo & Matsubara 2015, eq. 22)
-        const double vol = P.volume[p];
-        double minus_v_sigma[6];
-        for (int c = 0; c < 6; ++c) minus_v_sigma[c] = -vol * P.stress[c][p];
-        scatter.set_particle(m, mv, minus_v_sigma);
-        stencil.visit(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw, [&](const auto& s) {
-          constexpr int N = std::decay_t<decltype(s)>::N;
-          // Sum factorisation: with grad N = (gx wy wz, wx gy wz, wx wy gz) (Stencil::gradient) the
-          // force on node (a, b, c) is wz[c] A + gz[c] B with A, B fixed per (a, b) row, so the
-          // innermost loop does 2 multiply-adds per component instead of forming the gradient.
-          for (int a = 0; a < N; ++a)
-            for (int bb = 0; bb < N; ++bb) {
-              const std::size_t row = s.ix[a] + s.iy[bb];
-              const double wxy = s.wx[a] * s.wy[bb];
-              scatter.template set_row<!Terrain::kIsFlat>(wxy, s.gx[a] * s.wy[bb], s.wx[a] * s.gy[bb],
-                                                          s.terrain_slope * wxy);
-              for (int c = 0; c < N; ++c) scatter.add_to(records + (row + s.iz[c]) * kNodeRecord, s.wz[c], s.gz[c]);
-            }
-        });
-      }
+      scatter_block<Shape, Terrain, with_mass, with_momentum, with_force, false>(P, sort, grid, b, records, {}, 0);
       if (timing) timing->block_seconds[colour][bi] = omp_get_wtime() - block_start;
     }
     if (timing) {
@@ -254,13 +311,13 @@ void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid, Co
 }  // namespace
 
 template <class Shape, class Terrain>
-void scatter_impl(const ParticleStore& P, const CellSort& sort, Grid& grid, ScatterFields fields,
+void scatter_impl(const ParticleStore& P, const CellSort& sort, Grid& grid, ScatterFields fields, BlockBuffers* buffers,
                   ColourPassTiming* timing) {
   switch (fields) {
-    case ScatterFields::MassMomentumForce: scatter_fields<Shape, Terrain, true, true, true>(P, sort, grid, timing); break;
-    case ScatterFields::Momentum: scatter_fields<Shape, Terrain, false, true, false>(P, sort, grid, timing); break;
-    case ScatterFields::MassMomentum: scatter_fields<Shape, Terrain, true, true, false>(P, sort, grid, timing); break;
-    case ScatterFields::Force: scatter_fields<Shape, Terrain, false, false, true>(P, sort, grid, timing); break;
+    case ScatterFields::MassMomentumForce: scatter_fields<Shape, Terrain, true, true, true>(P, sort, grid, buffers, timing); break;
+    case ScatterFields::Momentum: scatter_fields<Shape, Terrain, false, true, false>(P, sort, grid, buffers, timing); break;
+    case ScatterFields::MassMomentum: scatter_fields<Shape, Terrain, true, true, false>(P, sort, grid, buffers, timing); break;
+    case ScatterFields::Force: scatter_fields<Shape, Terrain, false, false, true>(P, sort, grid, buffers, timing); break;
   }
 }
 
@@ -272,10 +329,13 @@ namespace {
 // one colour's, and it saves the remap's own pass over the particles and its weight evaluation.
 // Called by every thread of a parallel region (an orphaned `omp for`); each thread's flags are its own
 // (merged by gather_impl: OR and max, the same for any thread count).
-template <class Shape, class Terrain, bool remap, class BlockList>
+// With `kBox` (BlockBuffers) the remap scatters into each block's own box instead, and the blocks may
+// be any blocks at once.
+template <class Shape, class Terrain, bool remap, bool kBox, class BlockList>
 void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std::array<std::span<double>, 3>& displacement,
                    std::vector<double>& block_damping, const GatherOptions& options, std::size_t count,
-                   BlockList block_list, GatherResult& flags, std::vector<double>* block_seconds) {
+                   BlockList block_list, GatherResult& flags, std::vector<double>* block_seconds,
+                   BlockBuffers* buffers) {
   const double dt = options.dt, pic_fraction = options.pic_fraction;
   const double max_d2 = options.max_displacement * options.max_displacement;
   const Terrain& terrain = grid.template terrain<Terrain>();
@@ -297,6 +357,15 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std
     RecordScatter<false, true, false> remap_scatter;
     static constexpr double kNoStress[6] = {0, 0, 0, 0, 0, 0};
     const auto origin = sort.block_origin(b);
+    double* remap_records = records;
+    std::array<int, 3> box_first{};
+    int box_edge = 0;
+    if constexpr (kBox) {
+      remap_records = buffers->records(b);
+      std::fill_n(remap_records, buffers->box_doubles(), 0.0);
+      box_first = buffers->first_node(b);
+      box_edge = buffers->edge();
+    }
     double damped = 0.0;  // kinetic energy the PIC share removed in this block
     for (std::size_t p = sort.block_begin(b); p < sort.block_end(b); ++p) {
       double hw[3];
@@ -346,11 +415,13 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std
           const double m = P.mass[p];
           const double mv[3] = {m * P.v[0][p], m * P.v[1][p], m * P.v[2][p]};
           remap_scatter.set_particle(m, mv, kNoStress);  // as scatter_to_grid's Momentum
+          const ScatterIndex<kBox, N> index(s, box_first, box_edge);
           for (int a = 0; a < N; ++a)
             for (int bb = 0; bb < N; ++bb) {
-              const std::size_t row = s.ix[a] + s.iy[bb];
+              const std::size_t row = index.ix[a] + index.iy[bb];
               remap_scatter.template set_row<false>(s.wx[a] * s.wy[bb], 0.0, 0.0, 0.0);
-              for (int c = 0; c < N; ++c) remap_scatter.add_to(records + (row + s.iz[c]) * kNodeRecord, s.wz[c], 0.0);
+              for (int c = 0; c < N; ++c)
+                remap_scatter.add_to(remap_records + (row + index.iz[c]) * kNodeRecord, s.wz[c], 0.0);
             }
         }
       });
@@ -386,10 +457,11 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std
 template <class Shape, class Terrain>
 GatherResult gather_impl(ParticleStore& P, const CellSort& sort, Grid& grid,
                          const std::array<std::span<double>, 3>& displacement, std::vector<double>& block_damping,
-                         const GatherOptions& options, ColourPassTiming* timing) {
+                         const GatherOptions& options, BlockBuffers* buffers, ColourPassTiming* timing) {
   GatherResult result;
+  const bool one_pass = !options.remap || buffers;
   if (timing) {
-    if (!options.remap)
+    if (one_pass)
       timing->block_seconds[0].assign(sort.block_count(), 0.0);
     else
       for (int colour = 0; colour < 8; ++colour) timing->block_seconds[colour].assign(sort.colour(colour).size(), 0.0);
@@ -398,12 +470,18 @@ GatherResult gather_impl(ParticleStore& P, const CellSort& sort, Grid& grid,
 #pragma omp parallel
   {
     GatherResult mine;
-    if (!options.remap) {
-      // one pass over all blocks; a timing record lists it as colour 0
-      const std::vector<std::uint32_t>& order = sort.blocks_in_work_order();  // pure gather: any order
-      gather_blocks<Shape, Terrain, false>(P, sort, grid, displacement, block_damping, options, sort.block_count(),
-                                           [&order](std::size_t bi) { return static_cast<std::size_t>(order[bi]); }, mine,
-                                           timing ? &timing->block_seconds[0] : nullptr);
+    if (one_pass) {
+      // one pass over all blocks (a pure gather, or the remap into the blocks' boxes: any order);
+      // a timing record lists it as colour 0
+      const std::vector<std::uint32_t>& order = sort.blocks_in_work_order();
+      auto block = [&order](std::size_t bi) { return static_cast<std::size_t>(order[bi]); };
+      std::vector<double>* seconds = timing ? &timing->block_seconds[0] : nullptr;
+      if (!options.remap)
+        gather_blocks<Shape, Terrain, false, false>(P, sort, grid, displacement, block_damping, options,
+                                                    sort.block_count(), block, mine, seconds, nullptr);
+      else
+        gather_blocks<Shape, Terrain, true, true>(P, sort, grid, displacement, block_damping, options,
+                                                  sort.block_count(), block, mine, seconds, buffers);
       if (timing) {
 #pragma omp master
         timing->wall[0] = omp_get_wtime() - pass_start;
@@ -414,9 +492,9 @@ GatherResult gather_impl(ParticleStore& P, const CellSort& sort, Grid& grid,
       // thread count.
       for (int colour = 0; colour < 8; ++colour) {
         const auto& blocks = sort.colour(colour);
-        gather_blocks<Shape, Terrain, true>(P, sort, grid, displacement, block_damping, options, blocks.size(),
-                                            [&blocks](std::size_t bi) { return static_cast<std::size_t>(blocks[bi]); },
-                                            mine, timing ? &timing->block_seconds[colour] : nullptr);
+        gather_blocks<Shape, Terrain, true, false>(P, sort, grid, displacement, block_damping, options, blocks.size(),
+                                                   [&blocks](std::size_t bi) { return static_cast<std::size_t>(blocks[bi]); },
+                                                   mine, timing ? &timing->block_seconds[colour] : nullptr, nullptr);
         if (timing) {
 #pragma omp master
           {
@@ -616,16 +694,16 @@ void strain_impl(const ParticleStore& P, const Grid& grid, const NodeVectors& nv
   }
 
 void ScatterToGrid(int kind, const ParticleStore& P, const CellSort& sort, Grid& grid, ScatterFields fields,
-                   ColourPassTiming* timing) {
-#define TALUS_SCATTER(S, T) return scatter_impl<S, T>(P, sort, grid, fields, timing)
+                   BlockBuffers* buffers, ColourPassTiming* timing) {
+#define TALUS_SCATTER(S, T) return scatter_impl<S, T>(P, sort, grid, fields, buffers, timing)
   TALUS_TRANSFER_CASES(TALUS_SCATTER)
 #undef TALUS_SCATTER
 }
 
 GatherResult GatherFromGrid(int kind, ParticleStore& P, const CellSort& sort, Grid& grid,
                             const std::array<std::span<double>, 3>& displacement, std::vector<double>& block_damping,
-                            const GatherOptions& options, ColourPassTiming* timing) {
-#define TALUS_GATHER(S, T) return gather_impl<S, T>(P, sort, grid, displacement, block_damping, options, timing)
+                            const GatherOptions& options, BlockBuffers* buffers, ColourPassTiming* timing) {
+#define TALUS_GATHER(S, T) return gather_impl<S, T>(P, sort, grid, displacement, block_damping, options, buffers, timing)
   TALUS_TRANSFER_CASES(TALUS_GATHER)
 #undef TALUS_GATHER
 }
@@ -653,16 +731,16 @@ HWY_EXPORT(StrainIncrementsOf);
 
 template <class Shape, class Terrain>
 void scatter_to_grid(const ParticleStore& P, const CellSort& sort, Grid& grid, ScatterFields fields,
-                     ColourPassTiming* timing) {
-  TALUS_TRANSFER_DISPATCH(ScatterToGrid)(transfer_kind<Shape, Terrain>(), P, sort, grid, fields, timing);
+                     ColourPassTiming* timing, BlockBuffers* buffers) {
+  TALUS_TRANSFER_DISPATCH(ScatterToGrid)(transfer_kind<Shape, Terrain>(), P, sort, grid, fields, buffers, timing);
 }
 
 template <class Shape, class Terrain>
 GatherResult gather_from_grid(ParticleStore& P, const CellSort& sort, Grid& grid,
                               const std::array<std::span<double>, 3>& displacement, std::vector<double>& block_damping,
-                              const GatherOptions& options, ColourPassTiming* timing) {
+                              const GatherOptions& options, ColourPassTiming* timing, BlockBuffers* buffers) {
   return TALUS_TRANSFER_DISPATCH(GatherFromGrid)(transfer_kind<Shape, Terrain>(), P, sort, grid, displacement,
-                                                 block_damping, options, timing);
+                                                 block_damping, options, buffers, timing);
 }
 
 template <class Shape, class Terrain>
@@ -673,10 +751,10 @@ void strain_increments(const ParticleStore& P, const Grid& grid, const NodeVecto
 
 #define TALUS_INSTANTIATE_TRANSFERS(SHAPE, TERRAIN)                                                          \
   template void scatter_to_grid<SHAPE, TERRAIN>(const ParticleStore&, const CellSort&, Grid&, ScatterFields,  \
-                                                ColourPassTiming*);                                           \
+                                                ColourPassTiming*, BlockBuffers*);                            \
   template GatherResult gather_from_grid<SHAPE, TERRAIN>(ParticleStore&, const CellSort&, Grid&,                \
                                                          const std::array<std::span<double>, 3>&, std::vector<double>&, \
-                                                         const GatherOptions&, ColourPassTiming*);                  \
+                                                         const GatherOptions&, ColourPassTiming*, BlockBuffers*);   \
   template void strain_increments<SHAPE, TERRAIN>(const ParticleStore&, const Grid&,                          \
                                                   const NodeVectors&, double, std::size_t,    \
                                                   std::size_t, StrainIncrements&);

@@ -47,6 +47,10 @@ TEST(PeriodicScene, BadUseNamesTheKey) {
                              "grid.cells[0] = 12 with periodic x faces: must be 8 or a multiple of 16");
   test::expect_variant_error(ok, "\"time\"", "\"solver\": { \"smoothing\": {} }, \"time\"",
                              "boundaries.x- = \"periodic\" cannot run with solver.smoothing");
+  test::expect_variant_error(ok, "\"time\"", "\"solver\": { \"scatter\": \"block_buffers\" }, \"time\"",
+                             "boundaries.x- = \"periodic\" cannot run with solver.scatter = \"block_buffers\"");
+  test::expect_variant_error(ok, "\"time\"", "\"solver\": { \"scatter\": \"blocks\" }, \"time\"",
+                             "solver.scatter = \"blocks\" is not one of: colour_passes, block_buffers");
   test::expect_variant_error(ok, "\"cell_size\": 0.1 }", "\"cell_size\": 0.1, \"terrain\": { \"points\": [[0, 0], [0.8, -0.1]] } }",
                              "boundaries.x- = \"periodic\" needs a flat grid");
   test::expect_variant_error(ok, "\"x-\": \"periodic\"", "\"x-\": \"periodical\"",

@@ -228,6 +228,28 @@ TEST(IsaPaths, EveryShapeAndSchemeIsBitIdenticalOnEveryPath) {
   expect_every_path_matches_the_reference(bspline);
 }
 
+// The scatter into per-block boxes (solver.scatter = "block_buffers"): MUSL's P2G and remap with a
+// linear shape on a terrain grid (the default flume's kind), and USF's two scatters with cpGIMP.
+TEST(IsaPaths, BlockBufferScattersAreBitIdenticalOnEveryPath) {
+  Scene usf = test::column_collapse_scene(0.02, 0.02);
+  usf.shape = ShapeKind::CpGimp;
+  usf.scheme = SchemeKind::Usf;
+  usf.scatter = ScatterOrder::BlockBuffers;
+  expect_every_path_matches_the_reference(usf);
+  const std::string json = R"({
+    "grid": { "origin": [0, 0, 0], "size": [4, 0.25, 2], "cell_size": 0.25,
+              "terrain": { "points": [[0, 2.0], [4, 0.0]] } },
+    "time": { "end": 0.1, "courant": 0.3 },
+    "solver": { "shape": "linear", "scheme": "musl", "scatter": "block_buffers", "pic_fraction": 0.01 },
+    "materials": { "m": { "density": 1000.0, "young": 1.0e6, "poisson": 0.3 } },
+    "bodies": [ { "name": "block", "material": "m", "particles_per_cell": 2,
+                  "box": { "min": [1, 0, 0], "max": [2, 0.25, 0.75], "frame": "terrain" } } ],
+    "boundaries": { "z-": { "type": "friction", "friction_coefficient": 0.2 }, "z+": "open",
+                    "x-": "open", "x+": "open", "y-": "slip", "y+": "slip" }
+  })";
+  expect_every_path_matches_the_reference(parse_scene(json, "terrain_slide_block_buffers"));
+}
+
 // MLS strain smoothing (Edo & Matsubara 2015, eq. 38-46) in the run: the smoother's lanes are compiled per
 // target too. A 3D linear fit on a cpGIMP column (MUSL), a quadratic fit over x and z only
 // with a radius that is not a whole number of cells (USAVG), and one linear fit per cell (B-spline).

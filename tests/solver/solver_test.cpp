@@ -198,6 +198,41 @@ TEST(Solver, BitIdenticalForOneAndThreeThreadsWithSmallerBlocks) {
   }
 }
 
+// The scatter without colour passes (solver.scatter = "block_buffers", transfer/block_buffers.hpp):
+// every node adds its blocks' boxes in ascending block order, so the results do not depend on the
+// thread count; against the colour passes only the order of the additions differs (round-off).
+TEST(Solver, BlockBuffersAreBitIdenticalForAnyThreadCountAndMatchTheColourPasses) {
+  const std::pair<ShapeKind, SchemeKind> cases[] = {{ShapeKind::Linear, SchemeKind::Musl},
+                                                    {ShapeKind::UGimp, SchemeKind::Usl},
+                                                    {ShapeKind::CpGimp, SchemeKind::Usf},
+                                                    {ShapeKind::BSpline2, SchemeKind::Usavg}};
+  for (const auto& [shape, scheme] : cases) {
+    const std::string what = std::string(to_string(shape)) + " " + to_string(scheme);
+    Scene scene = test::tumbling_block_scene(0.02);
+    scene.shape = shape;
+    scene.scheme = scheme;
+    const Solver colours = test::run_to_end(scene, 1);
+    scene.scatter = ScatterOrder::BlockBuffers;
+    const Solver one = test::run_to_end(scene, 1), three = test::run_to_end(scene, 3);
+    EXPECT_GT(one.sort_count(), 1) << what;
+    test::expect_same_particles_and_energies(one, three, what);
+    const auto& a = colours.particles();
+    const auto& b = one.particles();
+    ASSERT_EQ(a.size(), b.size()) << what;
+    double largest = 0.0, moved = 0.0;
+    for (int d = 0; d < 3; ++d)
+      for (std::size_t p = 0; p < a.size(); ++p) {
+        largest = std::max(largest, std::abs(a.x[d][p] - b.x[d][p]));
+        moved = std::max(moved, std::abs(a.v[d][p]));
+      }
+    EXPECT_LT(largest, 1e-10) << what << ": positions differ by more than round-off";
+    EXPECT_GT(moved, 0.1) << what;  // the block moved: the transfers did something
+    const EnergyBudget ea = colours.energies(), eb = one.energies();
+    EXPECT_NEAR(eb.kinetic, ea.kinetic, 1e-9 * ea.kinetic) << what;
+    EXPECT_NEAR(eb.total(), ea.total(), 1e-9 * std::abs(ea.total())) << what;
+  }
+}
+
 // Sliding on a frictional floor: the kinetic energy lost equals the friction work counted at the
 // nodes, so the energy budget closes (the default scene's physics, at test size).
 TEST(Solver, FrictionWorkClosesTheEnergyBudgetOfASlidingBlock) {

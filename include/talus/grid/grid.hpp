@@ -53,6 +53,14 @@ class NodeField {
   std::size_t stride_ = 1;
 };
 
+/// A set of the fields a scatter writes (mass, momentum, force): what the ghost fold moves and what
+/// BlockBuffers::add_to_grid adds.
+struct ScatteredFields {
+  bool mass = false;
+  bool momentum = false;
+  bool force = false;
+};
+
 /// One node vector field as its three components.
 using NodeVectors = std::array<NodeField, 3>;
 

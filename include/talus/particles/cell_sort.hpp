@@ -58,6 +58,9 @@ class CellSort {
 
   int block_cells() const { return block_cells_; }
   int slack() const { return slack_; }
+  /// The shape's support in cells below and above a particle's cell (the constructor's).
+  int reach_low() const { return reach_low_; }
+  int reach_high() const { return reach_high_; }
   std::size_t block_count() const { return blocks_.size(); }
   /// Cell coordinates of the first cell of active block b.
   std::array<int, 3> block_origin(std::size_t b) const;

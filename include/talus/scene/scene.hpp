@@ -24,6 +24,10 @@ namespace talus {
 enum class ShapeKind { Linear, UGimp, CpGimp, BSpline2 };
 /// Update schemes (Abe, Johansson & Konagai 2005, sec. 4(1)): MUSL, USL, USF (Bardenhagen 2002), USAVG (Nairn 2003).
 enum class SchemeKind { Musl, Usl, Usf, Usavg };
+/// How P2G and the MUSL remap sum the particles into the nodes without races (transfer/block_buffers.hpp):
+/// 8 colour passes over the blocks (the default), or one pass into per-block node boxes and a sum of
+/// the boxes (fewer, larger parallel loops for small scenes on many threads; round-off differs).
+enum class ScatterOrder { ColourPasses, BlockBuffers };
 
 struct LinearElasticParameters {
   double young = 0.0;    // E [Pa]
@@ -111,6 +115,8 @@ struct Scene {
   /// blocks (down to 3 for linear, 5 for the others) give the colour passes more blocks to share
   /// among threads; the sums then run in another (still thread-independent) order.
   int block_cells = 0;
+  /// The scatter's order (ScatterOrder): colour passes, or per-block boxes (not with periodic axes).
+  ScatterOrder scatter = ScatterOrder::ColourPasses;
   /// Gravity (the body force) grows linearly from 0 to its full value over this time [s]; 0 = applied
   /// at once. A quasi-static load (the Bardenhagen-Kober column, Edo & Matsubara 2015, sec. 4(1)) needs it.
   double gravity_ramp_time = 0.0;
@@ -141,6 +147,7 @@ std::vector<std::string> scene_warnings(const Scene& scene);
 constexpr double kMlsStableRadiusFactor = 2.5;
 
 const char* to_string(SchemeKind scheme);
+const char* to_string(ScatterOrder order);
 const char* to_string(ShapeKind shape);
 const char* to_string(MaterialModel model);
 const char* to_string(ConeFit cone);

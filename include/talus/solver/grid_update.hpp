@@ -35,12 +35,7 @@ void start_velocities(Grid& grid, const Walls& walls, double mass_floor);
 /// equation of the image node in the constrained space. The ghost is left empty (no friction or
 /// wall work is counted on it; the node masses still sum to the particle mass); mirror_ghost_nodes
 /// fills its velocities afterwards. Each ghost has one image: race-free and deterministic.
-/// Which of the scattered node fields fold_ghost_nodes moves.
-struct ScatteredFields {
-  bool mass = false;
-  bool momentum = false;
-  bool force = false;
-};
+/// `fields`: which of the scattered node fields it moves.
 void fold_ghost_nodes(Grid& grid, const Walls& walls, ScatteredFields fields, const Vec3& gravity);
 
 /// Which node velocity fields mirror_ghost_nodes reflects.

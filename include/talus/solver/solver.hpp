@@ -196,6 +196,11 @@ class Solver {
   // Per-particle working memory lent to one phase at a time: the sort's keys and orders, then this
   // step's displacement dt sum N v^L (planes 0, 2, 4; written by G2P, applied after the strain pass).
   ParticleScratch scratch_;
+  // solver.scatter = "block_buffers": the blocks' node boxes (prepared after every sort), else unused.
+  BlockBuffers block_buffers_;
+  double buffers_prepare_seconds_ = 0.0;  // the last prepare(), serial (the work recorder's sort bookkeeping)
+  BlockBuffers* block_buffers() { return scene_.scatter == ScatterOrder::BlockBuffers ? &block_buffers_ : nullptr; }
+  void prepare_block_buffers();
   double mass_floor_ = 0.0;
   double time_ = 0.0;
   std::int64_t step_ = 0;

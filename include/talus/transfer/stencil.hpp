@@ -18,6 +18,7 @@ struct Stencil {
   double wx[N], wy[N], wz[N];
   double gx[N], gy[N], gz[N];  // d w / d x in 1/m
   double terrain_slope = 0.0;  // z_b'(x) at the particle (0 on a flat grid)
+  int first[3];                // padded node indices of node (0, 0, 0), before any periodic wrap
 
   /// One half width (grid units) for all three axes.
   template <class Terrain>
@@ -44,6 +45,9 @@ struct Stencil {
     Shape::weights((x - g.origin[0]) * inv_h + kPad, half_width[0], bx, wx, gx);
     Shape::weights((y - g.origin[1]) * inv_h + kPad, half_width[1], by, wy, gy);
     Shape::weights((w_coord - g.origin[2]) * inv_h + kPad, half_width[2], bz, wz, gz);
+    first[0] = bx;
+    first[1] = by;
+    first[2] = bz;
     if (g.has_periodic_axes()) [[unlikely]] {
       // periodic boundaries: a support reaching past a periodic face lands on the wrapped nodes
       for (int a = 0; a < N; ++a) {

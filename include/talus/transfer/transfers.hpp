@@ -3,7 +3,8 @@
 // terrain type (instantiated in transfers.cpp), so the inner loops have compile-time extents.
 //
 //  scatter_to_grid    P2G: nodal mass, momentum and internal force (Edo & Matsubara 2015, eq. 47-49), as 8
-//                     colour passes over blocks: no atomics, same order for any thread count.
+//                     colour passes over blocks: no atomics, same order for any thread count; or, with
+//                     BlockBuffers, one pass into each block's own box and a sum of the boxes.
 //  gather_from_grid   G2P: v_p += sum N_i (v_i^L - v_i), x_p += dt sum N_i v_i^L (Edo & Matsubara 2015, eq. 50-51),
 //                     parallel over blocks (pure gather); with the MUSL remap folded in, the new
 //                     momentum is scattered right after each particle's gather, in colour passes.
@@ -12,6 +13,7 @@
 #include "talus/grid/grid.hpp"
 #include "talus/particles/cell_sort.hpp"
 #include "talus/particles/particle_store.hpp"
+#include "talus/transfer/block_buffers.hpp"
 #include "talus/transfer/colour_pass_timing.hpp"
 
 #include <array>
@@ -31,7 +33,9 @@ enum class ScatterFields {
 
 template <class Shape, class Terrain>
 void scatter_to_grid(const ParticleStore& particles, const CellSort& sort, Grid& grid, ScatterFields fields,
-                     ColourPassTiming* timing = nullptr);  // timing: the work recorder's, null normally
+                     ColourPassTiming* timing = nullptr,  // timing: the work recorder's, null normally
+                     BlockBuffers* buffers = nullptr);    // buffers: one pass into the blocks' boxes, which
+                                                          // the caller adds with buffers->add_to_grid()
 
 struct GatherResult {
   bool needs_sort = false;          // some particle drifted beyond its block's slack
@@ -71,7 +75,8 @@ struct GatherOptions {
 template <class Shape, class Terrain>
 GatherResult gather_from_grid(ParticleStore& particles, const CellSort& sort, Grid& grid,
                               const std::array<std::span<double>, 3>& displacement, std::vector<double>& block_damping,
-                              const GatherOptions& options, ColourPassTiming* timing = nullptr);
+                              const GatherOptions& options, ColourPassTiming* timing = nullptr,
+                              BlockBuffers* buffers = nullptr);  // the remap into the blocks' boxes (as scatter_to_grid)
 
 /// Per-particle strain and spin increments of a range, structure of arrays.
 struct StrainIncrements {

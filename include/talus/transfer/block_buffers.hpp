@@ -1,0 +1,82 @@
+#pragma once
+// BlockBuffers: the scatter without colour passes (solver.scatter = "block_buffers").
+//
+// The default scatter runs 8 colour passes with a barrier after each, so that two blocks that share
+// nodes never run at once. A small scene has few blocks per colour (the default flume: 13 on
+// average, 4 at the least), so on many threads most of them wait in every pass
+// (docs/performance.md, "Scaling"). Here every block scatters into node records of its own — a box
+// of edge() nodes per axis around the block, its cells widened by the slack and the shape's reach —
+// all blocks in one parallel pass, and add_to_grid() then adds the boxes into the grid's records,
+// tile by tile in parallel, each node's boxes in ascending block order. Every node's sum is
+// therefore the same for any thread count; it differs at round-off from the colour passes', which
+// add particle by particle across blocks (the particle sums of each block are formed first here).
+//
+// Memory: blocks x edge()^3 x 64 bytes (the default flume: 104 blocks of 7^3 nodes, 2.3 MB; a
+// 1 M-particle B-spline scene with 8-cell blocks: 244 blocks of 16^3 nodes, 64 MB), kept between
+// sorts. Periodic axes are not supported (their stencils wrap around the box).
+#include "talus/grid/grid.hpp"
+#include "talus/particles/cell_sort.hpp"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <new>
+#include <vector>
+
+namespace talus {
+
+class BlockBuffers {
+ public:
+  /// Size the boxes for the sort's blocks and list, per active tile of the grid, the boxes that
+  /// overlap it (ascending block order). After every sort, before the next scatter.
+  void prepare(const CellSort& sort, const Grid& grid);
+
+  /// Nodes per box edge: block_cells + 2 slack + the shape's reach below and above.
+  int edge() const { return edge_; }
+  /// The first node (padded indices) of block b's box.
+  std::array<int, 3> first_node(std::size_t b) const {
+    const auto o = block_origin_[b];
+    return {o[0] - below_, o[1] - below_, o[2] - below_};
+  }
+  /// Block b's node records (edge()^3 of kNodeRecord doubles; node (i, j, k) of the box at
+  /// ((i * edge + j) * edge + k) * kNodeRecord). The scatter clears them first.
+  double* records(std::size_t b) { return data_.get() + b * box_doubles_; }
+  const double* records(std::size_t b) const { return data_.get() + b * box_doubles_; }
+  std::size_t box_doubles() const { return box_doubles_; }
+  std::size_t blocks() const { return block_origin_.size(); }
+  /// Bytes held (the memory report).
+  std::size_t bytes() const { return capacity_ * sizeof(double) + runs_.capacity() * sizeof(Run); }
+
+  /// Add the boxes' `fields` into the grid's node records (which the caller cleared or holds
+  /// partial sums in): one parallel loop over the active tiles.
+  void add_to_grid(Grid& grid, ScatteredFields fields) const;
+
+  /// The bytes prepare() would hold for `blocks` blocks of `edge` nodes (the memory estimate).
+  static std::size_t bytes_for(std::size_t blocks, int edge) {
+    return blocks * static_cast<std::size_t>(edge) * edge * edge * kNodeRecord * sizeof(double);
+  }
+
+ private:
+  /// `nodes` neighbouring node records of one box (from its node `from`, counted over all boxes)
+  /// added to as many neighbouring records of the grid (from node `to`): along k the nodes of a
+  /// tile are neighbours in both layouts (Grid::z_part), so a box's share of a tile is rows of runs.
+  struct Run {
+    std::uint64_t to;
+    std::uint64_t from;
+    std::uint32_t nodes;
+  };
+  int edge_ = 0, below_ = 0;
+  std::size_t box_doubles_ = 0;
+  std::vector<std::array<int, 3>> block_origin_;  // first cell of each block
+  // The boxes, 64-byte aligned like the grid's records (the scatter loads and stores records as vectors).
+  struct AlignedDelete {
+    void operator()(double* p) const { ::operator delete[](p, std::align_val_t(64)); }
+  };
+  std::unique_ptr<double[], AlignedDelete> data_;
+  std::size_t capacity_ = 0;  // doubles held (grown, never shrunk)
+  std::vector<Run> runs_;                   // by tile, then block ascending
+  std::vector<std::uint32_t> tile_starts_;  // per tile that boxes overlap: its first run (+1 end)
+};
+
+}  // namespace talus

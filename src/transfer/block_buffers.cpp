@@ -1,0 +1,109 @@
+#include "talus/transfer/block_buffers.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace talus {
+
+void BlockBuffers::prepare(const CellSort& sort, const Grid& grid) {
+  if (grid.geometry().has_periodic_axes())
+    throw std::logic_error("BlockBuffers: periodic axes are not supported (the scene refuses them)");
+  below_ = sort.slack() + sort.reach_low();
+  edge_ = sort.block_cells() + 2 * sort.slack() + sort.reach_low() + sort.reach_high();
+  box_doubles_ = static_cast<std::size_t>(edge_) * edge_ * edge_ * kNodeRecord;
+  const std::size_t count = sort.block_count();
+  block_origin_.resize(count);
+  for (std::size_t b = 0; b < count; ++b) block_origin_[b] = sort.block_origin(b);
+  if (count * box_doubles_ > capacity_) {  // the scatter clears each box before it writes it
+    capacity_ = count * box_doubles_ + count * box_doubles_ / 4;  // room for the flow to spread
+    data_.reset(static_cast<double*>(::operator new[](capacity_ * sizeof(double), std::align_val_t(64))));
+  }
+
+  // Every (tile, block) pair whose box overlaps the tile, generated in ascending block order and
+  // sorted stably by tile: each tile's blocks stay ascending. Then each pair's runs of nodes.
+  struct Overlap {
+    std::uint32_t tile, block;
+  };
+  const auto tiles = grid.tiles();
+  std::vector<Overlap> overlaps;
+  for (std::size_t b = 0; b < count; ++b) {
+    const auto first = first_node(b);
+    std::array<int, 3> lo{}, hi{};
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::max(first[d], 0) / kTileEdge;
+      hi[d] = std::min((first[d] + edge_ - 1) / kTileEdge, tiles[d] - 1);
+    }
+    for (int ti = lo[0]; ti <= hi[0]; ++ti)
+      for (int tj = lo[1]; tj <= hi[1]; ++tj)
+        for (int tk = lo[2]; tk <= hi[2]; ++tk) {
+          const std::size_t tile = (static_cast<std::size_t>(ti) * tiles[1] + tj) * tiles[2] + tk;
+          overlaps.push_back({static_cast<std::uint32_t>(tile), static_cast<std::uint32_t>(b)});
+        }
+  }
+  std::stable_sort(overlaps.begin(), overlaps.end(), [](const Overlap& a, const Overlap& b) { return a.tile < b.tile; });
+  runs_.clear();
+  tile_starts_.clear();
+  const std::size_t box_nodes = box_doubles_ / kNodeRecord;
+  for (std::size_t e = 0; e < overlaps.size(); ++e) {
+    const std::size_t tile = overlaps[e].tile, b = overlaps[e].block;
+    if (e == 0 || tile != overlaps[e - 1].tile) tile_starts_.push_back(static_cast<std::uint32_t>(runs_.size()));
+    const int t0[3] = {static_cast<int>(tile / (static_cast<std::size_t>(tiles[1]) * tiles[2])) * kTileEdge,
+                       static_cast<int>((tile / tiles[2]) % tiles[1]) * kTileEdge,
+                       static_cast<int>(tile % tiles[2]) * kTileEdge};
+    const auto first = first_node(b);
+    int lo[3], hi[3];
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::max(t0[d], first[d]);
+      hi[d] = std::min(t0[d] + kTileEdge, first[d] + edge_);
+    }
+    if (hi[2] <= lo[2]) continue;
+    for (int i = lo[0]; i < hi[0]; ++i)
+      for (int j = lo[1]; j < hi[1]; ++j)
+        runs_.push_back({grid.node(i, j, lo[2]),
+                         b * box_nodes + (static_cast<std::size_t>(i - first[0]) * edge_ + (j - first[1])) * edge_ +
+                             (lo[2] - first[2]),
+                         static_cast<std::uint32_t>(hi[2] - lo[2])});
+  }
+  tile_starts_.push_back(static_cast<std::uint32_t>(runs_.size()));
+}
+
+namespace {
+
+template <bool kMass, bool kMomentum, bool kForce>
+void add_runs(const double* boxes, const auto& runs, const std::vector<std::uint32_t>& starts, Grid& grid) {
+  const std::size_t groups = starts.empty() ? 0 : starts.size() - 1;
+  double* const records = grid.records();
+  // One tile per iteration, its runs in ascending block order: every node receives its boxes in
+  // ascending block order, whichever thread holds the tile.
+#pragma omp parallel for schedule(static)
+  for (std::size_t g = 0; g < groups; ++g)
+    for (std::size_t e = starts[g]; e < starts[g + 1]; ++e) {
+      const double* from = boxes + runs[e].from * kNodeRecord;
+      double* to = records + runs[e].to * kNodeRecord;
+      const int nodes = static_cast<int>(runs[e].nodes);
+      if constexpr (kMass && kMomentum && kForce) {
+        for (int v = 0; v < nodes * kNodeRecord; ++v) to[v] += from[v];  // every slot (the unused one: zeros)
+      } else {
+        for (int n = 0; n < nodes; ++n, from += kNodeRecord, to += kNodeRecord) {
+          if constexpr (kMass) to[kMassSlot] += from[kMassSlot];
+          for (int d = 0; d < 3; ++d) {
+            if constexpr (kMomentum) to[kMomentumSlot + d] += from[kMomentumSlot + d];
+            if constexpr (kForce) to[kForceSlot + d] += from[kForceSlot + d];
+          }
+        }
+      }
+    }
+}
+
+}  // namespace
+
+void BlockBuffers::add_to_grid(Grid& grid, ScatteredFields f) const {
+  const double* boxes = data_.get();
+  if (f.mass && f.momentum && f.force) add_runs<true, true, true>(boxes, runs_, tile_starts_, grid);
+  else if (f.mass && f.momentum && !f.force) add_runs<true, true, false>(boxes, runs_, tile_starts_, grid);
+  else if (!f.mass && f.momentum && !f.force) add_runs<false, true, false>(boxes, runs_, tile_starts_, grid);
+  else if (!f.mass && !f.momentum && f.force) add_runs<false, false, true>(boxes, runs_, tile_starts_, grid);
+  else throw std::logic_error("BlockBuffers::add_to_grid: an unsupported set of fields");
+}
+
+}  // namespace talus
