@@ -76,7 +76,8 @@ def build(a):
         },
         "gravity": [0.0, 0.0, -9.81],
         "time": {"end": a.end, "courant": 0.3},
-        "solver": {"scheme": "musl", "shape": a.shape, "pic_fraction": a.pic_fraction},
+        "solver": dict({"scheme": "musl", "shape": a.shape, "pic_fraction": a.pic_fraction},
+                       **({"scatter": a.scatter} if a.scatter != "colour_passes" else {})),
         "materials": {"sand": material(a)},
         "bodies": [{
             "name": "wedge", "material": "sand",
@@ -144,6 +145,8 @@ def main():
     p.add_argument("--shape", default="linear", choices=["linear", "ugimp", "cpgimp", "bspline2"],
                    help="shape function (solver.shape); linear is the fast default, bspline2 the more accurate "
                         "(docs/flume.md, 'Thin spots')")
+    p.add_argument("--scatter", default="colour_passes", choices=["colour_passes", "block_buffers"],
+                   help="solver.scatter: block_buffers for many threads (docs/performance.md 'Scaling')")
     p.add_argument("--flat-slope", action="store_true",
                    help="no terrain: the slope alone in bed-aligned coordinates with gravity tilted (runs without "
                         "the terrain grid; for timing and checks)")

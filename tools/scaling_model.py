@@ -327,8 +327,9 @@ def main():
                         "fork_join_seconds": record["fork_join_seconds"], **info, "prediction": rows})
         print(f"{label}: {info['recorded_steps']} steps recorded at {record['threads']} thread(s), "
               f"{info['particles'][1]} particles, {info['blocks'][1]} blocks, "
-              f"{info['blocks_per_colour_pass_mean']:.1f} blocks per colour pass (min {info['blocks_per_colour_pass_min']}); "
-              f"schedule {a.schedule}, work {a.work}")
+              + (f"{info['blocks_per_colour_pass_mean']:.1f} blocks per colour pass (min {info['blocks_per_colour_pass_min']}); "
+                 if info['blocks_per_colour_pass_mean'] else "no colour passes (solver.scatter = block_buffers); ")
+              + f"schedule {a.schedule}, work {a.work}")
         print(f"  {'T':>4} {'speed-up':>9} {'eff.':>6} {'ideal':>6} {'imbal.':>6} {'sync':>6} {'serial':>6} {'bw':>6}  limit"
               + ("  (ideal and imbalance include the contention)" if contention else ""))
         for r in rows:

@@ -31,6 +31,22 @@ std::vector<std::string> vector_paths() {
   return paths;
 }
 
+/// A block sliding down a terrain grid (the ProfileTerrain transfers), with the given solver keys.
+Scene terrain_slide(const std::string& solver_keys) {
+  const std::string json = R"({
+    "grid": { "origin": [0, 0, 0], "size": [4, 0.25, 2], "cell_size": 0.25,
+              "terrain": { "points": [[0, 2.0], [4, 0.0]] } },
+    "time": { "end": 0.1, "courant": 0.3 },
+    "solver": { )" + solver_keys + R"( },
+    "materials": { "m": { "density": 1000.0, "young": 1.0e6, "poisson": 0.3 } },
+    "bodies": [ { "name": "block", "material": "m", "particles_per_cell": 2,
+                  "box": { "min": [1, 0, 0], "max": [2, 0.25, 0.75], "frame": "terrain" } } ],
+    "boundaries": { "z-": { "type": "friction", "friction_coefficient": 0.2 }, "z+": "open",
+                    "x-": "open", "x+": "open", "y-": "slip", "y+": "slip" }
+  })";
+  return parse_scene(json, "terrain_slide");
+}
+
 TEST(IsaPaths, TheReferenceAndAtLeastTheBaselineAreAvailable) {
   const std::vector<std::string> all = available_isas();
   ASSERT_GE(all.size(), 2u);
@@ -236,18 +252,8 @@ TEST(IsaPaths, BlockBufferScattersAreBitIdenticalOnEveryPath) {
   usf.scheme = SchemeKind::Usf;
   usf.scatter = ScatterOrder::BlockBuffers;
   expect_every_path_matches_the_reference(usf);
-  const std::string json = R"({
-    "grid": { "origin": [0, 0, 0], "size": [4, 0.25, 2], "cell_size": 0.25,
-              "terrain": { "points": [[0, 2.0], [4, 0.0]] } },
-    "time": { "end": 0.1, "courant": 0.3 },
-    "solver": { "shape": "linear", "scheme": "musl", "scatter": "block_buffers", "pic_fraction": 0.01 },
-    "materials": { "m": { "density": 1000.0, "young": 1.0e6, "poisson": 0.3 } },
-    "bodies": [ { "name": "block", "material": "m", "particles_per_cell": 2,
-                  "box": { "min": [1, 0, 0], "max": [2, 0.25, 0.75], "frame": "terrain" } } ],
-    "boundaries": { "z-": { "type": "friction", "friction_coefficient": 0.2 }, "z+": "open",
-                    "x-": "open", "x+": "open", "y-": "slip", "y+": "slip" }
-  })";
-  expect_every_path_matches_the_reference(parse_scene(json, "terrain_slide_block_buffers"));
+  expect_every_path_matches_the_reference(
+      terrain_slide(R"("shape": "linear", "scheme": "musl", "scatter": "block_buffers", "pic_fraction": 0.01)"));
 }
 
 // MLS strain smoothing (Edo & Matsubara 2015, eq. 38-46) in the run: the smoother's lanes are compiled per
@@ -292,18 +298,7 @@ TEST(IsaPaths, PeriodicWrapIsBitIdenticalOnEveryPath) {
 
 // A block sliding down a terrain (the ProfileTerrain transfers), uGIMP, USAVG.
 TEST(IsaPaths, TerrainTransfersAreBitIdenticalOnEveryPath) {
-  const std::string json = R"({
-    "grid": { "origin": [0, 0, 0], "size": [4, 0.25, 2], "cell_size": 0.25,
-              "terrain": { "points": [[0, 2.0], [4, 0.0]] } },
-    "time": { "end": 0.1, "courant": 0.3 },
-    "solver": { "shape": "ugimp", "scheme": "usavg" },
-    "materials": { "m": { "density": 1000.0, "young": 1.0e6, "poisson": 0.3 } },
-    "bodies": [ { "name": "block", "material": "m", "particles_per_cell": 2,
-                  "box": { "min": [1, 0, 0], "max": [2, 0.25, 0.75], "frame": "terrain" } } ],
-    "boundaries": { "z-": { "type": "friction", "friction_coefficient": 0.2 }, "z+": "open",
-                    "x-": "open", "x+": "open", "y-": "slip", "y+": "slip" }
-  })";
-  expect_every_path_matches_the_reference(parse_scene(json, "terrain_slide"));
+  expect_every_path_matches_the_reference(terrain_slide(R"("shape": "ugimp", "scheme": "usavg")"));
 }
 
 }  // namespace
