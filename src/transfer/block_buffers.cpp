@@ -14,6 +14,8 @@ void BlockBuffers::prepare(const CellSort& sort, const Grid& grid) {
   const std::size_t count = sort.block_count();
   block_origin_.resize(count);
   for (std::size_t b = 0; b < count; ++b) block_origin_[b] = sort.block_origin(b);
+  written_.assign(count, {0, 0, 0, 0, 0, 0});
+  stale_.assign(count, 1);
   if (count * box_doubles_ > capacity_) {  // the scatter clears each box before it writes it
     capacity_ = count * box_doubles_ + count * box_doubles_ / 4;  // room for the flow to spread
     data_.reset(static_cast<double*>(::operator new[](capacity_ * sizeof(double), std::align_val_t(64))));
@@ -62,7 +64,9 @@ void BlockBuffers::prepare(const CellSort& sort, const Grid& grid) {
         runs_.push_back({grid.node(i, j, lo[2]),
                          b * box_nodes + (static_cast<std::size_t>(i - first[0]) * edge_ + (j - first[1])) * edge_ +
                              (lo[2] - first[2]),
-                         static_cast<std::uint32_t>(hi[2] - lo[2])});
+                         static_cast<std::uint32_t>(b), static_cast<std::uint16_t>(hi[2] - lo[2]),
+                         static_cast<std::int16_t>(i - first[0]), static_cast<std::int16_t>(j - first[1]),
+                         static_cast<std::int16_t>(lo[2] - first[2])});
   }
   tile_starts_.push_back(static_cast<std::uint32_t>(runs_.size()));
 }
@@ -70,7 +74,8 @@ void BlockBuffers::prepare(const CellSort& sort, const Grid& grid) {
 namespace {
 
 template <bool kMass, bool kMomentum, bool kForce>
-void add_runs(const double* boxes, const auto& runs, const std::vector<std::uint32_t>& starts, Grid& grid) {
+void add_runs(const double* boxes, const auto& runs, const std::vector<std::uint32_t>& starts,
+              const std::vector<std::array<int, 6>>& written, Grid& grid) {
   const std::size_t groups = starts.empty() ? 0 : starts.size() - 1;
   double* const records = grid.records();
   // One tile per iteration, its runs in ascending block order: every node receives its boxes in
@@ -78,9 +83,16 @@ void add_runs(const double* boxes, const auto& runs, const std::vector<std::uint
 #pragma omp parallel for schedule(static)
   for (std::size_t g = 0; g < groups; ++g)
     for (std::size_t e = starts[g]; e < starts[g + 1]; ++e) {
-      const double* from = boxes + runs[e].from * kNodeRecord;
-      double* to = records + runs[e].to * kNodeRecord;
-      const int nodes = static_cast<int>(runs[e].nodes);
+      // Only the nodes the box's scatter wrote (the others hold zeros: adding them changes nothing,
+      // as no sum here is ever -0).
+      const auto& run = runs[e];
+      const auto& w = written[run.block];
+      if (run.i < w[0] || run.i >= w[3] || run.j < w[1] || run.j >= w[4]) continue;
+      const int k0 = std::max<int>(run.k, w[2]), k1 = std::min<int>(run.k + run.nodes, w[5]);
+      if (k1 <= k0) continue;
+      const double* from = boxes + (run.from + (k0 - run.k)) * kNodeRecord;
+      double* to = records + (run.to + (k0 - run.k)) * kNodeRecord;
+      const int nodes = k1 - k0;
       if constexpr (kMass && kMomentum && kForce) {
         for (int v = 0; v < nodes * kNodeRecord; ++v) to[v] += from[v];  // every slot (the unused one: zeros)
       } else {
@@ -97,12 +109,28 @@ void add_runs(const double* boxes, const auto& runs, const std::vector<std::uint
 
 }  // namespace
 
+double* BlockBuffers::open_box(std::size_t b) {
+  double* box = data_.get() + b * box_doubles_;
+  if (stale_[b]) {
+    std::fill_n(box, box_doubles_, 0.0);
+    stale_[b] = 0;
+    return box;
+  }
+  const auto& w = written_[b];
+  if (w[2] < w[5])
+    for (int i = w[0]; i < w[3]; ++i)
+      for (int j = w[1]; j < w[4]; ++j)
+        std::fill_n(box + ((static_cast<std::size_t>(i) * edge_ + j) * edge_ + w[2]) * kNodeRecord,
+                    static_cast<std::size_t>(w[5] - w[2]) * kNodeRecord, 0.0);
+  return box;
+}
+
 void BlockBuffers::add_to_grid(Grid& grid, ScatteredFields f) const {
   const double* boxes = data_.get();
-  if (f.mass && f.momentum && f.force) add_runs<true, true, true>(boxes, runs_, tile_starts_, grid);
-  else if (f.mass && f.momentum && !f.force) add_runs<true, true, false>(boxes, runs_, tile_starts_, grid);
-  else if (!f.mass && f.momentum && !f.force) add_runs<false, true, false>(boxes, runs_, tile_starts_, grid);
-  else if (!f.mass && !f.momentum && f.force) add_runs<false, false, true>(boxes, runs_, tile_starts_, grid);
+  if (f.mass && f.momentum && f.force) add_runs<true, true, true>(boxes, runs_, tile_starts_, written_, grid);
+  else if (f.mass && f.momentum && !f.force) add_runs<true, true, false>(boxes, runs_, tile_starts_, written_, grid);
+  else if (!f.mass && f.momentum && !f.force) add_runs<false, true, false>(boxes, runs_, tile_starts_, written_, grid);
+  else if (!f.mass && !f.momentum && f.force) add_runs<false, false, true>(boxes, runs_, tile_starts_, written_, grid);
   else throw std::logic_error("BlockBuffers::add_to_grid: an unsupported set of fields");
 }
 

@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <array>
+#include <climits>
 #include <cmath>
 #include <span>
 #include <stdexcept>
@@ -199,9 +200,15 @@ template <bool kBox, int N>
 struct ScatterIndex {
   std::size_t x[N], y[N], z[N];
   const std::size_t *ix, *iy, *iz;
+  /// With a box, also widens [lo, hi) (box-local nodes, per axis) to the stencil's nodes.
   template <class S>
-  ScatterIndex(const S& s, const std::array<int, 3>& box_first, int edge) {
+  ScatterIndex(const S& s, const std::array<int, 3>& box_first, int edge, int* lo = nullptr, int* hi = nullptr) {
     if constexpr (kBox) {
+      for (int d = 0; d < 3; ++d) {
+        const int f = s.first[d] - box_first[d];
+        lo[d] = std::min(lo[d], f);
+        hi[d] = std::max(hi[d], f + N);
+      }
       for (int a = 0; a < N; ++a) {
         x[a] = static_cast<std::size_t>(s.first[0] + a - box_first[0]) * edge * edge;
         y[a] = static_cast<std::size_t>(s.first[1] + a - box_first[1]) * edge;
@@ -213,6 +220,8 @@ struct ScatterIndex {
     } else {
       (void)box_first;
       (void)edge;
+      (void)lo;
+      (void)hi;
       ix = s.ix;
       iy = s.iy;
       iz = s.iz;
@@ -225,7 +234,7 @@ struct ScatterIndex {
 // `records`: the grid's, or with `kBox` the block's box (BlockBuffers).
 template <class Shape, class Terrain, bool with_mass, bool with_momentum, bool with_force, bool kBox>
 void scatter_block(const ParticleStore& P, const CellSort& sort, const Grid& grid, std::size_t b, double* records,
-                   const std::array<int, 3>& box_first, int edge) {
+                   const std::array<int, 3>& box_first, int edge, int* lo = nullptr, int* hi = nullptr) {
   const Terrain& terrain = grid.template terrain<Terrain>();
   const double inv_h = 1.0 / grid.geometry().h;
   ParticleStencil<Shape> stencil;
@@ -242,7 +251,7 @@ void scatter_block(const ParticleStore& P, const CellSort& sort, const Grid& gri
     scatter.set_particle(m, mv, minus_v_sigma);
     stencil.visit(grid, terrain, P.x[0][p], P.x[1][p], P.x[2][p], hw, [&](const auto& s) {
       constexpr int N = std::decay_t<decltype(s)>::N;
-      const ScatterIndex<kBox, N> index(s, box_first, edge);
+      const ScatterIndex<kBox, N> index(s, box_first, edge, lo, hi);
       // Sum factorisation: with grad N = (gx wy wz, wx gy wz, wx wy gz) (Stencil::gradient) the
       // force on node (a, b, c) is wz[c] A + gz[c] B with A, B fixed per (a, b) row, so the
       // innermost loop does 2 multiply-adds per component instead of forming the gradient.
@@ -273,10 +282,11 @@ void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid, Bl
     for (std::size_t bi = 0; bi < count; ++bi) {
       const std::size_t b = order[bi];
       const double block_start = timing ? omp_get_wtime() : 0.0;
-      double* box = buffers->records(b);
-      std::fill_n(box, buffers->box_doubles(), 0.0);
-      scatter_block<Shape, Terrain, with_mass, with_momentum, with_force, true>(P, sort, grid, b, box,
-                                                                              buffers->first_node(b), buffers->edge());
+      double* box = buffers->open_box(b);
+      std::array<int, 3> lo{INT_MAX, INT_MAX, INT_MAX}, hi{INT_MIN, INT_MIN, INT_MIN};
+      scatter_block<Shape, Terrain, with_mass, with_momentum, with_force, true>(
+          P, sort, grid, b, box, buffers->first_node(b), buffers->edge(), lo.data(), hi.data());
+      buffers->close_box(b, lo, hi);
       if (timing) timing->block_seconds[0][bi] = omp_get_wtime() - block_start;
     }
     if (timing) timing->wall[0] = omp_get_wtime() - pass_start;
@@ -360,9 +370,9 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std
     double* remap_records = records;
     std::array<int, 3> box_first{};
     int box_edge = 0;
+    std::array<int, 3> box_lo{INT_MAX, INT_MAX, INT_MAX}, box_hi{INT_MIN, INT_MIN, INT_MIN};
     if constexpr (kBox) {
-      remap_records = buffers->records(b);
-      std::fill_n(remap_records, buffers->box_doubles(), 0.0);
+      remap_records = buffers->open_box(b);
       box_first = buffers->first_node(b);
       box_edge = buffers->edge();
     }
@@ -415,7 +425,7 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std
           const double m = P.mass[p];
           const double mv[3] = {m * P.v[0][p], m * P.v[1][p], m * P.v[2][p]};
           remap_scatter.set_particle(m, mv, kNoStress);  // as scatter_to_grid's Momentum
-          const ScatterIndex<kBox, N> index(s, box_first, box_edge);
+          const ScatterIndex<kBox, N> index(s, box_first, box_edge, box_lo.data(), box_hi.data());
           for (int a = 0; a < N; ++a)
             for (int bb = 0; bb < N; ++bb) {
               const std::size_t row = index.ix[a] + index.iy[bb];
@@ -446,6 +456,7 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std
       if (!inside) outside = std::max(outside, static_cast<long long>(p));
       if (!sort.within_slack_of(origin, cell[0], cell[1], cell[2])) needs_sort = true;
     }
+    if constexpr (kBox) buffers->close_box(b, box_lo, box_hi);
     if (pic_fraction > 0.0) block_damping[b] = damped;
     if (block_seconds) (*block_seconds)[bi] = omp_get_wtime() - block_start;
   }
