@@ -49,9 +49,7 @@ void BlockBuffers::prepare(const CellSort& sort, const Grid& grid) {
   for (std::size_t e = 0; e < overlaps.size(); ++e) {
     const std::size_t tile = overlaps[e].tile, b = overlaps[e].block;
     if (e == 0 || tile != overlaps[e - 1].tile) tile_starts_.push_back(static_cast<std::uint32_t>(runs_.size()));
-    const int t0[3] = {static_cast<int>(tile / (static_cast<std::size_t>(tiles[1]) * tiles[2])) * kTileEdge,
-                       static_cast<int>((tile / tiles[2]) % tiles[1]) * kTileEdge,
-                       static_cast<int>(tile % tiles[2]) * kTileEdge};
+    const std::array<int, 3> t0 = grid.node_of(tile, 0);  // the tile's first node
     const auto first = first_node(b);
     int lo[3], hi[3];
     for (int d = 0; d < 3; ++d) {

@@ -14,8 +14,8 @@
 // Only the nodes a box's scatter reached are summed and, at the next scatter, cleared
 // (open_box/close_box): a block's particles reach about 5^3 of the 7^3 nodes of a linear box.
 //
-// Memory: blocks x edge()^3 x 64 bytes (the default flume: 104 blocks of 7^3 nodes, 2.3 MB; a
-// 1 M-particle B-spline scene with 8-cell blocks: 244 blocks of 16^3 nodes, 64 MB), kept between
+// Memory: blocks x edge()^3 x 64 bytes (the default flume: 145 blocks of 7^3 nodes, 3.2 MB; the
+// 1 M-particle B-spline shear bench with 8-cell blocks: 343 blocks of 16^3 nodes, 90 MB), kept between
 // sorts. Periodic axes are not supported (their stencils wrap around the box).
 #include "talus/grid/grid.hpp"
 #include "talus/particles/cell_sort.hpp"
@@ -51,10 +51,6 @@ class BlockBuffers {
   void close_box(std::size_t b, const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
     written_[b] = {lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]};
   }
-  std::size_t blocks() const { return block_origin_.size(); }
-  /// Bytes held (the memory report).
-  std::size_t bytes() const { return capacity_ * sizeof(double) + runs_.capacity() * sizeof(Run); }
-
   /// Add the boxes' `fields` into the grid's node records (which the caller cleared or holds
   /// partial sums in): one parallel loop over the active tiles.
   void add_to_grid(Grid& grid, ScatteredFields fields) const;
