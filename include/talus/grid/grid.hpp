@@ -14,7 +14,7 @@
 // one 64-byte record per node, so that a particle's P2G touches one cache line per node instead of
 // seven, and the gather reads the velocity change from the same line; the Lagrangian velocity
 // v^L has records of its own (4 doubles: two nodes a line). The transfers load and store records
-// as vectors (transfer/transfers.cpp); NodeField is one field's strided
+// as vectors (transfer/transfer_kernels-inl.h); NodeField is one field's strided
 // view of the records (or of a plain array, stride 1).
 #include "talus/core/lazy_array.hpp"
 #include "talus/core/types.hpp"

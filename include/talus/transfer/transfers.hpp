@@ -1,6 +1,6 @@
 #pragma once
 // The particle <-> grid transfers of one step. Each is a template over the shape function and the
-// terrain type (instantiated in transfers.cpp), so the inner loops have compile-time extents.
+// terrain type (instantiated in transfers.cpp; the kernels are in transfer_kernels-inl.h), so the inner loops have compile-time extents.
 //
 //  scatter_to_grid    P2G: nodal mass, momentum and internal force (Edo & Matsubara 2015, eq. 47-49), as 8
 //                     colour passes over blocks: no atomics, same order for any thread count; or, with
