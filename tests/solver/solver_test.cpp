@@ -201,6 +201,8 @@ TEST(Solver, BitIdenticalForOneAndThreeThreadsWithSmallerBlocks) {
 // The scatter without colour passes (solver.scatter = "block_buffers", transfer/block_buffers.hpp):
 // every node adds its blocks' boxes in ascending block order, so the results do not depend on the
 // thread count; against the colour passes only the order of the additions differs (round-off).
+// To 8 ms: 45 steps, 3 cell sorts (the boxes change blocks at each), about 3 s in Release and 70 s
+// under the sanitizers for the 12 runs.
 TEST(Solver, BlockBuffersAreBitIdenticalForAnyThreadCountAndMatchTheColourPasses) {
   const std::pair<ShapeKind, SchemeKind> cases[] = {{ShapeKind::Linear, SchemeKind::Musl},
                                                     {ShapeKind::UGimp, SchemeKind::Usl},
@@ -208,7 +210,7 @@ TEST(Solver, BlockBuffersAreBitIdenticalForAnyThreadCountAndMatchTheColourPasses
                                                     {ShapeKind::BSpline2, SchemeKind::Usavg}};
   for (const auto& [shape, scheme] : cases) {
     const std::string what = std::string(to_string(shape)) + " " + to_string(scheme);
-    Scene scene = test::tumbling_block_scene(0.02);
+    Scene scene = test::tumbling_block_scene(0.008);
     scene.shape = shape;
     scene.scheme = scheme;
     const Solver colours = test::run_to_end(scene, 1);
