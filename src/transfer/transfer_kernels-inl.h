@@ -139,6 +139,25 @@ class RecordScatter {
   hn::Mask<D> keep_[kParts];
 };
 
+/// The vectors of a node record (`kStride` doubles) that hold the 3 doubles at `kSlot`: the
+/// gathers load only those (RecordGather, RecordVelocityGradient).
+template <int kStride, int kSlot>
+struct RecordSlots {
+  using D = hn::CappedTag<double, kStride>;
+  using V = hn::Vec<D>;
+  static constexpr int kLanes = static_cast<int>(hn::MaxLanes(D()));
+  static constexpr int kFirst = kSlot / kLanes, kLast = (kSlot + 2) / kLanes;
+  static constexpr int kParts = kLast - kFirst + 1;
+  /// Where component d lands when the kParts vectors are stored one after another.
+  static constexpr int lane_of(int d) { return kSlot + d - kFirst * kLanes; }
+
+  explicit RecordSlots(const double* records) : records(records) {}
+  /// Vector `part` (0 .. kParts-1) of node n's record.
+  V load(std::size_t n, int part) const { return hn::Load(D(), records + n * kStride + (kFirst + part) * kLanes); }
+
+  const double* records;
+};
+
 /// One node vector (3 doubles at `kSlot` of records of `kStride` doubles: v^L - v in the node
 /// records' force slots after the grid update, or v^L in its own records) interpolated to a particle
 /// with vector registers: each (a, b) row sums wz[c] record over its nodes, the particle wxy row.
@@ -146,14 +165,13 @@ class RecordScatter {
 /// operations in its order, so those lanes get the same bits (the others are unused).
 template <int kStride, int kSlot>
 class RecordGather {
-  using D = hn::CappedTag<double, kStride>;
-  using V = hn::Vec<D>;
-  static constexpr int kLanes = static_cast<int>(hn::MaxLanes(D()));
-  static constexpr int kFirst = kSlot / kLanes, kLast = (kSlot + 2) / kLanes;
-  static constexpr int kParts = kLast - kFirst + 1;
+  using Slots = RecordSlots<kStride, kSlot>;
+  using D = typename Slots::D;
+  using V = typename Slots::V;
+  static constexpr int kParts = Slots::kParts, kLanes = Slots::kLanes;
 
  public:
-  explicit RecordGather(const double* records) : records_(records) {}
+  explicit RecordGather(const double* records) : slots_(records) {}
   void start_particle() {
     for (int i = 0; i < kParts; ++i) particle_[i] = hn::Zero(D());
   }
@@ -162,8 +180,7 @@ class RecordGather {
   }
   void add_node(std::size_t n, double wz) {
     const V w = hn::Set(D(), wz);
-    const double* record = records_ + n * kStride;
-    for (int i = 0; i < kParts; ++i) row_[i] = hn::Add(row_[i], hn::Mul(w, hn::Load(D(), record + (kFirst + i) * kLanes)));
+    for (int i = 0; i < kParts; ++i) row_[i] = hn::Add(row_[i], hn::Mul(w, slots_.load(n, i)));
   }
   void end_row(double wxy) {
     const V w = hn::Set(D(), wxy);
@@ -173,11 +190,11 @@ class RecordGather {
   void value(double out[3]) const {
     alignas(64) double lanes[kParts * kLanes];
     for (int i = 0; i < kParts; ++i) hn::Store(particle_[i], D(), lanes + i * kLanes);
-    for (int d = 0; d < 3; ++d) out[d] = lanes[kSlot + d - kFirst * kLanes];
+    for (int d = 0; d < 3; ++d) out[d] = lanes[Slots::lane_of(d)];
   }
 
  private:
-  const double* records_;
+  Slots slots_;
   V row_[kParts], particle_[kParts];
 };
 
@@ -568,14 +585,13 @@ class StridedVelocityGradient {
 
 template <int kStride, int kSlot>
 class RecordVelocityGradient {
-  using D = hn::CappedTag<double, kStride>;
-  using V = hn::Vec<D>;
-  static constexpr int kLanes = static_cast<int>(hn::MaxLanes(D()));
-  static constexpr int kFirst = kSlot / kLanes, kLast = (kSlot + 2) / kLanes;
-  static constexpr int kParts = kLast - kFirst + 1;
+  using Slots = RecordSlots<kStride, kSlot>;
+  using D = typename Slots::D;
+  using V = typename Slots::V;
+  static constexpr int kParts = Slots::kParts, kLanes = Slots::kLanes;
 
  public:
-  explicit RecordVelocityGradient(const double* records) : records_(records) {}
+  explicit RecordVelocityGradient(const double* records) : slots_(records) {}
   void start_particle() {
     for (int i = 0; i < kParts; ++i) lx_[i] = ly_[i] = lz_[i] = hn::Zero(D());
   }
@@ -584,9 +600,8 @@ class RecordVelocityGradient {
   }
   void add_node(std::size_t n, double wz, double gz) {
     const V w = hn::Set(D(), wz), g = hn::Set(D(), gz);
-    const double* record = records_ + n * kStride;
     for (int i = 0; i < kParts; ++i) {
-      const V v = hn::Load(D(), record + (kFirst + i) * kLanes);
+      const V v = slots_.load(n, i);
       sw_[i] = hn::Add(sw_[i], hn::Mul(v, w));
       sg_[i] = hn::Add(sg_[i], hn::Mul(v, g));
     }
@@ -611,7 +626,7 @@ class RecordVelocityGradient {
       hn::Store(lz_[i], D(), z + i * kLanes);
     }
     for (int i = 0; i < 3; ++i) {
-      const int lane = kSlot + i - kFirst * kLanes;
+      const int lane = Slots::lane_of(i);
       L[i][0] = x[lane];
       L[i][1] = y[lane];
       L[i][2] = z[lane];
@@ -619,7 +634,7 @@ class RecordVelocityGradient {
   }
 
  private:
-  const double* records_;
+  Slots slots_;
   V sw_[kParts], sg_[kParts], lx_[kParts], ly_[kParts], lz_[kParts];
 };
 
