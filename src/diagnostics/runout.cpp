@@ -1,5 +1,7 @@
 #include "talus/diagnostics/runout.hpp"
 
+#include "talus/core/parallel_sort.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -25,7 +27,9 @@ RunoutSample measure_runout(const ParticleStore& P, const FlumeCoordinates& c, d
   std::vector<Entry> order(n);
 #pragma omp parallel for schedule(static)
   for (std::size_t p = 0; p < n; ++p) order[p] = Entry{c.s(P.x[0][p]), P.id[p], p};
-  std::sort(order.begin(), order.end(), [](const Entry& a, const Entry& b) { return a.s < b.s || (a.s == b.s && a.id < b.id); });
+  // (s, id) is a total order (ids are unique), so the parallel sort gives the same order for any
+  // thread count, and the quantiles and sums below the same bits.
+  parallel_sort(order, [](const Entry& a, const Entry& b) { return a.s < b.s || (a.s == b.s && a.id < b.id); });
 
   double mass = 0.0;
   for (const Entry& e : order) mass += P.mass[e.index];
@@ -75,7 +79,7 @@ DepositRaster measure_deposit(const ParticleStore& P, const FlumeCoordinates& c,
   r.thickness.assign(static_cast<std::size_t>(r.ns) * r.ny, 0.0);
   std::vector<std::size_t> by_id(P.size());
   std::iota(by_id.begin(), by_id.end(), std::size_t{0});
-  std::sort(by_id.begin(), by_id.end(), [&](std::size_t a, std::size_t b) { return P.id[a] < P.id[b]; });
+  parallel_sort(by_id, [&](std::size_t a, std::size_t b) { return P.id[a] < P.id[b]; });  // ids are unique
   const double area = r.ds * r.dy;
   for (std::size_t p : by_id) {
     const double fi = std::floor((c.s(P.x[0][p]) - s0) / r.ds);
