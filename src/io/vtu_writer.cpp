@@ -67,24 +67,39 @@ vtkSmartPointer<vtkUnstructuredGrid> particle_grid(const ParticleStore& P, bool 
   offsets->SetNumberOfTuples(n + 1);
   connectivity->SetNumberOfTuples(n);
 
+  // Filled through raw pointers, in parallel: a frame of the h = 0.005 m flume (244 k particles)
+  // took about 90 ms on one core, this copy a fifth of it (the rest is VTK's LZ4 and the write).
+  // Each particle writes only its own tuples, so the bytes are the same for any thread count.
+  double* const xyz = vtkDoubleArray::SafeDownCast(points->GetData())->GetPointer(0);
+  double* const vel = velocity->GetPointer(0);
+  double* const spd = speed->GetPointer(0);
+  double* const sig = stress->GetPointer(0);
+  double* const eps = strain->GetPointer(0);
+  double* const rho = density->GetPointer(0);
+  double* const vol = volume->GetPointer(0);
+  auto* const ids = id->GetPointer(0);
+  unsigned short* const bodies = body->GetPointer(0);
+  auto* const offset = offsets->GetPointer(0);
+  auto* const vertex = connectivity->GetPointer(0);
+#pragma omp parallel for schedule(static)
   for (vtkIdType p = 0; p < n; ++p) {
-    points->SetPoint(p, P.x[0][p], P.x[1][p], P.x[2][p]);
     double v2 = 0.0;
     for (int d = 0; d < 3; ++d) {
-      velocity->SetTypedComponent(p, d, P.v[d][p]);
+      xyz[3 * p + d] = P.x[d][p];
+      vel[3 * p + d] = P.v[d][p];
       v2 += P.v[d][p] * P.v[d][p];
     }
-    speed->SetValue(p, std::sqrt(v2));
+    spd[p] = std::sqrt(v2);
     for (int c = 0; c < 6; ++c) {
-      stress->SetTypedComponent(p, c, P.stress[c][p]);
-      strain->SetTypedComponent(p, c, P.strain[c][p]);
+      sig[6 * p + c] = P.stress[c][p];
+      eps[6 * p + c] = P.strain[c][p];
     }
-    density->SetValue(p, P.mass[p] / P.volume[p]);
-    volume->SetValue(p, P.volume[p]);
-    id->SetValue(p, P.id[p]);
-    body->SetValue(p, P.body[p]);
-    offsets->SetValue(p, static_cast<int>(p));
-    connectivity->SetValue(p, static_cast<int>(p));
+    rho[p] = P.mass[p] / P.volume[p];
+    vol[p] = P.volume[p];
+    ids[p] = P.id[p];
+    bodies[p] = P.body[p];
+    offset[p] = static_cast<vtkTypeInt32>(p);
+    vertex[p] = static_cast<vtkTypeInt32>(p);
   }
   offsets->SetValue(n, static_cast<int>(n));
 
