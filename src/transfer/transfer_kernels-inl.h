@@ -376,12 +376,10 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std
     static constexpr double kNoStress[6] = {0, 0, 0, 0, 0, 0};
     const auto origin = sort.block_origin(b);
     double* remap_records = records;
-    BoxTarget box_target;
-    BoxTarget* box = nullptr;
+    BoxTarget box;  // with into_boxes: the block's box, which the remap scatters into
     if constexpr (into_boxes) {
       remap_records = buffers->open_box(b);
-      box_target = {buffers->first_node(b), buffers->edge()};
-      box = &box_target;
+      box = {buffers->first_node(b), buffers->edge()};
     }
     double damped = 0.0;  // kinetic energy the PIC share removed in this block
     for (std::size_t p = sort.block_begin(b); p < sort.block_end(b); ++p) {
@@ -442,7 +440,7 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std
               }
           };
           if constexpr (into_boxes)
-            with_scatter_index(s, box, remap_rows);
+            with_scatter_index(s, &box, remap_rows);
           else
             remap_rows(s.ix, s.iy, s.iz);
         }
@@ -468,7 +466,7 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std
       if (!inside) outside = std::max(outside, static_cast<long long>(p));
       if (!sort.within_slack_of(origin, cell[0], cell[1], cell[2])) needs_sort = true;
     }
-    if (box) buffers->close_box(b, box->lo, box->hi);
+    if constexpr (into_boxes) buffers->close_box(b, box.lo, box.hi);
     if (pic_fraction > 0.0) block_damping[b] = damped;
     if (block_seconds) (*block_seconds)[bi] = omp_get_wtime() - block_start;
   }
