@@ -11,7 +11,6 @@ namespace talus::dem {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-constexpr double kSqrt3 = std::numbers::sqrt3;
 
 // Abe 1996 derives everything in plane strain; plane stress is the same algebra with nu read as
 // nu/(1+nu) (Abe 1996, §2(1)). The inverse maps the plane-strain value back.
@@ -61,12 +60,12 @@ ContactSprings springs_for(double g, double nu, const PackingGeometry& geometry)
   switch (geometry.packing) {
     case Packing::hexagonal: {
       // Abe 1996, eq. 34
-      const double scale = 2.0 / kSqrt3 * g / (1.0 - 2.0 * nu);
+      const double scale = 2.0 / std::numbers::sqrt3 * g / (1.0 - 2.0 * nu);
       return {scale, scale * (1.0 - 4.0 * nu)};
     }
     case Packing::hexagonal_rotation_locked: {
       // Abe 1996, eq. 53
-      const double scale = kSqrt3 * g / (6.0 * (1.0 - 2.0 * nu));
+      const double scale = std::numbers::sqrt3 * g / (6.0 * (1.0 - 2.0 * nu));
       return {scale * (5.0 - 4.0 * nu), scale * (1.0 - 4.0 * nu)};
     }
     case Packing::square: {
@@ -131,7 +130,7 @@ IsotropicElasticity macroscopic_elasticity(const ContactSprings& springs, const 
     case Packing::hexagonal_rotation_locked: {
       // Matching the locked lattice's equilibrium equation to eq. 19 (docs/dem.md):
       // G = sqrt3/4 (kN + 3 kT), G/(1 - 2 nu) = sqrt3/2 (kN - kT).
-      g = kSqrt3 / 4.0 * (kn + 3.0 * kt);
+      g = std::numbers::sqrt3 / 4.0 * (kn + 3.0 * kt);
       nu = (kn - 5.0 * kt) / (4.0 * (kn - kt));
       break;
     }

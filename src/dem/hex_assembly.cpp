@@ -17,7 +17,6 @@
 namespace talus::dem {
 namespace {
 
-constexpr double kSqrt3 = std::numbers::sqrt3;
 constexpr int kFixed = -1;
 
 struct DiscId {
@@ -62,7 +61,7 @@ class DofMap {
 
 Vec2 centre_of(DiscId disc, double radius) {
   const double shift = (disc.row % 2 == 1) ? radius : 0.0;
-  return {2.0 * radius * disc.column + shift, kSqrt3 * radius * disc.row};
+  return {2.0 * radius * disc.column + shift, std::numbers::sqrt3 * radius * disc.row};
 }
 
 // Each touching pair once: the right-hand neighbour and the two neighbours in the row above.
@@ -88,7 +87,7 @@ std::vector<std::pair<DiscId, DiscId>> touching_pairs(const HexAssemblySpec& spe
 // The uniform state the exact loading reproduces: sigma_11 = stress, sigma_22 = sigma_12 = 0 in the
 // plane-strain continuum of eq. 52 with the hexagonal lattice's G and nu (eq. 22, 33).
 Mat2 uniaxial_plane_strain_gradient(const ContactSprings& springs, double stress) {
-  const double shear = kSqrt3 / 4.0 * (springs.normal + springs.tangential);
+  const double shear = std::numbers::sqrt3 / 4.0 * (springs.normal + springs.tangential);
   const double poisson = 0.25 * (1.0 - springs.tangential_to_normal());
   Mat2 gradient = Mat2::Zero();
   gradient(0, 0) = stress * (1.0 - poisson) / (2.0 * shear);
@@ -217,7 +216,7 @@ HexAssemblyResult analyse_hex_assembly(const HexAssemblySpec& spec) {
   };
   if (spec.loading == HexLoading::equal_end_forces) {
     // Abe 1996, §3: each row carries a band sqrt3 a high of the applied stress.
-    const double end_force = spec.applied_stress * kSqrt3 * a;
+    const double end_force = spec.applied_stress * std::numbers::sqrt3 * a;
     for (int row = 0; row < spec.rows; ++row) {
       add_load({row, 0}, 0, -end_force);
       add_load({row, discs_in_row(spec, row) - 1}, 0, end_force);

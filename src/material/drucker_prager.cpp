@@ -5,7 +5,6 @@
 #include "talus/core/tensor.hpp"
 
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <string>
 
@@ -17,39 +16,27 @@ constexpr double kSqrt2 = std::numbers::sqrt2;  // as in update() (drucker_prage
 constexpr double kSqrt3 = 1.7320508075688772;
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
 
-std::string number(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", v);
-  return buffer;
-}
-
-[[noreturn]] void out_of_range(std::string_view prefix, const char* key, double value,
-                               const std::string& allowed) {
-  throw input_error(std::string(prefix) + key + " = " + number(value) +
-                    " is out of range; allowed " + allowed);
-}
-
 void validate(const DruckerPragerParameters& p, std::string_view prefix) {
   // Written as !(inside) so that NaN is rejected too.
   if (!(p.young > 0.0 && std::isfinite(p.young)))
-    out_of_range(prefix, "young", p.young, "E > 0 (Pa, finite)");
+    throw_out_of_range(prefix, "young", p.young, "E > 0 (Pa, finite)");
   if (!(p.poisson >= 0.0 && p.poisson < 0.5))
-    out_of_range(prefix, "poisson", p.poisson, "[0, 0.5)");
+    throw_out_of_range(prefix, "poisson", p.poisson, "[0, 0.5)");
   if (!(p.friction_angle_deg > 0.0 && p.friction_angle_deg < 90.0))
-    out_of_range(prefix, "friction_angle", p.friction_angle_deg, "(0, 90) degrees");
+    throw_out_of_range(prefix, "friction_angle", p.friction_angle_deg, "(0, 90) degrees");
   if (!(p.dilatancy_angle_deg >= 0.0 && p.dilatancy_angle_deg <= p.friction_angle_deg))
-    out_of_range(prefix, "dilatancy_angle", p.dilatancy_angle_deg,
-                 "[0, friction_angle] = [0, " + number(p.friction_angle_deg) + "] degrees");
+    throw_out_of_range(prefix, "dilatancy_angle", p.dilatancy_angle_deg,
+                       "[0, friction_angle] = [0, " + number_g(p.friction_angle_deg) + "] degrees");
   if (!(p.cohesion >= 0.0 && std::isfinite(p.cohesion)))
-    out_of_range(prefix, "cohesion", p.cohesion, "c >= 0 (Pa, finite)");
+    throw_out_of_range(prefix, "cohesion", p.cohesion, "c >= 0 (Pa, finite)");
   if (!(p.hardening_modulus >= 0.0 && std::isfinite(p.hardening_modulus)))
-    out_of_range(prefix, "hardening_modulus", p.hardening_modulus, "H >= 0 (Pa, finite)");
+    throw_out_of_range(prefix, "hardening_modulus", p.hardening_modulus, "H >= 0 (Pa, finite)");
   if (!(p.kinematic_fraction >= 0.0 && p.kinematic_fraction <= 1.0))
-    out_of_range(prefix, "kinematic_fraction", p.kinematic_fraction,
-                 "[0, 1] (0 isotropic, 1 kinematic)");
+    throw_out_of_range(prefix, "kinematic_fraction", p.kinematic_fraction,
+                       "[0, 1] (0 isotropic, 1 kinematic)");
   if (!(p.tension_cutoff >= 0.0))
-    out_of_range(prefix, "tension_cutoff", p.tension_cutoff,
-                 "mean stress >= 0 (Pa), or the apex (default)");
+    throw_out_of_range(prefix, "tension_cutoff", p.tension_cutoff,
+                       "mean stress >= 0 (Pa), or the apex (default)");
 }
 
 }  // namespace

@@ -4,35 +4,24 @@
 #include "talus/core/error.hpp"
 
 #include <cmath>
-#include <cstdio>
 #include <string>
 
 namespace talus {
 
 namespace {
 
-std::string number(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", v);
-  return buffer;
-}
-
-[[noreturn]] void out_of_range(std::string_view prefix, const char* key, double value, const std::string& allowed) {
-  throw input_error(std::string(prefix) + key + " = " + number(value) + " is out of range; allowed " + allowed);
-}
-
 void validate(const MuIParameters& p, std::string_view prefix) {
   // Written as !(inside) so that NaN is rejected too.
-  if (!(p.young > 0.0 && std::isfinite(p.young))) out_of_range(prefix, "young", p.young, "E > 0 (Pa, finite)");
-  if (!(p.poisson >= 0.0 && p.poisson < 0.5)) out_of_range(prefix, "poisson", p.poisson, "[0, 0.5)");
-  if (!(p.mu_s >= 0.0 && std::isfinite(p.mu_s))) out_of_range(prefix, "mu_s", p.mu_s, "mu_s >= 0 (finite)");
+  if (!(p.young > 0.0 && std::isfinite(p.young))) throw_out_of_range(prefix, "young", p.young, "E > 0 (Pa, finite)");
+  if (!(p.poisson >= 0.0 && p.poisson < 0.5)) throw_out_of_range(prefix, "poisson", p.poisson, "[0, 0.5)");
+  if (!(p.mu_s >= 0.0 && std::isfinite(p.mu_s))) throw_out_of_range(prefix, "mu_s", p.mu_s, "mu_s >= 0 (finite)");
   if (!(p.mu_2 > p.mu_s && std::isfinite(p.mu_2)))
-    out_of_range(prefix, "mu_2", p.mu_2, "mu_2 > mu_s = " + number(p.mu_s) + " (finite)");
-  if (!(p.i0 > 0.0 && std::isfinite(p.i0))) out_of_range(prefix, "i0", p.i0, "I0 > 0 (finite)");
+    throw_out_of_range(prefix, "mu_2", p.mu_2, "mu_2 > mu_s = " + number_g(p.mu_s) + " (finite)");
+  if (!(p.i0 > 0.0 && std::isfinite(p.i0))) throw_out_of_range(prefix, "i0", p.i0, "I0 > 0 (finite)");
   if (!(p.grain_diameter > 0.0 && std::isfinite(p.grain_diameter)))
-    out_of_range(prefix, "grain_diameter", p.grain_diameter, "d > 0 (m, finite)");
+    throw_out_of_range(prefix, "grain_diameter", p.grain_diameter, "d > 0 (m, finite)");
   if (!(p.grain_density > 0.0 && std::isfinite(p.grain_density)))
-    out_of_range(prefix, "grain_density", p.grain_density, "rho_s > 0 (kg/m^3, finite)");
+    throw_out_of_range(prefix, "grain_density", p.grain_density, "rho_s > 0 (kg/m^3, finite)");
 }
 
 }  // namespace

@@ -1,8 +1,10 @@
 #pragma once
 // One exception type for everything a user can get wrong or a run can hit. The program prints
 // what() as one line and exits with exit_code(): 2 for bad input, 3 for a run that went unstable.
+#include <cstdio>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace talus {
 
@@ -37,5 +39,18 @@ inline Error instability_error(const std::string& message) {
   return Error(Error::Kind::Instability, message);
 }
 inline Error io_error(const std::string& message) { return Error(Error::Kind::Io, message); }
+
+/// A value as a message shows it: printf's %g (6 significant digits, no trailing zeros).
+inline std::string number_g(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", v);
+  return buffer;
+}
+
+/// The parameter checks' one message: "<prefix><key> = <value> is out of range; allowed <allowed>".
+[[noreturn]] inline void throw_out_of_range(std::string_view prefix, const char* key, double value,
+                                            const std::string& allowed) {
+  throw input_error(std::string(prefix) + key + " = " + number_g(value) + " is out of range; allowed " + allowed);
+}
 
 }  // namespace talus
