@@ -12,6 +12,7 @@
 #include <string>
 #include <sys/wait.h>
 
+namespace cli_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -304,3 +305,4 @@ TEST(Cli, RunWithRunoutDiagnosticsPrintsTheRunoutAndItsFiles) {
 }
 
 }  // namespace
+}  // namespace cli_test

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+namespace dem_springs_cli_test {
 namespace {
 
 struct CommandResult {
@@ -113,3 +114,4 @@ TEST(DemSpringsCli, PoissonRatioAboveTheLimitExitsWithCode2AndOneLine) {
 }
 
 }  // namespace
+}  // namespace dem_springs_cli_test

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+namespace element_test_cli_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -104,3 +105,4 @@ TEST_F(ElementTestCli, MissingSpecFileExitsTwo) {
 }
 
 }  // namespace
+}  // namespace element_test_cli_test

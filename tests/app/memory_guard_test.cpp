@@ -18,6 +18,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+namespace memory_guard_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -144,3 +145,4 @@ TEST(MemoryGuard, ASceneThatDoesNotFitStopsAtOnceWithOneLine) {
 }
 
 }  // namespace
+}  // namespace memory_guard_test

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+namespace mu_i_cli_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -98,3 +99,4 @@ TEST_F(MuICli, BadSceneParametersExitTwoNamingTheKeyAndRange) {
 }
 
 }  // namespace
+}  // namespace mu_i_cli_test

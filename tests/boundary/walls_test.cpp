@@ -9,6 +9,7 @@
 #include <cmath>
 
 namespace talus {
+namespace walls_test {
 namespace {
 
 GridGeometry box() {
@@ -118,4 +119,5 @@ TEST(Walls, ABedAlongZOnATerrainGridActsLikeTheFlatFloor) {
 }
 
 }  // namespace
+}  // namespace walls_test
 }  // namespace talus

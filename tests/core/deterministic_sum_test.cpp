@@ -8,6 +8,7 @@
 #include <cmath>
 
 namespace talus {
+namespace deterministic_sum_test {
 namespace {
 
 // Terms of wildly different size, so that any change of summation order changes the last bits.
@@ -36,4 +37,5 @@ TEST(DeterministicSum, SameBitsForOneAndTwoThreadsInTheFixedChunkOrder) {
 }
 
 }  // namespace
+}  // namespace deterministic_sum_test
 }  // namespace talus

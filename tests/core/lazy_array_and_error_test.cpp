@@ -8,6 +8,7 @@
 #include <utility>
 
 namespace talus {
+namespace lazy_array_and_error_test {
 namespace {
 
 TEST(LazyArray, ReadsZeroUntilWrittenAndMovesItsMemory) {
@@ -33,4 +34,5 @@ TEST(Error, OneLineMessagesAndExitCodes) {
 }
 
 }  // namespace
+}  // namespace lazy_array_and_error_test
 }  // namespace talus

@@ -9,6 +9,7 @@
 #include <random>
 
 namespace talus {
+namespace parallel_sort_test {
 namespace {
 
 struct Keyed {
@@ -56,4 +57,5 @@ TEST(ParallelSort, SortsInsideAParallelRegionToo) {
 }
 
 }  // namespace
+}  // namespace parallel_sort_test
 }  // namespace talus

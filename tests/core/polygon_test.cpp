@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 namespace talus {
+namespace polygon_test {
 namespace {
 
 const PolygonPoints kSquare{{0, 0}, {1, 0}, {1, 1}, {0, 1}};
@@ -32,4 +33,5 @@ TEST(Polygon, SignedAreaAndCrossingEdges) {
 }
 
 }  // namespace
+}  // namespace polygon_test
 }  // namespace talus

@@ -7,6 +7,7 @@
 #include <cmath>
 
 namespace talus {
+namespace tensor_test {
 namespace {
 
 const Sym6 kStress{-3.0, -1.0, -2.0, 0.4, -0.7, 1.1};
@@ -49,4 +50,5 @@ TEST(Tensor, ObjectiveRotationKeepsTheInvariantsAndIsJaumannToFirstOrder) {
 }
 
 }  // namespace
+}  // namespace tensor_test
 }  // namespace talus

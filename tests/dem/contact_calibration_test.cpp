@@ -18,6 +18,7 @@
 #include <vector>
 
 namespace talus::dem {
+namespace contact_calibration_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -412,4 +413,5 @@ TEST(Packing, NamesRoundTrip) {
 }
 
 }  // namespace
+}  // namespace contact_calibration_test
 }  // namespace talus::dem

@@ -29,6 +29,7 @@
 #include <vector>
 
 namespace talus::dem {
+namespace hex_assembly_test {
 namespace {
 
 double poisson_eq22(double alpha) { return 0.25 * (1.0 - alpha); }
@@ -282,4 +283,5 @@ TEST(HexAssembly, SingularAndMalformedBlocksAreReported) {
 }
 
 }  // namespace
+}  // namespace hex_assembly_test
 }  // namespace talus::dem

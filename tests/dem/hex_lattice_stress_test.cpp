@@ -10,6 +10,7 @@
 #include <cstdlib>
 
 namespace talus::dem {
+namespace hex_lattice_stress_test {
 namespace {
 
 Mat2 isotropic_law(const IsotropicElasticity& m, const Mat2& strain) {  // Abe 1996, eq. 52
@@ -92,4 +93,5 @@ TEST(HexLatticeStress, WithoutRotationLockedAndFreeLatticesCarryTheSameStress) {
 }
 
 }  // namespace
+}  // namespace hex_lattice_stress_test
 }  // namespace talus::dem

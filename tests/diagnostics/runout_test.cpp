@@ -27,6 +27,7 @@
 #include <sstream>
 
 namespace talus {
+namespace runout_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -356,4 +357,5 @@ TEST(RunoutSpec, BadDiagnosticsKeysAreRefusedNamingTheKey) {
 }
 
 }  // namespace
+}  // namespace runout_test
 }  // namespace talus

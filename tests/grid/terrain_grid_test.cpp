@@ -16,6 +16,7 @@
 #include <random>
 
 namespace talus {
+namespace terrain_grid_test {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -248,4 +249,5 @@ TEST(TerrainGrid, FrameKeyNeedsATerrain) {
 }
 
 }  // namespace
+}  // namespace terrain_grid_test
 }  // namespace talus

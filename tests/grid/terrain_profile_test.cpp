@@ -8,6 +8,7 @@
 #include <cmath>
 
 namespace talus {
+namespace terrain_profile_test {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -92,4 +93,5 @@ TEST(TerrainProfile, RefusesProfilesThatAreNotAGraph) {
 }
 
 }  // namespace
+}  // namespace terrain_profile_test
 }  // namespace talus

@@ -24,6 +24,7 @@
 #include <vector>
 
 namespace talus {
+namespace frame_series_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -193,4 +194,5 @@ TEST(FrameSeries, EveryRanksParticlesReadBackAsOneFrame) {
 }
 
 }  // namespace
+}  // namespace frame_series_test
 }  // namespace talus

@@ -18,6 +18,7 @@
 #include <vector>
 
 namespace talus {
+namespace pvtu_output_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -195,4 +196,5 @@ TEST(PvtuOutput, PvdIndexOfAnotherRankWritesNothing) {
 }
 
 }  // namespace
+}  // namespace pvtu_output_test
 }  // namespace talus

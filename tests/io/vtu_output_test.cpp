@@ -18,6 +18,7 @@
 #include <sstream>
 
 namespace talus {
+namespace vtu_output_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -89,4 +90,5 @@ TEST(VtuOutput, RunWritesSeriesIndexSceneAndHistory) {
 }
 
 }  // namespace
+}  // namespace vtu_output_test
 }  // namespace talus

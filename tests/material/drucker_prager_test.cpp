@@ -16,6 +16,7 @@
 #include <string>
 
 namespace talus {
+namespace drucker_prager_test {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -736,4 +737,5 @@ TEST(DruckerPragerHelpers, WithDilatancyAndReset) {
 }
 
 }  // namespace
+}  // namespace drucker_prager_test
 }  // namespace talus

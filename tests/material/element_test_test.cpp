@@ -11,6 +11,7 @@
 #include <string>
 
 namespace talus {
+namespace element_test_test {
 namespace {
 
 using Regime = DruckerPragerResult::Regime;
@@ -137,4 +138,5 @@ TEST(ElementTest, CsvHasDocumentedColumns) {
 }
 
 }  // namespace
+}  // namespace element_test_test
 }  // namespace talus

@@ -13,6 +13,7 @@
 #include <string>
 
 namespace talus {
+namespace mu_i_test {
 namespace {
 
 MuIParameters glass_beads() {
@@ -201,4 +202,5 @@ TEST(MuI, BadParametersNameTheKeyAndRange) {
 }
 
 }  // namespace
+}  // namespace mu_i_test
 }  // namespace talus

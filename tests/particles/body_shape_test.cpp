@@ -13,6 +13,7 @@
 #include <cmath>
 
 namespace talus {
+namespace body_shape_test {
 namespace {
 
 const PolygonPoints kSquare = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
@@ -141,4 +142,5 @@ TEST(PrismBody, RoundTripsThroughTheResolvedScene) {
 }
 
 }  // namespace
+}  // namespace body_shape_test
 }  // namespace talus

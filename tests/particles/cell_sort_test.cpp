@@ -13,6 +13,7 @@
 #include <set>
 
 namespace talus {
+namespace cell_sort_test {
 namespace {
 
 struct SortedCloud {
@@ -163,4 +164,5 @@ TEST(ParticleStore, ParallelCopyEqualsACopy) {
 }
 
 }  // namespace
+}  // namespace cell_sort_test
 }  // namespace talus

@@ -13,6 +13,7 @@
 #include <vector>
 
 namespace talus {
+namespace particle_scratch_test {
 namespace {
 
 TEST(ParticleScratch, PlanesAreAlignedAndDisjoint) {
@@ -122,4 +123,5 @@ TEST(ParticleScratch, ASortThroughABorrowedScratchMatchesOneWithItsOwn) {
 }
 
 }  // namespace
+}  // namespace particle_scratch_test
 }  // namespace talus

@@ -10,6 +10,7 @@
 #include <set>
 
 namespace talus {
+namespace periodic_cell_sort_test {
 namespace {
 
 TEST(PeriodicCellSort, BlocksOfOneColourWriteDisjointNodesAcrossTheSeam) {
@@ -75,4 +76,5 @@ TEST(PeriodicCellSort, OddBlockCountsAreRefused) {
 }
 
 }  // namespace
+}  // namespace periodic_cell_sort_test
 }  // namespace talus

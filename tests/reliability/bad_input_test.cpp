@@ -9,6 +9,7 @@
 #include <vector>
 
 namespace talus {
+namespace bad_input_test {
 namespace {
 
 const std::string kValid = R"({
@@ -79,4 +80,5 @@ TEST(BadInput, EveryMistakeNamesTheKeyPathInOneLine) {
 }
 
 }  // namespace
+}  // namespace bad_input_test
 }  // namespace talus

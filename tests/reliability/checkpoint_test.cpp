@@ -14,6 +14,7 @@
 #include <cstring>
 
 namespace talus {
+namespace checkpoint_test {
 namespace {
 
 /// Every array, bit for bit, and the solver's scalars.
@@ -237,4 +238,5 @@ TEST(Checkpoint, RefusesAnotherSceneAnotherVersionAndBadFiles) {
 }
 
 }  // namespace
+}  // namespace checkpoint_test
 }  // namespace talus

@@ -16,6 +16,7 @@
 #include <thread>
 
 namespace talus {
+namespace crash_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -218,4 +219,5 @@ TEST(Crash, InstabilityExitsThreeWithOneLineAndTheLastGoodState) {
 }
 
 }  // namespace
+}  // namespace crash_test
 }  // namespace talus

@@ -16,6 +16,7 @@
 #include <limits>
 
 namespace talus {
+namespace guards_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -334,4 +335,5 @@ TEST(HardCases, SteepSixtyDegreeSlopeWithLowFriction) {
 }
 
 }  // namespace
+}  // namespace guards_test
 }  // namespace talus

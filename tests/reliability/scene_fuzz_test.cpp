@@ -18,6 +18,7 @@
 #include <random>
 
 namespace talus {
+namespace scene_fuzz_test {
 namespace {
 
 using Json = nlohmann::json;
@@ -228,4 +229,5 @@ TEST(SceneFuzz, MutatedScenesParseOrFailWithAnInputError) {
 }
 
 }  // namespace
+}  // namespace scene_fuzz_test
 }  // namespace talus

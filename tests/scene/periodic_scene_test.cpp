@@ -9,6 +9,7 @@
 #include <string>
 
 namespace talus {
+namespace periodic_scene_test {
 namespace {
 
 const char* kPeriodic = R"({
@@ -67,4 +68,5 @@ TEST(PeriodicScene, BlockCellsChangeTheCellCountsAllowed) {
 }
 
 }  // namespace
+}  // namespace periodic_scene_test
 }  // namespace talus

@@ -13,6 +13,7 @@
 #include <vector>
 
 namespace talus {
+namespace scene_json_test {
 namespace {
 
 const char* kMinimal = R"({
@@ -112,4 +113,5 @@ TEST(SceneJson, EmptyBodyIsRefusedWhenSeeding) {
 }
 
 }  // namespace
+}  // namespace scene_json_test
 }  // namespace talus

@@ -9,6 +9,7 @@
 #include <string>
 
 namespace talus {
+namespace smoothing_scene_test {
 namespace {
 
 const char* kSmoothed = R"({
@@ -56,4 +57,5 @@ TEST(SmoothingScene, BadUseNamesTheKey) {
 }
 
 }  // namespace
+}  // namespace smoothing_scene_test
 }  // namespace talus

@@ -14,6 +14,7 @@
 #include <type_traits>
 
 namespace talus {
+namespace shape_function_test {
 namespace {
 
 /// The small grid the stencil checks run on (off-origin, non-unit spacing).
@@ -258,4 +259,5 @@ TEST(ShapeFunctions, QuadraticBSplineWeightsMatchTheClosedForm) {
 }
 
 }  // namespace
+}  // namespace shape_function_test
 }  // namespace talus

@@ -20,6 +20,7 @@
 #include <tuple>
 
 namespace talus {
+namespace mls_cell_fit_test {
 namespace {
 
 using namespace mls_test;
@@ -242,4 +243,5 @@ TEST(MlsCellFit, CloseToTheParticleFitOnANoisySmoothField) {
 }
 
 }  // namespace
+}  // namespace mls_cell_fit_test
 }  // namespace talus

@@ -17,6 +17,7 @@
 #include <random>
 
 namespace talus {
+namespace mls_strain_smoother_test {
 namespace {
 
 using namespace mls_test;
@@ -336,4 +337,5 @@ TEST(MlsStrainSmoother, EveryInstructionSetPathGivesTheReferenceBits) {
 }
 
 }  // namespace
+}  // namespace mls_strain_smoother_test
 }  // namespace talus

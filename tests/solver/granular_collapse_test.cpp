@@ -11,6 +11,7 @@
 #include <cmath>
 
 namespace talus {
+namespace granular_collapse_test {
 namespace {
 
 TEST(GranularCollapse, ColumnRunsToRestAndTheEnergyBudgetCloses) {
@@ -110,4 +111,5 @@ TEST(GranularCollapse, BitIdenticalForOneAndTwoThreads) {
 }
 
 }  // namespace
+}  // namespace granular_collapse_test
 }  // namespace talus

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 namespace talus {
+namespace grid_update_test {
 namespace {
 
 struct OneTileGrid {
@@ -78,4 +79,5 @@ TEST(GridUpdate, AFrictionalFloorStopsTheFallAndReturnsTheFrictionWork) {
 }
 
 }  // namespace
+}  // namespace grid_update_test
 }  // namespace talus

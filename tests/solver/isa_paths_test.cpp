@@ -17,6 +17,7 @@
 #include <vector>
 
 namespace talus {
+namespace isa_paths_test {
 namespace {
 
 /// Selects an instruction-set path for the test's scope and goes back to "auto" after it.
@@ -302,4 +303,5 @@ TEST(IsaPaths, TerrainTransfersAreBitIdenticalOnEveryPath) {
 }
 
 }  // namespace
+}  // namespace isa_paths_test
 }  // namespace talus

@@ -11,6 +11,7 @@
 
 
 namespace talus {
+namespace mls_solver_test {
 namespace {
 
 const char* kScene = R"({
@@ -159,4 +160,5 @@ TEST(MlsSolver, BitIdenticalForOneAndTwoThreads) {
 }
 
 }  // namespace
+}  // namespace mls_solver_test
 }  // namespace talus

@@ -14,6 +14,7 @@
 #include <vector>
 
 namespace talus {
+namespace mu_i_collapse_test {
 namespace {
 
 Scene mu_i_column_scene(double cell, double end_time, const char* extra_material_keys = "") {
@@ -138,4 +139,5 @@ TEST(MuICollapse, BitIdenticalForOneAndTwoThreads) {
 }
 
 }  // namespace
+}  // namespace mu_i_collapse_test
 }  // namespace talus

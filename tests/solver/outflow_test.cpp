@@ -9,6 +9,7 @@
 #include <cstring>
 
 namespace talus {
+namespace outflow_test {
 namespace {
 
 // An elastic block sliding on a frictionless floor through the open x+ face of the grid.
@@ -70,4 +71,5 @@ TEST(Outflow, RestoreAfterOutflowContinuesBitForBit) {
 }
 
 }  // namespace
+}  // namespace outflow_test
 }  // namespace talus

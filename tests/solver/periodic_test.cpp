@@ -14,6 +14,7 @@
 #include <vector>
 
 namespace talus {
+namespace periodic_test {
 namespace {
 
 const char* const kShapes[] = {"linear", "ugimp", "cpgimp", "bspline2"};
@@ -198,4 +199,5 @@ TEST(Periodic, InclinedFlowIsTheSameAtEveryXAndTheBudgetCloses) {
 }
 
 }  // namespace
+}  // namespace periodic_test
 }  // namespace talus

@@ -10,6 +10,7 @@
 #include <cstring>
 
 namespace talus {
+namespace pic_damping_test {
 namespace {
 
 struct Gap {
@@ -53,4 +54,5 @@ TEST(PicDamping, BitIdenticalForOneAndTwoThreads) {
 }
 
 }  // namespace
+}  // namespace pic_damping_test
 }  // namespace talus

@@ -12,6 +12,7 @@
 #include <random>
 
 namespace talus {
+namespace solver_test {
 namespace {
 
 using test::same_bits;
@@ -280,4 +281,5 @@ TEST(Solver, ParticleLeavingTheGridStopsTheRunWithADiagnosis) {
 }
 
 }  // namespace
+}  // namespace solver_test
 }  // namespace talus

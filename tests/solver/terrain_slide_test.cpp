@@ -14,6 +14,7 @@
 #include <string>
 
 namespace talus {
+namespace terrain_slide_test {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -198,9 +199,11 @@ TEST(TerrainSlide, FlatGridWithRotatedGravityAgrees) {
 }
 
 }  // namespace
+}  // namespace terrain_slide_test
 }  // namespace talus
 
 namespace talus {
+namespace terrain_slide_test {
 namespace {
 
 // The flume in miniature: a 30-degree slope into a flat runout through a circular transition of
@@ -308,4 +311,5 @@ TEST(TerrainSlide, RestoreOnATerrainGridContinuesBitForBit) {
 }
 
 }  // namespace
+}  // namespace terrain_slide_test
 }  // namespace talus

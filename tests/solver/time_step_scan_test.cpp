@@ -14,6 +14,7 @@
 #include <vector>
 
 namespace talus {
+namespace time_step_scan_test {
 namespace {
 
 struct ParticleRun {
@@ -66,4 +67,5 @@ TEST(TimeStepScan, SameMaximumAsTheScalarFormulaOnEveryPath) {
 }
 
 }  // namespace
+}  // namespace time_step_scan_test
 }  // namespace talus

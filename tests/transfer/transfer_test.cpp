@@ -18,6 +18,7 @@
 #include <span>
 
 namespace talus {
+namespace transfer_test {
 namespace {
 
 template <class Shape>
@@ -90,4 +91,5 @@ TEST(Transfers, RemapInTheGatherPassEqualsTheSeparateRemapBitForBit) {
 }
 
 }  // namespace
+}  // namespace transfer_test
 }  // namespace talus

@@ -17,6 +17,7 @@
 #include <vector>
 
 namespace talus {
+namespace bagnold_profile_test {
 namespace {
 
 constexpr double kTheta = 24.0 * M_PI / 180.0, kG = 9.81;
@@ -113,4 +114,5 @@ TEST(BagnoldProfile, InclinedMuILayerReachesTheBagnoldProfile) {
 }
 
 }  // namespace
+}  // namespace bagnold_profile_test
 }  // namespace talus

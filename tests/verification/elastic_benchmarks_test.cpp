@@ -10,6 +10,7 @@
 #include <functional>
 
 namespace talus {
+namespace elastic_benchmarks_test {
 namespace {
 
 using test::benchmark_scene;
@@ -140,4 +141,5 @@ TEST(ElasticBenchmarks, BlockBetweenWallsEnergyThroughFourImpacts) {
 }
 
 }  // namespace
+}  // namespace elastic_benchmarks_test
 }  // namespace talus

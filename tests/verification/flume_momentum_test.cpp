@@ -14,6 +14,7 @@
 #include <vector>
 
 namespace talus {
+namespace flume_momentum_test {
 namespace {
 
 TEST(FlumeMomentum, SlidingSandAcceleratesAtGSinThetaMinusTanDeltaCosTheta) {
@@ -68,4 +69,5 @@ TEST(FlumeMomentum, SlidingSandAcceleratesAtGSinThetaMinusTanDeltaCosTheta) {
 }
 
 }  // namespace
+}  // namespace flume_momentum_test
 }  // namespace talus

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 namespace talus {
+namespace mls_column_test {
 namespace {
 
 using test::benchmark_scene;
@@ -74,4 +75,5 @@ TEST(MlsColumn, StrainChangeTellsTheUnstableFourCellFitFromTheTwoCellOne) {
 }
 
 }  // namespace
+}  // namespace mls_column_test
 }  // namespace talus

@@ -11,6 +11,7 @@
 #include <vector>
 
 namespace talus {
+namespace mls_dynamic_test {
 namespace {
 
 using test::benchmark_scene;
@@ -119,4 +120,5 @@ TEST(MlsBlockBetweenWalls, ImpactLossHalvesWithTheCellAndSmoothingRemovesTheFlig
 }
 
 }  // namespace
+}  // namespace mls_dynamic_test
 }  // namespace talus
