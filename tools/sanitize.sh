@@ -18,14 +18,11 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs="${TALUS_JOBS:-$(nproc)}"
-cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-O1 -DTALUS_SANITIZE=ON -DTALUS_NO_AVX512=ON \
-  > build-asan.log 2>&1 || { cat build-asan.log; exit 1; }
-known=$(cmake --build build-asan --target help 2>/dev/null | sed -n 's/^\.\.\. \([^ ]*\).*/\1/p')
+bash tools/configure.sh build-asan build-asan.log \
+  -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-O1 -DTALUS_SANITIZE=ON -DTALUS_NO_AVX512=ON
 targets=()
-for t in talus_core_tests talus_material_tests talus_dem_tests talus_scene_tests talus_particles_tests talus_grid_tests \
-         talus_shape_tests talus_transfer_tests talus_smoothing_tests talus_boundary_tests talus_solver_tests \
-         talus_diagnostics_tests talus_io_tests talus_reliability_tests; do
-  if grep -qx "$t" <<<"$known"; then targets+=("$t"); fi  # a group without sources has no target
+for group in core material dem scene particles grid shape transfer smoothing boundary solver diagnostics io reliability; do
+  if compgen -G "tests/$group/*.cpp" > /dev/null; then targets+=("talus_${group}_tests"); fi  # no sources, no target
 done
 cmake --build build-asan -j "$jobs" --target "${targets[@]}" >> build-asan.log 2>&1 || { tail -50 build-asan.log; exit 1; }
 echo "sanitize build: ok (log in build-asan.log)"

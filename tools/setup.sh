@@ -4,7 +4,7 @@
 set -euo pipefail
 
 packages=(
-  cmake g++ make
+  cmake g++ make ninja-build
   libeigen3-dev libhdf5-dev libvtk9-dev nlohmann-json3-dev libgtest-dev
   libcli11-dev libfmt-dev libhwy-dev libopenmpi-dev openmpi-bin
   python3-matplotlib python3-numpy python3-vtk9 python3-jsonschema hdf5-tools
