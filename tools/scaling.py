@@ -10,8 +10,11 @@ Weak scaling: particles proportional to the thread count.
 Threads are pinned with OMP_PROC_BIND=close and OMP_PLACES=cores (set them yourself to override; the
 values used are written to the JSON): `close` keeps thread t on core t, so 1..N threads fill the first
 socket before the second, and STREAM and talus see the same cores. On a multi-socket node, compare
-with OMP_PROC_BIND=spread (threads spread over the sockets: more bandwidth at low counts; particle
-arrays are first touched by the threads of the seeding loop, so their pages follow that placement).
+with OMP_PROC_BIND=spread (threads spread over the sockets: more bandwidth at low counts). The particle
+arrays are seeded by one thread, so their pages all land on that thread's NUMA node; the transfers hand
+blocks out dynamically, so no thread keeps the same particles anyway. On a multi-socket node run under
+`numactl --interleave=all` (Debian package numactl) to spread the pages over every node's memory
+controller; docs/performance.md ("No many-core measurement yet") says why and what is not measured.
 Runs unchanged on 2 to 128 cores; thread counts are 1, 2, 4, ... and nproc.
 The model: `talus bench --record-work` at 1 thread (strong scaling size) records the work of every
 block and region; tools/scaling_model.py replays it for each thread count (its fork/join costs are
