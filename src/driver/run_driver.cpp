@@ -282,8 +282,8 @@ void RunLoop::start() {
   progress_line_.set_particles(solver_.distribution().particles);
   // The energy guard reads the global ledger; in a distributed run rank 0 alone checks it (with
   // every particle's mass), so its verdict is given once.
-  const ParticleStore everyone = comm_.distributed() ? gather_particles(comm_, solver_.particles()) : ParticleStore();
-  const ParticleStore& all = comm_.distributed() ? everyone : solver_.particles();
+  const AllParticles everyone(comm_, solver_.particles());
+  const ParticleStore& all = everyone.get();
   if (resuming_) {
     summary_.initial = progress_.initial;
     energy_guard_ = EnergyGuard(scene_, all, progress_.initial);

@@ -183,9 +183,9 @@ RunoutFiles::RunoutFiles(const Scene& scene, const fs::path& dir, std::optional<
 
 void RunoutFiles::write(const Solver& solver) {
   if (!monitor_) return;
-  const ParticleStore all = gather_particles(comm_, solver.particles());
+  const AllParticles all(comm_, solver.particles());
   if (!comm_.root()) return;
-  file_ << runout_csv_row(monitor_->sample(all, solver.time(), solver.step_count())) << "\n";
+  file_ << runout_csv_row(monitor_->sample(all.get(), solver.time(), solver.step_count())) << "\n";
   file_.flush();
 }
 
@@ -194,7 +194,8 @@ RunoutFiles::Outcome RunoutFiles::finish(Solver& solver) const {
   if (!monitor_) return out;
   // the deposit needs every particle on rank 0 (collective: every rank takes part)
   const bool completed = solver.finished();
-  const ParticleStore all = completed ? gather_particles(comm_, solver.particles()) : ParticleStore();
+  const ParticleStore none;
+  const AllParticles all(completed ? comm_ : Comm(), completed ? solver.particles() : none);
   if (!comm_.root() || !monitor_->has_samples()) return out;
   out.result = monitor_->result();
   out.summary_path = (dir_ / "runout.json").string();
@@ -204,7 +205,7 @@ RunoutFiles::Outcome RunoutFiles::finish(Solver& solver) const {
   const FlumeCoordinates& c = monitor_->coordinates();
   const GridGeometry& g = scene_.grid;
   const double x1 = g.origin[0] + g.cells[0] * g.h;
-  const DepositRaster deposit = measure_deposit(all, c, c.s(g.origin[0]), c.s(x1), g.origin[1],
+  const DepositRaster deposit = measure_deposit(all.get(), c, c.s(g.origin[0]), c.s(x1), g.origin[1],
                                                 g.origin[1] + g.cells[1] * g.h, scene_.runout.deposit_cell);
   out.deposit_path = (dir_ / "deposit.csv").string();
   write_deposit_csv(out.deposit_path, deposit, c);

@@ -124,7 +124,8 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
   SolverState state = solver.state();
   // A distributed run: every rank's particles (rank after rank), its sort cells and its scalars on
   // rank 0; the attributes hold the sums over the ranks, so one rank can restart from them too.
-  const ParticleStore P = gather_particles(comm, solver.particles());
+  const AllParticles all(comm, solver.particles());
+  const ParticleStore& P = all.get();
   std::vector<std::int64_t> rank_particles;
   std::map<std::string, std::vector<double>> rank_scalars;
   std::map<std::string, std::vector<std::int64_t>> rank_integers;
