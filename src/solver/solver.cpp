@@ -179,9 +179,7 @@ void Solver::wrap_periodic() {
 
 void Solver::prepare_block_buffers() {
   if (!block_buffers()) return;
-  const double start = omp_get_wtime();
   block_buffers_.prepare(sort_, grid_);
-  buffers_prepare_seconds_ = omp_get_wtime() - start;
 }
 
 void Solver::sort_particles() {
@@ -357,10 +355,13 @@ void Solver::step_with(double dt) {
     if (WorkRecorder* const r = recording()) {
       const double start = omp_get_wtime();
       sort_particles();
-      // serial: the sort's bookkeeping, and the block buffers' preparation (their run lists)
-      const double bookkeeping = sort_.last_serial_seconds() + (block_buffers() ? buffers_prepare_seconds_ : 0.0);
+      // serial: the sort's bookkeeping, and the block buffers' serial part of their preparation
+      // (the pairs of boxes and tiles; their run lists are written in parallel)
+      const bool buffers = block_buffers() != nullptr;
+      const double bookkeeping = sort_.last_serial_seconds() + (buffers ? block_buffers_.last_serial_seconds() : 0.0);
       const double seconds = omp_get_wtime() - start, serial = std::min(bookkeeping, seconds);
-      r->add_static("sort", particles_.size(), sort_.last_parallel_regions(), seconds - serial);
+      r->add_static("sort", particles_.size(),
+                    sort_.last_parallel_regions() + (buffers ? BlockBuffers::kPrepareParallelRegions : 0), seconds - serial);
       r->add_serial("sort bookkeeping", serial);
     } else {
       sort_particles();

@@ -1,5 +1,7 @@
 #include "talus/transfer/block_buffers.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <stdexcept>
 
@@ -8,6 +10,7 @@ namespace talus {
 void BlockBuffers::prepare(const CellSort& sort, const Grid& grid) {
   if (grid.geometry().has_periodic_axes())
     throw std::logic_error("BlockBuffers: periodic axes are not supported (the scene refuses them)");
+  const double start = omp_get_wtime();
   below_ = sort.slack() + sort.reach_low();
   edge_ = sort.block_cells() + 2 * sort.slack() + sort.reach_low() + sort.reach_high();
   box_doubles_ = static_cast<std::size_t>(edge_) * edge_ * edge_ * kNodeRecord;
@@ -43,28 +46,51 @@ void BlockBuffers::prepare(const CellSort& sort, const Grid& grid) {
         }
   }
   std::stable_sort(overlaps.begin(), overlaps.end(), [](const Overlap& a, const Overlap& b) { return a.tile < b.tile; });
-  runs_.clear();
-  tile_starts_.clear();
-  const std::size_t box_nodes = box_doubles_ / kNodeRecord;
-  for (std::size_t e = 0; e < overlaps.size(); ++e) {
-    const std::size_t tile = overlaps[e].tile, b = overlaps[e].block;
-    if (e == 0 || tile != overlaps[e - 1].tile) tile_starts_.push_back(static_cast<std::uint32_t>(runs_.size()));
-    const std::array<int, 3> t0 = grid.node_of(tile, 0);  // the tile's first node
-    const auto first = first_node(b);
+  // Each pair's runs: rows along k of the nodes that its box shares with its tile. Counted, placed
+  // by a prefix sum and written in parallel (the serial version was most of a sort's serial
+  // bookkeeping with block buffers: ~0.2 ms for the default flume), in the same order as serially.
+  const std::size_t pairs = overlaps.size();
+  struct Span {
     int lo[3], hi[3];
+  };
+  std::vector<Span> spans(pairs);
+  std::vector<std::size_t> offset(pairs + 1, 0);
+  serial_seconds_ = omp_get_wtime() - start;
+#pragma omp parallel for schedule(static)
+  for (std::size_t e = 0; e < pairs; ++e) {
+    const std::array<int, 3> t0 = grid.node_of(overlaps[e].tile, 0);  // the tile's first node
+    const auto first = first_node(overlaps[e].block);
+    Span& sp = spans[e];
     for (int d = 0; d < 3; ++d) {
-      lo[d] = std::max(t0[d], first[d]);
-      hi[d] = std::min(t0[d] + kTileEdge, first[d] + edge_);
+      sp.lo[d] = std::max(t0[d], first[d]);
+      sp.hi[d] = std::min(t0[d] + kTileEdge, first[d] + edge_);
     }
-    if (hi[2] <= lo[2]) continue;
-    for (int i = lo[0]; i < hi[0]; ++i)
-      for (int j = lo[1]; j < hi[1]; ++j)
-        runs_.push_back({grid.node(i, j, lo[2]),
-                         b * box_nodes + (static_cast<std::size_t>(i - first[0]) * edge_ + (j - first[1])) * edge_ +
-                             (lo[2] - first[2]),
-                         static_cast<std::uint32_t>(b), static_cast<std::uint16_t>(hi[2] - lo[2]),
-                         static_cast<std::int16_t>(i - first[0]), static_cast<std::int16_t>(j - first[1]),
-                         static_cast<std::int16_t>(lo[2] - first[2])});
+    offset[e + 1] = sp.hi[2] <= sp.lo[2] ? 0 : static_cast<std::size_t>(sp.hi[0] - sp.lo[0]) * (sp.hi[1] - sp.lo[1]);
+  }
+  const double prefix_start = omp_get_wtime();
+  tile_starts_.clear();
+  for (std::size_t e = 0; e < pairs; ++e) {
+    if (e == 0 || overlaps[e].tile != overlaps[e - 1].tile) tile_starts_.push_back(static_cast<std::uint32_t>(offset[e]));
+    offset[e + 1] += offset[e];
+  }
+  runs_.resize(offset[pairs]);  // keeps its memory from sort to sort
+  serial_seconds_ += omp_get_wtime() - prefix_start;
+  const std::size_t box_nodes = box_doubles_ / kNodeRecord;
+#pragma omp parallel for schedule(static)
+  for (std::size_t e = 0; e < pairs; ++e) {
+    const std::size_t b = overlaps[e].block;
+    const auto first = first_node(b);
+    const Span& sp = spans[e];
+    if (sp.hi[2] <= sp.lo[2]) continue;
+    std::size_t r = offset[e];
+    for (int i = sp.lo[0]; i < sp.hi[0]; ++i)
+      for (int j = sp.lo[1]; j < sp.hi[1]; ++j)
+        runs_[r++] = {grid.node(i, j, sp.lo[2]),
+                      b * box_nodes + (static_cast<std::size_t>(i - first[0]) * edge_ + (j - first[1])) * edge_ +
+                          (sp.lo[2] - first[2]),
+                      static_cast<std::uint32_t>(b), static_cast<std::uint16_t>(sp.hi[2] - sp.lo[2]),
+                      static_cast<std::int16_t>(i - first[0]), static_cast<std::int16_t>(j - first[1]),
+                      static_cast<std::int16_t>(sp.lo[2] - first[2])};
   }
   tile_starts_.push_back(static_cast<std::uint32_t>(runs_.size()));
 }

@@ -198,7 +198,6 @@ class Solver {
   ParticleScratch scratch_;
   // solver.scatter = "block_buffers": the blocks' node boxes (prepared after every sort), else unused.
   BlockBuffers block_buffers_;
-  double buffers_prepare_seconds_ = 0.0;  // the last prepare(), serial (the work recorder's sort bookkeeping)
   BlockBuffers* block_buffers() { return scene_.scatter == ScatterOrder::BlockBuffers ? &block_buffers_ : nullptr; }
   void prepare_block_buffers();
   double mass_floor_ = 0.0;

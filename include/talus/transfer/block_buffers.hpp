@@ -34,6 +34,10 @@ class BlockBuffers {
   /// Size the boxes for the sort's blocks and list, per active tile of the grid, the boxes that
   /// overlap it (ascending block order). After every sort, before the next scatter.
   void prepare(const CellSort& sort, const Grid& grid);
+  /// The serial part of the last prepare() in seconds (the pairs of boxes and tiles, their order
+  /// and the prefix sum); the rest is kPrepareParallelRegions parallel loops (the work recorder).
+  double last_serial_seconds() const { return serial_seconds_; }
+  static constexpr int kPrepareParallelRegions = 2;
 
   /// Nodes per box edge: block_cells + 2 slack + the shape's reach below and above.
   int edge() const { return edge_; }
@@ -85,6 +89,7 @@ class BlockBuffers {
   std::size_t capacity_ = 0;  // doubles held (grown, never shrunk)
   std::vector<Run> runs_;                   // by tile, then block ascending
   std::vector<std::uint32_t> tile_starts_;  // per tile that boxes overlap: its first run (+1 end)
+  double serial_seconds_ = 0.0;
 };
 
 }  // namespace talus
