@@ -65,7 +65,9 @@ void BlockBuffers::prepare(const CellSort& sort, const Grid& grid) {
       sp.lo[d] = std::max(t0[d], first[d]);
       sp.hi[d] = std::min(t0[d] + kTileEdge, first[d] + edge_);
     }
-    offset[e + 1] = sp.hi[2] <= sp.lo[2] ? 0 : static_cast<std::size_t>(sp.hi[0] - sp.lo[0]) * (sp.hi[1] - sp.lo[1]);
+    // (an empty extent on any axis gives no runs, as the loops below would write none)
+    const int rows_i = std::max(sp.hi[0] - sp.lo[0], 0), rows_j = std::max(sp.hi[1] - sp.lo[1], 0);
+    offset[e + 1] = sp.hi[2] <= sp.lo[2] ? 0 : static_cast<std::size_t>(rows_i) * rows_j;
   }
   const double prefix_start = omp_get_wtime();
   tile_starts_.clear();
