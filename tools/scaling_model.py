@@ -215,7 +215,10 @@ def with_run_mean_output(record):
     none by chance: the flume's 176 recorded steps of 6504 held 3 frames where 0.3 were due, 475 us of
     output per step against the run's 200. The run's totals are exact: run_other_seconds (the loop
     outside the steps, start and finish included) and, of it, run_snapshot_seconds (the field checks
-    and copies of the snapshots, parallel, in run_snapshot_regions regions). Records without totals
+    and copies of the snapshots, parallel, in run_snapshot_regions regions), and beside them
+    run_background_seconds: the frames' compression and writes on the writer's thread, which overlap
+    the steps. The model shares that work among the cores, as a parallel part without a region of its
+    own (a background write on a core slows the steps' work on that core). Records without totals
     come back unchanged."""
     steps_total = record.get("run_steps", 0)
     if not steps_total:
@@ -223,6 +226,7 @@ def with_run_mean_output(record):
     other = record["run_other_seconds"]
     snapshot = record.get("run_snapshot_seconds", 0.0)
     regions_per_step = record.get("run_snapshot_regions", 0) / steps_total
+    background = record.get("run_background_seconds", 0.0)
     out = dict(record)
     out["steps"] = []
     for step in record["steps"]:
@@ -235,6 +239,12 @@ def with_run_mean_output(record):
             kept.append({"name": "snapshot (run mean)", "schedule": "static", "items": step["particles"],
                          "parallel_regions": regions_per_step, "seconds": snapshot / steps_total})
             added += snapshot / steps_total
+        if background > 0.0:
+            # one thread's work; a static region's seconds are wall time on the recording's threads
+            wall = background / steps_total / max(int(record.get("threads", 1)), 1)
+            kept.append({"name": "frames in the background (run mean)", "schedule": "static",
+                         "items": step["particles"], "parallel_regions": 0, "seconds": wall})
+            added += wall
         out["steps"].append(dict(step, regions=kept, seconds=step["seconds"] - removed + added))
     return out
 

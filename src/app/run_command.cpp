@@ -90,6 +90,10 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--record-interval", *record_interval, "Steps between the steps --record-work records")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
+  auto foreground_frames = std::make_shared<bool>(false);
+  cmd->add_flag("--foreground-frames", *foreground_frames,
+                "Write each frame before the next step starts (by default a frame's compression and file write "
+                "run on a thread of their own while the next steps run)");
   cmd->callback([=]() {
     set_threads(*threads);
     if (!isa->empty()) select_isa(*isa);
@@ -121,6 +125,7 @@ void add_run_command(CLI::App& app) {
     RunOptions options;
     options.out_dir = dir;
     options.progress = !*quiet;
+    options.frames_in_background = !*foreground_frames;
     if (checkpoint) options.resume = &checkpoint->run;
     std::unique_ptr<WorkRecorder> recorder;
     if (!record_path->empty()) {

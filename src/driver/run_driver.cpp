@@ -155,10 +155,11 @@ class LoopRecording {
     snapshot_step_seconds_ = 0.0;
     snapshot_step_regions_ = 0;
   }
-  void finish(double wall_seconds) {
+  /// `background_seconds`: the frames' writes on the writer's thread, beside the steps.
+  void finish(double wall_seconds, double background_seconds) {
     if (recorder_)
       recorder_->set_totals(solver_.step_count() - first_step_, solver_seconds_, wall_seconds - solver_seconds_,
-                            snapshot_seconds_, snapshot_regions_);
+                            snapshot_seconds_, snapshot_regions_, background_seconds);
   }
 
  private:
@@ -191,7 +192,7 @@ class RunLoop {
       : solver_(solver), scene_(solver.scene()), comm_(solver.comm()), dir_(options.out_dir),
         resuming_(options.resume != nullptr), progress_(resuming_ ? *options.resume : RunProgress{}),
         history_(dir_, resume_step(), comm_.root()), runout_(scene_, dir_, resume_step(), comm_),
-        frames_(dir_, scene_.output.compress, progress_, comm_), checkpoint_(dir_),
+        frames_(dir_, scene_.output.compress, progress_, comm_, options.frames_in_background), checkpoint_(dir_),
         history_schedule_{scene_.output.history_interval, progress_.next_history},
         frame_schedule_{scene_.output.frame_interval, progress_.next_frame},
         checkpoint_schedule_{scene_.output.checkpoint_interval, progress_.next_checkpoint},
@@ -213,6 +214,7 @@ class RunLoop {
     ++summary_.frames;
   }
   void write_checkpoint() {
+    frames_.complete(solver_);  // a resumed run keeps the frames the checkpoint lists: they must be on disk
     progress_.energy_max_released = energy_guard_.max_released();
     checkpoint_.write(solver_, progress_);
     ++summary_.checkpoints;
@@ -387,6 +389,7 @@ void RunLoop::fail(const Error& e) {
 }
 
 void RunLoop::finish() {
+  frames_.complete(solver_);  // the last frame on disk and in the .pvd before the run reports it
   history_.flush();
   const RunoutFiles::Outcome runout = runout_.finish(solver_);
   summary_.runout = runout.result;
@@ -395,7 +398,7 @@ void RunLoop::finish() {
   summary_.steps = solver_.step_count();
   summary_.time = solver_.time();
   summary_.wall_seconds = progress_line_.elapsed();
-  recording_.finish(summary_.wall_seconds);
+  recording_.finish(summary_.wall_seconds, frames_.background_seconds());
   summary_.final = solver_.energies();
 }
 

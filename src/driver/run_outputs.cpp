@@ -7,8 +7,11 @@
 #include <fmt/core.h>
 
 #include <algorithm>
+#include <chrono>
+#include <memory>
 #include <optional>
 #include <regex>
+#include <utility>
 
 namespace talus {
 
@@ -214,9 +217,10 @@ RunoutFiles::Outcome RunoutFiles::finish(Solver& solver) const {
 
 // ---- frames and the ParaView series -------------------------------------------------------------
 
-FrameSeries::FrameSeries(const fs::path& dir, bool compress, RunProgress& progress, const Comm& comm)
+FrameSeries::FrameSeries(const fs::path& dir, bool compress, RunProgress& progress, const Comm& comm, bool background)
     : dir_(dir),
       compress_(compress),
+      background_(background),
       progress_(progress),
       comm_(comm),
       pvd_path_((dir / "particles.pvd").string()),
@@ -229,23 +233,47 @@ FrameSeries::FrameSeries(const fs::path& dir, bool compress, RunProgress& progre
 
 std::string FrameSeries::write(Solver& solver) {
   ScopedPhase timer(solver.phase_times(), Phase::Output);
+  finish_pending();  // one frame at a time: its memory, and the order of the .pvd entries
   const std::size_t index = progress_.frame_times.size();
+  const double time = solver.time();
   const std::string name = frame_name(index, comm_.distributed());
-  if (!comm_.distributed()) {
-    write_particles_vtu((dir_ / name).string(), solver.particles(), compress_);
-  } else {
-    write_particles_vtu((dir_ / frame_piece_name(index, comm_.rank())).string(), solver.particles(), compress_);
-    comm_.barrier();  // every piece is on disk before the summary names it
-    if (comm_.root()) {
-      std::vector<std::string> pieces;  // relative to frames/, where the summary is
-      for (int r = 0; r < comm_.size(); ++r) pieces.push_back(fs::path(frame_piece_name(index, r)).filename().string());
-      write_particles_pvtu((dir_ / name).string(), pieces, solver.particles());
-    }
-  }
-  pvd_.add(solver.time(), name);
-  progress_.frame_times.push_back(solver.time());
+  // The copy of the arrays is the only part that reads the particles: the solver may go on once
+  // it is made. The writer's thread owns the frame; pvd_ is touched only by one thread at a time
+  // (the run loop's waits for the writer before it reads or writes pvd_ again).
+  auto frame = std::make_shared<const ParticleFrame>(solver.particles());
+  const bool distributed = comm_.distributed();
+  const std::string path = (dir_ / (distributed ? frame_piece_name(index, comm_.rank()) : name)).string();
+  writer_.start([this, frame, path, time, name, distributed] {
+    const auto start = std::chrono::steady_clock::now();
+    frame->write(path, compress_);
+    if (!distributed) pvd_.add(time, name);  // a distributed run's summary waits for every piece
+    if (background_) background_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  });
+  if (distributed) pending_summary_ = PendingSummary{index, time, &solver.particles()};
+  progress_.frame_times.push_back(time);
   progress_.frame_steps.push_back(solver.step_count());
+  if (!background_) finish_pending();
   return name;
+}
+
+void FrameSeries::complete(Solver& solver) {
+  ScopedPhase timer(solver.phase_times(), Phase::Output);
+  finish_pending();
+}
+
+void FrameSeries::finish_pending() {
+  std::optional<PendingSummary> summary = std::exchange(pending_summary_, std::nullopt);
+  writer_.wait();
+  if (!summary) return;
+  comm_.barrier();  // every piece is on disk before the summary names it
+  const std::string name = frame_name(summary->index, true);
+  if (comm_.root()) {
+    std::vector<std::string> pieces;  // relative to frames/, where the summary is
+    for (int r = 0; r < comm_.size(); ++r)
+      pieces.push_back(fs::path(frame_piece_name(summary->index, r)).filename().string());
+    write_particles_pvtu((dir_ / name).string(), pieces, *summary->layout);
+  }
+  pvd_.add(summary->time, name);
 }
 
 bool FrameSeries::has_frame_of_step(std::int64_t step) const {

@@ -174,10 +174,27 @@ std::string pdata_array(vtkDataArray* a, const char* indent) {
   return xml + "/>\n";
 }
 
+/// The last step of an atomic write: the temporary file takes the final name. A failure is an
+/// io_error naming the file (not a filesystem_error, which would reach the user as an internal error).
+void rename_into_place(const std::string& tmp, const std::string& path) {
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw io_error(fmt::format("cannot write {}: {}", path, ec.message()));
+}
+
 }  // namespace
 
 void write_particles_vtu(const std::string& path, const ParticleStore& P, bool compress) {
-  write_vtu_atomically(particle_grid(P, true), path, compress, "particle frame");
+  ParticleFrame(P).write(path, compress);
+}
+
+ParticleFrame::ParticleFrame(const ParticleStore& particles) : grid_(particle_grid(particles, true)) {}
+ParticleFrame::~ParticleFrame() = default;
+ParticleFrame::ParticleFrame(ParticleFrame&&) noexcept = default;
+ParticleFrame& ParticleFrame::operator=(ParticleFrame&&) noexcept = default;
+
+void ParticleFrame::write(const std::string& path, bool compress) const {
+  write_vtu_atomically(grid_, path, compress, "particle frame");
 }
 
 void write_particles_pvtu(const std::string& path, const std::vector<std::string>& piece_files,
@@ -217,8 +234,10 @@ void write_vtu_atomically(vtkUnstructuredGrid* grid, const std::string& path, bo
     writer->SetCompressorTypeToLZ4();
   else
     writer->SetCompressorTypeToNone();
-  if (writer->Write() != 1) throw io_error(fmt::format("cannot write {} {}", what, path));
-  std::filesystem::rename(tmp, path);
+  // Write() can return 1 when the file could not be opened (VTK 9.1 reports it through the
+  // pipeline and the error code only): both are checked.
+  if (writer->Write() != 1 || writer->GetErrorCode() != 0) throw io_error(fmt::format("cannot write {} {}", what, path));
+  rename_into_place(tmp, path);
 }
 
 void write_file_atomically(const std::string& path, const std::string& text) {
@@ -229,7 +248,7 @@ void write_file_atomically(const std::string& path, const std::string& text) {
     out.flush();
     if (!out) throw io_error(fmt::format("cannot write {}", path));
   }
-  std::filesystem::rename(tmp, path);
+  rename_into_place(tmp, path);
 }
 
 void PvdIndex::add(double time, const std::string& relative_file) {

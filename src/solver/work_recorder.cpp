@@ -96,12 +96,13 @@ void WorkRecorder::add_after_step(const char* name, double seconds, std::size_t 
 }
 
 void WorkRecorder::set_totals(std::int64_t steps, double solver_seconds, double other_seconds, double snapshot_seconds,
-                              std::int64_t snapshot_regions) {
+                              std::int64_t snapshot_regions, double background_seconds) {
   total_steps_ = steps;
   solver_seconds_ = solver_seconds;
   other_seconds_ = other_seconds;
   snapshot_seconds_ = snapshot_seconds;
   snapshot_regions_ = snapshot_regions;
+  background_seconds_ = background_seconds;
 }
 
 namespace {
@@ -192,6 +193,7 @@ nlohmann::json WorkRecorder::to_json(const nlohmann::json& meta) const {
     j["run_other_seconds"] = other_seconds_;  // includes the snapshots
     j["run_snapshot_seconds"] = snapshot_seconds_;  // field checks and copies of the snapshots (parallel)
     j["run_snapshot_regions"] = snapshot_regions_;
+    j["run_background_seconds"] = background_seconds_;  // frames written on the writer's thread
   }
   return j;
 }

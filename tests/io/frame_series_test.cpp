@@ -1,8 +1,11 @@
-// The frame series of a run: one rank writes .vtu frames exactly as write_particles_vtu does; the
-// ranks of a distributed run write one piece each and rank 0 a .pvtu that reads back as one data
-// set; a resumed run keeps the frames of either kind its checkpoint lists and no other.
+// The frame series of a run: one rank writes .vtu frames exactly as write_particles_vtu does, of
+// the particles as they were when write() was called although the file is written in the
+// background; the ranks of a distributed run write one piece each and rank 0 a .pvtu that reads
+// back as one data set; a resumed run keeps the frames of either kind its checkpoint lists and no
+// other; a write that fails in the background stops the run at the next complete().
 #include "../solver/scene_fixtures.hpp"
 #include "talus/core/comm.hpp"
+#include "talus/core/error.hpp"
 #include "talus/driver/run_outputs.hpp"
 #include "talus/solver/solver.hpp"
 #include "vtk_xml_headers.hpp"
@@ -66,13 +69,17 @@ TEST(FrameSeries, OneRankWritesVtuFramesAsWriteParticlesVtuDoes) {
     FrameSeries frames(dir, compress, progress, Comm());
     EXPECT_EQ(frames.write(solver), "frames/particles_000000.vtu");
     for (int s = 0; s < 5; ++s) solver.step();
+    // The file the frame must be: write_particles_vtu's, of the particles when write() is called.
+    write_particles_vtu((dir / "expected.vtu").string(), solver.particles(), compress);
     EXPECT_EQ(frames.write(solver), "frames/particles_000001.vtu");
     EXPECT_TRUE(frames.has_frame_of_step(5));
     ASSERT_EQ(progress.frame_times.size(), 2u);
     EXPECT_EQ(progress.frame_times[1], solver.time());
+    // The solver goes on while the frame is written: the frame keeps the state it was given.
+    for (int s = 0; s < 5; ++s) solver.step();
+    frames.complete(solver);
 
     // Byte for byte the file write_particles_vtu writes; no summary, no pieces.
-    write_particles_vtu((dir / "expected.vtu").string(), solver.particles(), compress);
     EXPECT_EQ(test::file_bytes(dir / "frames" / "particles_000001.vtu"), test::file_bytes(dir / "expected.vtu"));
     EXPECT_EQ(files_in(dir / "frames"), (std::vector<std::string>{"particles_000000.vtu", "particles_000001.vtu"}));
     EXPECT_EQ(pvd_files(frames.pvd_path()),
@@ -105,12 +112,46 @@ TEST(FrameSeries, ResumeKeepsTheListedFramesOfEveryKindAndNoOther) {
             (std::vector<std::string>{"frames/particles_000000.vtu", "frames/particles_000001.pvtu"}));
   Solver solver(test::tumbling_block_scene(0.01));
   EXPECT_EQ(frames.write(solver), "frames/particles_000002.vtu");
+  frames.complete(solver);
   EXPECT_EQ(pvd_files(frames.pvd_path()).back(), "frames/particles_000002.vtu");
 
   // A fresh run removes every frame, summary and piece.
   prepare_output_folder(dir, nullptr);
   EXPECT_EQ(files_in(dir / "frames"), (std::vector<std::string>{"notes.txt"}));
   EXPECT_FALSE(fs::exists(dir / "particles.pvd"));
+  fs::remove_all(dir);
+}
+
+TEST(FrameSeries, WithoutBackgroundEveryFrameIsOnDiskAndListedWhenWriteReturns) {
+  Solver solver(test::tumbling_block_scene(0.01));
+  const fs::path dir = temp_dir("series_foreground");
+  prepare_output_folder(dir, nullptr);
+  RunProgress progress;
+  FrameSeries frames(dir, true, progress, Comm(), false);
+  write_particles_vtu((dir / "expected.vtu").string(), solver.particles(), true);
+  EXPECT_EQ(frames.write(solver), "frames/particles_000000.vtu");
+  EXPECT_EQ(test::file_bytes(dir / "frames" / "particles_000000.vtu"), test::file_bytes(dir / "expected.vtu"));
+  EXPECT_EQ(pvd_files(frames.pvd_path()), std::vector<std::string>{"frames/particles_000000.vtu"});
+  fs::remove_all(dir);
+}
+
+TEST(FrameSeries, AFailedBackgroundWriteIsReportedAndNotListed) {
+  Solver solver(test::tumbling_block_scene(0.01));
+  const fs::path dir = temp_dir("series_failed_write");
+  prepare_output_folder(dir, nullptr);
+  RunProgress progress;
+  FrameSeries frames(dir, false, progress, Comm());
+  fs::remove_all(dir / "frames");  // the frame's folder is gone: its write fails on the writer's thread
+  EXPECT_EQ(frames.write(solver), "frames/particles_000000.vtu");
+  try {
+    frames.complete(solver);
+    FAIL() << "the failed write was not reported";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), Error::Kind::Io);
+    EXPECT_NE(std::string(e.what()).find("particles_000000.vtu"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir / "particles.pvd"));  // the .pvd never listed the frame
+  frames.complete(solver);  // reported once: the series can go on (or be written after a fix)
   fs::remove_all(dir);
 }
 
@@ -152,7 +193,8 @@ TEST(FrameSeries, EveryRanksParticlesReadBackAsOneFrame) {
   RunProgress progress;
   FrameSeries frames(dir, false, progress, comm);
   const std::string name = frames.write(solver);
-  comm.barrier();  // rank 0 has written the summary and the .pvd
+  frames.complete(solver);  // collective: every piece on disk, then rank 0's summary and .pvd
+  comm.barrier();
   EXPECT_EQ(name, frame_name(0, comm.distributed()));
   const std::vector<std::int64_t> counts = comm.allgather(static_cast<std::int64_t>(solver.particles().size()));
   if (comm.root()) {

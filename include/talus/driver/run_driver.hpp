@@ -35,6 +35,9 @@ struct RunOptions {
   /// Work recorder (talus run --record-work): attached to the solver for the run; the time the
   /// loop spends outside a recorded step (output, guards) is added to that step as serial time.
   WorkRecorder* recorder = nullptr;
+  /// Write each frame's file on a thread of its own while the steps go on (FrameSeries); false:
+  /// every frame is on disk before the next step (talus run --foreground-frames).
+  bool frames_in_background = true;
 };
 
 struct RunSummary {

@@ -14,6 +14,7 @@
 // to a temporary name and renamed; history rows are flushed one by one.
 #include "talus/core/comm.hpp"
 #include "talus/diagnostics/runout.hpp"
+#include "talus/io/background_writer.hpp"
 #include "talus/io/checkpoint.hpp"
 #include "talus/io/vtu_writer.hpp"
 #include "talus/solver/solver.hpp"
@@ -98,25 +99,55 @@ class RunoutFiles {
 /// its own particles as the piece frames/particles_<i:06>_<rank:04>.vtu (a rank may hold none);
 /// once all have, rank 0 writes frames/particles_<i:06>.pvtu, which lists the pieces of ranks
 /// 0..N-1, and adds it to the .pvd. Only rank 0 writes the .pvd; the others keep its entries.
+///
+/// Frames are written in the background: write() copies the particle arrays (in parallel) and
+/// returns; VTK's compression and the file write run on a thread of their own while the solver
+/// steps on, one frame at a time (the next write() waits for the one before). The .pvd lists a
+/// frame once its file is on disk: right after the write in a run on one rank; at the next
+/// complete() in a distributed run, whose summary waits for every rank's piece.
 class FrameSeries {
  public:
   /// `progress` records each frame's time and step (the checkpoint carries them); a resumed run's
   /// series starts with the frames it lists. `comm`: the ranks that hold the particles.
-  FrameSeries(const std::filesystem::path& dir, bool compress, RunProgress& progress, const Comm& comm);
-  /// Write the solver's particles as the next frame; returns the file name the .pvd lists
-  /// (frames/...vtu, or frames/...pvtu in a distributed run). Every rank must call it.
+  /// `background` false: every write() is on disk (and listed) when it returns.
+  FrameSeries(const std::filesystem::path& dir, bool compress, RunProgress& progress, const Comm& comm,
+              bool background = true);
+  /// Start writing the solver's particles as the next frame; returns the file name the .pvd lists
+  /// (frames/...vtu, or frames/...pvtu in a distributed run). Throws the error of the frame before,
+  /// if its write failed. Every rank must call it.
   std::string write(Solver& solver);
+  /// Wait until every frame started is on disk and listed in the .pvd; throws a failed write's
+  /// error. Collective in a distributed run. Call it before anything that relies on the frames
+  /// being on disk: a checkpoint (a resumed run keeps the frames it lists) and the end of the run.
+  void complete(Solver& solver);
   /// Whether the last frame is of this step already.
   bool has_frame_of_step(std::int64_t step) const;
   const std::string& pvd_path() const { return pvd_path_; }
+  /// The seconds the writer's thread spent on the frames completed so far, in the background (0
+  /// without background writes: the run loop waited for them). The work recorder's run total.
+  double background_seconds() const { return background_seconds_; }
 
  private:
+  /// complete() without the phase timer.
+  void finish_pending();
+
   std::filesystem::path dir_;
   bool compress_;
+  bool background_;
   RunProgress& progress_;
   Comm comm_;
   std::string pvd_path_;
   PvdIndex pvd_;
+  /// A distributed run's frame whose pieces are being written: its summary and .pvd entry are
+  /// written once every piece is on disk.
+  struct PendingSummary {
+    std::size_t index;
+    double time;
+    const ParticleStore* layout;  // the solver's store: the summary declares its arrays
+  };
+  std::optional<PendingSummary> pending_summary_;
+  double background_seconds_ = 0.0;  // added to by the writer's thread, read after its join
+  BackgroundWriter writer_;  // declared last: destroyed (its thread joined) before the members it writes
 };
 
 /// checkpoint.h5: the solver's state and the run's progress.

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <vtkSmartPointer.h>
+
 class vtkUnstructuredGrid;
 
 namespace talus {
@@ -17,6 +19,23 @@ namespace talus {
 /// strain (6), density, volume, body. A store with no particles (an empty rank of a distributed run)
 /// gives a valid file with 0 points and the same arrays.
 void write_particles_vtu(const std::string& path, const ParticleStore& particles, bool compress);
+
+/// One frame's point arrays (those write_particles_vtu writes), copied out of the store, in
+/// parallel, when it is built: the store may change afterwards while the frame is written, on
+/// another thread (FrameSeries). write(path, compress) gives the bytes write_particles_vtu would
+/// have written at construction.
+class ParticleFrame {
+ public:
+  explicit ParticleFrame(const ParticleStore& particles);
+  ~ParticleFrame();
+  ParticleFrame(ParticleFrame&&) noexcept;
+  ParticleFrame& operator=(ParticleFrame&&) noexcept;
+  /// As write_particles_vtu: through a temporary name and a rename.
+  void write(const std::string& path, bool compress) const;
+
+ private:
+  vtkSmartPointer<vtkUnstructuredGrid> grid_;
+};
 
 /// Write (atomically) the .pvtu summary of one frame written in pieces: a PUnstructuredGrid
 /// (GhostLevel 0) that declares the point arrays and point type write_particles_vtu writes for a

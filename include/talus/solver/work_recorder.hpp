@@ -65,8 +65,10 @@ class WorkRecorder {
   /// parts (the field checks before and the copies of the snapshots, in `snapshot_regions` parallel
   /// regions). The run loop's output is spiky (a frame every few hundred steps), so the model takes
   /// its run mean rather than the sampled steps' share.
+  /// `background_seconds`: the frames' writes on the writer's thread (FrameSeries), beside the
+  /// steps and not part of any of the times above; the model shares them among the cores.
   void set_totals(std::int64_t steps, double solver_seconds, double other_seconds, double snapshot_seconds = 0.0,
-                  std::int64_t snapshot_regions = 0);
+                  std::int64_t snapshot_regions = 0, double background_seconds = 0.0);
 
   const std::vector<WorkStep>& steps() const { return steps_; }
   /// Wall time of an empty `omp parallel for` (fork, a loop of `threads` iterations, barrier) at
@@ -85,7 +87,7 @@ class WorkRecorder {
   bool active_ = false;
   std::vector<WorkStep> steps_;
   std::int64_t total_steps_ = 0;
-  double solver_seconds_ = 0.0, other_seconds_ = 0.0, snapshot_seconds_ = 0.0;
+  double solver_seconds_ = 0.0, other_seconds_ = 0.0, snapshot_seconds_ = 0.0, background_seconds_ = 0.0;
   std::int64_t snapshot_regions_ = 0;
 };
 
