@@ -181,7 +181,8 @@ def predict_step(step, threads, barrier, t_rec, schedule, work, contention=1.0, 
             terms["ideal"] += w / threads
             terms["imbalance"] += span - w / threads
             terms["sync"] += k * barrier(threads)
-    terms["serial"] += max(step["seconds"] - listed, 0.0)  # glue between the listed regions
+    # glue between the listed regions, less the recorder's own bookkeeping (not in an unrecorded step)
+    terms["serial"] += max(step["seconds"] - listed - step.get("recorder_seconds", 0.0), 0.0)
     return terms
 
 

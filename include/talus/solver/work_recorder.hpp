@@ -36,6 +36,9 @@ struct WorkRegion {
 struct WorkStep {
   std::int64_t step = 0;
   double seconds = 0.0;  // wall time of the whole step
+  /// Of it, the recorder's own bookkeeping (the add_* calls): no part of an unrecorded step, so
+  /// the model leaves it out of the step's serial glue.
+  double recorder_seconds = 0.0;
   std::size_t particles = 0;
   std::size_t blocks = 0;
   std::vector<WorkRegion> regions;
