@@ -31,8 +31,23 @@ RunoutSample measure_runout(const ParticleStore& P, const FlumeCoordinates& c, d
   // thread count, and the quantiles and sums below the same bits.
   parallel_sort(order, [](const Entry& a, const Entry& b) { return a.s < b.s || (a.s == b.s && a.id < b.id); });
 
+  // The terms of the sums, in (s, id) order, in parallel: the gathers by index and the bed's
+  // tangent are the costly part. The sums themselves then run serially over contiguous terms, in
+  // (s, id) order as before, so they have the bits they had when the loop below did everything.
+  struct Terms {
+    double m, ms, mx[3], mv;
+  };
+  std::vector<Terms> terms(n);
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t p = order[i].index;
+    const double m = P.mass[p];
+    const Vec3 t = c.tangent(P.x[0][p]);
+    terms[i] = Terms{m, m * order[i].s, {m * P.x[0][p], m * P.x[1][p], m * P.x[2][p]},
+                     m * (P.v[0][p] * t[0] + P.v[1][p] * t[1] + P.v[2][p] * t[2])};
+  }
   double mass = 0.0;
-  for (const Entry& e : order) mass += P.mass[e.index];
+  for (const Terms& t : terms) mass += t.m;
   r.mass = mass;
   r.s_min = order.front().s;
   r.s_max = order.back().s;
@@ -41,22 +56,20 @@ RunoutSample measure_runout(const ParticleStore& P, const FlumeCoordinates& c, d
   bool have_tail = false, have_front = false;
   double cumulative = 0.0, sum_s = 0.0, sum_v = 0.0;
   Vec3 sum_x = Vec3::Zero();
-  for (const Entry& e : order) {
-    const std::size_t p = e.index;
-    const double m = P.mass[p];
-    cumulative += m;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Terms& t = terms[i];
+    cumulative += t.m;
     if (!have_tail && cumulative >= tail_mass) {
-      r.tail = e.s;
+      r.tail = order[i].s;
       have_tail = true;
     }
     if (!have_front && cumulative >= front_mass) {
-      r.front = e.s;
+      r.front = order[i].s;
       have_front = true;
     }
-    sum_s += m * e.s;
-    for (int d = 0; d < 3; ++d) sum_x[d] += m * P.x[d][p];
-    const Vec3 t = c.tangent(P.x[0][p]);
-    sum_v += m * (P.v[0][p] * t[0] + P.v[1][p] * t[1] + P.v[2][p] * t[2]);
+    sum_s += t.ms;
+    for (int d = 0; d < 3; ++d) sum_x[d] += t.mx[d];
+    sum_v += t.mv;
   }
   if (!have_front) r.front = r.s_max;  // round-off: the cumulative sum fell a hair short of q M
   if (!have_tail) r.tail = r.s_max;
