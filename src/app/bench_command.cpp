@@ -204,7 +204,7 @@ void start_in_simple_shear(Solver& solver) {
       return model.initial_strength() + 3.0 * model.alpha() * pressure;
     };
   }
-  ParticleStore& P = solver.particles();
+  ParticleStore& P = solver.edit_particles();
   double z_low = std::numeric_limits<double>::infinity(), z_top = -z_low;
   for (double z : P.x[2]) {
     z_low = std::min(z_low, z);

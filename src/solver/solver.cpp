@@ -134,6 +134,7 @@ void Solver::remove_outflow() {
 #pragma omp parallel for schedule(static) reduction(+ : leaving)
   for (std::size_t p = 0; p < n; ++p) leaving += beyond(p) ? 1 : 0;
   if (leaving == 0) return;
+  wave_rate_from_stress_pass_.reset();  // the maximum included the particles that leave
   if (leaving == n && !comm_.distributed())  // a distributed run checks the total at the next step
     throw instability_error(fmt::format("step {}, t = {:.6g} s: every particle has left the grid through its open faces",
                                         step_, time_));
@@ -211,6 +212,7 @@ void Solver::redistribute() {
   std::vector<int> owner(n);
 #pragma omp parallel for schedule(static)
   for (std::size_t p = 0; p < n; ++p) owner[p] = owner_of(particles_.x[0][p]);
+  wave_rate_from_stress_pass_.reset();  // other particles from here on
   migrated_ += static_cast<std::int64_t>(migrate_particles(comm_, particles_, owner));
   size_scratch();
 }
@@ -244,39 +246,58 @@ bool Solver::finished() const {
   return time_done || steps_done;
 }
 
-double Solver::stable_time_step() const {
-  const ParticleStore& P = particles_;
-  const std::size_t n = P.size();
-  double max_rate = 0.0;  // max (c_p + |v_p|)
+std::optional<WaveRateRule> Solver::lanes_wave_rate_rule() const {
   WaveRateRule rule;
-  if (vector_kernels_enabled() && materials_.shared_wave_rate_rule(rule)) {
-    // Every body has the same rule (the usual scene): the lanes do the same arithmetic per
-    // particle, and a maximum has no rounding, so the time step has the same bits.
+  if (vector_kernels_enabled() && materials_.shared_wave_rate_rule(rule)) return rule;
+  return std::nullopt;
+}
+
+double Solver::max_wave_rate(std::size_t begin, std::size_t end, const WaveRateRule* rule) const {
+  const ParticleStore& P = particles_;
+  if (rule) {
+    // Every body has the same rule (the usual scene): the lanes do the scalar formula's arithmetic
+    // per particle, and a maximum has no rounding, so the time step has the same bits.
     const WaveRateFields fields{P.volume.data(), P.volume0.data(), P.mass.data(), {P.v[0].data(), P.v[1].data(), P.v[2].data()}};
-    constexpr std::size_t kChunk = 4096;
-    const std::int64_t chunks = static_cast<std::int64_t>((n + kChunk - 1) / kChunk);
-#pragma omp parallel for schedule(static) reduction(max : max_rate)
-    for (std::int64_t c = 0; c < chunks; ++c) {
-      const std::size_t begin = static_cast<std::size_t>(c) * kChunk;
-      max_rate = std::max(max_rate, max_wave_rate_lanes(fields, rule, begin, std::min(n, begin + kChunk)));
-    }
-    return scene_.courant * scene_.grid.h / max_rate;  // Edo & Matsubara 2015, eq. 60
+    return max_wave_rate_lanes(fields, *rule, begin, end);
   }
-#pragma omp parallel for schedule(static) reduction(max : max_rate)
-  for (std::size_t p = 0; p < n; ++p) {
+  double max_rate = 0.0;
+  for (std::size_t p = begin; p < end; ++p) {
     const double volume = materials_.wave_speed_volume(P.body[p], P.volume[p], P.volume0[p]);
     const double c = std::sqrt(materials_.p_wave_modulus(P.body[p]) * volume / P.mass[p]);
     const double speed = std::sqrt(P.v[0][p] * P.v[0][p] + P.v[1][p] * P.v[1][p] + P.v[2][p] * P.v[2][p]);
     max_rate = std::max(max_rate, c + speed);
   }
+  return max_rate;
+}
+
+double Solver::stable_time_step() const {
+  const std::size_t n = particles_.size();
+  const std::optional<WaveRateRule> rule = lanes_wave_rate_rule();
+  const WaveRateRule* const lanes = rule ? &*rule : nullptr;
+  constexpr std::size_t kChunk = 4096;
+  const std::int64_t chunks = static_cast<std::int64_t>((n + kChunk - 1) / kChunk);
+  double max_rate = 0.0;  // max (c_p + |v_p|)
+#pragma omp parallel for schedule(static) reduction(max : max_rate)
+  for (std::int64_t c = 0; c < chunks; ++c) {
+    const std::size_t begin = static_cast<std::size_t>(c) * kChunk;
+    max_rate = std::max(max_rate, max_wave_rate(begin, std::min(n, begin + kChunk), lanes));
+  }
   return scene_.courant * scene_.grid.h / max_rate;  // Edo & Matsubara 2015, eq. 60
+}
+
+double Solver::time_step_for_this_step() const {
+  if (wave_rate_from_stress_pass_) return scene_.courant * scene_.grid.h / *wave_rate_from_stress_pass_;  // eq. 60
+  return stable_time_step();
 }
 
 void Solver::step() {
   const bool recorded_step = recorder_ && recorder_->begin_step(step_, particles_.size(), sort_.block_count());
   const double step_start = recorded_step ? omp_get_wtime() : 0.0;
   double dt = 0.0;
-  recorded(recording(), RegionSchedule::Static, "time step", particles_.size(), 1, [&] { dt = stable_time_step(); });
+  if (wave_rate_from_stress_pass_)
+    dt = time_step_for_this_step();  // the maximum the last stress pass kept: no scan, no parallel region
+  else
+    recorded(recording(), RegionSchedule::Static, "time step", particles_.size(), 1, [&] { dt = stable_time_step(); });
   if (comm_.distributed()) {
     // One collective a step: the time step (the smallest; a min has the same bits in any order),
     // whether any rank must sort (then all sort and migrate), whether any rank's tiles changed.
@@ -516,6 +537,13 @@ template <class Shape, class FillChunk>
 void Solver::update_material_by_chunks(double dt, bool move, FillChunk fill) {
   const std::size_t blocks = sort_.block_count();
   block_dissipation_.assign(blocks, 0.0);
+  // The pass that moves the particles ends the step (MUSL, USL, USAVG): after it nothing changes
+  // v or V, so the next time step's maximum is taken here, per chunk, while the chunk is in cache.
+  const bool keep_wave_rate = move;
+  const std::optional<WaveRateRule> rule = keep_wave_rate ? lanes_wave_rate_rule() : std::nullopt;
+  const WaveRateRule* const lanes = rule ? &*rule : nullptr;
+  wave_rate_from_stress_pass_.reset();
+  if (keep_wave_rate) block_wave_rate_.assign(blocks, 0.0);
   WorkRecorder* const rec = recording();
   std::vector<double>* const block_seconds = rec ? &stress_block_seconds_ : nullptr;
   if (block_seconds) block_seconds->assign(blocks, 0.0);
@@ -528,18 +556,25 @@ void Solver::update_material_by_chunks(double dt, bool move, FillChunk fill) {
     for (std::size_t bi = 0; bi < blocks; ++bi) {
       const std::size_t b = order[bi];
       const double block_start = block_seconds ? omp_get_wtime() : 0.0;
-      double dissipated = 0.0;
+      double dissipated = 0.0, wave_rate = 0.0;
       for (std::size_t begin = sort_.block_begin(b); begin < sort_.block_end(b); begin += StrainIncrements::kCapacity) {
         const std::size_t end = std::min<std::size_t>(begin + StrainIncrements::kCapacity, sort_.block_end(b));
         fill(begin, end, inc);
         dissipated += update_chunk<Shape>(begin, end, inc, dt, move);
+        if (keep_wave_rate) wave_rate = std::max(wave_rate, max_wave_rate(begin, end, lanes));
       }
       block_dissipation_[b] = dissipated;
+      if (keep_wave_rate) block_wave_rate_[b] = wave_rate;
       if (block_seconds) (*block_seconds)[bi] = omp_get_wtime() - block_start;
     }
   }
   if (rec) rec->add_block_loop("stress", stress_block_seconds_, omp_get_wtime() - pass_start, sort_);
   for (double d : block_dissipation_) work_.plastic_work += d;
+  if (keep_wave_rate) {
+    double max_rate = 0.0;
+    for (double r : block_wave_rate_) max_rate = std::max(max_rate, r);
+    wave_rate_from_stress_pass_ = max_rate;
+  }
 }
 
 // The material update of particles [begin, end) from their increments; returns the dissipation.
@@ -723,6 +758,7 @@ void Solver::restore(ParticleStore particles, const SolverState& s, RestoreSort 
     for (const auto& c : s.sort_cell)
       if (c.size() != n) throw io_error("restart: the saved sort state does not match the particles");
   particles_ = std::move(particles);
+  wave_rate_from_stress_pass_.reset();
   size_scratch();
   if (mode == RestoreSort::Fresh) {
     restore_counters(s);

@@ -184,7 +184,7 @@ TEST(FrameSeries, EveryRanksParticlesReadBackAsOneFrame) {
   Solver solver(test::tumbling_block_scene(0.01));
   for (int s = 0; s < 3; ++s) solver.step();
   const ParticleStore all = solver.particles();
-  solver.particles() = share_of(all, comm);
+  solver.edit_particles() = share_of(all, comm);
   std::set<std::int64_t> expected_ids;
   for (std::int64_t id : all.id)
     if (!(comm.size() >= 3 && id % comm.size() == 1)) expected_ids.insert(id);

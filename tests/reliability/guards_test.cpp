@@ -42,7 +42,7 @@ void expect_diagnosis(const std::string& message, const std::string& field) {
 TEST(Guards, NonFiniteParticleFieldIsDiagnosedWithItsName) {
   Solver solver(test::tumbling_block_scene());
   solver.step();
-  auto& P = solver.particles();
+  auto& P = solver.edit_particles();
   P.strain[2][17] = std::numeric_limits<double>::infinity();  // a field the step itself never reads
   const std::int64_t id = P.id[17];
   const std::string m = instability_of(solver, Solver::kFieldCheckInterval);
@@ -241,7 +241,7 @@ TEST(HardCases, StrayParticleJustPastANode) {
   scene.end_time = 0.05;
   scene.gravity = Vec3(0, 0, -9.81);
   Solver solver(scene);
-  auto& P = solver.particles();
+  auto& P = solver.edit_particles();
   P.x[0][0] = 0.05 * 2 + 1e-9 * 0.05;
   P.x[1][0] = 0.05 * 1 + 1e-9 * 0.05;
   P.x[2][0] = 0.05 * 4 + 1e-9 * 0.05;

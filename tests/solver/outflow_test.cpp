@@ -1,11 +1,14 @@
 // Open faces are outflow boundaries: particles that cross one are removed at the end of their
 // step, with their mass and energy counted, so the energy budget still closes and a restart
-// continues bit for bit.
+// continues bit for bit. The time step that the stress pass prepares for the next step is that of
+// a scan of the particles, also when the fastest ones have just left.
 #include "scene_fixtures.hpp"
 #include "talus/solver/solver.hpp"
 
+#include <fmt/core.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 
 namespace talus {
@@ -68,6 +71,43 @@ TEST(Outflow, RestoreAfterOutflowContinuesBitForBit) {
     EXPECT_EQ(0, std::memcmp(a.particles().v[d].data(), b.particles().v[d].data(), a.particles().size() * sizeof(double)));
   }
   EXPECT_EQ(a.energies().total(), b.energies().total());
+}
+
+// A fast block leaves through the open x+ face while a slow one stays: the maximum of c_p + |v_p|
+// drops when the fast particles are removed. Every step's dt must be the scan of the particles it
+// starts with (Solver::stable_time_step), whether it comes from the scan or from the maximum the
+// last stress pass kept (MUSL, USL, USAVG), on every scheme.
+TEST(Outflow, EveryStepsTimeStepIsTheScanOfItsParticles) {
+  for (const char* scheme : {"musl", "usl", "usf", "usavg"}) {
+    const std::string json = fmt::format(R"({{
+      "name": "time_step_after_outflow",
+      "grid": {{ "origin": [0, 0, 0], "size": [0.6, 0.2, 0.3], "cell_size": 0.025 }},
+      "time": {{ "end": 0.03, "courant": 0.3 }},
+      "solver": {{ "scheme": "{}" }},
+      "materials": {{ "m": {{ "density": 1000.0, "young": 1.0e6, "poisson": 0.3 }} }},
+      "bodies": [ {{ "name": "fast", "material": "m", "box": {{ "min": [0.45, 0.05, 0.0], "max": [0.55, 0.15, 0.05] }},
+                    "particles_per_cell": 2, "velocity": [6.0, 0.0, 0.0] }},
+                  {{ "name": "slow", "material": "m", "box": {{ "min": [0.05, 0.05, 0.0], "max": [0.15, 0.15, 0.05] }},
+                    "particles_per_cell": 2, "velocity": [0.2, 0.0, 0.0] }} ],
+      "boundaries": {{ "x-": "slip", "x+": "open", "y-": "slip", "y+": "slip", "z-": "slip", "z+": "open" }}
+    }})",
+                                         scheme);
+    Solver solver(parse_scene(json, "time_step_after_outflow"));
+    const std::size_t seeded = solver.particles().size();
+    double first_dt = 0.0;
+    int steps = 0;
+    while (!solver.finished()) {
+      const double scan = solver.stable_time_step();
+      const double expected = std::min(scan, solver.scene().end_time - solver.time());
+      solver.step();
+      const double dt = solver.last_dt();
+      if (steps++ == 0) first_dt = dt;
+      ASSERT_EQ(std::memcmp(&expected, &dt, sizeof(double)), 0)
+          << scheme << ", step " << solver.step_count() << ": dt " << dt << ", the scan gives " << expected;
+    }
+    EXPECT_EQ(solver.particles().size(), seeded / 2) << scheme;  // the fast block has left
+    EXPECT_GT(solver.stable_time_step(), 1.1 * first_dt) << scheme;  // so the time step grew
+  }
 }
 
 }  // namespace

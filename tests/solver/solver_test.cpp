@@ -35,7 +35,7 @@ TEST(Solver, StepConservesMassAndMomentumWithoutExternalForces) {
   // Give every particle its own velocity so the stresses and the nodal velocities are non-trivial.
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  auto& P = solver.particles();
+  auto& P = solver.edit_particles();
   for (std::size_t p = 0; p < P.size(); ++p)
     for (int d = 0; d < 3; ++d) P.v[d][p] += u(rng);
   double mass0 = 0.0;

@@ -73,7 +73,8 @@ class Solver {
   void check_particles() const;
 
   /// dt = courant * h / max_p (c_p + |v_p|) (Edo & Matsubara 2015, eq. 60), c_p the P-wave speed at the
-  /// particle's current density.
+  /// particle's current density. A scan of every particle; step() takes the maximum from the last
+  /// stress pass instead when nothing has changed the particles since (the same value).
   double stable_time_step() const;
 
   double time() const { return time_; }
@@ -89,7 +90,12 @@ class Solver {
   /// The rank owning a particle at x (its cell's slab); 0 in a serial run.
   int owner_of(double x) const { return decomposition_.owner_of_cell(scene_.grid.cell_of(0, x)); }
   const ParticleStore& particles() const { return particles_; }
-  ParticleStore& particles() { return particles_; }
+  /// Access to change the particles (a bench's set-up, a test): the next step then scans them for
+  /// its time step (the maximum kept from the last stress pass is dropped).
+  ParticleStore& edit_particles() {
+    wave_rate_from_stress_pass_.reset();
+    return particles_;
+  }
   const Grid& grid() const { return grid_; }
   const CellSort& cell_sort() const { return sort_; }
   PhaseTimes& phase_times() { return times_; }
@@ -150,6 +156,14 @@ class Solver {
   double update_chunk(std::size_t begin, std::size_t end, const StrainIncrements& inc, double dt, bool move);
   template <class Shape, class FillChunk>
   void update_material_by_chunks(double dt, bool move, FillChunk fill);
+  /// max over particles [begin, end) of c_p + |v_p| (0 for none; a NaN rate is skipped): in lanes
+  /// when `rule` (every body's shared wave-speed rule) is given, else the scalar formula. Both give
+  /// the same bits, and a maximum does not depend on how the particles are split.
+  double max_wave_rate(std::size_t begin, std::size_t end, const WaveRateRule* rule) const;
+  /// The rule for max_wave_rate: every body's shared rule when the vector kernels run, else none.
+  std::optional<WaveRateRule> lanes_wave_rate_rule() const;
+  /// This step's time step: from the maximum the last stress pass kept, else a scan.
+  double time_step_for_this_step() const;
   void move_particles();
   /// The energy particle p holds: kinetic, stored strain, gravitational (energies(), the outflow).
   struct ParticleEnergy {
@@ -193,6 +207,12 @@ class Solver {
   Walls walls_;
   BodyMaterials materials_;                   // the constitutive model of each body
   std::vector<double> block_dissipation_;     // per sort block, this step's material dissipation
+  // The time step's maximum of c_p + |v_p|, taken per block at the end of the stress pass that ends
+  // a step (MUSL, USL, USAVG: nothing changes v or V after it), while the particles are in cache;
+  // the next step's time step uses it instead of a scan. Dropped by anything else that changes the
+  // particles: outflow removal, a restore, migration, mutable access from outside.
+  std::vector<double> block_wave_rate_;
+  std::optional<double> wave_rate_from_stress_pass_;
   // Per-particle working memory lent to one phase at a time: the sort's keys and orders, then this
   // step's displacement dt sum N v^L (planes 0, 2, 4; written by G2P, applied after the strain pass).
   ParticleScratch scratch_;
