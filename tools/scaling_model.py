@@ -18,8 +18,10 @@ and the wall time of the step; what the regions leave of it is serial glue.
 The model, per region, for T threads (the record taken at T_rec threads, normally 1):
   dynamic: the greedy list schedule of `dynamic, 1` - each block goes, in hand-out order, to the
            thread that becomes free first - gives the critical path (the largest thread's share);
-           plus the region's own overhead (wall - critical path at T_rec - fork/join at T_rec), kept
-           serial; plus one fork/join + barrier b(T).
+           the region's own overhead (wall - critical path at T_rec - fork/join at T_rec: the cost
+           of handing out the blocks) spread evenly over the blocks as their work when T_rec = 1
+           (--loop-overhead per-block, the default; `serial` keeps it serial, the model before
+           2026-12-04); plus one fork/join + barrier b(T).
   static:  the loop's work W = (wall - k b(T_rec)) * min(T_rec, n) split in T contiguous parts of
            ceil(n/T) iterations (what `schedule(static)` does): W ceil(n/T)/n, plus k b(T) for its k
            parallel loops.
@@ -148,10 +150,15 @@ def contention_factor(contention, threads):
     return contention[below[-1]] if below else 1.0
 
 
-def predict_step(step, threads, barrier, t_rec, schedule, work, contention=1.0, inner=None):
+def predict_step(step, threads, barrier, t_rec, schedule, work, contention=1.0, inner=None, loop_overhead="per-block"):
     """Terms of the predicted step time at `threads`: ideal, imbalance, sync, serial (seconds).
     `contention` multiplies the parallel work (the per-core slowdown when `threads` cores work);
-    `inner` is the cost of a barrier inside an open region (the fused colour passes), b(T) if not given."""
+    `inner` is the cost of a barrier inside an open region (the fused colour passes), b(T) if not given.
+    `loop_overhead`: what a dynamic loop's time beyond its blocks and its fork/join is, in a record
+    taken on 1 thread: "per-block" (the default) - the cost of handing out each block (the loop's
+    shared counter, the block's clock reads, the loop's own bookkeeping), paid by the thread that
+    takes the block, so spread evenly over the blocks as their work; "serial" - kept serial, as
+    before 2026-12-04 (an upper bound)."""
     inner = inner or barrier
     terms = {"ideal": 0.0, "imbalance": 0.0, "sync": 0.0, "serial": 0.0}
     listed = 0.0
@@ -166,6 +173,9 @@ def predict_step(step, threads, barrier, t_rec, schedule, work, contention=1.0, 
             items = region_items(r, work)
             critical_rec = greedy_makespan(r["block_seconds"], t_rec)
             overhead = max(r["seconds"] - critical_rec - k * barrier(t_rec) - m * inner(t_rec), 0.0)
+            if loop_overhead == "per-block" and t_rec == 1 and items:
+                items = [x + overhead / len(items) for x in items]
+                overhead = 0.0
             if schedule == "lpt":
                 items = sorted(items, reverse=True)
             span = (static_makespan(items, threads) if schedule == "static" else greedy_makespan(items, threads)) * contention
@@ -191,13 +201,13 @@ def inner_barrier(record, per_doubling):
     return Barrier(record["barrier_seconds"], per_doubling) if record.get("barrier_seconds") else None
 
 
-def predict(record, threads, barrier, schedule, work, bandwidth=None, contention=None):
+def predict(record, threads, barrier, schedule, work, bandwidth=None, contention=None, loop_overhead="per-block"):
     t_rec = int(record["threads"])
     inner = inner_barrier(record, barrier.per_doubling)
     total = {"ideal": 0.0, "imbalance": 0.0, "sync": 0.0, "serial": 0.0, "bandwidth": 0.0}
     c = contention_factor(contention, threads) / contention_factor(contention, t_rec)
     for step in record["steps"]:
-        terms = predict_step(step, threads, barrier, t_rec, schedule, work, c, inner)
+        terms = predict_step(step, threads, barrier, t_rec, schedule, work, c, inner, loop_overhead)
         compute = sum(terms.values())
         floor = bandwidth(step["particles"], threads) if bandwidth else 0.0
         for k, v in terms.items():
@@ -250,12 +260,12 @@ def with_run_mean_output(record):
     return out
 
 
-def model(record, counts, barrier, schedule, work, bandwidth=None, contention=None):
+def model(record, counts, barrier, schedule, work, bandwidth=None, contention=None, loop_overhead="per-block"):
     """Per thread count: predicted seconds (over the recorded steps), speed-up, efficiency, terms."""
-    base = sum(predict(record, 1, barrier, schedule, work, bandwidth, contention).values())
+    base = sum(predict(record, 1, barrier, schedule, work, bandwidth, contention, loop_overhead).values())
     rows = []
     for t in counts:
-        terms = predict(record, t, barrier, schedule, work, bandwidth, contention)
+        terms = predict(record, t, barrier, schedule, work, bandwidth, contention, loop_overhead)
         seconds = sum(terms.values())
         losses = {k: terms[k] for k in ("imbalance", "sync", "serial", "bandwidth")}
         if contention:  # the contention's share of the parallel work
@@ -298,6 +308,9 @@ def main():
                     help="per-core slowdown c(T) when T cores work, e.g. 2:1.16 (kept at the largest given T beyond it)")
     ap.add_argument("--measure-contention", nargs=2, metavar=("REC1", "RECT"),
                     help="print c(T) = block seconds per particle of a T-thread record / of a 1-thread record, and exit")
+    ap.add_argument("--loop-overhead", default="per-block", choices=["per-block", "serial"],
+                    help="a dynamic loop's time beyond its blocks (1-thread records): the blocks' hand-out cost, "
+                         "spread over the blocks (default), or kept serial (the model before 2026-12-04)")
     ap.add_argument("--output", default="run-mean",
                     help="the run loop's output, guards and snapshot per step: run-mean (the run's mean, talus run "
                          "records) or sampled (as in the recorded steps: for a record of a run's first steps, whose "
@@ -329,7 +342,7 @@ def main():
         if output == "run-mean":
             record = with_run_mean_output(record)
         barrier = Barrier(record["fork_join_seconds"], a.barrier_per_doubling)
-        rows = model(record, counts, barrier, a.schedule, a.work, bandwidth, contention)
+        rows = model(record, counts, barrier, a.schedule, a.work, bandwidth, contention, a.loop_overhead)
         info = summary(record)
         results.append({"label": label, "record": path, "source": record.get("source"), "threads_recorded": record["threads"],
                         "output": output,
