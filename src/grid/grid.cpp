@@ -33,16 +33,17 @@ std::array<int, 3> Grid::node_of(std::size_t tile, int slot) const {
   return {ti * kTileEdge + (slot >> 4), tj * kTileEdge + ((slot >> 2) & 3), tk * kTileEdge + (slot & 3)};
 }
 
+void Grid::clear_tile(std::size_t tile) {
+  const std::size_t begin = tile * kTileNodes;
+  std::fill_n(records_.data() + begin * kNodeRecord, kTileNodes * kNodeRecord, 0.0);
+  std::fill_n(lagrangian_.data() + begin * kLagrangianRecord, kTileNodes * kLagrangianRecord, 0.0);
+}
+
 void Grid::clear_active() {
   const auto& tiles = active_tiles_;
   const std::size_t count = tiles.size();
-  double* r = records_.data();
 #pragma omp parallel for schedule(static)
-  for (std::size_t t = 0; t < count; ++t) {
-    const std::size_t begin = static_cast<std::size_t>(tiles[t]) * kTileNodes;
-    std::fill_n(r + begin * kNodeRecord, kTileNodes * kNodeRecord, 0.0);
-    std::fill_n(lagrangian_.data() + begin * kLagrangianRecord, kTileNodes * kLagrangianRecord, 0.0);
-  }
+  for (std::size_t t = 0; t < count; ++t) clear_tile(tiles[t]);
 }
 
 void Grid::clear_momentum() {

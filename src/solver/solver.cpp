@@ -399,20 +399,27 @@ void Solver::step_with(double dt) {
   const int mirrored = walls_.has_mirrored_walls() ? 1 : 0;
   BlockBuffers* const buffers = block_buffers();
   // After a scatter: its record, and with block buffers the sum of the boxes into the grid.
-  auto add_block_buffers = [&](WorkRecorder* r, const char* name, ScatteredFields fields) {
+  // `clear_first`: the box sum zeroes each tile before its sums (the step's grid clear, folded in).
+  auto add_block_buffers = [&](WorkRecorder* r, const char* name, ScatteredFields fields, bool clear_first = false) {
     if (r) r->add_colour_passes(name, pass_timing_, sort_, buffers != nullptr);
     if (buffers)
       recorded(r, RegionSchedule::Static, (std::string(name) + " box sum").c_str(), tiles, 1,
-               [&] { buffers->add_to_grid(grid_, fields); });
+               [&] { buffers->add_to_grid(grid_, fields, clear_first); });
+  };
+  // The grid is cleared before the first scatter of the step. With block buffers the scatter
+  // writes only the boxes, so the clear can wait for the box sum, tile by tile, in its loop.
+  const bool clear_in_box_sum = buffers && buffers->covers_active_tiles();
+  auto clear_grid = [&] {
+    if (!clear_in_box_sum) recorded(rec, RegionSchedule::Static, "grid clear", tiles, 1, [&] { grid_.clear_active(); });
   };
 
   // 2. P2G: nodal mass, momentum and internal force. USF / USAVG update the stress in between,
   //    from the start-of-step nodal velocities (walls applied), before scattering the force.
   if (!scheme.stress_first) {
     ScopedPhase timer(times_, Phase::P2G);
-    recorded(rec, RegionSchedule::Static, "grid clear", tiles, 1, [&] { grid_.clear_active(); });
+    clear_grid();
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentumForce, timing, buffers);
-    add_block_buffers(rec, "p2g", {.mass = true, .momentum = true, .force = true});
+    add_block_buffers(rec, "p2g", {.mass = true, .momentum = true, .force = true}, clear_in_box_sum);
     sum_shared_nodes({grid_.mass, grid_.momentum[0], grid_.momentum[1], grid_.momentum[2], grid_.force[0],
                       grid_.force[1], grid_.force[2]});
     recorded(rec, RegionSchedule::Static, "fold ghosts", tiles, mirrored,
@@ -420,9 +427,9 @@ void Solver::step_with(double dt) {
   } else {
     {
       ScopedPhase timer(times_, Phase::P2G);
-      recorded(rec, RegionSchedule::Static, "grid clear", tiles, 1, [&] { grid_.clear_active(); });
+      clear_grid();
       scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentum, timing, buffers);
-      add_block_buffers(rec, "p2g mass momentum", {.mass = true, .momentum = true});
+      add_block_buffers(rec, "p2g mass momentum", {.mass = true, .momentum = true}, clear_in_box_sum);
       sum_shared_nodes({grid_.mass, grid_.momentum[0], grid_.momentum[1], grid_.momentum[2]});
       recorded(rec, RegionSchedule::Static, "start velocities", tiles, 1 + 2 * mirrored, [&] {
         fold_ghost_nodes(grid_, walls_, {.mass = true, .momentum = true}, gravity);

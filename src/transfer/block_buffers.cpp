@@ -71,10 +71,15 @@ void BlockBuffers::prepare(const CellSort& sort, const Grid& grid) {
   }
   const double prefix_start = omp_get_wtime();
   tile_starts_.clear();
+  tiles_.clear();
   for (std::size_t e = 0; e < pairs; ++e) {
-    if (e == 0 || overlaps[e].tile != overlaps[e - 1].tile) tile_starts_.push_back(static_cast<std::uint32_t>(offset[e]));
+    if (e == 0 || overlaps[e].tile != overlaps[e - 1].tile) {
+      tile_starts_.push_back(static_cast<std::uint32_t>(offset[e]));
+      tiles_.push_back(overlaps[e].tile);
+    }
     offset[e + 1] += offset[e];
   }
+  covers_active_tiles_ = tiles_ == grid.active_tiles();
   runs_.resize(offset[pairs]);  // keeps its memory from sort to sort
   serial_seconds_ += omp_get_wtime() - prefix_start;
   const std::size_t box_nodes = box_doubles_ / kNodeRecord;
@@ -101,13 +106,16 @@ namespace {
 
 template <bool kMass, bool kMomentum, bool kForce>
 void add_runs(const double* boxes, const auto& runs, const std::vector<std::uint32_t>& starts,
-              const std::vector<std::array<int, 6>>& written, Grid& grid) {
+              const std::vector<std::uint32_t>& tiles, const std::vector<std::array<int, 6>>& written, Grid& grid,
+              bool clear_first) {
   const std::size_t groups = starts.empty() ? 0 : starts.size() - 1;
   double* const records = grid.records();
   // One tile per iteration, its runs in ascending block order: every node receives its boxes in
-  // ascending block order, whichever thread holds the tile.
+  // ascending block order, whichever thread holds the tile. Cleared first, the tile starts from
+  // zeros as after Grid::clear_active, so the sums have the same bits.
 #pragma omp parallel for schedule(static)
-  for (std::size_t g = 0; g < groups; ++g)
+  for (std::size_t g = 0; g < groups; ++g) {
+    if (clear_first) grid.clear_tile(tiles[g]);
     for (std::size_t e = starts[g]; e < starts[g + 1]; ++e) {
       // Only the nodes the box's scatter wrote (the others hold zeros: adding them changes nothing,
       // as no sum here is ever -0).
@@ -131,6 +139,7 @@ void add_runs(const double* boxes, const auto& runs, const std::vector<std::uint
         }
       }
     }
+  }
 }
 
 }  // namespace
@@ -151,12 +160,15 @@ double* BlockBuffers::open_box(std::size_t b) {
   return box;
 }
 
-void BlockBuffers::add_to_grid(Grid& grid, ScatteredFields f) const {
+void BlockBuffers::add_to_grid(Grid& grid, ScatteredFields f, bool clear_first) const {
+  if (clear_first && !covers_active_tiles_)
+    throw std::logic_error("BlockBuffers::add_to_grid: the boxes do not cover the active tiles, which it would clear");
   const double* boxes = data_.get();
-  if (f.mass && f.momentum && f.force) add_runs<true, true, true>(boxes, runs_, tile_starts_, written_, grid);
-  else if (f.mass && f.momentum && !f.force) add_runs<true, true, false>(boxes, runs_, tile_starts_, written_, grid);
-  else if (!f.mass && f.momentum && !f.force) add_runs<false, true, false>(boxes, runs_, tile_starts_, written_, grid);
-  else if (!f.mass && !f.momentum && f.force) add_runs<false, false, true>(boxes, runs_, tile_starts_, written_, grid);
+  const auto& t = tiles_;
+  if (f.mass && f.momentum && f.force) add_runs<true, true, true>(boxes, runs_, tile_starts_, t, written_, grid, clear_first);
+  else if (f.mass && f.momentum && !f.force) add_runs<true, true, false>(boxes, runs_, tile_starts_, t, written_, grid, clear_first);
+  else if (!f.mass && f.momentum && !f.force) add_runs<false, true, false>(boxes, runs_, tile_starts_, t, written_, grid, clear_first);
+  else if (!f.mass && !f.momentum && f.force) add_runs<false, false, true>(boxes, runs_, tile_starts_, t, written_, grid, clear_first);
   else throw std::logic_error("BlockBuffers::add_to_grid: an unsupported set of fields");
 }
 

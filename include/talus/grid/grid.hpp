@@ -164,6 +164,8 @@ class Grid {
   const std::vector<std::uint32_t>& active_tiles() const { return active_tiles_; }
   /// Zero every field on the active tiles.
   void clear_active();
+  /// Zero every field of one tile (clear_active does this for each active tile, in parallel).
+  void clear_tile(std::size_t tile);
   /// Zero the momentum on the active tiles (before the MUSL remap re-scatters it).
   void clear_momentum();
   /// Bytes of node data in the active tiles (what the grid really occupies).

@@ -56,8 +56,14 @@ class BlockBuffers {
     written_[b] = {lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]};
   }
   /// Add the boxes' `fields` into the grid's node records (which the caller cleared or holds
-  /// partial sums in): one parallel loop over the active tiles.
-  void add_to_grid(Grid& grid, ScatteredFields fields) const;
+  /// partial sums in): one parallel loop over the active tiles. With `clear_first` each tile is
+  /// zeroed (Grid::clear_tile) just before its sums, in the same loop: the step's grid clear
+  /// without a pass and a parallel region of its own. Only when covers_active_tiles().
+  void add_to_grid(Grid& grid, ScatteredFields fields, bool clear_first = false) const;
+  /// Whether the tiles the boxes overlap are exactly the grid's active tiles at the last prepare()
+  /// (both follow from the blocks' extent, so they are unless the grid changed since): then
+  /// add_to_grid(..., true) clears every active tile.
+  bool covers_active_tiles() const { return covers_active_tiles_; }
 
   /// The bytes prepare() would hold for `blocks` blocks of `edge` nodes (the memory estimate).
   static std::size_t bytes_for(std::size_t blocks, int edge) {
@@ -89,6 +95,8 @@ class BlockBuffers {
   std::size_t capacity_ = 0;  // doubles held (grown, never shrunk)
   std::vector<Run> runs_;                   // by tile, then block ascending
   std::vector<std::uint32_t> tile_starts_;  // per tile that boxes overlap: its first run (+1 end)
+  std::vector<std::uint32_t> tiles_;        // the tiles that boxes overlap, ascending (one per tile_starts_ entry)
+  bool covers_active_tiles_ = false;
   double serial_seconds_ = 0.0;
 };
 
