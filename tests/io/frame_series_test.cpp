@@ -122,25 +122,29 @@ TEST(FrameSeries, ResumeKeepsTheListedFramesOfEveryKindAndNoOther) {
   fs::remove_all(dir);
 }
 
-TEST(FrameSeries, WithoutBackgroundEveryFrameIsOnDiskAndListedWhenWriteReturns) {
-  Solver solver(test::tumbling_block_scene(0.01));
-  const fs::path dir = temp_dir("series_foreground");
-  prepare_output_folder(dir, nullptr);
+/// The tumbling block's solver and a fresh output folder for one series (removed at the end).
+struct OneRankSeries {
+  explicit OneRankSeries(const char* name) : dir(temp_dir(name)) { prepare_output_folder(dir, nullptr); }
+  ~OneRankSeries() { fs::remove_all(dir); }
+  Solver solver{test::tumbling_block_scene(0.01)};
+  fs::path dir;
   RunProgress progress;
-  FrameSeries frames(dir, true, progress, Comm(), false);
-  write_particles_vtu((dir / "expected.vtu").string(), solver.particles(), true);
-  EXPECT_EQ(frames.write(solver), "frames/particles_000000.vtu");
-  EXPECT_EQ(test::file_bytes(dir / "frames" / "particles_000000.vtu"), test::file_bytes(dir / "expected.vtu"));
+};
+
+TEST(FrameSeries, WithoutBackgroundEveryFrameIsOnDiskAndListedWhenWriteReturns) {
+  OneRankSeries s("series_foreground");
+  FrameSeries frames(s.dir, true, s.progress, Comm(), false);
+  write_particles_vtu((s.dir / "expected.vtu").string(), s.solver.particles(), true);
+  EXPECT_EQ(frames.write(s.solver), "frames/particles_000000.vtu");
+  EXPECT_EQ(test::file_bytes(s.dir / "frames" / "particles_000000.vtu"), test::file_bytes(s.dir / "expected.vtu"));
   EXPECT_EQ(pvd_files(frames.pvd_path()), std::vector<std::string>{"frames/particles_000000.vtu"});
-  fs::remove_all(dir);
 }
 
 TEST(FrameSeries, AFailedBackgroundWriteIsReportedAndNotListed) {
-  Solver solver(test::tumbling_block_scene(0.01));
-  const fs::path dir = temp_dir("series_failed_write");
-  prepare_output_folder(dir, nullptr);
-  RunProgress progress;
-  FrameSeries frames(dir, false, progress, Comm());
+  OneRankSeries s("series_failed_write");
+  Solver& solver = s.solver;
+  const fs::path& dir = s.dir;
+  FrameSeries frames(dir, false, s.progress, Comm());
   fs::remove_all(dir / "frames");  // the frame's folder is gone: its write fails on the writer's thread
   EXPECT_EQ(frames.write(solver), "frames/particles_000000.vtu");
   try {
@@ -152,7 +156,6 @@ TEST(FrameSeries, AFailedBackgroundWriteIsReportedAndNotListed) {
   }
   EXPECT_FALSE(fs::exists(dir / "particles.pvd"));  // the .pvd never listed the frame
   frames.complete(solver);  // reported once: the series can go on (or be written after a fix)
-  fs::remove_all(dir);
 }
 
 /// The particles of `P` this rank holds: ids i with i % ranks == rank, none on rank 1 of three or
