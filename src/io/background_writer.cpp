@@ -3,6 +3,7 @@
 #include <omp.h>
 #include <pthread.h>
 #include <sched.h>
+#include <signal.h>
 
 #include <utility>
 #include <vector>
@@ -38,6 +39,11 @@ BackgroundWriter::~BackgroundWriter() {
 void BackgroundWriter::start(std::function<void()> job) {
   wait();
   thread_ = std::thread([this, job = std::move(job)] {
+    // Signals go to the run loop's thread: SIGINT and SIGTERM set its flag for a checkpoint, and
+    // a file write here is never interrupted by one.
+    sigset_t all;
+    sigfillset(&all);
+    pthread_sigmask(SIG_BLOCK, &all, nullptr);
     allow_every_openmp_place();
     try {
       job();
