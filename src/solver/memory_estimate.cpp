@@ -33,7 +33,8 @@ constexpr std::size_t kParticleScratch = ParticleScratch::kPlanes * 4;
 constexpr std::size_t kSmoothing = (6 + 6 + 3) * 8;       // raw and smoothed strain, raw spin
 constexpr std::size_t kSortCell = 3 * 4;                  // the sort state a snapshot keeps
 // The largest transient buffer: a particle frame's VTK arrays (points, velocity, speed, stress,
-// strain, density, volume, id, body, vertex offsets and connectivity; io/vtu_writer.cpp).
+// strain, density, volume, id, body, vertex offsets and connectivity; io/vtu_writer.cpp). One
+// frame at a time, held while the steps after it run (it is written in the background).
 constexpr std::size_t kFrameArrays = 24 + 24 + 8 + 48 + 48 + 8 + 8 + 8 + 2 + 4 + 4;
 constexpr std::size_t kNodeBytes = Grid::kFieldCount * sizeof(double);
 
