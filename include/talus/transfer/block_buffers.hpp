@@ -37,7 +37,7 @@ class BlockBuffers {
   /// The serial part of the last prepare() in seconds (the pairs of boxes and tiles, their order
   /// and the prefix sum); the rest is kPrepareParallelRegions parallel loops (the work recorder).
   double last_serial_seconds() const { return serial_seconds_; }
-  static constexpr int kPrepareParallelRegions = 2;
+  static constexpr int kPrepareParallelRegions = 3;
 
   /// Nodes per box edge: block_cells + 2 slack + the shape's reach below and above.
   int edge() const { return edge_; }
@@ -96,6 +96,7 @@ class BlockBuffers {
   std::vector<Run> runs_;                   // by tile, then block ascending
   std::vector<std::uint32_t> tile_starts_;  // per tile that boxes overlap: its first run (+1 end)
   std::vector<std::uint32_t> tiles_;        // the tiles that boxes overlap, ascending (one per tile_starts_ entry)
+  std::vector<std::uint32_t> tile_counts_;  // prepare(): per thread and active tile, its pairs, then its next slot
   bool covers_active_tiles_ = false;
   double serial_seconds_ = 0.0;
 };
