@@ -1,6 +1,7 @@
 #include "talus/particles/cell_sort.hpp"
 
 #include "talus/core/error.hpp"
+#include "talus/core/slice_offsets.hpp"
 
 #include <fmt/core.h>
 
@@ -176,29 +177,9 @@ void CellSort::sort(ParticleStore& particles, Grid& grid, ParticleScratch& scrat
       particle_block[p] = b;  // now the compact block
       ++counts[b];
     }
-#pragma omp barrier
     // Each block's size, then (one thread) the blocks' offsets, then each slice's offset in each block.
-#pragma omp for schedule(static)
-    for (std::size_t b = 0; b < blocks; ++b) {
-      std::uint32_t total = 0;
-      for (std::size_t u = 0; u < threads; ++u) total += slice_counts_[u * blocks + b];
-      block_start_[b + 1] = total;
-    }
-#pragma omp single
-    {
-      block_start_[0] = 0;
-      for (std::size_t b = 0; b < blocks; ++b) block_start_[b + 1] += block_start_[b];
-    }
-#pragma omp for schedule(static)
-    for (std::size_t b = 0; b < blocks; ++b) {
-      std::uint32_t offset = block_start_[b];
-      for (std::size_t u = 0; u < threads; ++u) {
-        const std::uint32_t c = slice_counts_[u * blocks + b];
-        slice_counts_[u * blocks + b] = offset;
-        offset += c;
-      }
-    }
-    // (the implicit barrier: every slice's offsets are known) place the slice, block by block
+    slice_offsets_in_region(slice_counts_.data(), threads, blocks, block_start_.data(), [] {});
+    // (every slice's offsets are known) place the slice, block by block
     for (std::size_t p = begin; p < end; ++p) by_block[counts[particle_block[p]]++] = static_cast<std::uint32_t>(p);
 #pragma omp barrier
     // 4. Within each block, by local cell (stable).

@@ -1,5 +1,7 @@
 #include "talus/transfer/block_buffers.hpp"
 
+#include "talus/core/slice_offsets.hpp"
+
 #include <omp.h>
 
 #include <algorithm>
@@ -72,31 +74,10 @@ void BlockBuffers::prepare(const CellSort& sort, const Grid& grid) {
         else
           ++mine[i];
       });
-#pragma omp barrier
-#pragma omp for schedule(static)
-    for (std::size_t i = 0; i < n_active; ++i) {
-      std::uint32_t total = 0;
-      for (std::size_t t = 0; t < threads; ++t) total += tile_counts_[t * n_active + i];
-      tile_first[i + 1] = total;
-    }
-#pragma omp single
-    {
-      const double prefix_start = omp_get_wtime();
-      for (std::size_t i = 0; i < n_active; ++i) tile_first[i + 1] += tile_first[i];
+    slice_offsets_in_region(tile_counts_.data(), threads, n_active, tile_first.data(), [&] {
       if (!outside.load(std::memory_order_relaxed)) overlaps.resize(tile_first[n_active]);
-      prefix_seconds = omp_get_wtime() - prefix_start;
-    }
-    if (!outside.load(std::memory_order_relaxed)) {  // the same for every thread (read after the single's barrier)
-      // each (thread, tile) count becomes that thread's first slot in the tile
-#pragma omp for schedule(static)
-      for (std::size_t i = 0; i < n_active; ++i) {
-        std::uint32_t slot = tile_first[i];
-        for (std::size_t t = 0; t < threads; ++t) {
-          const std::uint32_t n = tile_counts_[t * n_active + i];
-          tile_counts_[t * n_active + i] = slot;
-          slot += n;
-        }
-      }
+    }, &prefix_seconds);
+    if (!outside.load(std::memory_order_relaxed)) {  // the same for every thread (read after the barriers)
       for (std::size_t b = b0; b < b1; ++b)
         for_each_tile(b, [&](std::uint32_t tile) {
           overlaps[mine[active_index(tile)]++] = {tile, static_cast<std::uint32_t>(b)};
