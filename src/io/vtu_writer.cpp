@@ -190,8 +190,6 @@ void write_particles_vtu(const std::string& path, const ParticleStore& P, bool c
 
 ParticleFrame::ParticleFrame(const ParticleStore& particles) : grid_(particle_grid(particles, true)) {}
 ParticleFrame::~ParticleFrame() = default;
-ParticleFrame::ParticleFrame(ParticleFrame&&) noexcept = default;
-ParticleFrame& ParticleFrame::operator=(ParticleFrame&&) noexcept = default;
 
 void ParticleFrame::write(const std::string& path, bool compress) const {
   write_vtu_atomically(grid_, path, compress, "particle frame");

@@ -285,17 +285,12 @@ double Solver::stable_time_step() const {
   return scene_.courant * scene_.grid.h / max_rate;  // Edo & Matsubara 2015, eq. 60
 }
 
-double Solver::time_step_for_this_step() const {
-  if (wave_rate_from_stress_pass_) return scene_.courant * scene_.grid.h / *wave_rate_from_stress_pass_;  // eq. 60
-  return stable_time_step();
-}
-
 void Solver::step() {
   const bool recorded_step = recorder_ && recorder_->begin_step(step_, particles_.size(), sort_.block_count());
   const double step_start = recorded_step ? omp_get_wtime() : 0.0;
   double dt = 0.0;
-  if (wave_rate_from_stress_pass_)
-    dt = time_step_for_this_step();  // the maximum the last stress pass kept: no scan, no parallel region
+  if (wave_rate_from_stress_pass_)  // the maximum the last stress pass kept: no scan, no parallel region
+    dt = scene_.courant * scene_.grid.h / *wave_rate_from_stress_pass_;  // Edo & Matsubara 2015, eq. 60
   else
     recorded(recording(), RegionSchedule::Static, "time step", particles_.size(), 1, [&] { dt = stable_time_step(); });
   if (comm_.distributed()) {

@@ -28,8 +28,6 @@ class ParticleFrame {
  public:
   explicit ParticleFrame(const ParticleStore& particles);
   ~ParticleFrame();
-  ParticleFrame(ParticleFrame&&) noexcept;
-  ParticleFrame& operator=(ParticleFrame&&) noexcept;
   /// As write_particles_vtu: through a temporary name and a rename.
   void write(const std::string& path, bool compress) const;
 

@@ -162,8 +162,6 @@ class Solver {
   double max_wave_rate(std::size_t begin, std::size_t end, const WaveRateRule* rule) const;
   /// The rule for max_wave_rate: every body's shared rule when the vector kernels run, else none.
   std::optional<WaveRateRule> lanes_wave_rate_rule() const;
-  /// This step's time step: from the maximum the last stress pass kept, else a scan.
-  double time_step_for_this_step() const;
   void move_particles();
   /// The energy particle p holds: kinetic, stored strain, gravitational (energies(), the outflow).
   struct ParticleEnergy {
