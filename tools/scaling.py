@@ -48,6 +48,34 @@ def pinned_env():
     return env
 
 
+def add_wait_policy_argument(ap):
+    ap.add_argument("--wait-policy", choices=["unset", "active", "passive"], default="unset",
+                    help="OMP_WAIT_POLICY of every run; unset (the default): libgomp's own, threads spin a while "
+                         "before they sleep, as users run. An OMP_WAIT_POLICY in the environment is ignored "
+                         "unless given here: with PASSIVE every parallel region wakes sleeping threads, which "
+                         "cost 13 us at 2 and about 100 us at 16 threads on the 16-core VM of 2026-12-04, and "
+                         "the measurement is then of that, not of talus")
+
+
+def apply_wait_policy(policy):
+    """Sets (or removes) OMP_WAIT_POLICY for the runs this process starts; returns the value used."""
+    inherited = os.environ.pop("OMP_WAIT_POLICY", None)
+    if policy != "unset":
+        os.environ["OMP_WAIT_POLICY"] = policy.upper()
+    elif inherited:
+        print(f"note: OMP_WAIT_POLICY={inherited} from the environment is not used (--wait-policy unset)",
+              file=sys.stderr)
+    return os.environ.get("OMP_WAIT_POLICY", "unset")
+
+
+def contention(record_1, record_n):
+    """c(N): block seconds per particle at N threads over those at 1 thread (tools/scaling_model.py)."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import scaling_model
+    return (scaling_model.block_seconds_per_particle(json.load(open(record_n))) /
+            scaling_model.block_seconds_per_particle(json.load(open(record_1))))
+
+
 def bench(talus, particles, threads, steps, extra, record=None):
     with tempfile.NamedTemporaryFile(suffix=".json") as f:
         cmd = [talus, "bench", "--particles", str(particles), "--threads", str(threads), "--steps", str(steps),
@@ -58,12 +86,12 @@ def bench(talus, particles, threads, steps, extra, record=None):
         return json.load(open(f.name))
 
 
-def model_speedups(record_path, counts):
+def model_speedups(record_path, counts, contention_by_threads=None):
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
     import scaling_model
     record = json.load(open(record_path))
     barrier = scaling_model.Barrier(record["fork_join_seconds"], 1e-6)
-    rows = scaling_model.model(record, counts, barrier, "recorded", "robust")
+    rows = scaling_model.model(record, counts, barrier, "recorded", "robust", contention=contention_by_threads)
     return {r["threads"]: r for r in rows}
 
 
@@ -76,20 +104,29 @@ def main():
     ap.add_argument("--out", default="docs/performance")
     ap.add_argument("--name", default="scaling", help="file stem of the CSV, JSON and PNG")
     ap.add_argument("--repeat", type=int, default=1, help="runs per point (the best is kept; all are in the JSON)")
+    add_wait_policy_argument(ap)
     ap.add_argument("bench_args", nargs="*", help="extra arguments for talus bench (after --)")
     a = ap.parse_args()
+    wait_policy = apply_wait_policy(a.wait_policy)
     os.makedirs(a.out, exist_ok=True)
     counts = thread_counts(a.max_threads)
     record_path = os.path.join(a.out, a.name + "_record.json")
+    record_n_path = os.path.join(a.out, a.name + f"_record_{counts[-1]}.json")
     rows = []
-    predicted = {}
+    predicted, with_c, c_n = {}, {}, None
     for kind in ("strong", "weak"):
         for t in counts:
             n = a.particles if kind == "strong" else a.particles * t
-            runs = [bench(a.talus, n, t, a.steps, a.bench_args,
-                          record_path if (kind == "strong" and t == 1 and i == 0) else None) for i in range(a.repeat)]
+            # strong scaling records at 1 thread (the model's input) and at N threads (c(N), below)
+            recorded = {1: record_path, counts[-1]: record_n_path} if kind == "strong" else {}
+            runs = [bench(a.talus, n, t, a.steps, a.bench_args, recorded.get(t) if i == 0 else None)
+                    for i in range(a.repeat)]
             if kind == "strong" and t == 1:
                 predicted = model_speedups(record_path, counts)
+            if kind == "strong" and t == counts[-1]:
+                # the per-core slowdown when N cores work, which the work model leaves out
+                c_n = contention(record_path, record_n_path) if t > 1 else 1.0
+                with_c = model_speedups(record_path, counts, {t: c_n} if t > 1 else None)
             r = max(runs, key=lambda x: x["particle_updates_per_second"])
             rows.append({"kind": kind, "threads": t, "particles": r["particles"],
                          "updates_per_second": r["particle_updates_per_second"],
@@ -116,11 +153,19 @@ def main():
         w.writeheader()
         w.writerows(rows)
     print("wrote", path)
+    for r in rows:
+        if r["kind"] == "strong":
+            r["model_speedup_with_contention"] = with_c[r["threads"]]["speedup"]
+    print(f"strong scaling, the model with the measured c({counts[-1]}) = {c_n:.3f}: " +
+          ", ".join(f"{t}: {with_c[t]['speedup']:.2f}" for t in counts))
     env = pinned_env()
     with open(os.path.join(a.out, a.name + ".json"), "w") as f:
-        json.dump({"omp_proc_bind": env["OMP_PROC_BIND"], "omp_places": env["OMP_PLACES"], "nproc": os.cpu_count(),
+        json.dump({"omp_proc_bind": env["OMP_PROC_BIND"], "omp_places": env["OMP_PLACES"],
+                   "omp_wait_policy": wait_policy, "nproc": os.cpu_count(),
                    "bench_args": a.bench_args, "particles": a.particles, "steps": a.steps, "rows": rows,
-                   "model": {str(t): v for t, v in predicted.items()}}, f, indent=1)
+                   "contention": {str(counts[-1]): c_n},
+                   "model": {str(t): v for t, v in predicted.items()},
+                   "model_with_contention": {str(t): v for t, v in with_c.items()}}, f, indent=1)
     print("wrote", os.path.join(a.out, a.name + ".json"))
     try:
         import matplotlib
@@ -143,13 +188,18 @@ def main():
     model = [predicted[t]["speedup"] for t in threads]
     ax1.plot(threads, model, "x--", color="C3", label="model (strong)")
     ax2.plot(threads, [m / t for m, t in zip(model, threads)], "x--", color="C3", label="model (strong)")
+    model_c = [with_c[t]["speedup"] for t in threads]
+    label_c = f"model with c({counts[-1]}) = {c_n:.2f}"
+    ax1.plot(threads, model_c, ":", color="C3", label=label_c)
+    ax2.plot(threads, [m / t for m, t in zip(model_c, threads)], ":", color="C3", label=label_c)
     ax1.plot(threads, threads, "k--", lw=0.8, label="ideal")
     ax1.set(xlabel="threads", ylabel="speed-up (particle-updates/s)", title="talus scaling")
     ax2.set(xlabel="threads", ylabel="efficiency", ylim=(0, 1.1))
     for ax in (ax1, ax2):
         ax.legend()
         ax.grid(alpha=0.3)
-    fig.suptitle(f"{rows[0]['cpu']}, OMP_PROC_BIND={env['OMP_PROC_BIND']} OMP_PLACES={env['OMP_PLACES']}, "
+    fig.suptitle(f"{rows[0]['cpu']}, OMP_PROC_BIND={env['OMP_PROC_BIND']} OMP_PLACES={env['OMP_PLACES']} "
+                 f"OMP_WAIT_POLICY={wait_policy}, "
                  f"{' '.join(a.bench_args) or 'block, linear, elastic'}", fontsize=8)
     fig.tight_layout()
     fig.savefig(os.path.join(a.out, a.name + ".png"), dpi=120)

@@ -339,6 +339,9 @@ def main():
         if output not in ("run-mean", "sampled"):
             sys.exit(f"--output: {output} is not run-mean or sampled")
         record = json.load(open(path))
+        if record.get("omp_wait_policy", "").upper() == "PASSIVE":
+            print(f"note: {path} was recorded with OMP_WAIT_POLICY=PASSIVE: its fork/join costs are those of waking "
+                  "sleeping threads, and the model predicts runs under that policy", file=sys.stderr)
         if output == "run-mean":
             record = with_run_mean_output(record)
         barrier = Barrier(record["fork_join_seconds"], a.barrier_per_doubling)

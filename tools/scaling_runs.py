@@ -30,7 +30,7 @@ import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import scaling_model  # noqa: E402
-from scaling import pinned_env, thread_counts  # noqa: E402
+from scaling import add_wait_policy_argument, apply_wait_policy, pinned_env, thread_counts  # noqa: E402
 
 RATE = re.compile(r"done: (\d+) steps to t = \S+ s in ([0-9.]+) s \(([0-9.]+) M particle-updates/s\)")
 
@@ -109,7 +109,8 @@ def plot(results, path, env):
     ax.set_xticks(ticks, [str(t) for t in ticks])
     ax.set_yticks(ticks, [str(t) for t in ticks])
     ax.minorticks_off()
-    ax.set_title(f"talus run, strong scaling\nOMP_PROC_BIND={env['OMP_PROC_BIND']} OMP_PLACES={env['OMP_PLACES']}, "
+    ax.set_title(f"talus run, strong scaling\nOMP_PROC_BIND={env['OMP_PROC_BIND']} OMP_PLACES={env['OMP_PLACES']} "
+                 f"OMP_WAIT_POLICY={env.get('OMP_WAIT_POLICY', 'unset')}, "
                  f"{os.cpu_count()} CPUs", fontsize=9)
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
@@ -128,7 +129,9 @@ def main():
     ap.add_argument("--record-interval", type=int, default=7, help="steps between recorded steps")
     ap.add_argument("--out", default="docs/performance")
     ap.add_argument("--name", default="scaling_runs", help="file stem of the JSON and PNG")
+    add_wait_policy_argument(ap)
     a = ap.parse_args()
+    wait_policy = apply_wait_policy(a.wait_policy)
     if a.max_threads < 1:
         sys.exit("--max-threads: at least 1")
     counts = thread_counts(a.max_threads)
@@ -146,8 +149,8 @@ def main():
     env = pinned_env()
     out = os.path.join(a.out, a.name + ".json")
     with open(out, "w") as f:
-        json.dump({"omp_proc_bind": env["OMP_PROC_BIND"], "omp_places": env["OMP_PLACES"], "nproc": os.cpu_count(),
-                   "results": results}, f, indent=1)
+        json.dump({"omp_proc_bind": env["OMP_PROC_BIND"], "omp_places": env["OMP_PLACES"],
+                   "omp_wait_policy": wait_policy, "nproc": os.cpu_count(), "results": results}, f, indent=1)
     print("wrote", out)
     plot(results, os.path.join(a.out, a.name + ".png"), env)
 

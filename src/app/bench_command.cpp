@@ -543,16 +543,13 @@ void record_work(Solver& solver, const BenchOptions& o, const nlohmann::json& be
   solver.record_work(&recorder);
   for (int s = 0; s < o.record_steps; ++s) solver.step();
   solver.record_work(nullptr);
-  const std::vector<double> fork_join = WorkRecorder::measure_fork_join(std::max(omp_get_max_threads(), omp_get_num_procs()));
-  nlohmann::json meta;
+  nlohmann::json meta = WorkRecorder::threading_meta();
   meta["source"] = "talus bench";
   meta["bench"] = bench;
   meta["threads"] = omp_get_max_threads();
   meta["cpu"] = cpu_model();
   meta["block_cells"] = solver.cell_sort().block_cells();
   meta["scatter"] = to_string(solver.scene().scatter);
-  meta["fork_join_seconds"] = fork_join;  // index = thread count (0 unused)
-  meta["barrier_seconds"] = WorkRecorder::measure_barrier(std::max(omp_get_max_threads(), omp_get_num_procs()));
   std::ofstream out(o.record_path);
   if (!out) throw io_error(fmt::format("cannot write {}", o.record_path));
   out << recorder.to_json(meta).dump() << "\n";

@@ -157,15 +157,13 @@ void add_run_command(CLI::App& app) {
     if (summary.interrupted_signal) exit_code() = 128 + summary.interrupted_signal;
     if (!world.root()) return;
     if (recorder) {
-      nlohmann::json meta;
+      nlohmann::json meta = WorkRecorder::threading_meta();
       meta["source"] = "talus run";
       meta["scene"] = solver.scene().name;
       meta["threads"] = omp_get_max_threads();
       meta["block_cells"] = solver.cell_sort().block_cells();
       meta["run_wall_seconds"] = summary.wall_seconds;
       meta["run_particles_end"] = solver.particles().size();
-      meta["fork_join_seconds"] = WorkRecorder::measure_fork_join(std::max(omp_get_max_threads(), omp_get_num_procs()));
-      meta["barrier_seconds"] = WorkRecorder::measure_barrier(std::max(omp_get_max_threads(), omp_get_num_procs()));
       std::ofstream out(*record_path);
       if (!out) throw io_error(fmt::format("cannot write {}", *record_path));
       out << recorder->to_json(meta).dump() << "\n";

@@ -4,6 +4,8 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cctype>
+#include <cstdlib>
 
 namespace talus {
 
@@ -218,6 +220,20 @@ nlohmann::json WorkRecorder::to_json(const nlohmann::json& meta) const {
     j["run_background_seconds"] = background_seconds_;  // frames written on the writer's thread
   }
   return j;
+}
+
+nlohmann::json WorkRecorder::threading_meta() {
+  const int max_threads = std::max(omp_get_max_threads(), omp_get_num_procs());
+  nlohmann::json meta;
+  meta["fork_join_seconds"] = measure_fork_join(max_threads);  // index = thread count (0 unused)
+  meta["barrier_seconds"] = measure_barrier(max_threads);
+  for (const char* name : {"OMP_WAIT_POLICY", "OMP_PROC_BIND", "OMP_PLACES"}) {
+    const char* value = std::getenv(name);
+    std::string key(name);
+    std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return std::tolower(c); });
+    meta[key] = value ? value : "unset";
+  }
+  return meta;
 }
 
 }  // namespace talus

@@ -249,6 +249,9 @@ TEST(Cli, BenchAndRunRecordTheWorkDistribution) {
   ASSERT_EQ(rb["steps"].size(), 2u);
   EXPECT_GE(rb["fork_join_seconds"].size(), 2u);
   EXPECT_EQ(rb["barrier_seconds"].size(), rb["fork_join_seconds"].size());
+  // the OpenMP settings those costs depend on travel with them (PASSIVE: threads woken per region)
+  const char* wait_policy = std::getenv("OMP_WAIT_POLICY");
+  EXPECT_EQ(rb["omp_wait_policy"], wait_policy ? wait_policy : "unset");
   for (const auto& step : rb["steps"]) {
     std::size_t p2g_particles = 0, stress_particles = 0, passes = 0;
     double listed = 0.0;
@@ -290,6 +293,8 @@ TEST(Cli, BenchAndRunRecordTheWorkDistribution) {
   EXPECT_EQ(rr["steps"].size(), (steps + 2) / 3);
   EXPECT_EQ(rr["steps"][1]["step"], 3);
   EXPECT_EQ(rr["steps"][0]["regions"].back()["name"], "output and guards");
+  EXPECT_EQ(rr["omp_wait_policy"], wait_policy ? wait_policy : "unset");
+  EXPECT_GE(rr["fork_join_seconds"].size(), 2u);
   EXPECT_GT(rr["run_background_seconds"].get<double>(), 0.0);  // the frames, written on their own thread
   // Frames in the foreground are the run loop's own time: nothing in the background.
   const Result f = run("run " + (dir / "short.json").string() + " --out " + (dir / "out").string() +

@@ -1,0 +1,91 @@
+#!/usr/bin/env bash
+# Issue 19's measurements on a many-core node, in one sitting with a time budget (docs/performance.md,
+# "Measured on a 16-core node"). Each phase is skipped when less of the budget is left than it needs,
+# and the results are packed into OUT/results.tar.gz after every phase, so a run stopped from outside
+# still returns what it finished.
+#
+#   TALUS=build/talus BUDGET=510 tools/node_scaling.sh OUT
+#
+# Phases: the machine (lscpu, NUMA nodes); STREAM at 1, 2, 4, 8, N threads and mpm_limit at 1 and N
+# (../shared/bench, built with -march=native when g++ is there; MPM_LIMIT_SRC / STREAM_SRC point at the
+# sources); determinism (the outputs of 1, 7 and N threads, same bits, three flumes); tools/scaling_runs.py
+# (the default flume with both scatters to 0.1 s, the h = 0.005 m flume with both to 0.004 s);
+# tools/scaling.py (bench block and shear, strong and weak); issue 18's 1-thread table
+# (tools/bench_kernels.py). OMP_PROC_BIND=close, OMP_PLACES=cores; OMP_WAIT_POLICY is left unset
+# (libgomp's own: spin, then sleep), as users run: the 2026-12-04 node ran under PASSIVE by mistake,
+# which measured the waking of sleeping threads (about 100 us per region at 16 threads).
+set -u
+OUT=${1:?usage: tools/node_scaling.sh OUT}
+cd "$(dirname "$0")/.."
+TALUS=${TALUS:-build/talus}
+BUDGET=${BUDGET:-510}
+MPM_LIMIT_SRC=${MPM_LIMIT_SRC:-../shared/bench/mpm_limit.cpp}
+STREAM_SRC=${STREAM_SRC:-../shared/bench/stream.cpp}
+T0=$(date +%s)
+W=$(mktemp -d); S=$(mktemp -d); mkdir -p "$OUT"  # W: results, S: scratch
+trap 'rm -rf "$W" "$S"' EXIT
+exec > >(tee -a "$OUT/log.txt") 2>&1
+el() { echo $(( $(date +%s) - T0 )); }
+pack() { (cd "$W" && tar czf "$OUT/results.tar.gz" . 2>/dev/null); echo "[$(el) s] packed"; }
+phase() { # name, seconds it needs
+  local left=$(( BUDGET - $(el) ))
+  if [ $left -lt "$2" ]; then echo "[$(el) s] SKIP $1 (needs $2 s, $left left)"; return 1; fi
+  echo "[$(el) s] PHASE $1"; return 0
+}
+export PYTHONUNBUFFERED=1 OMP_PROC_BIND=close OMP_PLACES=cores
+unset OMP_WAIT_POLICY
+N=$(nproc)
+
+phase machine 1
+{ date -u; uname -a; head -2 /etc/os-release; nproc; lscpu; free -g; ls /sys/devices/system/node/ | grep node; } > "$W/env.txt" 2>&1
+grep -E "Model name|^CPU\(s\)|Thread|Socket|NUMA" "$W/env.txt"
+"$TALUS" --version || { echo "talus does not start: $TALUS"; pack; exit 1; }
+
+ML=""; ST=""
+if g++ -O3 -march=native -fopenmp "$MPM_LIMIT_SRC" -o "$S/mpm_limit" 2>/dev/null &&
+   g++ -O3 -march=native -fopenmp "$STREAM_SRC" -o "$S/stream" 2>/dev/null; then
+  ML=$S/mpm_limit; ST=$S/stream
+fi
+phase references 30 && [ -n "$ST" ] && {
+  for t in 1 2 4 8 "$N"; do echo "STREAM $t threads: $(OMP_NUM_THREADS=$t "$ST") GB/s"; done | tee "$W/stream.txt"
+  for t in 1 "$N"; do echo "mpm_limit 2 colour 20 50 10, $t threads: $(OMP_NUM_THREADS=$t "$ML" 2 colour 20 50 10 | grep -o 'particle-updates/s: [0-9.e+]*')"; done | tee "$W/mpm_limit.txt"
+  pack; }
+
+H005=$W/flume_h005.json; H005BB=$W/flume_h005_block_buffers.json
+python3 tools/make_flume_scene.py --cell 0.005 --name flume_h005 > "$H005"
+python3 tools/make_flume_scene.py --cell 0.005 --scatter block_buffers --name flume_h005_block_buffers > "$H005BB"
+
+phase determinism 45 && {
+  # the outputs (frames, energy, runout, deposit) of 1, 7 and N threads must be the same bits
+  for sc in inputs/denlinger_flume.json@0.03 inputs/denlinger_flume_block_buffers.json@0.03 "$H005BB@0.0015"; do
+    f=${sc%@*}; e=${sc#*@}; b=$(basename "$f" .json); d=$S/det_$b
+    python3 -c "import json; s=json.load(open('$f')); s['time']['end']=$e; s['output']['frame_interval']=$e/3; json.dump(s,open('$d.json','w'))"
+    for t in 1 7 "$N"; do "$TALUS" run "$d.json" --threads $t --quiet --out "${d}_$t" > /dev/null || echo "run failed: $b, $t threads"; done
+    for t in 7 "$N"; do
+      if diff -rq "${d}_1" "${d}_$t" > /dev/null; then echo "determinism $b: 1 vs $t threads identical ($(find "${d}_1" -type f | wc -l) files)"
+      else echo "determinism $b: 1 vs $t threads DIFFER"; fi
+    done
+  done | tee "$W/determinism.txt"
+  pack; }
+
+phase scaling_runs 200 && {
+  python3 tools/scaling_runs.py inputs/denlinger_flume.json@0.1 inputs/denlinger_flume_block_buffers.json@0.1 \
+    "$H005BB@0.004" "$H005@0.004" --talus "$TALUS" --max-threads "$N" --repeat 3 --out "$W" --name scaling_runs_node
+  pack; }
+
+phase scaling_block 100 && {
+  python3 tools/scaling.py --talus "$TALUS" --particles 1000000 --steps 20 --repeat 2 --max-threads "$N" --out "$W" \
+    --name scaling_node_block
+  pack; }
+
+phase scaling_shear 100 && {
+  python3 tools/scaling.py --talus "$TALUS" --particles 1000000 --steps 10 --repeat 2 --max-threads "$N" --out "$W" \
+    --name scaling_node_shear -- --scene shear --material dp
+  pack; }
+
+phase kernels_1thread 60 && {
+  python3 tools/bench_kernels.py --talus "$TALUS" --paths reference,auto --rounds 1 ${ML:+--mpm-limit "$ML"} \
+    ${ST:+--stream "$ST"} --json "$W/kernels_node.json"
+  pack; }
+echo "[$(el) s] done"
+pack
