@@ -179,6 +179,31 @@ TEST(Cli, BenchWritesTheJsonContract) {
 // `talus bench` under mpirun (docs/performance.md "Distributed runs (MPI)"): rank 0 alone prints
 // and writes, the rate counts every rank's particles, the phases are the largest and the mean over
 // the ranks, and the slabs' exchange is reported. Skipped without MPI or mpirun.
+// Under OMP_WAIT_POLICY=PASSIVE every parallel region wakes sleeping threads (about 100 us a region
+// at 16 threads on the 2026-12-04 node): a bench on several threads says so, and its JSON records
+// the policy; on one thread, or with another policy, it says nothing.
+TEST(Cli, BenchNotesAPassiveWaitPolicy) {
+  const char* inherited = std::getenv("OMP_WAIT_POLICY");
+  const std::string saved = inherited ? inherited : "";
+  const fs::path dir = temp_dir("wait_policy");
+  fs::create_directories(dir);
+  const fs::path json = dir / "bench.json";
+  ::setenv("OMP_WAIT_POLICY", "passive", 1);
+  const Result passive = run("bench --particles 2000 --threads 2 --steps 1 --json " + json.string());
+  const Result one_thread = run("bench --particles 2000 --threads 1 --steps 1");
+  ::setenv("OMP_WAIT_POLICY", "active", 1);
+  const Result active = run("bench --particles 2000 --threads 2 --steps 1");
+  if (inherited) ::setenv("OMP_WAIT_POLICY", saved.c_str(), 1); else ::unsetenv("OMP_WAIT_POLICY");
+  const std::string note = "note: OMP_WAIT_POLICY=PASSIVE";
+  ASSERT_EQ(passive.exit_code, 0) << passive.output;
+  EXPECT_NE(passive.output.find(note), std::string::npos) << passive.output;
+  EXPECT_EQ(one_thread.output.find(note), std::string::npos) << one_thread.output;
+  EXPECT_EQ(active.output.find(note), std::string::npos) << active.output;
+  std::ifstream in(json);
+  EXPECT_EQ(nlohmann::json::parse(in)["omp_wait_policy"], "passive");
+  fs::remove_all(dir);
+}
+
 TEST(Cli, BenchUnderMpirunReportsAllRanks) {
   if (!talus::mpi_built() || std::system("command -v mpirun > /dev/null 2>&1") != 0)
     GTEST_SKIP() << "no MPI build or no mpirun";
