@@ -64,7 +64,7 @@ def main():
     top = runs["nproc"]
     for i, res in enumerate(runs["results"]):
         t = [r["threads"] for r in res["rows"]]
-        c = list(res["contention"].items())[0]
+        c = list(res["contention"].items())[-1]  # the largest count's c
         ax1.plot(t, [r["best_speedup"] for r in res["rows"]], "o-", color=f"C{i}",
                  label=f"{res['scene']} ({res['particles']} p.): measured")
         ax1.plot(t, [r["model_speedup_with_contention"] for r in res["rows"]], "x:", color=f"C{i}",

@@ -14,11 +14,15 @@ with OMP_PROC_BIND=spread (threads spread over the sockets: more bandwidth at lo
 arrays are seeded by one thread, so their pages all land on that thread's NUMA node; the transfers hand
 blocks out dynamically, so no thread keeps the same particles anyway. On a multi-socket node run under
 `numactl --interleave=all` (Debian package numactl) to spread the pages over every node's memory
-controller; docs/performance.md ("No many-core measurement yet") says why and what is not measured.
+controller; docs/performance.md ("Memory placement on a multi-socket node") says why and what is not measured.
 Runs unchanged on 2 to 128 cores; thread counts are 1, 2, 4, ... and nproc.
 The model: `talus bench --record-work` at 1 thread (strong scaling size) records the work of every
 block and region; tools/scaling_model.py replays it for each thread count (its fork/join costs are
 measured in the same run up to nproc). The prediction is the 1-thread rate times the model's speed-up.
+A record at every other strong-scaling count T gives the per-core slowdown when T cores work,
+c(T) = block seconds per particle at T threads / at 1 thread, which the work model leaves out; the
+model with c(T) is drawn beside the one without (on the 2026-12-04 node the 1 M benches fell 25-50%
+short of the work model at 16 threads: that slowdown).
 Each bench also measures the STREAM triad at the same thread count (`talus bench --stream`), so the
 CSV shows the MPM speed-up next to the memory-bandwidth speed-up of the same machine in the same run:
 `speedup_vs_stream` = (MPM speed-up) / (STREAM speed-up), the issue's target being >= 0.9 at 2 threads.
@@ -111,22 +115,24 @@ def main():
     os.makedirs(a.out, exist_ok=True)
     counts = thread_counts(a.max_threads)
     record_path = os.path.join(a.out, a.name + "_record.json")
-    record_n_path = os.path.join(a.out, a.name + f"_record_{counts[-1]}.json")
+    record_t_path = os.path.join(a.out, a.name + "_record_t.json")
     rows = []
-    predicted, with_c, c_n = {}, {}, None
+    predicted, with_c, c_t = {}, {}, {}
     for kind in ("strong", "weak"):
         for t in counts:
             n = a.particles if kind == "strong" else a.particles * t
-            # strong scaling records at 1 thread (the model's input) and at N threads (c(N), below)
-            recorded = {1: record_path, counts[-1]: record_n_path} if kind == "strong" else {}
-            runs = [bench(a.talus, n, t, a.steps, a.bench_args, recorded.get(t) if i == 0 else None)
-                    for i in range(a.repeat)]
+            # strong scaling records at 1 thread (the model's input) and at every T > 1 (c(T), below)
+            record = (record_path if t == 1 else record_t_path) if kind == "strong" else None
+            runs = [bench(a.talus, n, t, a.steps, a.bench_args, record if i == 0 else None) for i in range(a.repeat)]
             if kind == "strong" and t == 1:
                 predicted = model_speedups(record_path, counts)
+            elif kind == "strong":
+                # the per-core slowdown when T cores work, which the work model leaves out
+                c_t[t] = contention(record_path, record_t_path)
             if kind == "strong" and t == counts[-1]:
-                # the per-core slowdown when N cores work, which the work model leaves out
-                c_n = contention(record_path, record_n_path) if t > 1 else 1.0
-                with_c = model_speedups(record_path, counts, {t: c_n} if t > 1 else None)
+                with_c = model_speedups(record_path, counts, c_t or None)
+                if os.path.exists(record_t_path):
+                    os.remove(record_t_path)
             r = max(runs, key=lambda x: x["particle_updates_per_second"])
             rows.append({"kind": kind, "threads": t, "particles": r["particles"],
                          "updates_per_second": r["particle_updates_per_second"],
@@ -156,14 +162,15 @@ def main():
     for r in rows:
         if r["kind"] == "strong":
             r["model_speedup_with_contention"] = with_c[r["threads"]]["speedup"]
-    print(f"strong scaling, the model with the measured c({counts[-1]}) = {c_n:.3f}: " +
-          ", ".join(f"{t}: {with_c[t]['speedup']:.2f}" for t in counts))
+    print("strong scaling, the measured per-core slowdown: " + (", ".join(f"c({t}) = {c:.3f}" for t, c in c_t.items())
+                                                                or "none (1 thread)"))
+    print("the model with it: " + ", ".join(f"{t}: {with_c[t]['speedup']:.2f}" for t in counts))
     env = pinned_env()
     with open(os.path.join(a.out, a.name + ".json"), "w") as f:
         json.dump({"omp_proc_bind": env["OMP_PROC_BIND"], "omp_places": env["OMP_PLACES"],
                    "omp_wait_policy": wait_policy, "nproc": os.cpu_count(),
                    "bench_args": a.bench_args, "particles": a.particles, "steps": a.steps, "rows": rows,
-                   "contention": {str(counts[-1]): c_n},
+                   "contention": {str(t): c for t, c in c_t.items()},
                    "model": {str(t): v for t, v in predicted.items()},
                    "model_with_contention": {str(t): v for t, v in with_c.items()}}, f, indent=1)
     print("wrote", os.path.join(a.out, a.name + ".json"))
@@ -189,7 +196,7 @@ def main():
     ax1.plot(threads, model, "x--", color="C3", label="model (strong)")
     ax2.plot(threads, [m / t for m, t in zip(model, threads)], "x--", color="C3", label="model (strong)")
     model_c = [with_c[t]["speedup"] for t in threads]
-    label_c = f"model with c({counts[-1]}) = {c_n:.2f}"
+    label_c = f"model with the measured c(T)" + (f" (c({counts[-1]}) = {c_t[counts[-1]]:.2f})" if c_t else "")
     ax1.plot(threads, model_c, ":", color="C3", label=label_c)
     ax2.plot(threads, [m / t for m, t in zip(model_c, threads)], ":", color="C3", label=label_c)
     ax1.plot(threads, threads, "k--", lw=0.8, label="ideal")

@@ -10,11 +10,14 @@ For each scene (its `time.end` replaced by END, or by --end, so that a node's ti
   1. a run on 1 thread with `--record-work` (every --record-interval-th step): the model's input;
   2. runs on 1, 2, 4, ... and N threads, --repeat times each, alternating the thread counts, timed by
      the rate the run prints (particle-updates per second of wall time, outputs included);
-  3. a run on N threads with `--record-work`: the per-core slowdown when N cores work,
-     c(N) = block seconds per particle at N threads / at 1 thread (tools/scaling_model.py
+  3. a run with `--record-work` at each thread count T > 1 (--contention-at every, the default; `max`:
+     at N alone, as on the 2026-12-04 node): the per-core slowdown when T cores work,
+     c(T) = block seconds per particle at T threads / at 1 thread (tools/scaling_model.py
      --measure-contention), which the work model leaves out;
   4. the model's speed-up at every thread count from the 1-thread record (the run loop's work as its
-     run mean), without and with c(N), printed and drawn beside the best measured speed-up.
+     run mean), without and with c(T), printed and drawn beside the best measured speed-up. (With c
+     measured at N alone, the model takes c = 1 below N: on the node the small flume's 2- and 4-thread
+     runs fell 18-31% short of the model, which a c(2), c(4) would show or rule out.)
 Threads are pinned as in tools/scaling.py (OMP_PROC_BIND=close, OMP_PLACES=cores unless set). Writes
 OUT/NAME.json and OUT/NAME.png. On a 16-core node with the default flume with block buffers and the
 h = 0.005 m flume (tools/make_flume_scene.py --cell 0.005 --scatter block_buffers) at --end 0.1 and
@@ -68,22 +71,27 @@ def measure(a, spec, counts, workdir):
     end = float(end) if end else a.end
     scene, _ = scene_with_end(path, end, workdir)
     name = os.path.splitext(os.path.basename(path))[0]
-    rec1, recn = os.path.join(workdir, "record_1.json"), os.path.join(workdir, f"record_{counts[-1]}.json")
+    rec1, recn = os.path.join(workdir, "record_1.json"), os.path.join(workdir, "record_t.json")
     run(a.talus, scene, 1, workdir, rec1, a.record_interval)
     rates = {t: [] for t in counts}
     for _ in range(a.repeat):
         for t in counts:
             rates[t].append(run(a.talus, scene, t, workdir)[2])
-    run(a.talus, scene, counts[-1], workdir, recn, a.record_interval)
-    r1, rn = json.load(open(rec1)), json.load(open(recn))
-    c = scaling_model.block_seconds_per_particle(rn) / scaling_model.block_seconds_per_particle(r1)
+    r1 = json.load(open(rec1))
+    contention = {}
+    for t in (counts[1:] if a.contention_at == "every" else counts[-1:]):
+        if t > 1:
+            run(a.talus, scene, t, workdir, recn, a.record_interval)
+            contention[t] = (scaling_model.block_seconds_per_particle(json.load(open(recn))) /
+                             scaling_model.block_seconds_per_particle(r1))
     plain = model_speedups(r1, counts)
-    with_c = model_speedups(r1, counts, {counts[-1]: c}) if counts[-1] > 1 else plain
+    with_c = model_speedups(r1, counts, contention) if contention else plain
     base = max(rates[1])
     rows = [{"threads": t, "rates": rates[t], "best_speedup": max(rates[t]) / base, "model_speedup": plain[t],
              "model_speedup_with_contention": with_c[t]} for t in counts]
     return {"scene": name, "file": path, "end": end, "particles": r1["steps"][0]["particles"],
-            "contention": {str(counts[-1]): c}, "fork_join_seconds": r1["fork_join_seconds"], "rows": rows}
+            "contention": {str(t): c for t, c in contention.items()} or {"1": 1.0},
+            "fork_join_seconds": r1["fork_join_seconds"], "rows": rows}
 
 
 def plot(results, path, env):
@@ -99,9 +107,9 @@ def plot(results, path, env):
         t = [r["threads"] for r in res["rows"]]
         ax.plot(t, [r["best_speedup"] for r in res["rows"]], "o-", color=f"C{i}", label=f"{res['scene']}: measured")
         ax.plot(t, [r["model_speedup"] for r in res["rows"]], "x--", color=f"C{i}", label="model")
-        c = list(res["contention"].values())[0]
+        top_t, top_c = list(res["contention"].items())[-1]
         ax.plot(t, [r["model_speedup_with_contention"] for r in res["rows"]], ":", color=f"C{i}",
-                label=f"model with c({list(res['contention'])[0]}) = {c:.2f}")
+                label=f"model with c(T) ({len(res['contention'])} measured; c({top_t}) = {top_c:.2f})")
     top = max(r["threads"] for res in results for r in res["rows"])
     ax.plot([1, top], [1, top], "k--", lw=0.8, label="ideal")
     ticks = sorted({r["threads"] for res in results for r in res["rows"]})
@@ -127,6 +135,8 @@ def main():
     ap.add_argument("--max-threads", type=int, default=os.cpu_count())
     ap.add_argument("--repeat", type=int, default=2, help="runs per thread count (all kept; the best is compared)")
     ap.add_argument("--record-interval", type=int, default=7, help="steps between recorded steps")
+    ap.add_argument("--contention-at", choices=["every", "max"], default="every",
+                    help="thread counts with a record for c(T): every count above 1, or the largest alone")
     ap.add_argument("--out", default="docs/performance")
     ap.add_argument("--name", default="scaling_runs", help="file stem of the JSON and PNG")
     add_wait_policy_argument(ap)
@@ -141,8 +151,8 @@ def main():
         with tempfile.TemporaryDirectory() as workdir:
             res = measure(a, path, counts, workdir)
         results.append(res)
-        c = list(res["contention"].items())[0]
-        print(f"{res['scene']} ({res['particles']} particles, to {res['end']} s): c({c[0]}) = {c[1]:.3f}")
+        cs = ", ".join(f"c({t}) = {c:.3f}" for t, c in res["contention"].items())
+        print(f"{res['scene']} ({res['particles']} particles, to {res['end']} s): {cs}")
         for r in res["rows"]:
             print(f"  {r['threads']:4} threads  best {max(r['rates']) / 1e6:7.3f} M/s  speed-up {r['best_speedup']:6.2f}"
                   f"  model {r['model_speedup']:6.2f}  with c {r['model_speedup_with_contention']:6.2f}", flush=True)
