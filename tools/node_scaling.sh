@@ -6,12 +6,12 @@
 #
 #   TALUS=build/talus BUDGET=510 tools/node_scaling.sh OUT
 #
-# Phases: the machine (lscpu, NUMA nodes); STREAM at 1, 2, 4, 8, N threads and mpm_limit at 1 and N
+# Phases, most needed first: the machine (lscpu, NUMA nodes); STREAM at 1, 2, 4, 8, N threads and mpm_limit at 1 and N
 # (../shared/bench, built with -march=native when g++ is there; MPM_LIMIT_SRC / STREAM_SRC point at the
 # sources); determinism (the outputs of 1, 7 and N threads, same bits, three flumes); tools/scaling_runs.py
-# (the default flume with both scatters to 0.1 s, the h = 0.005 m flume with both to 0.004 s);
-# tools/scaling.py (bench block and shear, strong and weak); issue 18's 1-thread table
-# (tools/bench_kernels.py). OMP_PROC_BIND=close, OMP_PLACES=cores; OMP_WAIT_POLICY is left unset
+# (the default flume with both scatters to 0.1 s, the h = 0.005 m flume with both to 0.0025 s);
+# tools/scaling.py (bench block, strong and weak); issue 18's 1-thread table (tools/bench_kernels.py);
+# the shear bench (tools/scaling.py). Each model's c(T) is measured at every thread count. OMP_PROC_BIND=close, OMP_PLACES=cores; OMP_WAIT_POLICY is left unset
 # (libgomp's own: spin, then sleep), as users run: the 2026-12-04 node ran under PASSIVE by mistake,
 # which measured the waking of sleeping threads (about 100 us per region at 16 threads).
 set -u
@@ -68,19 +68,16 @@ phase determinism 45 && {
   done | tee "$W/determinism.txt"
   pack; }
 
-phase scaling_runs 200 && {
+# (on the 2026-12-04 node: about 290 s for these four scenes with 2 repeats and c(16) alone; the
+# h = 0.005 m flumes dominate, hence 0.0025 s here, with c(T) at every count)
+phase scaling_runs 240 && {
   python3 tools/scaling_runs.py inputs/denlinger_flume.json@0.1 inputs/denlinger_flume_block_buffers.json@0.1 \
-    "$H005BB@0.004" "$H005@0.004" --talus "$TALUS" --max-threads "$N" --repeat 3 --out "$W" --name scaling_runs_node
+    "$H005BB@0.0025" "$H005@0.0025" --talus "$TALUS" --max-threads "$N" --repeat 2 --out "$W" --name scaling_runs_node
   pack; }
 
 phase scaling_block 100 && {
-  python3 tools/scaling.py --talus "$TALUS" --particles 1000000 --steps 20 --repeat 2 --max-threads "$N" --out "$W" \
-    --name scaling_node_block
-  pack; }
-
-phase scaling_shear 100 && {
   python3 tools/scaling.py --talus "$TALUS" --particles 1000000 --steps 10 --repeat 2 --max-threads "$N" --out "$W" \
-    --name scaling_node_shear -- --scene shear --material dp
+    --name scaling_node_block
   pack; }
 
 phase kernels_1thread 80 && {
@@ -88,6 +85,10 @@ phase kernels_1thread 80 && {
   # on the block where the AVX-512 EPYC VM gained 1.94x; is AVX2 faster there?
   python3 tools/bench_kernels.py --talus "$TALUS" --paths reference,avx2,auto --rounds 1 ${ML:+--mpm-limit "$ML"} \
     ${ST:+--stream "$ST"} --json "$W/kernels_node.json"
+  pack; }
+phase scaling_shear 60 && {
+  python3 tools/scaling.py --talus "$TALUS" --particles 1000000 --steps 10 --repeat 1 --max-threads "$N" --out "$W" \
+    --name scaling_node_shear -- --scene shear --material dp
   pack; }
 echo "[$(el) s] done"
 pack
