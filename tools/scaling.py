@@ -3,12 +3,14 @@
 with the scaling model's prediction (tools/scaling_model.py) drawn beside the measurement.
 
     tools/scaling.py [--talus build/talus] [--particles 1000000] [--steps 10] [--max-threads N]
-                     [--out docs/performance] [--name scaling] [-- extra talus bench arguments]
+                     [--out docs/performance] [--name scaling] [--wait-policy unset|active|passive]
+                     [-- extra talus bench arguments]
 
 Strong scaling: fixed particle count, threads 1..N (powers of two and N).
 Weak scaling: particles proportional to the thread count.
 Threads are pinned with OMP_PROC_BIND=close and OMP_PLACES=cores (set them yourself to override; the
-values used are written to the JSON): `close` keeps thread t on core t, so 1..N threads fill the first
+values used are written to the JSON; OMP_WAIT_POLICY is --wait-policy's, unset by default, whatever
+the environment says): `close` keeps thread t on core t, so 1..N threads fill the first
 socket before the second, and STREAM and talus see the same cores. On a multi-socket node, compare
 with OMP_PROC_BIND=spread (threads spread over the sockets: more bandwidth at low counts). The particle
 arrays are seeded by one thread, so their pages all land on that thread's NUMA node; the transfers hand

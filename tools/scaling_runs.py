@@ -4,6 +4,7 @@ the measurement: the companion of tools/scaling.py (which times `talus bench`) f
 
     tools/scaling_runs.py SCENE[@END] [SCENE[@END] ...] [--end 0.1] [--talus build/talus]
                           [--max-threads N] [--repeat 2] [--out docs/performance] [--name scaling_runs]
+                          [--contention-at every|max] [--wait-policy unset|active|passive]
 
 For each scene (its `time.end` replaced by END, or by --end, so that a node's time is not spent on a
 4 s run):
@@ -18,7 +19,8 @@ For each scene (its `time.end` replaced by END, or by --end, so that a node's ti
      run mean), without and with c(T), printed and drawn beside the best measured speed-up. (With c
      measured at N alone, the model takes c = 1 below N: on the node the small flume's 2- and 4-thread
      runs fell 18-31% short of the model, which a c(2), c(4) would show or rule out.)
-Threads are pinned as in tools/scaling.py (OMP_PROC_BIND=close, OMP_PLACES=cores unless set). Writes
+Threads are pinned as in tools/scaling.py (OMP_PROC_BIND=close, OMP_PLACES=cores unless set; the wait
+policy is --wait-policy's, unset by default). Writes
 OUT/NAME.json and OUT/NAME.png. On a 16-core node with the default flume with block buffers and the
 h = 0.005 m flume (tools/make_flume_scene.py --cell 0.005 --scatter block_buffers) at --end 0.1 and
 0.004, it takes a few minutes.
