@@ -17,6 +17,7 @@ import glob
 import json
 import os
 import re
+import sys
 
 RUNS_LINE = re.compile(r"^\s*(\d+) threads\s+best\s+([0-9.]+) M/s\s+speed-up\s+([0-9.]+)\s+model\s+([0-9.]+)\s+with c\s+([0-9.]+)")
 RUNS_HEAD = re.compile(r"^(\S+) \((\d+) particles, to ([0-9.]+) s\): c\((\d+)\) = ([0-9.]+)")
@@ -58,7 +59,11 @@ def main():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    runs = json.load(open(os.path.join(a.dir, "scaling_runs_node.json")))
+    runs_path = os.path.join(a.dir, "scaling_runs_node.json")
+    if not os.path.exists(runs_path):
+        sys.exit(f"plot_node_scaling.py: {runs_path} missing (written by tools/node_scaling.sh: unpack its "
+                 "results.tar.gz into the folder given)")
+    runs = json.load(open(runs_path))
     second = second_sitting(os.path.join(a.dir, "run2_log.txt"))
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.8))
     top = runs["nproc"]
@@ -77,6 +82,8 @@ def main():
                      label="second sitting: model")
 
     for i, (name, label) in enumerate((("scaling_node_block", "block"), ("scaling_node_shear", "shear"))):
+        if not os.path.exists(os.path.join(a.dir, name + ".json")):  # a phase the budget left out
+            continue
         d = json.load(open(os.path.join(a.dir, name + ".json")))
         strong = [r for r in d["rows"] if r["kind"] == "strong"]
         weak = [r for r in d["rows"] if r["kind"] == "weak"]

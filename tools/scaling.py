@@ -37,6 +37,9 @@ import subprocess
 import sys
 import tempfile
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import scaling_model  # noqa: E402
+
 
 def thread_counts(max_threads):
     counts, t = [], 1
@@ -74,12 +77,10 @@ def apply_wait_policy(policy):
     return os.environ.get("OMP_WAIT_POLICY", "unset")
 
 
-def contention(record_1, record_n):
-    """c(N): block seconds per particle at N threads over those at 1 thread (tools/scaling_model.py)."""
-    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-    import scaling_model
-    return (scaling_model.block_seconds_per_particle(json.load(open(record_n))) /
-            scaling_model.block_seconds_per_particle(json.load(open(record_1))))
+def contention(record_1, record_t):
+    """c(T): block seconds per particle of a record at T threads over those of one at 1 thread
+    (tools/scaling_model.py --measure-contention)."""
+    return scaling_model.block_seconds_per_particle(record_t) / scaling_model.block_seconds_per_particle(record_1)
 
 
 def bench(talus, particles, threads, steps, extra, record=None):
@@ -93,8 +94,6 @@ def bench(talus, particles, threads, steps, extra, record=None):
 
 
 def model_speedups(record_path, counts, contention_by_threads=None):
-    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-    import scaling_model
     record = json.load(open(record_path))
     barrier = scaling_model.Barrier(record["fork_join_seconds"], 1e-6)
     rows = scaling_model.model(record, counts, barrier, "recorded", "robust", contention=contention_by_threads)
@@ -130,7 +129,7 @@ def main():
                 predicted = model_speedups(record_path, counts)
             elif kind == "strong":
                 # the per-core slowdown when T cores work, which the work model leaves out
-                c_t[t] = contention(record_path, record_t_path)
+                c_t[t] = contention(json.load(open(record_path)), json.load(open(record_t_path)))
             if kind == "strong" and t == counts[-1]:
                 with_c = model_speedups(record_path, counts, c_t or None)
                 if os.path.exists(record_t_path):

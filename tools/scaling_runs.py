@@ -35,7 +35,7 @@ import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import scaling_model  # noqa: E402
-from scaling import add_wait_policy_argument, apply_wait_policy, pinned_env, thread_counts  # noqa: E402
+from scaling import add_wait_policy_argument, apply_wait_policy, contention as slowdown, pinned_env, thread_counts  # noqa: E402
 
 RATE = re.compile(r"done: (\d+) steps to t = \S+ s in ([0-9.]+) s \(([0-9.]+) M particle-updates/s\)")
 
@@ -84,8 +84,7 @@ def measure(a, spec, counts, workdir):
     for t in (counts[1:] if a.contention_at == "every" else counts[-1:]):
         if t > 1:
             run(a.talus, scene, t, workdir, recn, a.record_interval)
-            contention[t] = (scaling_model.block_seconds_per_particle(json.load(open(recn))) /
-                             scaling_model.block_seconds_per_particle(r1))
+            contention[t] = slowdown(r1, json.load(open(recn)))
     plain = model_speedups(r1, counts)
     with_c = model_speedups(r1, counts, contention) if contention else plain
     base = max(rates[1])

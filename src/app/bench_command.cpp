@@ -19,9 +19,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
-#include <cctype>
 #include <cmath>
-#include <cstdlib>
 #include <functional>
 #include <fstream>
 #include <initializer_list>
@@ -99,15 +97,6 @@ std::string cpu_model() {
   for (std::string line; std::getline(info, line);)
     if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
   return "unknown";
-}
-
-/// OMP_WAIT_POLICY=PASSIVE (any case): libgomp's threads then sleep as soon as a region ends.
-bool passive_wait_policy() {
-  const char* policy = std::getenv("OMP_WAIT_POLICY");
-  if (!policy) return false;
-  std::string value(policy);
-  std::transform(value.begin(), value.end(), value.begin(), [](unsigned char c) { return std::toupper(c); });
-  return value == "PASSIVE";
 }
 
 /// The sand the `dp` material and the column scene use: Abe, Johansson & Konagai 2005, Table 2 (E = 2 MPa, nu = 0.3,
@@ -456,7 +445,7 @@ void run_bench(const BenchOptions& o) {
   j["threads"] = threads;  // per rank
   j["isa"] = active_isa();
   j["clock"] = o.cpu_time ? "process cpu" : "wall";
-  j["omp_wait_policy"] = std::getenv("OMP_WAIT_POLICY") ? std::getenv("OMP_WAIT_POLICY") : "unset";
+  j["omp_wait_policy"] = WorkRecorder::openmp_setting("OMP_WAIT_POLICY");
   j["cpu"] = cpu_model();
   j["wall_seconds"] = wall_max;  // the slowest rank's
   j["particle_updates_per_second"] = rate;
@@ -512,7 +501,7 @@ void run_bench(const BenchOptions& o) {
              o.scene, n, o.shape, o.scheme, o.material,
              o.mls == "off" ? o.mls : fmt::format("{} ({} fit)", o.mls, o.mls_variant), workers, active_isa(), o.steps);
   fmt::print("  {:.3f} M particle-updates/s ({:.3f} s)\n", rate / 1e6, wall_max);
-  if (threads > 1 && passive_wait_policy())
+  if (threads > 1 && WorkRecorder::passive_wait_policy())
     fmt::print("  note: OMP_WAIT_POLICY=PASSIVE: the threads sleep between parallel regions and each region wakes them "
                "(13-100 us a region on a 16-core VM): unset it to time talus rather than the wake-ups\n");
   if (!world.distributed()) {

@@ -228,12 +228,22 @@ nlohmann::json WorkRecorder::threading_meta() {
   meta["fork_join_seconds"] = measure_fork_join(max_threads);  // index = thread count (0 unused)
   meta["barrier_seconds"] = measure_barrier(max_threads);
   for (const char* name : {"OMP_WAIT_POLICY", "OMP_PROC_BIND", "OMP_PLACES"}) {
-    const char* value = std::getenv(name);
     std::string key(name);
     std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return std::tolower(c); });
-    meta[key] = value ? value : "unset";
+    meta[key] = openmp_setting(name);
   }
   return meta;
+}
+
+std::string WorkRecorder::openmp_setting(const char* name) {
+  const char* value = std::getenv(name);
+  return value ? value : "unset";
+}
+
+bool WorkRecorder::passive_wait_policy() {
+  std::string value = openmp_setting("OMP_WAIT_POLICY");
+  std::transform(value.begin(), value.end(), value.begin(), [](unsigned char c) { return std::toupper(c); });
+  return value == "PASSIVE";
 }
 
 }  // namespace talus

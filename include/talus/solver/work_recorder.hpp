@@ -86,6 +86,10 @@ class WorkRecorder {
   /// The wait policy matters most: with OMP_WAIT_POLICY=PASSIVE every region wakes sleeping
   /// threads (13 µs at 2 threads, about 100 µs at 16, measured on a 16-core VM).
   static nlohmann::json threading_meta();
+  /// An OpenMP setting as the environment gives it (e.g. "OMP_WAIT_POLICY"), "unset" where unset.
+  static std::string openmp_setting(const char* name);
+  /// OMP_WAIT_POLICY=PASSIVE (any case): the threads sleep as soon as a region ends.
+  static bool passive_wait_policy();
 
   /// The record as JSON ("format": "talus-work-record/1"); `meta` is merged in.
   nlohmann::json to_json(const nlohmann::json& meta) const;
