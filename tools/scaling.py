@@ -62,7 +62,7 @@ def add_wait_policy_argument(ap):
                     help="OMP_WAIT_POLICY of every run; unset (the default): libgomp's own, threads spin a while "
                          "before they sleep, as users run. An OMP_WAIT_POLICY in the environment is ignored "
                          "unless given here: with PASSIVE every parallel region wakes sleeping threads, which "
-                         "cost 13 us at 2 and about 100 us at 16 threads on the 16-core VM of 2026-12-04, and "
+                         "cost 11-15 us at 2 and 38-218 us at 16 threads on the 16-core VM of 2026-12-04, and "
                          "the measurement is then of that, not of talus")
 
 

@@ -503,7 +503,7 @@ void run_bench(const BenchOptions& o) {
   fmt::print("  {:.3f} M particle-updates/s ({:.3f} s)\n", rate / 1e6, wall_max);
   if (threads > 1 && WorkRecorder::passive_wait_policy())
     fmt::print("  note: OMP_WAIT_POLICY=PASSIVE: the threads sleep between parallel regions and each region wakes them "
-               "(13-100 us a region on a 16-core VM): unset it to time talus rather than the wake-ups\n");
+               "(11-15 us a region at 2 threads, 38-218 us at 16 on a 16-core VM): unset it to time talus rather than the wake-ups\n");
   if (!world.distributed()) {
     const double total = solver.phase_times().total();
     for (int p = 0; p < other; ++p)

@@ -84,7 +84,7 @@ class WorkRecorder {
   /// fork_join_seconds and barrier_seconds (above), and the OpenMP settings they depend on
   /// (omp_wait_policy, omp_proc_bind, omp_places: the environment's values, "unset" where unset).
   /// The wait policy matters most: with OMP_WAIT_POLICY=PASSIVE every region wakes sleeping
-  /// threads (13 µs at 2 threads, about 100 µs at 16, measured on a 16-core VM).
+  /// threads (11–15 µs at 2 threads, 38–218 µs at 16, measured on a 16-core VM).
   static nlohmann::json threading_meta();
   /// An OpenMP setting as the environment gives it (e.g. "OMP_WAIT_POLICY"), "unset" where unset.
   static std::string openmp_setting(const char* name);
