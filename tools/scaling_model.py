@@ -22,9 +22,10 @@ The model, per region, for T threads (the record taken at T_rec threads, normall
            of handing out the blocks) spread evenly over the blocks as their work when T_rec = 1
            (--loop-overhead per-block, the default; `serial` keeps it serial, the model before
            2026-12-04); plus one fork/join + barrier b(T).
-  static:  the loop's work W = (wall - k b(T_rec)) * min(T_rec, n) split in T contiguous parts of
-           ceil(n/T) iterations (what `schedule(static)` does): W ceil(n/T)/n, plus k b(T) for its k
-           parallel loops.
+  static:  the loop's work W = (wall - k b(T_rec) - m B(T_rec)) * min(T_rec, n) split in T contiguous
+           parts of ceil(n/T) iterations (what `schedule(static)` does): W ceil(n/T)/n, plus k b(T)
+           for its k parallel regions and m B(T) for the m barriers between the loops inside them
+           (the grid phase: one region of `omp for` loops, grid/tile_stages.hpp).
   serial:  its time.
 A dynamic region that runs inside a region opened before it (the colour passes after the first share
 one parallel region) adds a barrier B(T) instead: an empty `omp for` in an open region, measured alike
@@ -184,13 +185,13 @@ def predict_step(step, threads, barrier, t_rec, schedule, work, contention=1.0, 
             terms["imbalance"] += max(span - total / threads, 0.0)
             terms["sync"] += k * barrier(threads) + m * inner(threads)
             terms["serial"] += overhead
-        else:  # static
+        else:  # static; m: barriers between the loops of one region (the grid phase's TileStages)
             n = max(int(r["items"]), 1)
-            w = max(r["seconds"] - k * barrier(t_rec), 0.0) * min(t_rec, n) * contention
+            w = max(r["seconds"] - k * barrier(t_rec) - m * inner(t_rec), 0.0) * min(t_rec, n) * contention
             span = w * math.ceil(n / threads) / n
             terms["ideal"] += w / threads
             terms["imbalance"] += span - w / threads
-            terms["sync"] += k * barrier(threads)
+            terms["sync"] += k * barrier(threads) + m * inner(threads)
     # glue between the listed regions, less the recorder's own bookkeeping (not in an unrecorded step)
     terms["serial"] += max(step["seconds"] - listed - step.get("recorder_seconds", 0.0), 0.0)
     return terms

@@ -7,145 +7,164 @@ namespace talus {
 
 namespace {
 
-/// Runs node_update(n, node_ijk) on every node of every active tile in parallel; sums the returned
-/// energies tile by tile in a fixed order, so the total does not depend on the thread count.
+/// node_update(n, tile, slot) on every node of active tile t, in slot order; returns the sum of what
+/// it returns (the tile's energy).
 template <class NodeUpdate>
-double for_active_nodes(const Grid& grid, NodeUpdate node_update, const Walls* only_near_mirrored_walls = nullptr,
-                        const std::vector<std::uint8_t>& counted = {}) {
-  const auto& tiles = grid.active_tiles();
-  const std::size_t count = tiles.size();
-  std::vector<double> tile_energy(count, 0.0);
-#pragma omp parallel for schedule(static)
-  for (std::size_t t = 0; t < count; ++t) {
-    if (only_near_mirrored_walls) {  // skip the tiles far from every mirrored wall (most of them)
-      const auto first = grid.node_of(tiles[t], 0);
-      if (!only_near_mirrored_walls->near_mirrored_face(first, kTileEdge)) continue;
-    }
-    double energy = 0.0;
-    const std::size_t begin = static_cast<std::size_t>(tiles[t]) * kTileNodes;
-    for (int s = 0; s < kTileNodes; ++s) energy += node_update(begin + s, tiles[t], s);
-    tile_energy[t] = energy;
-  }
-  double total = 0.0;
-  for (std::size_t t = 0; t < count; ++t)
-    if (counted.empty() || counted[t]) total += tile_energy[t];
-  return total;
+double for_tile_nodes(const Grid& grid, std::size_t t, NodeUpdate&& node_update) {
+  const std::uint32_t tile = grid.active_tiles()[t];
+  const std::size_t begin = static_cast<std::size_t>(tile) * kTileNodes;
+  double energy = 0.0;
+  for (int s = 0; s < kTileNodes; ++s) energy += node_update(begin + s, tile, s);
+  return energy;
+}
+
+/// Active tile t holds nodes near a mirrored wall (most tiles do not: the ghost stages skip them).
+bool near_mirrored_wall(const Grid& grid, const Walls& walls, std::size_t t) {
+  return walls.near_mirrored_face(grid.node_of(grid.active_tiles()[t], 0), kTileEdge);
 }
 
 }  // namespace
 
+void add_grid_update(TileStages& stages, Grid& grid, const Walls& walls, const Vec3& gravity, double dt,
+                     double mass_floor, bool zero_momentum, std::vector<double>& tile_work) {
+  tile_work.assign(grid.active_tiles().size(), 0.0);
+  stages.add(TileReach::OwnTile, [&grid, &walls, &tile_work, gravity, dt, mass_floor, zero_momentum](std::size_t t) {
+    tile_work[t] = for_tile_nodes(grid, t, [&](std::size_t n, std::uint32_t tile, int slot) {
+      // the node's record and its v^L record, read and written in place (NodeField's run-time
+      // stride made this loop 1.8x slower)
+      double* const record = grid.record(n);
+      double* const lagrangian = grid.lagrangian_record(n);
+      const double m = record[kMassSlot];
+      if (m <= mass_floor) {
+        for (int d = 0; d < 3; ++d) record[kMomentumSlot + d] = record[kForceSlot + d] = lagrangian[d] = 0.0;
+        return 0.0;
+      }
+      double v[3], vl[3];
+      for (int d = 0; d < 3; ++d) {
+        v[d] = record[kMomentumSlot + d] / m;
+        vl[d] = v[d] + (record[kForceSlot + d] / m + gravity[d]) * dt;
+      }
+      double removed = 0.0;
+      const auto node = grid.node_of(tile, slot);
+      if (walls.touches(node)) removed = walls.apply(node, vl, Walls::Stage::GridUpdate, m, v);
+      for (int d = 0; d < 3; ++d) {
+        record[kMomentumSlot + d] = zero_momentum ? 0.0 : v[d];
+        record[kForceSlot + d] = vl[d] - v[d];
+        lagrangian[d] = vl[d];
+      }
+      return removed;
+    });
+  });
+}
+
+double counted_work(const std::vector<double>& tile_work, const std::vector<std::uint8_t>& counted) {
+  double total = 0.0;
+  for (std::size_t t = 0; t < tile_work.size(); ++t)
+    if (counted.empty() || counted[t]) total += tile_work[t];
+  return total;
+}
+
 double update_grid(Grid& grid, const Walls& walls, const Vec3& gravity, double dt, double mass_floor,
                    const std::vector<std::uint8_t>& counted, bool zero_momentum) {
-  return for_active_nodes(grid, [&](std::size_t n, std::uint32_t tile, int slot) {
-    // the node's record and its v^L record, read and written in place (NodeField's run-time
-    // stride made this loop 1.8x slower)
-    double* const record = grid.record(n);
-    double* const lagrangian = grid.lagrangian_record(n);
-    const double m = record[kMassSlot];
-    if (m <= mass_floor) {
-      for (int d = 0; d < 3; ++d) record[kMomentumSlot + d] = record[kForceSlot + d] = lagrangian[d] = 0.0;
-      return 0.0;
-    }
-    double v[3], vl[3];
-    for (int d = 0; d < 3; ++d) {
-      v[d] = record[kMomentumSlot + d] / m;
-      vl[d] = v[d] + (record[kForceSlot + d] / m + gravity[d]) * dt;
-    }
-    double removed = 0.0;
-    const auto node = grid.node_of(tile, slot);
-    if (walls.touches(node)) removed = walls.apply(node, vl, Walls::Stage::GridUpdate, m, v);
-    for (int d = 0; d < 3; ++d) {
-      record[kMomentumSlot + d] = zero_momentum ? 0.0 : v[d];
-      record[kForceSlot + d] = vl[d] - v[d];
-      lagrangian[d] = vl[d];
-    }
-    return removed;
-  }, nullptr, counted);
+  TileStages stages(grid.active_tiles().size());
+  std::vector<double> tile_work;
+  add_grid_update(stages, grid, walls, gravity, dt, mass_floor, zero_momentum, tile_work);
+  stages.run();
+  return counted_work(tile_work, counted);
 }
 
 namespace {
 
 /// v = momentum / m with the walls at `stage`, written into `target` (zero on empty nodes). For the
 /// remap, `velocity_l` still holds this step's v^L: the contact state of the grid update.
-void wall_projected_velocities(Grid& grid, const Walls& walls, double mass_floor, Walls::Stage stage,
-                               NodeVectors& target) {
-  for_active_nodes(grid, [&](std::size_t n, std::uint32_t tile, int slot) {
-    const double m = grid.mass[n];
-    if (m <= mass_floor) {
-      for (int d = 0; d < 3; ++d) target[d][n] = 0.0;
+void add_wall_projected_velocities(TileStages& stages, Grid& grid, const Walls& walls, double mass_floor,
+                                   Walls::Stage stage, NodeVectors& target) {
+  stages.add(TileReach::OwnTile, [&grid, &walls, &target, mass_floor, stage](std::size_t t) {
+    for_tile_nodes(grid, t, [&](std::size_t n, std::uint32_t tile, int slot) {
+      const double m = grid.mass[n];
+      if (m <= mass_floor) {
+        for (int d = 0; d < 3; ++d) target[d][n] = 0.0;
+        return 0.0;
+      }
+      double v[3] = {grid.momentum[0][n] / m, grid.momentum[1][n] / m, grid.momentum[2][n] / m};
+      const auto node = grid.node_of(tile, slot);
+      if (walls.touches(node)) {
+        const double vl[3] = {grid.velocity_l[0][n], grid.velocity_l[1][n], grid.velocity_l[2][n]};
+        walls.apply(node, v, stage, 0.0, nullptr, vl);
+      }
+      for (int d = 0; d < 3; ++d) target[d][n] = v[d];
       return 0.0;
-    }
-    double v[3] = {grid.momentum[0][n] / m, grid.momentum[1][n] / m, grid.momentum[2][n] / m};
-    const auto node = grid.node_of(tile, slot);
-    if (walls.touches(node)) {
-      const double vl[3] = {grid.velocity_l[0][n], grid.velocity_l[1][n], grid.velocity_l[2][n]};
-      walls.apply(node, v, stage, 0.0, nullptr, vl);
-    }
-    for (int d = 0; d < 3; ++d) target[d][n] = v[d];
-    return 0.0;
+    });
   });
 }
 
 }  // namespace
 
-void velocities_from_momentum(Grid& grid, const Walls& walls, double mass_floor) {
-  wall_projected_velocities(grid, walls, mass_floor, Walls::Stage::Remap, grid.momentum);
+void add_velocities_from_momentum(TileStages& stages, Grid& grid, const Walls& walls, double mass_floor) {
+  add_wall_projected_velocities(stages, grid, walls, mass_floor, Walls::Stage::Remap, grid.momentum);
 }
 
-void fold_ghost_nodes(Grid& grid, const Walls& walls, ScatteredFields fields, const Vec3& gravity) {
+void add_start_velocities(TileStages& stages, Grid& grid, const Walls& walls, double mass_floor) {
+  add_wall_projected_velocities(stages, grid, walls, mass_floor, Walls::Stage::Start, grid.velocity_l);
+}
+
+void add_fold_ghost_nodes(TileStages& stages, Grid& grid, const Walls& walls, ScatteredFields fields,
+                          const Vec3& gravity) {
   if (!walls.has_mirrored_walls()) return;
-  const auto [mass, momentum, force] = fields;
-  for_active_nodes(grid, [&](std::size_t n, std::uint32_t tile, int slot) {
-    std::array<std::array<int, 3>, 7> ghosts;
-    std::array<std::array<double, 3>, 7> signs;
-    const int count = walls.ghosts_of(grid.node_of(tile, slot), ghosts, signs);
-    for (int g = 0; g < count; ++g) {
-      // Each ghost has exactly one image, so this thread is the only one touching it: its values
-      // are moved (not copied) to the image, and the ghost is left empty until the mirror.
-      const std::size_t m = grid.node(ghosts[g][0], ghosts[g][1], ghosts[g][2]);
-      const auto& S = signs[g];
-      if (mass) {
-        grid.mass[n] += grid.mass[m];
-        // the body force on the ghost's share acts on the image with the factor S; update_grid
-        // adds g to the image as an acceleration of the whole folded mass, so add (S - 1) m_g g
-        for (int d = 0; d < 3; ++d) grid.force[d][n] += (S[d] - 1.0) * grid.mass[m] * gravity[d];
-        grid.mass[m] = 0.0;
-      }
-      for (int d = 0; d < 3; ++d) {
-        if (momentum) {
-          grid.momentum[d][n] += S[d] * grid.momentum[d][m];
-          grid.momentum[d][m] = 0.0;
+  stages.add(TileReach::AnyTile, [&grid, &walls, fields, gravity](std::size_t t) {
+    if (!near_mirrored_wall(grid, walls, t)) return;
+    const auto [mass, momentum, force] = fields;
+    for_tile_nodes(grid, t, [&](std::size_t n, std::uint32_t tile, int slot) {
+      std::array<std::array<int, 3>, 7> ghosts;
+      std::array<std::array<double, 3>, 7> signs;
+      const int count = walls.ghosts_of(grid.node_of(tile, slot), ghosts, signs);
+      for (int g = 0; g < count; ++g) {
+        // Each ghost has exactly one image, so this thread is the only one touching it: its values
+        // are moved (not copied) to the image, and the ghost is left empty until the mirror.
+        const std::size_t m = grid.node(ghosts[g][0], ghosts[g][1], ghosts[g][2]);
+        const auto& S = signs[g];
+        if (mass) {
+          grid.mass[n] += grid.mass[m];
+          // the body force on the ghost's share acts on the image with the factor S; the grid update
+          // adds g to the image as an acceleration of the whole folded mass, so add (S - 1) m_g g
+          for (int d = 0; d < 3; ++d) grid.force[d][n] += (S[d] - 1.0) * grid.mass[m] * gravity[d];
+          grid.mass[m] = 0.0;
         }
-        if (force) {
-          grid.force[d][n] += S[d] * grid.force[d][m];
-          grid.force[d][m] = 0.0;
+        for (int d = 0; d < 3; ++d) {
+          if (momentum) {
+            grid.momentum[d][n] += S[d] * grid.momentum[d][m];
+            grid.momentum[d][m] = 0.0;
+          }
+          if (force) {
+            grid.force[d][n] += S[d] * grid.force[d][m];
+            grid.force[d][m] = 0.0;
+          }
         }
       }
-    }
-    return 0.0;
-  }, &walls);
+      return 0.0;
+    });
+  });
 }
 
-void mirror_ghost_nodes(Grid& grid, const Walls& walls, GhostFields fields) {
+void add_mirror_ghost_nodes(TileStages& stages, Grid& grid, const Walls& walls, GhostFields fields) {
   if (!walls.has_mirrored_walls()) return;
   std::vector<NodeVectors*> targets;
   if (fields == GhostFields::AfterGridUpdate) targets = {&grid.momentum, &grid.force, &grid.velocity_l};
   if (fields == GhostFields::AfterGridUpdateForRemap) targets = {&grid.force, &grid.velocity_l};
   if (fields == GhostFields::Remapped) targets = {&grid.momentum};
   if (fields == GhostFields::Start) targets = {&grid.velocity_l};
-  for_active_nodes(grid, [&](std::size_t n, std::uint32_t tile, int slot) {
-    std::array<int, 3> image;
-    std::array<double, 3> sign;
-    if (!walls.mirror(grid.node_of(tile, slot), image, sign)) return 0.0;
-    const std::size_t m = grid.node(image[0], image[1], image[2]);
-    for (auto* field : targets)
-      for (int d = 0; d < 3; ++d) (*field)[d][n] = sign[d] * (*field)[d][m];
-    return 0.0;
-  }, &walls);
-}
-
-void start_velocities(Grid& grid, const Walls& walls, double mass_floor) {
-  wall_projected_velocities(grid, walls, mass_floor, Walls::Stage::Start, grid.velocity_l);
+  stages.add(TileReach::AnyTile, [&grid, &walls, targets](std::size_t t) {
+    if (!near_mirrored_wall(grid, walls, t)) return;
+    for_tile_nodes(grid, t, [&](std::size_t n, std::uint32_t tile, int slot) {
+      std::array<int, 3> image;
+      std::array<double, 3> sign;
+      if (!walls.mirror(grid.node_of(tile, slot), image, sign)) return 0.0;
+      const std::size_t m = grid.node(image[0], image[1], image[2]);
+      for (auto* field : targets)
+        for (int d = 0; d < 3; ++d) (*field)[d][n] = sign[d] * (*field)[d][m];
+      return 0.0;
+    });
+  });
 }
 
 }  // namespace talus

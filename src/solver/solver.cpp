@@ -38,9 +38,11 @@ CellSort make_cell_sort(const Grid& grid, ShapeKind shape, int block_cells) {
 }
 
 // Runs f(); when `recorder` is recording this step, adds it as a region of the given schedule
-// (items: the loop length of a static region; regions: its parallel regions).
+// (items: the loop length of a static region; regions: its parallel regions; barriers: those
+// between its loops inside a region).
 template <class F>
-void recorded(WorkRecorder* recorder, RegionSchedule schedule, const char* name, std::size_t items, int regions, F&& f) {
+void recorded(WorkRecorder* recorder, RegionSchedule schedule, const char* name, std::size_t items, int regions, F&& f,
+              int barriers = 0) {
   if (!recorder) {
     f();
     return;
@@ -51,7 +53,13 @@ void recorded(WorkRecorder* recorder, RegionSchedule schedule, const char* name,
   if (schedule == RegionSchedule::Serial)
     recorder->add_serial(name, seconds);
   else
-    recorder->add_static(name, items, regions, seconds);
+    recorder->add_static(name, items, regions, seconds, barriers);
+}
+
+// Runs the stages of a grid phase (one parallel region), recorded as a static region over `tiles`.
+void run_stages(WorkRecorder* recorder, const char* name, std::size_t tiles, const TileStages& stages) {
+  if (stages.empty()) return;
+  recorded(recorder, RegionSchedule::Static, name, tiles, 1, [&] { stages.run(); }, stages.loops() - 1);
 }
 
 }  // namespace
@@ -391,15 +399,23 @@ void Solver::step_with(double dt) {
   WorkRecorder* const rec = recording();
   ColourPassTiming* const timing = rec ? &pass_timing_ : nullptr;
   const std::size_t tiles = grid_.active_tiles().size();
-  const int mirrored = walls_.has_mirrored_walls() ? 1 : 0;
   BlockBuffers* const buffers = block_buffers();
-  // After a scatter: its record, and with block buffers the sum of the boxes into the grid.
+  // After a scatter: its record, and the stages of the node work that follows it, which the caller
+  // adds to and runs in one parallel region (run_stages). With block buffers the first stage is
+  // the sum of the boxes into the grid; on several ranks that sum runs on its own, so that the
+  // nodes the ranks share are summed across them (sum_shared_nodes) before the stages read them.
   // `clear_first`: the box sum zeroes each tile before its sums (the step's grid clear, folded in).
-  auto add_block_buffers = [&](WorkRecorder* r, const char* name, ScatteredFields fields, bool clear_first = false) {
-    if (r) r->add_colour_passes(name, pass_timing_, sort_, buffers != nullptr);
-    if (buffers)
-      recorded(r, RegionSchedule::Static, (std::string(name) + " box sum").c_str(), tiles, 1,
-               [&] { buffers->add_to_grid(grid_, fields, clear_first); });
+  auto after_scatter = [&](const char* name, ScatteredFields fields, const std::vector<NodeField>& shared,
+                           bool clear_first = false) {
+    if (rec) rec->add_colour_passes(name, pass_timing_, sort_, buffers != nullptr);
+    TileStages stages(tiles);
+    if (buffers) buffers->add_sum_stage(stages, grid_, fields, clear_first);
+    if (comm_.distributed()) {
+      run_stages(rec, (std::string(name) + " box sum").c_str(), tiles, stages);
+      stages = TileStages(tiles);
+      sum_shared_nodes(shared);
+    }
+    return stages;
   };
   // The grid is cleared before the first scatter of the step. With block buffers the scatter
   // writes only the boxes, so the clear can wait for the box sum, tile by tile, in its loop.
@@ -407,38 +423,44 @@ void Solver::step_with(double dt) {
   auto clear_grid = [&] {
     if (!clear_in_box_sum) recorded(rec, RegionSchedule::Static, "grid clear", tiles, 1, [&] { grid_.clear_active(); });
   };
+  const std::vector<NodeField> mass_momentum = {grid_.mass, grid_.momentum[0], grid_.momentum[1], grid_.momentum[2]};
+  const std::vector<NodeField> force = {grid_.force[0], grid_.force[1], grid_.force[2]};
 
   // 2. P2G: nodal mass, momentum and internal force. USF / USAVG update the stress in between,
   //    from the start-of-step nodal velocities (walls applied), before scattering the force.
+  //    The node work after each scatter (the box sum, the ghost fold, the velocities and the
+  //    mirror) runs as the stages of one parallel region, timed in the grid phase.
+  TileStages grid_stages(tiles);
   if (!scheme.stress_first) {
-    ScopedPhase timer(times_, Phase::P2G);
-    clear_grid();
-    scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentumForce, timing, buffers);
-    add_block_buffers(rec, "p2g", {.mass = true, .momentum = true, .force = true}, clear_in_box_sum);
-    sum_shared_nodes({grid_.mass, grid_.momentum[0], grid_.momentum[1], grid_.momentum[2], grid_.force[0],
-                      grid_.force[1], grid_.force[2]});
-    recorded(rec, RegionSchedule::Static, "fold ghosts", tiles, mirrored,
-             [&] { fold_ghost_nodes(grid_, walls_, {.mass = true, .momentum = true, .force = true}, gravity); });
+    {
+      ScopedPhase timer(times_, Phase::P2G);
+      clear_grid();
+      scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentumForce, timing, buffers);
+      std::vector<NodeField> shared = mass_momentum;
+      shared.insert(shared.end(), force.begin(), force.end());
+      grid_stages = after_scatter("p2g", {.mass = true, .momentum = true, .force = true}, shared, clear_in_box_sum);
+    }
+    add_fold_ghost_nodes(grid_stages, grid_, walls_, {.mass = true, .momentum = true, .force = true}, gravity);
   } else {
+    TileStages start_stages(tiles);
     {
       ScopedPhase timer(times_, Phase::P2G);
       clear_grid();
       scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentum, timing, buffers);
-      add_block_buffers(rec, "p2g mass momentum", {.mass = true, .momentum = true}, clear_in_box_sum);
-      sum_shared_nodes({grid_.mass, grid_.momentum[0], grid_.momentum[1], grid_.momentum[2]});
-      recorded(rec, RegionSchedule::Static, "start velocities", tiles, 1 + 2 * mirrored, [&] {
-        fold_ghost_nodes(grid_, walls_, {.mass = true, .momentum = true}, gravity);
-        start_velocities(grid_, walls_, mass_floor_);
-        mirror_ghost_nodes(grid_, walls_, GhostFields::Start);
-      });
+      start_stages = after_scatter("p2g mass momentum", {.mass = true, .momentum = true}, mass_momentum, clear_in_box_sum);
+    }
+    {
+      ScopedPhase timer(times_, Phase::Grid);
+      add_fold_ghost_nodes(start_stages, grid_, walls_, {.mass = true, .momentum = true}, gravity);
+      add_start_velocities(start_stages, grid_, walls_, mass_floor_);
+      add_mirror_ghost_nodes(start_stages, grid_, walls_, GhostFields::Start);
+      run_stages(rec, "start velocities", tiles, start_stages);
     }
     update_stress<Shape, Terrain>(grid_.start_velocity(), stress_dt, false);
     ScopedPhase timer(times_, Phase::P2G);
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Force, timing, buffers);
-    add_block_buffers(rec, "p2g force", {.force = true});
-    sum_shared_nodes({grid_.force[0], grid_.force[1], grid_.force[2]});
-    recorded(rec, RegionSchedule::Static, "fold ghosts", tiles, mirrored,
-             [&] { fold_ghost_nodes(grid_, walls_, {.force = true}, gravity); });
+    grid_stages = after_scatter("p2g force", {.force = true}, force);
+    add_fold_ghost_nodes(grid_stages, grid_, walls_, {.force = true}, gravity);
   }
   // 3. grid: velocities, accelerations with gravity, walls.
   // With a remap the grid update leaves the momentum at zero (ghost nodes included, and the
@@ -446,13 +468,15 @@ void Solver::step_with(double dt) {
   const bool remap = scheme.remap;
   {
     ScopedPhase timer(times_, Phase::Grid);
-    recorded(rec, RegionSchedule::Static, "grid update", tiles, 1 + mirrored, [&] {
-      work_.friction_work += update_grid(grid_, walls_, gravity, dt, mass_floor_, exchange_.counted(), remap);
-      mirror_ghost_nodes(grid_, walls_, remap ? GhostFields::AfterGridUpdateForRemap : GhostFields::AfterGridUpdate);
-    });
+    add_grid_update(grid_stages, grid_, walls_, gravity, dt, mass_floor_, remap, tile_work_);
+    add_mirror_ghost_nodes(grid_stages, grid_, walls_,
+                           remap ? GhostFields::AfterGridUpdateForRemap : GhostFields::AfterGridUpdate);
+    run_stages(rec, "grid update", tiles, grid_stages);
+    work_.friction_work += counted_work(tile_work_, exchange_.counted());
   }
   // 4. G2P: particle velocities and this step's displacement. MUSL and USAVG scatter the new
   //    momentum for the remap in the same pass (the weights are those of x_p^k in both).
+  TileStages remap_stages(tiles);
   {
     ScopedPhase timer(times_, Phase::G2P);
     GatherOptions options = gather_limits_;
@@ -464,7 +488,7 @@ void Solver::step_with(double dt) {
         gather_from_grid<Shape, Terrain>(particles_, sort_, grid_, displacement(), block_damping_, options, timing,
                                          remap ? buffers : nullptr);
     if (remap)
-      add_block_buffers(rec, "g2p", {.momentum = true});
+      remap_stages = after_scatter("g2p", {.momentum = true}, {grid_.momentum[0], grid_.momentum[1], grid_.momentum[2]});
     else if (rec)
       rec->add_colour_passes("g2p", pass_timing_, sort_, true);
     if (options.pic_fraction > 0.0)
@@ -480,12 +504,10 @@ void Solver::step_with(double dt) {
   NodeVectors node_velocity = grid_.lagrangian_velocity();
   if (remap) {
     ScopedPhase timer(times_, Phase::Remap);
-    sum_shared_nodes({grid_.momentum[0], grid_.momentum[1], grid_.momentum[2]});
-    recorded(rec, RegionSchedule::Static, "remap grid", tiles, 1 + 2 * mirrored, [&] {
-      fold_ghost_nodes(grid_, walls_, {.momentum = true}, gravity);
-      velocities_from_momentum(grid_, walls_, mass_floor_);
-      mirror_ghost_nodes(grid_, walls_, GhostFields::Remapped);
-    });
+    add_fold_ghost_nodes(remap_stages, grid_, walls_, {.momentum = true}, gravity);
+    add_velocities_from_momentum(remap_stages, grid_, walls_, mass_floor_);
+    add_mirror_ghost_nodes(remap_stages, grid_, walls_, GhostFields::Remapped);
+    run_stages(rec, "remap grid", tiles, remap_stages);
     node_velocity = grid_.velocity();
   }
   // 6. strain (and its MLS smoothing when enabled) and stress, then move the particles (USF: only

@@ -42,7 +42,7 @@ void WorkRecorder::end_step(double seconds) {
   active_ = false;
 }
 
-void WorkRecorder::add_static(const char* name, std::size_t items, int parallel_regions, double seconds) {
+void WorkRecorder::add_static(const char* name, std::size_t items, int parallel_regions, double seconds, int barriers) {
   if (!active_) return;
   const OwnTime own(steps_.back().recorder_seconds);
   WorkRegion r;
@@ -50,6 +50,7 @@ void WorkRecorder::add_static(const char* name, std::size_t items, int parallel_
   r.schedule = RegionSchedule::Static;
   r.items = items;
   r.parallel_regions = parallel_regions;
+  r.barriers = barriers;
   r.seconds = seconds;
   steps_.back().regions.push_back(std::move(r));
 }

@@ -150,38 +150,34 @@ void BlockBuffers::prepare(const CellSort& sort, const Grid& grid) {
 
 namespace {
 
+/// Tile group g's runs added into the grid, in ascending block order: every node receives its boxes
+/// in ascending block order, whichever thread holds the tile. Cleared first, the tile starts from
+/// zeros as after Grid::clear_active, so the sums have the same bits.
 template <bool kMass, bool kMomentum, bool kForce>
-void add_runs(const double* boxes, const auto& runs, const std::vector<std::uint32_t>& starts,
-              const std::vector<std::uint32_t>& tiles, const std::vector<std::array<int, 6>>& written, Grid& grid,
-              bool clear_first) {
-  const std::size_t groups = starts.empty() ? 0 : starts.size() - 1;
+void add_tile_runs(const double* boxes, const auto& runs, const std::vector<std::uint32_t>& starts,
+                   const std::vector<std::uint32_t>& tiles, const std::vector<std::array<int, 6>>& written, Grid& grid,
+                   bool clear_first, std::size_t g) {
   double* const records = grid.records();
-  // One tile per iteration, its runs in ascending block order: every node receives its boxes in
-  // ascending block order, whichever thread holds the tile. Cleared first, the tile starts from
-  // zeros as after Grid::clear_active, so the sums have the same bits.
-#pragma omp parallel for schedule(static)
-  for (std::size_t g = 0; g < groups; ++g) {
-    if (clear_first) grid.clear_tile(tiles[g]);
-    for (std::size_t e = starts[g]; e < starts[g + 1]; ++e) {
-      // Only the nodes the box's scatter wrote (the others hold zeros: adding them changes nothing,
-      // as no sum here is ever -0).
-      const auto& run = runs[e];
-      const auto& w = written[run.block];
-      if (run.i < w[0] || run.i >= w[3] || run.j < w[1] || run.j >= w[4]) continue;
-      const int k0 = std::max<int>(run.k, w[2]), k1 = std::min<int>(run.k + run.nodes, w[5]);
-      if (k1 <= k0) continue;
-      const double* from = boxes + (run.from + (k0 - run.k)) * kNodeRecord;
-      double* to = records + (run.to + (k0 - run.k)) * kNodeRecord;
-      const int nodes = k1 - k0;
-      if constexpr (kMass && kMomentum && kForce) {
-        for (int v = 0; v < nodes * kNodeRecord; ++v) to[v] += from[v];  // every slot (the unused one: zeros)
-      } else {
-        for (int n = 0; n < nodes; ++n, from += kNodeRecord, to += kNodeRecord) {
-          if constexpr (kMass) to[kMassSlot] += from[kMassSlot];
-          for (int d = 0; d < 3; ++d) {
-            if constexpr (kMomentum) to[kMomentumSlot + d] += from[kMomentumSlot + d];
-            if constexpr (kForce) to[kForceSlot + d] += from[kForceSlot + d];
-          }
+  if (clear_first) grid.clear_tile(tiles[g]);
+  for (std::size_t e = starts[g]; e < starts[g + 1]; ++e) {
+    // Only the nodes the box's scatter wrote (the others hold zeros: adding them changes nothing,
+    // as no sum here is ever -0).
+    const auto& run = runs[e];
+    const auto& w = written[run.block];
+    if (run.i < w[0] || run.i >= w[3] || run.j < w[1] || run.j >= w[4]) continue;
+    const int k0 = std::max<int>(run.k, w[2]), k1 = std::min<int>(run.k + run.nodes, w[5]);
+    if (k1 <= k0) continue;
+    const double* from = boxes + (run.from + (k0 - run.k)) * kNodeRecord;
+    double* to = records + (run.to + (k0 - run.k)) * kNodeRecord;
+    const int nodes = k1 - k0;
+    if constexpr (kMass && kMomentum && kForce) {
+      for (int v = 0; v < nodes * kNodeRecord; ++v) to[v] += from[v];  // every slot (the unused one: zeros)
+    } else {
+      for (int n = 0; n < nodes; ++n, from += kNodeRecord, to += kNodeRecord) {
+        if constexpr (kMass) to[kMassSlot] += from[kMassSlot];
+        for (int d = 0; d < 3; ++d) {
+          if constexpr (kMomentum) to[kMomentumSlot + d] += from[kMomentumSlot + d];
+          if constexpr (kForce) to[kForceSlot + d] += from[kForceSlot + d];
         }
       }
     }
@@ -206,16 +202,26 @@ double* BlockBuffers::open_box(std::size_t b) {
   return box;
 }
 
-void BlockBuffers::add_to_grid(Grid& grid, ScatteredFields f, bool clear_first) const {
+void BlockBuffers::add_sum_stage(TileStages& stages, Grid& grid, ScatteredFields f, bool clear_first) const {
   if (clear_first && !covers_active_tiles_)
-    throw std::logic_error("BlockBuffers::add_to_grid: the boxes do not cover the active tiles, which it would clear");
-  const double* boxes = data_.get();
-  const auto& t = tiles_;
-  if (f.mass && f.momentum && f.force) add_runs<true, true, true>(boxes, runs_, tile_starts_, t, written_, grid, clear_first);
-  else if (f.mass && f.momentum && !f.force) add_runs<true, true, false>(boxes, runs_, tile_starts_, t, written_, grid, clear_first);
-  else if (!f.mass && f.momentum && !f.force) add_runs<false, true, false>(boxes, runs_, tile_starts_, t, written_, grid, clear_first);
-  else if (!f.mass && !f.momentum && f.force) add_runs<false, false, true>(boxes, runs_, tile_starts_, t, written_, grid, clear_first);
-  else throw std::logic_error("BlockBuffers::add_to_grid: an unsupported set of fields");
+    throw std::logic_error("BlockBuffers::add_sum_stage: the boxes do not cover the active tiles, which it would clear");
+  TileStages::Stage stage;
+  auto sum = [&]<bool kMass, bool kMomentum, bool kForce>() {
+    stage = [this, &grid, clear_first](std::size_t g) {
+      add_tile_runs<kMass, kMomentum, kForce>(data_.get(), runs_, tile_starts_, tiles_, written_, grid, clear_first, g);
+    };
+  };
+  if (f.mass && f.momentum && f.force) sum.template operator()<true, true, true>();
+  else if (f.mass && f.momentum && !f.force) sum.template operator()<true, true, false>();
+  else if (!f.mass && f.momentum && !f.force) sum.template operator()<false, true, false>();
+  else if (!f.mass && !f.momentum && f.force) sum.template operator()<false, false, true>();
+  else throw std::logic_error("BlockBuffers::add_sum_stage: an unsupported set of fields");
+  // Over the active tiles (the boxes' tiles are those): a tile's own nodes only, so the grid update
+  // can follow on the same tile without a barrier. Otherwise a loop over the boxes' tiles of its own.
+  if (covers_active_tiles_)
+    stages.add(TileReach::OwnTile, std::move(stage));
+  else
+    stages.add_loop(tiles_.size(), std::move(stage));
 }
 
 }  // namespace talus

@@ -284,7 +284,7 @@ void scatter_fields(const ParticleStore& P, const CellSort& sort, Grid& grid, Bl
   double pass_start = timing ? omp_get_wtime() : 0.0;
   if (buffers) {
     // Without colour passes: every block into its own box, all blocks in one pass (any order);
-    // BlockBuffers::add_to_grid adds the boxes afterwards. A timing record lists it as colour 0.
+    // BlockBuffers::add_sum_stage adds the boxes afterwards. A timing record lists it as colour 0.
     const std::vector<std::uint32_t>& order = sort.blocks_in_work_order();
     const std::size_t count = order.size();
     if (timing) timing->block_seconds[0].assign(count, 0.0);

@@ -73,6 +73,16 @@ class Replay(unittest.TestCase):
         self.assertAlmostEqual(rows[1]["speedup"], (11 * MS + 2e-6) / (3.5 * MS + 8e-6), places=12)
         self.assertEqual(rows[1]["limit"], "serial")  # 1 ms of 3.508: the largest loss
 
+    def test_a_static_region_of_several_loops_pays_one_fork_join_and_a_barrier_between_loops(self):
+        # the grid phase as TileStages runs it: 4 loops in one region, 3 barriers of B(T)
+        inner = [0.0, 0.5e-6, 1e-6, 1.5e-6, 2e-6]
+        static = {"name": "grid update", "schedule": "static", "items": 4, "parallel_regions": 1, "barriers": 3,
+                  "seconds": 2 * MS + B[1] + 3 * inner[1]}
+        rec = record([static], barrier_seconds=inner)
+        terms = sm.predict(rec, 4, sm.Barrier(B, 1e-6), "recorded", "seconds")
+        self.assertAlmostEqual(terms["ideal"], 0.5 * MS, delta=1e-12)  # the loops' work, the barriers' time out
+        self.assertAlmostEqual(terms["sync"], B[4] + 3 * inner[4], delta=1e-15)
+
     def test_imbalance_is_the_critical_path_above_the_mean(self):
         rec = record([dynamic([1 * MS] * 5)])
         terms = sm.predict(rec, 4, sm.Barrier(B, 1e-6), "recorded", "seconds")

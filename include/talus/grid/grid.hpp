@@ -54,7 +54,7 @@ class NodeField {
 };
 
 /// A set of the fields a scatter writes (mass, momentum, force): what the ghost fold moves and what
-/// BlockBuffers::add_to_grid adds.
+/// BlockBuffers::add_sum_stage adds.
 struct ScatteredFields {
   bool mass = false;
   bool momentum = false;

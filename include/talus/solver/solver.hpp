@@ -227,6 +227,7 @@ class Solver {
   std::int64_t sorts_ = 0;
   EnergyBudget work_;                  // the accumulated terms of the ledger (energy_budget.hpp)
   std::vector<double> block_damping_;  // per sort block, this step's PIC damping
+  std::vector<double> tile_work_;      // per active tile, this step's wall friction work (add_grid_update)
   double outflow_mass_ = 0.0;
   double periodic_gravity_shift_ = 0.0;  // SolverState::periodic_gravity_shift
   std::int64_t outflow_particles_ = 0;

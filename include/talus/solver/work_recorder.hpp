@@ -26,7 +26,8 @@ struct WorkRegion {
   RegionSchedule schedule = RegionSchedule::Serial;
   int chunk = 1;               // dynamic: the chunk size of the schedule
   int parallel_regions = 0;    // fork/join + barrier pairs inside (0 for serial parts)
-  int barriers = 0;            // barriers inside a parallel region opened before (the fused colour passes)
+  int barriers = 0;            // barriers without a fork/join: inside a parallel region opened before
+                               // (the fused colour passes), or between the loops of a static region
   double seconds = 0.0;        // wall time of the region
   std::size_t items = 0;       // static: iterations of the loop (particles or tiles)
   std::vector<double> block_seconds;           // dynamic: per block, in hand-out order
@@ -55,7 +56,9 @@ class WorkRecorder {
   bool active() const { return active_; }
   bool full() const { return static_cast<int>(steps_.size()) >= max_steps_; }
 
-  void add_static(const char* name, std::size_t items, int parallel_regions, double seconds);
+  /// A static region: `items` iterations in `parallel_regions` parallel regions, with `barriers`
+  /// barriers between loops inside them (TileStages: one region, a barrier between its loops).
+  void add_static(const char* name, std::size_t items, int parallel_regions, double seconds, int barriers = 0);
   void add_serial(const char* name, double seconds);
   /// One region per colour of `timing` (8, or 1 for a single pass over all blocks).
   void add_colour_passes(const char* name, const ColourPassTiming& timing, const CellSort& sort, bool single_pass);

@@ -6,7 +6,7 @@
 // average, 4 at the least), so on many threads most of them wait in every pass
 // (docs/performance.md, "Scaling"). Here every block scatters into node records of its own — a box
 // of edge() nodes per axis around the block, its cells widened by the slack and the shape's reach —
-// all blocks in one parallel pass, and add_to_grid() then adds the boxes into the grid's records,
+// all blocks in one parallel pass, and add_sum_stage() then adds the boxes into the grid's records,
 // tile by tile in parallel, each node's boxes in ascending block order. Every node's sum is
 // therefore the same for any thread count; it differs at round-off from the colour passes', which
 // add particle by particle across blocks (the particle sums of each block are formed first here).
@@ -18,6 +18,7 @@
 // 1 M-particle B-spline shear bench with 8-cell blocks: 343 blocks of 16^3 nodes, 90 MB), kept between
 // sorts. Periodic axes are not supported (their stencils wrap around the box).
 #include "talus/grid/grid.hpp"
+#include "talus/grid/tile_stages.hpp"
 #include "talus/particles/cell_sort.hpp"
 
 #include <array>
@@ -55,14 +56,16 @@ class BlockBuffers {
   void close_box(std::size_t b, const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
     written_[b] = {lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]};
   }
-  /// Add the boxes' `fields` into the grid's node records (which the caller cleared or holds
-  /// partial sums in): one parallel loop over the active tiles. With `clear_first` each tile is
-  /// zeroed (Grid::clear_tile) just before its sums, in the same loop: the step's grid clear
-  /// without a pass and a parallel region of its own. Only when covers_active_tiles().
-  void add_to_grid(Grid& grid, ScatteredFields fields, bool clear_first = false) const;
+  /// The stage that adds the boxes' `fields` into the grid's node records (which the caller cleared
+  /// or holds partial sums in), tile by tile: over the active tiles (an OwnTile stage, which the
+  /// grid update can follow on the same tile) when covers_active_tiles(), else a loop of its own over
+  /// the boxes' tiles. With `clear_first` each tile is zeroed (Grid::clear_tile) just before its
+  /// sums, in the same loop: the step's grid clear without a pass and a parallel region of its
+  /// own. Only when covers_active_tiles(). The stage reads the boxes when it runs (after the scatter).
+  void add_sum_stage(TileStages& stages, Grid& grid, ScatteredFields fields, bool clear_first = false) const;
   /// Whether the tiles the boxes overlap are exactly the grid's active tiles at the last prepare()
   /// (both follow from the blocks' extent, so they are unless the grid changed since): then
-  /// add_to_grid(..., true) clears every active tile.
+  /// add_sum_stage(..., true) clears every active tile.
   bool covers_active_tiles() const { return covers_active_tiles_; }
 
   /// The bytes prepare() would hold for `blocks` blocks of `edge` nodes (the memory estimate).

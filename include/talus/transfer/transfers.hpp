@@ -35,7 +35,7 @@ template <class Shape, class Terrain>
 void scatter_to_grid(const ParticleStore& particles, const CellSort& sort, Grid& grid, ScatterFields fields,
                      ColourPassTiming* timing = nullptr,  // timing: the work recorder's, null normally
                      BlockBuffers* buffers = nullptr);    // buffers: one pass into the blocks' boxes, which
-                                                          // the caller adds with buffers->add_to_grid()
+                                                          // the caller adds with buffers->add_sum_stage()
 
 struct GatherResult {
   bool needs_sort = false;          // some particle drifted beyond its block's slack

@@ -1,0 +1,120 @@
+#!/usr/bin/env python3
+"""Do two talus binaries give the same bits? Runs short versions of a set of scenes with both and
+compares every output file byte for byte (all but scene.json, which names the binary's run).
+
+    tools/compare_binaries.py OLD_TALUS NEW_TALUS [--end 0.02] [--threads 2] [--work /tmp/compare]
+                              [--scene FILE ...] [--variants]
+
+By default the scenes are the flumes (colour passes and block buffers), the collapses, the terrain
+slope, the walls and bar benchmarks with and without MLS, and the elastic block. --variants adds,
+for the default flume and the block between walls, every scheme (musl, usl, usf, usavg) with each
+scatter (colour passes, block buffers). Each run ends at --end seconds of simulated time (frames
+every end/2). Exit status 1 when any file differs or a run fails on one side only.
+Used for refactors that must not change results (docs/performance.md).
+"""
+import argparse
+import filecmp
+import json
+import os
+import subprocess
+import sys
+
+DEFAULT_SCENES = [
+    "inputs/denlinger_flume.json",
+    "inputs/denlinger_flume_block_buffers.json",
+    "inputs/denlinger_flume_bspline2.json",
+    "inputs/column_collapse_2d.json",
+    "inputs/column_collapse_mu_i.json",
+    "inputs/elastic_block_slide.json",
+    "inputs/terrain/slope_to_runout_ugimp.json",
+    "inputs/benchmarks/block_between_walls.json",
+    "inputs/benchmarks/block_between_walls_mls.json",
+    "inputs/benchmarks/dynamic_bar.json",
+    "inputs/benchmarks/column_w12500_mls.json",
+]
+VARIANT_SCENES = ["inputs/denlinger_flume.json", "inputs/benchmarks/block_between_walls.json"]
+
+
+def short_scene(path, end, scheme=None, scatter=None):
+    with open(path) as f:
+        s = json.load(f)
+    s.setdefault("time", {})["end"] = end
+    out = s.setdefault("output", {})
+    out["frame_interval"] = end / 2
+    out["history_interval"] = end / 10
+    tag = ""
+    if scheme or scatter:
+        solver = s.setdefault("solver", {})
+        if scheme:
+            solver["scheme"] = scheme
+        if scatter:
+            solver["scatter"] = scatter
+        tag = f"_{scheme}_{scatter}"
+    s["name"] = s.get("name", os.path.splitext(os.path.basename(path))[0]) + tag
+    return s
+
+
+def run(talus, scene_file, out, threads):
+    r = subprocess.run([talus, "run", scene_file, "--out", out, "--threads", str(threads), "--quiet",
+                        "--foreground-frames"], capture_output=True, text=True)
+    return r.returncode, (r.stderr.strip().splitlines() or [""])[-1]
+
+
+def differing(a, b):
+    diffs = []
+    for root, _, files in os.walk(a):
+        for name in files:
+            if name == "scene.json":
+                continue
+            pa = os.path.join(root, name)
+            pb = os.path.join(b, os.path.relpath(pa, a))
+            if not os.path.exists(pb) or not filecmp.cmp(pa, pb, shallow=False):
+                diffs.append(os.path.relpath(pa, a))
+    for root, _, files in os.walk(b):
+        for name in files:
+            pb = os.path.join(root, name)
+            if not os.path.exists(os.path.join(a, os.path.relpath(pb, b))):
+                diffs.append(os.path.relpath(pb, b) + " (only in the new run)")
+    return diffs
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("old")
+    ap.add_argument("new")
+    ap.add_argument("--end", type=float, default=0.02, help="simulated seconds per run (default 0.02)")
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--work", default="/tmp/talus_compare")
+    ap.add_argument("--scene", action="append", help="a scene file (repeatable; default: the set above)")
+    ap.add_argument("--variants", action="store_true", help="every scheme with each scatter, on two scenes")
+    a = ap.parse_args()
+    cases = [(p, None, None) for p in (a.scene or DEFAULT_SCENES)]
+    if a.variants:
+        cases += [(p, scheme, scatter) for p in VARIANT_SCENES for scheme in ("musl", "usl", "usf", "usavg")
+                  for scatter in ("colour_passes", "block_buffers")]
+    os.makedirs(a.work, exist_ok=True)
+    bad = 0
+    for path, scheme, scatter in cases:
+        scene = short_scene(path, a.end, scheme, scatter)
+        scene_file = os.path.join(a.work, scene["name"] + ".json")
+        with open(scene_file, "w") as f:
+            json.dump(scene, f)
+        outs = [os.path.join(a.work, side, scene["name"]) for side in ("old", "new")]
+        results = [run(t, scene_file, o, a.threads) for t, o in zip((a.old, a.new), outs)]
+        if results[0][0] != results[1][0]:
+            print(f"DIFFER {scene['name']}: exit {results[0][0]} (old) against {results[1][0]} (new): {results[1][1]}")
+            bad += 1
+            continue
+        if results[0][0] != 0:
+            print(f"both fail {scene['name']} (exit {results[0][0]}): {results[0][1]}")
+            continue
+        diffs = differing(*outs)
+        files = sum(len(f) for _, _, f in os.walk(outs[0]))
+        print(f"{'DIFFER' if diffs else 'same  '} {scene['name']}: {files} files" + (f"; {', '.join(diffs[:5])}" if diffs else ""))
+        bad += bool(diffs)
+    print(f"{len(cases) - bad} of {len(cases)} scenes give the same bits")
+    sys.exit(1 if bad else 0)
+
+
+if __name__ == "__main__":
+    main()
