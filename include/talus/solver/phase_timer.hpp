@@ -8,7 +8,9 @@
 namespace talus {
 
 // Smooth: the MLS fit of the strain increments (only when the scene enables it); Stress holds the
-// strain pass and the material update around it.
+// strain pass and the material update around it. Grid and Remap hold the node work after their
+// scatter (one parallel region since 2026-12-04): with block buffers the sum of the boxes, the
+// ghost fold, the velocities and the mirror; P2G and G2P hold the scatters themselves.
 enum class Phase { Sort, P2G, Grid, G2P, Remap, Smooth, Stress, Output, Count };
 inline constexpr std::array<const char*, static_cast<int>(Phase::Count)> kPhaseNames = {
     "sort", "p2g", "grid", "g2p", "remap", "smooth", "stress", "output"};
