@@ -26,11 +26,11 @@ Grid::Grid(const GridGeometry& geometry) : geometry_(geometry), profile_(grid_be
   }
 }
 
-std::array<int, 3> Grid::node_of(std::size_t tile, int slot) const {
+std::array<int, 3> Grid::node_of(std::size_t tile) const {
   const int tk = static_cast<int>(tile % tiles_[2]);
   const int tj = static_cast<int>((tile / tiles_[2]) % tiles_[1]);
   const int ti = static_cast<int>(tile / (static_cast<std::size_t>(tiles_[2]) * tiles_[1]));
-  return {ti * kTileEdge + (slot >> 4), tj * kTileEdge + ((slot >> 2) & 3), tk * kTileEdge + (slot & 3)};
+  return {ti * kTileEdge, tj * kTileEdge, tk * kTileEdge};
 }
 
 void Grid::clear_tile(std::size_t tile) {

@@ -7,20 +7,22 @@ namespace talus {
 
 namespace {
 
-/// node_update(n, tile, slot) on every node of active tile t, in slot order; returns the sum of what
-/// it returns (the tile's energy).
+/// node_update(n, node) on every node of active tile t, in slot order (n: the node's index, node: its
+/// (i, j, k)); returns the sum of what it returns (the tile's energy).
 template <class NodeUpdate>
 double for_tile_nodes(const Grid& grid, std::size_t t, NodeUpdate&& node_update) {
   const std::uint32_t tile = grid.active_tiles()[t];
   const std::size_t begin = static_cast<std::size_t>(tile) * kTileNodes;
+  const std::array<int, 3> first = grid.node_of(tile);
   double energy = 0.0;
-  for (int s = 0; s < kTileNodes; ++s) energy += node_update(begin + s, tile, s);
+  for (int s = 0; s < kTileNodes; ++s)
+    energy += node_update(begin + s, Grid::node_in_tile(first, s));
   return energy;
 }
 
 /// Active tile t holds nodes near a mirrored wall (most tiles do not: the ghost stages skip them).
 bool near_mirrored_wall(const Grid& grid, const Walls& walls, std::size_t t) {
-  return walls.near_mirrored_face(grid.node_of(grid.active_tiles()[t], 0), kTileEdge);
+  return walls.near_mirrored_face(grid.node_of(grid.active_tiles()[t]), kTileEdge);
 }
 
 }  // namespace
@@ -29,7 +31,7 @@ void add_grid_update(TileStages& stages, Grid& grid, const Walls& walls, const V
                      double mass_floor, bool zero_momentum, std::vector<double>& tile_work) {
   tile_work.assign(grid.active_tiles().size(), 0.0);
   stages.add(TileReach::OwnTile, [&grid, &walls, &tile_work, gravity, dt, mass_floor, zero_momentum](std::size_t t) {
-    tile_work[t] = for_tile_nodes(grid, t, [&](std::size_t n, std::uint32_t tile, int slot) {
+    tile_work[t] = for_tile_nodes(grid, t, [&](std::size_t n, const std::array<int, 3>& node) {
       // the node's record and its v^L record, read and written in place (NodeField's run-time
       // stride made this loop 1.8x slower)
       double* const record = grid.record(n);
@@ -45,7 +47,6 @@ void add_grid_update(TileStages& stages, Grid& grid, const Walls& walls, const V
         vl[d] = v[d] + (record[kForceSlot + d] / m + gravity[d]) * dt;
       }
       double removed = 0.0;
-      const auto node = grid.node_of(tile, slot);
       if (walls.touches(node)) removed = walls.apply(node, vl, Walls::Stage::GridUpdate, m, v);
       for (int d = 0; d < 3; ++d) {
         record[kMomentumSlot + d] = zero_momentum ? 0.0 : v[d];
@@ -80,14 +81,13 @@ namespace {
 void add_wall_projected_velocities(TileStages& stages, Grid& grid, const Walls& walls, double mass_floor,
                                    Walls::Stage stage, NodeVectors& target) {
   stages.add(TileReach::OwnTile, [&grid, &walls, &target, mass_floor, stage](std::size_t t) {
-    for_tile_nodes(grid, t, [&](std::size_t n, std::uint32_t tile, int slot) {
+    for_tile_nodes(grid, t, [&](std::size_t n, const std::array<int, 3>& node) {
       const double m = grid.mass[n];
       if (m <= mass_floor) {
         for (int d = 0; d < 3; ++d) target[d][n] = 0.0;
         return 0.0;
       }
       double v[3] = {grid.momentum[0][n] / m, grid.momentum[1][n] / m, grid.momentum[2][n] / m};
-      const auto node = grid.node_of(tile, slot);
       if (walls.touches(node)) {
         const double vl[3] = {grid.velocity_l[0][n], grid.velocity_l[1][n], grid.velocity_l[2][n]};
         walls.apply(node, v, stage, 0.0, nullptr, vl);
@@ -114,10 +114,10 @@ void add_fold_ghost_nodes(TileStages& stages, Grid& grid, const Walls& walls, Sc
   stages.add(TileReach::AnyTile, [&grid, &walls, fields, gravity](std::size_t t) {
     if (!near_mirrored_wall(grid, walls, t)) return;
     const auto [mass, momentum, force] = fields;
-    for_tile_nodes(grid, t, [&](std::size_t n, std::uint32_t tile, int slot) {
+    for_tile_nodes(grid, t, [&](std::size_t n, const std::array<int, 3>& node) {
       std::array<std::array<int, 3>, 7> ghosts;
       std::array<std::array<double, 3>, 7> signs;
-      const int count = walls.ghosts_of(grid.node_of(tile, slot), ghosts, signs);
+      const int count = walls.ghosts_of(node, ghosts, signs);
       for (int g = 0; g < count; ++g) {
         // Each ghost has exactly one image, so this thread is the only one touching it: its values
         // are moved (not copied) to the image, and the ghost is left empty until the mirror.
@@ -155,10 +155,10 @@ void add_mirror_ghost_nodes(TileStages& stages, Grid& grid, const Walls& walls, 
   if (fields == GhostFields::Start) targets = {&grid.velocity_l};
   stages.add(TileReach::AnyTile, [&grid, &walls, targets](std::size_t t) {
     if (!near_mirrored_wall(grid, walls, t)) return;
-    for_tile_nodes(grid, t, [&](std::size_t n, std::uint32_t tile, int slot) {
+    for_tile_nodes(grid, t, [&](std::size_t n, const std::array<int, 3>& node) {
       std::array<int, 3> image;
       std::array<double, 3> sign;
-      if (!walls.mirror(grid.node_of(tile, slot), image, sign)) return 0.0;
+      if (!walls.mirror(node, image, sign)) return 0.0;
       const std::size_t m = grid.node(image[0], image[1], image[2]);
       for (auto* field : targets)
         for (int d = 0; d < 3; ++d) (*field)[d][n] = sign[d] * (*field)[d][m];

@@ -104,7 +104,7 @@ void BlockBuffers::prepare(const CellSort& sort, const Grid& grid) {
   std::vector<std::size_t> offset(pairs + 1, 0);
 #pragma omp parallel for schedule(static)
   for (std::size_t e = 0; e < pairs; ++e) {
-    const std::array<int, 3> t0 = grid.node_of(overlaps[e].tile, 0);  // the tile's first node
+    const std::array<int, 3> t0 = grid.node_of(overlaps[e].tile);  // the tile's first node
     const auto first = first_node(overlaps[e].block);
     Span& sp = spans[e];
     for (int d = 0; d < 3; ++d) {
