@@ -22,14 +22,11 @@ void TileStages::run() const {
   for (std::size_t l = 0; l <= last; ++l) {
     const Loop& loop = loops_[l];
     const auto count = loop.count;
-    if (l < last) {
-#pragma omp for schedule(static)
-      for (std::size_t t = 0; t < count; ++t)
-        for (const Stage& stage : loop.stages) stage(t);
-    } else {  // the region's end is the barrier
 #pragma omp for schedule(static) nowait
-      for (std::size_t t = 0; t < count; ++t)
-        for (const Stage& stage : loop.stages) stage(t);
+    for (std::size_t t = 0; t < count; ++t)
+      for (const Stage& stage : loop.stages) stage(t);
+    if (l < last) {  // after the last loop the region's end is the barrier
+#pragma omp barrier
     }
   }
 }

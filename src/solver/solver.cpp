@@ -225,8 +225,12 @@ void Solver::redistribute() {
   size_scratch();
 }
 
-void Solver::sum_shared_nodes(const std::vector<NodeField>& fields) {
+void Solver::sum_shared_nodes(ScatteredFields scattered) {
   if (!comm_.distributed()) return;
+  std::vector<NodeField> fields;
+  if (scattered.mass) fields.push_back(grid_.mass);
+  if (scattered.momentum) fields.insert(fields.end(), grid_.momentum.begin(), grid_.momentum.end());
+  if (scattered.force) fields.insert(fields.end(), grid_.force.begin(), grid_.force.end());
   exchange_bytes_ += static_cast<std::int64_t>(exchange_.sum_shared(comm_, fields));
 }
 
@@ -405,15 +409,14 @@ void Solver::step_with(double dt) {
   // the sum of the boxes into the grid; on several ranks that sum runs on its own, so that the
   // nodes the ranks share are summed across them (sum_shared_nodes) before the stages read them.
   // `clear_first`: the box sum zeroes each tile before its sums (the step's grid clear, folded in).
-  auto after_scatter = [&](const char* name, ScatteredFields fields, const std::vector<NodeField>& shared,
-                           bool clear_first = false) {
+  auto after_scatter = [&](const char* name, ScatteredFields fields, bool clear_first = false) {
     if (rec) rec->add_colour_passes(name, pass_timing_, sort_, buffers != nullptr);
     TileStages stages(tiles);
     if (buffers) buffers->add_sum_stage(stages, grid_, fields, clear_first);
     if (comm_.distributed()) {
       run_stages(rec, (std::string(name) + " box sum").c_str(), tiles, stages);
       stages = TileStages(tiles);
-      sum_shared_nodes(shared);
+      sum_shared_nodes(fields);
     }
     return stages;
   };
@@ -423,8 +426,6 @@ void Solver::step_with(double dt) {
   auto clear_grid = [&] {
     if (!clear_in_box_sum) recorded(rec, RegionSchedule::Static, "grid clear", tiles, 1, [&] { grid_.clear_active(); });
   };
-  const std::vector<NodeField> mass_momentum = {grid_.mass, grid_.momentum[0], grid_.momentum[1], grid_.momentum[2]};
-  const std::vector<NodeField> force = {grid_.force[0], grid_.force[1], grid_.force[2]};
 
   // 2. P2G: nodal mass, momentum and internal force. USF / USAVG update the stress in between,
   //    from the start-of-step nodal velocities (walls applied), before scattering the force.
@@ -436,9 +437,7 @@ void Solver::step_with(double dt) {
       ScopedPhase timer(times_, Phase::P2G);
       clear_grid();
       scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentumForce, timing, buffers);
-      std::vector<NodeField> shared = mass_momentum;
-      shared.insert(shared.end(), force.begin(), force.end());
-      grid_stages = after_scatter("p2g", {.mass = true, .momentum = true, .force = true}, shared, clear_in_box_sum);
+      grid_stages = after_scatter("p2g", {.mass = true, .momentum = true, .force = true}, clear_in_box_sum);
     }
     add_fold_ghost_nodes(grid_stages, grid_, walls_, {.mass = true, .momentum = true, .force = true}, gravity);
   } else {
@@ -447,7 +446,7 @@ void Solver::step_with(double dt) {
       ScopedPhase timer(times_, Phase::P2G);
       clear_grid();
       scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentum, timing, buffers);
-      start_stages = after_scatter("p2g mass momentum", {.mass = true, .momentum = true}, mass_momentum, clear_in_box_sum);
+      start_stages = after_scatter("p2g mass momentum", {.mass = true, .momentum = true}, clear_in_box_sum);
     }
     {
       ScopedPhase timer(times_, Phase::Grid);
@@ -459,7 +458,7 @@ void Solver::step_with(double dt) {
     update_stress<Shape, Terrain>(grid_.start_velocity(), stress_dt, false);
     ScopedPhase timer(times_, Phase::P2G);
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Force, timing, buffers);
-    grid_stages = after_scatter("p2g force", {.force = true}, force);
+    grid_stages = after_scatter("p2g force", {.force = true});
     add_fold_ghost_nodes(grid_stages, grid_, walls_, {.force = true}, gravity);
   }
   // 3. grid: velocities, accelerations with gravity, walls.
@@ -488,7 +487,7 @@ void Solver::step_with(double dt) {
         gather_from_grid<Shape, Terrain>(particles_, sort_, grid_, displacement(), block_damping_, options, timing,
                                          remap ? buffers : nullptr);
     if (remap)
-      remap_stages = after_scatter("g2p", {.momentum = true}, {grid_.momentum[0], grid_.momentum[1], grid_.momentum[2]});
+      remap_stages = after_scatter("g2p", {.momentum = true});
     else if (rec)
       rec->add_colour_passes("g2p", pass_timing_, sort_, true);
     if (options.pic_fraction > 0.0)

@@ -202,19 +202,21 @@ double* BlockBuffers::open_box(std::size_t b) {
   return box;
 }
 
+template <bool kMass, bool kMomentum, bool kForce>
+TileStages::Stage BlockBuffers::tile_sum(Grid& grid, bool clear_first) const {
+  return [this, &grid, clear_first](std::size_t g) {
+    add_tile_runs<kMass, kMomentum, kForce>(data_.get(), runs_, tile_starts_, tiles_, written_, grid, clear_first, g);
+  };
+}
+
 void BlockBuffers::add_sum_stage(TileStages& stages, Grid& grid, ScatteredFields f, bool clear_first) const {
   if (clear_first && !covers_active_tiles_)
     throw std::logic_error("BlockBuffers::add_sum_stage: the boxes do not cover the active tiles, which it would clear");
   TileStages::Stage stage;
-  auto sum = [&]<bool kMass, bool kMomentum, bool kForce>() {
-    stage = [this, &grid, clear_first](std::size_t g) {
-      add_tile_runs<kMass, kMomentum, kForce>(data_.get(), runs_, tile_starts_, tiles_, written_, grid, clear_first, g);
-    };
-  };
-  if (f.mass && f.momentum && f.force) sum.template operator()<true, true, true>();
-  else if (f.mass && f.momentum && !f.force) sum.template operator()<true, true, false>();
-  else if (!f.mass && f.momentum && !f.force) sum.template operator()<false, true, false>();
-  else if (!f.mass && !f.momentum && f.force) sum.template operator()<false, false, true>();
+  if (f.mass && f.momentum && f.force) stage = tile_sum<true, true, true>(grid, clear_first);
+  else if (f.mass && f.momentum && !f.force) stage = tile_sum<true, true, false>(grid, clear_first);
+  else if (!f.mass && f.momentum && !f.force) stage = tile_sum<false, true, false>(grid, clear_first);
+  else if (!f.mass && !f.momentum && f.force) stage = tile_sum<false, false, true>(grid, clear_first);
   else throw std::logic_error("BlockBuffers::add_sum_stage: an unsupported set of fields");
   // Over the active tiles (the boxes' tiles are those): a tile's own nodes only, so the grid update
   // can follow on the same tile without a barrier. Otherwise a loop over the boxes' tiles of its own.

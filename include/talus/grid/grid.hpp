@@ -156,12 +156,11 @@ class Grid {
 
   std::array<int, 3> tiles() const { return tiles_; }
   std::size_t tile_count() const { return static_cast<std::size_t>(tiles_[0]) * tiles_[1] * tiles_[2]; }
-  /// Node (i, j, k) of local slot `s` of tile `t` (inverse of node()).
-  std::array<int, 3> node_of(std::size_t tile, int slot) const { return node_in_tile(node_of(tile), slot); }
-  /// The first node of tile `t` (its slot 0).
+  /// The first node (i, j, k) of tile `t` (its slot 0).
   std::array<int, 3> node_of(std::size_t tile) const;
-  /// Node (i, j, k) of local slot `s` of the tile whose first node is `first`: a loop over a tile's
-  /// nodes finds its first node once (node_of(tile) divides the tile index) and the rest from this.
+  /// Node (i, j, k) of local slot `s` of the tile whose first node is `first` (with node_of, the
+  /// inverse of node()): a loop over a tile's nodes finds its first node once (node_of divides the
+  /// tile index) and the rest from this.
   static std::array<int, 3> node_in_tile(const std::array<int, 3>& first, int slot) {
     return {first[0] + (slot >> 4), first[1] + ((slot >> 2) & 3), first[2] + (slot & 3)};
   }

@@ -186,8 +186,9 @@ class Solver {
   void redistribute();
   /// The particles per block column of the slab decomposition, summed over the ranks in rank order.
   std::vector<std::int64_t> particles_per_column() const;
-  /// Sum `fields` on the tiles shared with other ranks (TileExchange); nothing in a serial run.
-  void sum_shared_nodes(const std::vector<NodeField>& fields);
+  /// Sum the `scattered` node fields (mass, momentum, force: what the scatter wrote) on the tiles
+  /// shared with other ranks (TileExchange); nothing in a serial run.
+  void sum_shared_nodes(ScatteredFields scattered);
   [[noreturn]] void report_bad_particle(long long index, const char* what) const;
 
   Scene scene_;

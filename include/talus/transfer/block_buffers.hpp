@@ -85,6 +85,9 @@ class BlockBuffers {
     std::int16_t i, j, k;  // box-local node of the run's first record
   };
   const double* records(std::size_t b) const { return data_.get() + b * box_doubles_; }
+  /// add_sum_stage's stage for one set of fields.
+  template <bool kMass, bool kMomentum, bool kForce>
+  TileStages::Stage tile_sum(Grid& grid, bool clear_first) const;
   int edge_ = 0, below_ = 0;
   std::size_t box_doubles_ = 0;
   std::vector<std::array<int, 3>> block_origin_;  // first cell of each block
