@@ -16,6 +16,7 @@ import argparse
 import filecmp
 import json
 import os
+import shutil
 import subprocess
 import sys
 
@@ -100,6 +101,8 @@ def main():
         with open(scene_file, "w") as f:
             json.dump(scene, f)
         outs = [os.path.join(a.work, side, scene["name"]) for side in ("old", "new")]
+        for o in outs:  # no frames left from an earlier, longer comparison
+            shutil.rmtree(o, ignore_errors=True)
         results = [run(t, scene_file, o, a.threads) for t, o in zip((a.old, a.new), outs)]
         if results[0][0] != results[1][0]:
             print(f"DIFFER {scene['name']}: exit {results[0][0]} (old) against {results[1][0]} (new): {results[1][1]}")
