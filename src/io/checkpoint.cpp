@@ -9,6 +9,7 @@
 #include <fmt/core.h>
 
 #include <filesystem>
+#include <limits>
 #include <set>
 #include <type_traits>
 
@@ -170,6 +171,7 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
       write_attribute(s, "sorts", state.sorts);
       write_attribute(s, "needs_sort", static_cast<std::int32_t>(state.needs_sort));
       write_attribute(s, "periodic_gravity_shift", state.periodic_gravity_shift);
+      write_attribute(s, "sort_drift", state.sort_drift);
       for (int d = 0; d < 3; ++d) write_array(s, fmt::format("sort_cell{}", d), state.sort_cell[d]);
       if (comm.distributed()) {
         H5::Group ranks = file.createGroup("/solver/ranks");
@@ -243,6 +245,9 @@ Checkpoint read_checkpoint(const std::string& path) {
     // absent in checkpoints of runs before periodic faces existed: no wraps
     if (s.attrExists("periodic_gravity_shift"))
       c.solver.periodic_gravity_shift = read_attribute<double>(s, "periodic_gravity_shift");
+    // absent in checkpoints of runs that sorted every step with MLS: the next step sorts
+    c.solver.sort_drift = s.attrExists("sort_drift") ? read_attribute<double>(s, "sort_drift")
+                                                     : std::numeric_limits<double>::infinity();
     for (int d = 0; d < 3; ++d) c.solver.sort_cell[d] = read_array<std::int32_t>(s, fmt::format("sort_cell{}", d));
 
     if (s.nameExists("ranks")) {

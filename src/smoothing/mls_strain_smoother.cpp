@@ -27,6 +27,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 #include <vector>
 
 #ifndef TALUS_MLS_SOLVE_DEFINED  // once, not per target
@@ -45,7 +46,8 @@ struct MlsPass {
   int degree, axis_count;
   std::array<int, 3> axes;
   double radius, min_rcond;
-  bool cell_fit;  // MlsVariant::Cell: one fit per cell
+  bool cell_fit;         // MlsVariant::Cell: one fit per cell
+  double search_radius;  // the cells walked: radius, plus the drift since the sort
 };
 
 /// The fit's solve for a well-conditioned A (the common case), in plain fixed-size loops that the
@@ -497,7 +499,7 @@ MlsCounts smooth_impl(const MlsPass& pass) {
   const std::size_t cells_per_block = static_cast<std::size_t>(bc) * bc * bc;
   const std::vector<std::uint32_t>& cell_start = sort.cell_start();
   const std::int64_t blocks = static_cast<std::int64_t>(sort.block_count());
-  const double rg = pass.radius / grid.h;  // radius in cells
+  const double rg = pass.search_radius / grid.h;  // radius in cells
   std::size_t smoothed = 0, unsmoothed = 0;
 #pragma omp parallel reduction(+ : smoothed, unsmoothed)
   {
@@ -759,7 +761,7 @@ MlsCounts smooth_cells_impl(const MlsPass& pass) {
   const std::size_t cells_per_block = static_cast<std::size_t>(bc) * bc * bc;
   const std::vector<std::uint32_t>& cell_start = sort.cell_start();
   const std::int64_t blocks = static_cast<std::int64_t>(sort.block_count());
-  const double rg = pass.radius / grid.h;  // radius in cells
+  const double rg = pass.search_radius / grid.h;  // radius in cells
   std::size_t smoothed = 0, unsmoothed = 0;
 #pragma omp parallel reduction(+ : smoothed, unsmoothed)
   {
@@ -868,10 +870,13 @@ int MlsStrainSmoother::term_count() const { return mls_term_count(static_cast<in
 // only by its own lane: the output is bit-identical for any thread count and on every path.
 MlsCounts MlsStrainSmoother::smooth(const ParticleStore& particles, const CellSort& sort, const GridGeometry& grid,
                                     const std::array<const double*, 6>& in, const std::array<double*, 6>& out,
-                                    const std::vector<std::uint8_t>& smooth_body) const {
+                                    const std::vector<std::uint8_t>& smooth_body, double drift) const {
+  if (!(drift >= 0.0 && std::isfinite(drift))) throw std::invalid_argument("MLS search drift must be finite and >= 0");
+  // The margin covers the round-off of the moves the drift sums (an ulp of a position per step).
+  const double search_radius = drift > 0.0 ? (radius_ + drift) * (1.0 + 1e-9) : radius_;
   const mls_detail::MlsPass pass{&particles, &sort, &grid, in, out, &smooth_body,
                                  static_cast<int>(settings_.basis), axis_count_, axis_list_, radius_,
-                                 settings_.min_rcond, settings_.variant == MlsVariant::Cell};
+                                 settings_.min_rcond, settings_.variant == MlsVariant::Cell, search_radius};
   // The `reference` path runs the baseline build of the same code.
   return (vector_kernels_enabled() ? HWY_DYNAMIC_DISPATCH(SmoothMls) : &HWY_STATIC_DISPATCH(SmoothMls))(pass);
 }

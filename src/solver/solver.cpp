@@ -191,12 +191,27 @@ void Solver::prepare_block_buffers() {
   block_buffers_.prepare(sort_, grid_);
 }
 
+// The MLS neighbour search finds the particles through the cells they were sorted into; once some
+// particle may have moved more than a quarter of a cell since the sort, sort again. Until then the
+// search walks the cells within radius + drift (MlsStrainSmoother::smooth): at a quarter of a cell
+// that is about the cells it walks right after a sort (particles at the quarter points of their
+// cells, radius 1 or 2 cells), while a sort of every step cost 6% of a 1 M-particle step at a
+// radius of 1 cell (docs/performance.md). The one-fit-per-cell variant evaluates the fit at the
+// particles of each sorted cell, so it sorts every step.
+bool Solver::mls_needs_sort() const {
+  if (!smoother_) return false;
+  if (scene_.smoothing.mls.variant == MlsVariant::Cell) return true;
+  constexpr double kMaxDriftCells = 0.25;
+  return !(sort_drift_ <= kMaxDriftCells * scene_.grid.h);  // NaN (never: G2P stops the run): sort
+}
+
 void Solver::sort_particles() {
   ScopedPhase timer(times_, Phase::Sort);
   sort_.sort(particles_, grid_, scratch_);
   prepare_block_buffers();
   needs_sort_ = false;
   steps_since_sort_ = 0;
+  sort_drift_ = 0.0;
   ++sorts_;
   tiles_changed_ = true;
 }
@@ -373,11 +388,12 @@ void Solver::step_with(double dt) {
   const double stress_dt = scheme.stress_dt_share * dt;
   const Vec3 gravity = gravity_at(time_ + 0.5 * dt);
   // 1. sort: when a particle has drifted beyond its block's slack, and every sort_interval steps
-  //    to keep the memory order close to the cell order. With MLS smoothing, every step: the
-  //    neighbour search reads the cell offsets, which must be those of the current positions.
+  //    to keep the memory order close to the cell order. With MLS smoothing also when some particle
+  //    may have moved a quarter of a cell since the sort (mls_needs_sort).
   // (recorded as its parallel loops, a static region, and its serial bookkeeping over the blocks)
-  const bool sort_now =
-      comm_.distributed() ? collective_sort_ : smoother_ || needs_sort_ || steps_since_sort_ >= scene_.sort_interval;
+  const bool sort_now = comm_.distributed()
+                            ? collective_sort_
+                            : mls_needs_sort() || needs_sort_ || steps_since_sort_ >= scene_.sort_interval;
   if (sort_now) {
     if (comm_.distributed()) recorded(recording(), RegionSchedule::Serial, "redistribute", 0, 0, [&] { redistribute(); });
     if (WorkRecorder* const r = recording()) {
@@ -495,6 +511,9 @@ void Solver::step_with(double dt) {
     if (r.nonfinite >= 0) report_bad_particle(r.nonfinite, "velocity is not finite");
     if (r.outside >= 0) report_bad_particle(r.outside, "left the grid");
     needs_sort_ = r.needs_sort;
+    // Counted before the move, so the drift the smoother allows for already holds this step's
+    // (larger than needed until the move; never smaller).
+    sort_drift_ += std::sqrt(r.max_displacement2);
     large_displacement_ = r.large_displacement;
     crosses_open_face_ = r.crosses_open_face;
   }
@@ -652,9 +671,11 @@ void Solver::update_stress_smoothed(const NodeVectors& node_velocity, double dt,
       in[c] = raw_strain_[c].data();
       out[c] = smooth_strain_[c].data();
     }
+    // The search widens by the drift since the sort (the cell fit sorts every step: drift 0).
+    const double mls_drift = scene_.smoothing.mls.variant == MlsVariant::Cell ? 0.0 : sort_drift_;
     // recorded as a static region: the smoother's own per-block times are not kept
     recorded(recording(), RegionSchedule::Static, "mls smooth", P.size(), 1,
-             [&] { last_smoothing_ = smoother_->smooth(P, sort_, scene_.grid, in, out, smooth_body_); });
+             [&] { last_smoothing_ = smoother_->smooth(P, sort_, scene_.grid, in, out, smooth_body_, mls_drift); });
     unsmoothed_total_ += static_cast<std::int64_t>(last_smoothing_.unsmoothed);
     measure_smoothing_change();
   }
@@ -735,6 +756,7 @@ SolverState Solver::state() const {
   s.sorts = sorts_;
   s.needs_sort = needs_sort_;
   s.periodic_gravity_shift = periodic_gravity_shift_;
+  s.sort_drift = sort_drift_;
   // The cell each particle was sorted into, read back from the sort's block and cell offsets.
   const std::size_t n = particles_.size();
   for (auto& c : s.sort_cell) c.resize(n);  // every particle lies in one cell: every entry is written below
@@ -819,6 +841,7 @@ void Solver::restore_counters(const SolverState& s) {
   sorts_ = s.sorts;
   needs_sort_ = s.needs_sort;
   periodic_gravity_shift_ = s.periodic_gravity_shift;
+  sort_drift_ = s.sort_drift;
 }
 
 }  // namespace talus

@@ -365,6 +365,7 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std
   double* disp[3] = {displacement[0].data(), displacement[1].data(), displacement[2].data()};
   bool needs_sort = flags.needs_sort, large = flags.large_displacement, crossing = flags.crosses_open_face;
   long long nonfinite = flags.nonfinite, outside = flags.outside;
+  double largest_d2 = flags.max_displacement2;
 #pragma omp for schedule(dynamic, 1)
   for (std::size_t bi = 0; bi < blocks.size(); ++bi) {
     const std::size_t b = blocks[bi];
@@ -461,7 +462,9 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std
       }
       // After the move x_p = x_p + displacement: exactly next[] (the same sum, then wrapped), in (x, y, w).
       crossing = crossing || options.beyond_open_face(next);
-      large = large || disp[0][p] * disp[0][p] + disp[1][p] * disp[1][p] + disp[2][p] * disp[2][p] > max_d2;
+      const double d2 = disp[0][p] * disp[0][p] + disp[1][p] * disp[1][p] + disp[2][p] * disp[2][p];
+      large = large || d2 > max_d2;
+      largest_d2 = d2 > largest_d2 ? d2 : largest_d2;  // a NaN is reported as nonfinite instead
       if (!finite) nonfinite = std::max(nonfinite, static_cast<long long>(p));
       if (!inside) outside = std::max(outside, static_cast<long long>(p));
       if (!sort.within_slack_of(origin, cell[0], cell[1], cell[2])) needs_sort = true;
@@ -470,7 +473,7 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std
     if (pic_fraction > 0.0) block_damping[b] = damped;
     if (block_seconds) (*block_seconds)[bi] = omp_get_wtime() - block_start;
   }
-  flags = {needs_sort, nonfinite, outside, large, crossing};
+  flags = {needs_sort, nonfinite, outside, large, crossing, largest_d2};
 }
 
 }  // namespace
@@ -531,6 +534,7 @@ GatherResult gather_impl(ParticleStore& P, const CellSort& sort, Grid& grid,
       result.crosses_open_face = result.crosses_open_face || mine.crosses_open_face;
       result.nonfinite = std::max(result.nonfinite, mine.nonfinite);
       result.outside = std::max(result.outside, mine.outside);
+      result.max_displacement2 = std::max(result.max_displacement2, mine.max_displacement2);  // any order: same bits
     }
   }
   return result;

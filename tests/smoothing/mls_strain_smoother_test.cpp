@@ -96,31 +96,22 @@ TEST(MlsStrainSmoother, QuadraticFieldReproducedByQuadraticAndCubicNotByLinear) 
 
 // Direct evaluation of eq. 42-46 (A, B, Phi_I = F(x_p)^T (A^-1 B)_{:,I}) over all particle pairs,
 // with absolute positions: the cell search must find exactly the neighbours within the radius.
-TEST(MlsStrainSmoother, MatchesBruteForceEvaluationOfEq42To46) {
-  Cloud c;
-  c.geometry.h = 1.0;
-  c.geometry.cells = {10, 10, 10};
-  add_lattice(c, {9, 8, 7}, 0.5, 0.45, Vec3(1.0, 1.3, 0.7), 0, 3);
-  add_lattice(c, {5, 5, 5}, 0.5, 0.45, Vec3(5.6, 1.3, 0.7), 1, 4);  // a second body touching the first
-  c.finish();
-  c.set_random_inputs(11);
-  MlsSettings s;
-  s.basis = MlsBasis::Quadratic;
-  s.radius_factor = 1.7;
-  const MlsStrainSmoother smoother(s, 1.0);
-  const MlsCounts n = smoother.smooth(c.particles, c.sort, c.geometry, c.inputs(), c.outputs(), {1, 1});
-  EXPECT_GT(n.smoothed, c.particles.size() / 2);
+/// The largest difference between the smoother's output in c.out (quadratic basis, 3D) and eq. 42-46
+/// evaluated by brute force over every pair, over the particles clear of the guard; `compared`
+/// counts them.
+double worst_difference_from_brute_force(const Cloud& c, const MlsStrainSmoother& smoother, std::size_t& compared) {
   const auto& P = c.particles;
   const double h = smoother.radius();
-  std::size_t compared = 0;
+  auto distance = [&](std::size_t p, std::size_t q) {
+    return std::sqrt(std::pow(P.x[0][q] - P.x[0][p], 2) + std::pow(P.x[1][q] - P.x[1][p], 2) +
+                     std::pow(P.x[2][q] - P.x[2][p], 2));
+  };
+  compared = 0;
   double worst = 0.0;
   for (std::size_t p = 0; p < P.size(); ++p) {
     std::vector<std::size_t> nb;
-    for (std::size_t q = 0; q < P.size(); ++q) {
-      const double r = std::sqrt(std::pow(P.x[0][q] - P.x[0][p], 2) + std::pow(P.x[1][q] - P.x[1][p], 2) +
-                                 std::pow(P.x[2][q] - P.x[2][p], 2));
-      if (P.body[q] == P.body[p] && r < h) nb.push_back(q);
-    }
+    for (std::size_t q = 0; q < P.size(); ++q)
+      if (P.body[q] == P.body[p] && distance(p, q) < h) nb.push_back(q);
     auto F = [&](std::size_t q) {  // quadratic basis at absolute position / h
       Eigen::Matrix<double, 10, 1> f;
       double y[3] = {P.x[0][q] / h, P.x[1][q] / h, P.x[2][q] / h};
@@ -131,9 +122,7 @@ TEST(MlsStrainSmoother, MatchesBruteForceEvaluationOfEq42To46) {
     Eigen::MatrixXd B(10, nb.size());
     for (std::size_t I = 0; I < nb.size(); ++I) {
       const std::size_t q = nb[I];
-      const double r = std::sqrt(std::pow(P.x[0][q] - P.x[0][p], 2) + std::pow(P.x[1][q] - P.x[1][p], 2) +
-                                 std::pow(P.x[2][q] - P.x[2][p], 2));
-      const double w = mls_weight(r / h);
+      const double w = mls_weight(distance(p, q) / h);
       A += w * F(q) * F(q).transpose();  // eq. 42
       B.col(I) = w * F(q);               // eq. 43
     }
@@ -148,9 +137,74 @@ TEST(MlsStrainSmoother, MatchesBruteForceEvaluationOfEq42To46) {
     }
     ++compared;
   }
+  return worst;
+}
+
+TEST(MlsStrainSmoother, MatchesBruteForceEvaluationOfEq42To46) {
+  Cloud c;
+  c.geometry.h = 1.0;
+  c.geometry.cells = {10, 10, 10};
+  add_lattice(c, {9, 8, 7}, 0.5, 0.45, Vec3(1.0, 1.3, 0.7), 0, 3);
+  add_lattice(c, {5, 5, 5}, 0.5, 0.45, Vec3(5.6, 1.3, 0.7), 1, 4);  // a second body touching the first
+  c.finish();
+  c.set_random_inputs(11);
+  MlsSettings s;
+  s.basis = MlsBasis::Quadratic;
+  s.radius_factor = 1.7;
+  const MlsStrainSmoother smoother(s, 1.0);
+  const MlsCounts n = smoother.smooth(c.particles, c.sort, c.geometry, c.inputs(), c.outputs(), {1, 1});
+  EXPECT_GT(n.smoothed, c.particles.size() / 2);
+  std::size_t compared = 0;
+  const double worst = worst_difference_from_brute_force(c, smoother, compared);
   std::printf("brute force: %zu particles compared, max difference %.3g\n", compared, worst);
   EXPECT_GT(compared, 250u);
   EXPECT_LT(worst, 1e-9);
+}
+
+// The solver re-sorts only once a particle may have moved a quarter of a cell: between sorts the
+// search walks the cells within radius + drift. Every particle moved by up to `drift` after the
+// sort, most into another cell: with that drift the result is still eq. 42-46 over every pair;
+// with none (the sort taken as current) neighbours are missed; and a wider drift changes no bit
+// (it only adds candidates of weight 0, in the same order).
+TEST(MlsStrainSmoother, AStaleSortWithItsDriftFindsEveryNeighbour) {
+  Cloud c;
+  c.geometry.h = 1.0;
+  c.geometry.cells = {10, 10, 10};
+  add_lattice(c, {9, 8, 7}, 0.5, 0.45, Vec3(1.0, 1.3, 0.7), 0, 3);
+  c.finish();
+  c.set_random_inputs(12);
+  const double drift = 0.8;  // cells: the solver re-sorts at 0.25; more makes misses certain without it
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n01;
+  std::size_t changed_cell = 0;
+  for (std::size_t p = 0; p < c.particles.size(); ++p) {
+    Vec3 d(n01(rng), n01(rng), n01(rng));
+    d *= drift * std::uniform_real_distribution<double>(0.5, 1.0)(rng) / d.norm();
+    bool moved_cell = false;
+    for (int k = 0; k < 3; ++k) {
+      const double x = c.particles.x[k][p];
+      moved_cell = moved_cell || std::floor(x + d[k]) != std::floor(x);
+      c.particles.x[k][p] = x + d[k];
+    }
+    changed_cell += moved_cell ? 1 : 0;
+  }
+  ASSERT_GT(changed_cell, c.particles.size() / 4);  // the sort is really stale
+  MlsSettings s;
+  s.basis = MlsBasis::Quadratic;
+  s.radius_factor = 1.7;
+  const MlsStrainSmoother smoother(s, 1.0);
+  smoother.smooth(c.particles, c.sort, c.geometry, c.inputs(), c.outputs(), {1}, drift);
+  const auto with_drift = c.out;
+  std::size_t compared = 0;
+  const double worst = worst_difference_from_brute_force(c, smoother, compared);
+  EXPECT_GT(compared, 150u);
+  EXPECT_LT(worst, 1e-9);
+  smoother.smooth(c.particles, c.sort, c.geometry, c.inputs(), c.outputs(), {1}, 0.0);
+  EXPECT_GT(worst_difference_from_brute_force(c, smoother, compared), 1e-6);
+  smoother.smooth(c.particles, c.sort, c.geometry, c.inputs(), c.outputs(), {1}, 3 * drift);
+  for (int k = 0; k < 6; ++k) EXPECT_EQ(std::memcmp(c.out[k].data(), with_drift[k].data(), 8 * c.out[k].size()), 0);
+  EXPECT_THROW(smoother.smooth(c.particles, c.sort, c.geometry, c.inputs(), c.outputs(), {1}, -1.0),
+               std::invalid_argument);
 }
 
 TEST(MlsStrainSmoother, GuardLeavesSparseOrDegenerateNeighbourhoodsAloneAndCountsThem) {

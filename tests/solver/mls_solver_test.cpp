@@ -86,12 +86,40 @@ TEST(MlsSolver, DisabledSmoothingIsTheUnsmoothedSolverBitForBit) {
   ASSERT_NE(s.smoother(), nullptr);
   EXPECT_GT(s.phase_times()[Phase::Smooth], 0.0);
   EXPECT_FALSE(same_bits(a.particles().stress[0], s.particles().stress[0]));
-  EXPECT_EQ(s.sort_count(), s.step_count() + 1);  // sorted at construction and every step
+}
+
+// With MLS the solver sorts again once some particle may have moved a quarter of a cell since the
+// last sort (the search walks radius + drift until then), besides the block slack and
+// sort_interval; the one-fit-per-cell variant sorts every step.
+TEST(MlsSolver, SortsAgainWhenTheDriftPassesAQuarterCell) {
+  Scene scene = test::tumbling_block_scene(0.005);
+  scene.smoothing.enabled = true;
+  scene.sort_interval = 1000;  // only the drift and the slack decide
+  Solver s(scene);
+  int drift_sorts = 0, steps = 0;
+  while (!s.finished()) {
+    const SolverState before = s.state();
+    const std::int64_t sorts = s.sort_count();
+    s.step();
+    ++steps;
+    const bool drifted = before.sort_drift > 0.25 * scene.grid.h;
+    EXPECT_EQ(s.sort_count() - sorts, drifted || before.needs_sort ? 1 : 0) << "step " << steps;
+    drift_sorts += drifted && !before.needs_sort ? 1 : 0;
+    // the drift is at least this step's largest move: a bound, summed since the sort
+    EXPECT_GT(s.state().sort_drift, 0.0);
+  }
+  EXPECT_GE(drift_sorts, 2);  // the drift, not the slack, asked for sorts
+  EXPECT_LT(s.sort_count(), steps / 2);
+  scene.smoothing.mls.variant = MlsVariant::Cell;
+  Solver cell(scene);
+  while (!cell.finished()) cell.step();
+  EXPECT_EQ(cell.sort_count(), cell.step_count() + 1);  // at construction and every step
 }
 
 // Only the named bodies are smoothed; the others follow the unsmoothed solver bit for bit (the
-// bodies never share a node here, and the time step is set by the stiff body b, not smoothed). Smoothing sorts every step, so the reference does too: the
-// order of the P2G sums then matches (with the frictional floor's stick/slip switch, a round-off
+// bodies never share a node here, and the time step is set by the stiff body b, not smoothed). Both
+// runs sort every step (sort_interval = 1; smoothing alone would sort less often), so the
+// order of the P2G sums matches (with the frictional floor's stick/slip switch, a round-off
 // difference in that order grows to 1e-3 of the stress within this run).
 TEST(MlsSolver, UnselectedBodiesAreNotSmoothed) {
   // Both bodies start on the frictional floor moving down into it, two cells apart: they strain at

@@ -14,8 +14,9 @@
 // has a reciprocal condition number below `min_rcond`, keeps its own increment and is counted.
 //
 // Neighbours are found through the cell sort: the cells within the radius, their particle ranges
-// from CellSort::cell_start(). This needs the sort to match the current positions (the solver
-// sorts every step when smoothing is on). Particles are fitted a register's worth at a time, one
+// from CellSort::cell_start(). The sort may be older than the positions: when no particle has moved
+// more than `drift` since it, the cells within radius + drift hold every neighbour (the solver
+// re-sorts once the drift passes a quarter of a cell). Particles are fitted a register's worth at a time, one
 // per vector lane, over the candidates near their group (weight 0 outside a particle's ball); each
 // particle's sums run over its neighbours in a fixed order (cells in (i, j, k) order, then store
 // order), so the output is bit-identical for any thread count and on every instruction-set path
@@ -48,10 +49,14 @@ class MlsStrainSmoother {
 
   /// Smooth the six strain-increment arrays `in` (indexed like the store) into `out` (no
   /// aliasing). Particles of a body b with smooth_body[b] == 0 are copied unchanged and are nobody's
-  /// neighbours outside their own body. `sort` must be the sort of the current positions.
+  /// neighbours outside their own body. `sort` is the sort of positions at most `drift` metres
+  /// from the current ones (0: of the current positions). The drift widens the search, not the
+  /// fit: a particle's result depends on the candidates' order, which is the sort's, not on the
+  /// drift. The one-fit-per-cell variant fits the particles of a sorted cell about its centre, so
+  /// it wants drift 0.
   MlsCounts smooth(const ParticleStore& particles, const CellSort& sort, const GridGeometry& grid,
                    const std::array<const double*, 6>& in, const std::array<double*, 6>& out,
-                   const std::vector<std::uint8_t>& smooth_body) const;
+                   const std::vector<std::uint8_t>& smooth_body, double drift = 0.0) const;
 
  private:
   MlsSettings settings_;

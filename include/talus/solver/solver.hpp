@@ -39,6 +39,8 @@ struct SolverState {
   bool needs_sort = false;
   /// [J] sum of m g.(x_wrapped - x) over the particles' periodic wraps (Solver::wrap_periodic).
   double periodic_gravity_shift = 0.0;
+  /// [m] a bound on how far any particle has moved since the last sort (the MLS search's drift).
+  double sort_drift = 0.0;
   /// Per particle (in the store's order): the padded grid cell it was sorted into at the last sort.
   /// restore() rebuilds the cell sort from these, so the blocks and the summation order match.
   std::array<std::vector<std::int32_t>, 3> sort_cell;
@@ -225,6 +227,8 @@ class Solver {
   double last_dt_ = 0.0;
   bool needs_sort_ = true;
   int steps_since_sort_ = 0;
+  double sort_drift_ = 0.0;  // SolverState::sort_drift: the sum of each step's largest displacement
+  bool mls_needs_sort() const;
   std::int64_t sorts_ = 0;
   EnergyBudget work_;                  // the accumulated terms of the ledger (energy_budget.hpp)
   std::vector<double> block_damping_;  // per sort block, this step's PIC damping

@@ -43,6 +43,8 @@ struct GatherResult {
   long long outside = -1;           // index of a particle that left the grid, or -1
   bool large_displacement = false;  // some displacement exceeded GatherOptions::max_displacement
   bool crosses_open_face = false;   // some particle will be beyond an open face after the move
+  double max_displacement2 = 0.0;   // the largest |displacement|^2 of the pass (m^2): the drift
+                                    // from the sorted cells that the MLS neighbour search allows for
 };
 
 /// What G2P does besides the gather, and the limits it flags on the way (the CFL guard and the
