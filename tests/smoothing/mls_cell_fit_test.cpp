@@ -66,13 +66,7 @@ TEST(MlsCellFit, PolynomialFieldsInTheBasisAreReproduced) {
 // radius of the cell's centre (absolute coordinates), the coefficients A^-1 B, evaluated at each of
 // the cell's particles. The cell search must find exactly the particles within the radius.
 TEST(MlsCellFit, MatchesBruteForceEvaluationAtTheCellCentres) {
-  Cloud c;
-  c.geometry.h = 1.0;
-  c.geometry.cells = {10, 10, 10};
-  add_lattice(c, {9, 8, 7}, 0.5, 0.45, Vec3(1.0, 1.3, 0.7), 0, 3);
-  add_lattice(c, {5, 5, 5}, 0.5, 0.45, Vec3(5.6, 1.3, 0.7), 1, 4);  // a second body touching the first
-  c.finish();
-  c.set_random_inputs(11);
+  Cloud c = two_body_cloud();  // two bodies that touch
   const MlsStrainSmoother smoother(cell_settings(MlsBasis::Quadratic, 1.7), 1.0);
   const MlsCounts n = smoother.smooth(c.particles, c.sort, c.geometry, c.inputs(), c.outputs(), {1, 1});
   EXPECT_GT(n.smoothed, c.particles.size() / 2);

@@ -69,6 +69,19 @@ inline void add_lattice(Cloud& cloud, std::array<int, 3> per_axis, double spacin
       }
 }
 
+/// Two jittered bodies that touch (9 x 8 x 7 and 5 x 5 x 5 particles, cell size 1), sorted, with
+/// random inputs: the cloud the brute-force comparisons use.
+inline Cloud two_body_cloud() {
+  Cloud c;
+  c.geometry.h = 1.0;
+  c.geometry.cells = {10, 10, 10};
+  add_lattice(c, {9, 8, 7}, 0.5, 0.45, Vec3(1.0, 1.3, 0.7), 0, 3);
+  add_lattice(c, {5, 5, 5}, 0.5, 0.45, Vec3(5.6, 1.3, 0.7), 1, 4);
+  c.finish();
+  c.set_random_inputs(11);
+  return c;
+}
+
 inline Cloud box_cloud(int per_axis, double jitter, unsigned seed = 1) {
   Cloud c;
   c.geometry.h = 1.0;

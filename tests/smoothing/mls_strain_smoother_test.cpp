@@ -141,13 +141,7 @@ double worst_difference_from_brute_force(const Cloud& c, const MlsStrainSmoother
 }
 
 TEST(MlsStrainSmoother, MatchesBruteForceEvaluationOfEq42To46) {
-  Cloud c;
-  c.geometry.h = 1.0;
-  c.geometry.cells = {10, 10, 10};
-  add_lattice(c, {9, 8, 7}, 0.5, 0.45, Vec3(1.0, 1.3, 0.7), 0, 3);
-  add_lattice(c, {5, 5, 5}, 0.5, 0.45, Vec3(5.6, 1.3, 0.7), 1, 4);  // a second body touching the first
-  c.finish();
-  c.set_random_inputs(11);
+  Cloud c = two_body_cloud();  // two bodies that touch
   MlsSettings s;
   s.basis = MlsBasis::Quadratic;
   s.radius_factor = 1.7;
