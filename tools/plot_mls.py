@@ -126,7 +126,7 @@ def main():
     # 3. Block between walls (Fig. 12-13): energy histories.
     if not a.skip_walls:
         base = load("block_between_walls")
-        fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), sharey=True)
+        fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))  # own scales: linear MPM with MLS can grow 10x
         for ax, shape, results in shape_runs(talus, base, axes, modes, a, "walls"):
             for mode, res in results:
                 e = res["energy"]
