@@ -243,7 +243,7 @@ Table<SceneDraft> make_solver_table() {
                          "shape functions: linear MPM (Edo & Matsubara 2015, eq. 28–29), uGIMP (eq. 30–31, 59), "
                          "cpGIMP (eq. 30–31, 57–58), quadratic B-spline; docs/theory.md"),
       integer<SceneDraft>("sort_interval", TALUS_AT(scene.sort_interval), 1, 1000000,
-                          "re-sort particles by cell at least this often"),
+                          "re-sort particles by cell at least this often (also when one leaves its block's slack, and with MLS smoothing when one may have moved a quarter cell since the sort)"),
       integer<SceneDraft>("block_cells", TALUS_AT(scene.block_cells), 0, 64,
                           "edge of the colour blocks in cells; 0 = automatic (4 for linear, 8 for the others). Smaller "
                           "blocks share small scenes better among many threads (docs/performance.md \"Scaling\"); "

@@ -195,7 +195,7 @@ void Solver::prepare_block_buffers() {
 // particle may have moved more than a quarter of a cell since the sort, sort again. Until then the
 // search walks the cells within radius + drift (MlsStrainSmoother::smooth): at a quarter of a cell
 // that is about the cells it walks right after a sort (particles at the quarter points of their
-// cells, radius 1 or 2 cells), while a sort of every step cost 6% of a 1 M-particle step at a
+// cells, radius 1 or 2 cells), while a sort of every step cost 8-9% of a 1 M-particle step at a
 // radius of 1 cell (docs/performance.md). The one-fit-per-cell variant evaluates the fit at the
 // particles of each sorted cell, so it sorts every step.
 bool Solver::mls_needs_sort() const {
