@@ -15,6 +15,7 @@
 
 #include <hwy/aligned_allocator.h>
 #include <hwy/highway.h>
+#include <omp.h>
 
 #include "talus/core/error.hpp"
 #include "talus/core/simd_dispatch.hpp"
@@ -35,6 +36,20 @@
 namespace talus {
 namespace mls_detail {
 
+/// The smoother's work units: the (i, j) columns of cells along k of every block (a group of
+/// particles never spans two), the blocks heaviest first (CellSort::blocks_in_work_order). A unit
+/// of bc cells balances the threads where whole blocks of bc^3 cells would not: a 200 000-particle
+/// column has 54 blocks.
+struct WorkUnits {
+  explicit WorkUnits(const CellSort& sort)
+      : order(sort.blocks_in_work_order()), bc(static_cast<std::size_t>(sort.block_cells())), columns(bc * bc) {}
+  std::size_t count() const { return order.size() * columns; }
+  std::size_t block(std::int64_t u) const { return order[static_cast<std::size_t>(u) / columns]; }
+  std::size_t first_cell(std::int64_t u) const { return (static_cast<std::size_t>(u) % columns) * bc; }  // in the block
+  const std::vector<std::uint32_t>& order;
+  std::size_t bc, columns;
+};
+
 /// The arguments of one smoothing pass, for the per-target entry point.
 struct MlsPass {
   const ParticleStore* particles;
@@ -48,6 +63,7 @@ struct MlsPass {
   double radius, min_rcond;
   bool cell_fit;         // MlsVariant::Cell: one fit per cell
   double search_radius;  // the cells walked: radius, plus the drift since the sort
+  double* unit_seconds;  // null, or per work unit (MlsStrainSmoother::work_units): its seconds
 };
 
 /// The fit's solve for a well-conditioned A (the common case), in plain fixed-size loops that the
@@ -498,7 +514,8 @@ MlsCounts smooth_impl(const MlsPass& pass) {
   const int bc = sort.block_cells();
   const std::size_t cells_per_block = static_cast<std::size_t>(bc) * bc * bc;
   const std::vector<std::uint32_t>& cell_start = sort.cell_start();
-  const std::int64_t blocks = static_cast<std::int64_t>(sort.block_count());
+  const mls_detail::WorkUnits work(sort);
+  const std::int64_t units = static_cast<std::int64_t>(work.count());
   const double rg = pass.search_radius / grid.h;  // radius in cells
   std::size_t smoothed = 0, unsmoothed = 0;
 #pragma omp parallel reduction(+ : smoothed, unsmoothed)
@@ -565,14 +582,16 @@ MlsCounts smooth_impl(const MlsPass& pass) {
       n = 0;
     };
 #pragma omp for schedule(dynamic, 1)
-    for (std::int64_t bi = 0; bi < blocks; ++bi) {
+    for (std::int64_t u = 0; u < units; ++u) {
+      const double unit_start = pass.unit_seconds ? omp_get_wtime() : 0.0;
       // Groups: up to kGroup particles from consecutive cells of one column along k (their box
-      // stays about one cell wide); a cell joins the open group only if all of it fits.
-      const std::size_t base = static_cast<std::size_t>(bi) * cells_per_block;
-      for (std::size_t l = 0; l < cells_per_block; ++l) {
+      // stays about one cell wide); a cell joins the open group only if all of it fits. A group
+      // never spans two columns (it is flushed at the end of each).
+      const std::size_t base = work.block(u) * cells_per_block + work.first_cell(u);
+      for (std::size_t l = 0; l < static_cast<std::size_t>(bc); ++l) {
         const std::uint32_t p_begin = cell_start[base + l], p_end = cell_start[base + l + 1];
         if (p_begin == p_end) continue;
-        if (n > 0 && (static_cast<std::uint32_t>(n) + (p_end - p_begin) > kGroup || l % bc == 0 ||
+        if (n > 0 && (static_cast<std::uint32_t>(n) + (p_end - p_begin) > kGroup || l == 0 ||
                       cell_start[base + l - 1] == cell_start[base + l]))
           flush();
         for (std::uint32_t q = p_begin; q < p_end; ++q) {
@@ -592,6 +611,7 @@ MlsCounts smooth_impl(const MlsPass& pass) {
         }
       }
       flush();
+      if (pass.unit_seconds) pass.unit_seconds[u] = omp_get_wtime() - unit_start;
     }
   }
   return {smoothed, unsmoothed};
@@ -760,7 +780,8 @@ MlsCounts smooth_cells_impl(const MlsPass& pass) {
   const int bc = sort.block_cells();
   const std::size_t cells_per_block = static_cast<std::size_t>(bc) * bc * bc;
   const std::vector<std::uint32_t>& cell_start = sort.cell_start();
-  const std::int64_t blocks = static_cast<std::int64_t>(sort.block_count());
+  const mls_detail::WorkUnits work(sort);
+  const std::int64_t units = static_cast<std::int64_t>(work.count());
   const double rg = pass.search_radius / grid.h;  // radius in cells
   std::size_t smoothed = 0, unsmoothed = 0;
 #pragma omp parallel reduction(+ : smoothed, unsmoothed)
@@ -768,10 +789,13 @@ MlsCounts smooth_cells_impl(const MlsPass& pass) {
     GroupScratch S;
     std::vector<std::uint8_t> fits;  // per particle of the cell: fitted (smoothed body, finite position)
 #pragma omp for schedule(dynamic, 1)
-    for (std::int64_t bi = 0; bi < blocks; ++bi) {
-      const std::array<int, 3> origin = sort.block_origin(static_cast<std::size_t>(bi));
-      const std::size_t base = static_cast<std::size_t>(bi) * cells_per_block;
-      for (std::size_t l = 0; l < cells_per_block; ++l) {
+    for (std::int64_t u = 0; u < units; ++u) {
+      const double unit_start = pass.unit_seconds ? omp_get_wtime() : 0.0;
+      const std::size_t bi = work.block(u);
+      const std::array<int, 3> origin = sort.block_origin(bi);
+      const std::size_t base = bi * cells_per_block;
+      const std::size_t first = work.first_cell(u);
+      for (std::size_t l = first; l < first + static_cast<std::size_t>(bc); ++l) {
         const std::uint32_t p_begin = cell_start[base + l], p_end = cell_start[base + l + 1];
         if (p_begin == p_end) continue;
         fits.assign(p_end - p_begin, 0);
@@ -812,6 +836,7 @@ MlsCounts smooth_cells_impl(const MlsPass& pass) {
             smooth_cell<Degree, Axes>(S, pass, rg, xc, P.body[q], p_begin, p_end, fits.data(), smoothed, unsmoothed);
         }
       }
+      if (pass.unit_seconds) pass.unit_seconds[u] = omp_get_wtime() - unit_start;
     }
   }
   return {smoothed, unsmoothed};
@@ -864,19 +889,36 @@ MlsStrainSmoother::MlsStrainSmoother(const MlsSettings& settings, double cell_si
   if (!(radius_ > 0.0)) throw input_error(fmt::format("MLS radius {} must be positive", radius_));
 }
 
+std::vector<std::uint32_t> MlsStrainSmoother::work_unit_particles(const CellSort& sort) {
+  const mls_detail::WorkUnits work(sort);
+  const std::size_t cells_per_block = work.columns * work.bc;
+  std::vector<std::uint32_t> particles(work.count());
+  for (std::size_t u = 0; u < particles.size(); ++u) {
+    const std::size_t first = work.block(static_cast<std::int64_t>(u)) * cells_per_block + work.first_cell(static_cast<std::int64_t>(u));
+    particles[u] = sort.cell_start()[first + work.bc] - sort.cell_start()[first];
+  }
+  return particles;
+}
+
 int MlsStrainSmoother::term_count() const { return mls_term_count(static_cast<int>(settings_.basis), axis_count_); }
 
 // Every particle's result depends only on the inputs and a fixed visiting order, and is written
 // only by its own lane: the output is bit-identical for any thread count and on every path.
 MlsCounts MlsStrainSmoother::smooth(const ParticleStore& particles, const CellSort& sort, const GridGeometry& grid,
                                     const std::array<const double*, 6>& in, const std::array<double*, 6>& out,
-                                    const std::vector<std::uint8_t>& smooth_body, double drift) const {
+                                    const std::vector<std::uint8_t>& smooth_body, double drift,
+                                    std::vector<double>* unit_seconds) const {
   if (!(drift >= 0.0 && std::isfinite(drift))) throw std::invalid_argument("MLS search drift must be finite and >= 0");
   // The margin covers the round-off of the moves the drift sums (an ulp of a position per step).
   const double search_radius = drift > 0.0 ? (radius_ + drift) * (1.0 + 1e-9) : radius_;
-  const mls_detail::MlsPass pass{&particles, &sort, &grid, in, out, &smooth_body,
+  mls_detail::MlsPass pass{&particles, &sort, &grid, in, out, &smooth_body,
                                  static_cast<int>(settings_.basis), axis_count_, axis_list_, radius_,
-                                 settings_.min_rcond, settings_.variant == MlsVariant::Cell, search_radius};
+                                 settings_.min_rcond, settings_.variant == MlsVariant::Cell, search_radius,
+                                 nullptr};
+  if (unit_seconds) {
+    unit_seconds->assign(mls_detail::WorkUnits(sort).count(), 0.0);
+    pass.unit_seconds = unit_seconds->data();
+  }
   // The `reference` path runs the baseline build of the same code.
   return (vector_kernels_enabled() ? HWY_DYNAMIC_DISPATCH(SmoothMls) : &HWY_STATIC_DISPATCH(SmoothMls))(pass);
 }

@@ -648,20 +648,30 @@ template <class Shape, class Terrain>
 void Solver::update_stress_smoothed(const NodeVectors& node_velocity, double dt, bool move) {
   ParticleStore& P = particles_;
   const std::size_t blocks = sort_.block_count();
+  WorkRecorder* const rec = recording();  // each loop over the blocks recorded with its blocks' times
   {
     ScopedPhase timer(times_, Phase::Stress);
+    std::vector<double>* const block_seconds = rec ? &strain_block_seconds_ : nullptr;
+    if (block_seconds) block_seconds->assign(blocks, 0.0);
+    const double pass_start = rec ? omp_get_wtime() : 0.0;
 #pragma omp parallel
     {
       StrainIncrements inc;
+      const std::vector<std::uint32_t>& order = sort_.blocks_in_work_order();  // heaviest first
 #pragma omp for schedule(dynamic, 1)
-      for (std::size_t b = 0; b < blocks; ++b)
+      for (std::size_t bi = 0; bi < blocks; ++bi) {
+        const std::size_t b = order[bi];
+        const double block_start = block_seconds ? omp_get_wtime() : 0.0;
         for (std::size_t begin = sort_.block_begin(b); begin < sort_.block_end(b); begin += StrainIncrements::kCapacity) {
           const std::size_t end = std::min<std::size_t>(begin + StrainIncrements::kCapacity, sort_.block_end(b));
           strain_increments<Shape, Terrain>(P, grid_, node_velocity, dt, begin, end, inc);  // eq. 53
           for (int c = 0; c < 6; ++c) std::copy_n(inc.strain[c].data(), end - begin, raw_strain_[c].data() + begin);
           for (int c = 0; c < 3; ++c) std::copy_n(inc.spin[c].data(), end - begin, raw_spin_[c].data() + begin);
         }
+        if (block_seconds) (*block_seconds)[bi] = omp_get_wtime() - block_start;
+      }
     }
+    if (rec) rec->add_block_loop("mls strain", strain_block_seconds_, omp_get_wtime() - pass_start, sort_);
   }
   {
     ScopedPhase timer(times_, Phase::Smooth);  // eq. 54
@@ -673,11 +683,14 @@ void Solver::update_stress_smoothed(const NodeVectors& node_velocity, double dt,
     }
     // The search widens by the drift since the sort (the cell fit sorts every step: drift 0).
     const double mls_drift = scene_.smoothing.mls.variant == MlsVariant::Cell ? 0.0 : sort_drift_;
-    // recorded as a static region: the smoother's own per-block times are not kept
-    recorded(recording(), RegionSchedule::Static, "mls smooth", P.size(), 1,
-             [&] { last_smoothing_ = smoother_->smooth(P, sort_, scene_.grid, in, out, smooth_body_, mls_drift); });
+    const double smooth_start = rec ? omp_get_wtime() : 0.0;
+    last_smoothing_ = smoother_->smooth(P, sort_, scene_.grid, in, out, smooth_body_, mls_drift,
+                                        rec ? &smooth_unit_seconds_ : nullptr);
+    if (rec)
+      rec->add_unit_loop("mls smooth", smooth_unit_seconds_, MlsStrainSmoother::work_unit_particles(sort_),
+                         omp_get_wtime() - smooth_start);
     unsmoothed_total_ += static_cast<std::int64_t>(last_smoothing_.unsmoothed);
-    measure_smoothing_change();
+    recorded(rec, RegionSchedule::Static, "mls change", P.size(), 1, [&] { measure_smoothing_change(); });
   }
   ScopedPhase timer(times_, Phase::Stress);
   update_material_by_chunks<Shape>(dt, move, [&](std::size_t begin, std::size_t end, StrainIncrements& inc) {

@@ -90,18 +90,25 @@ void WorkRecorder::add_colour_passes(const char* name, const ColourPassTiming& t
 void WorkRecorder::add_block_loop(const char* name, const std::vector<double>& block_seconds, double seconds,
                                   const CellSort& sort) {
   if (!active_) return;
+  std::vector<std::uint32_t> particles(block_seconds.size());
+  for (std::size_t bi = 0; bi < block_seconds.size(); ++bi) {
+    const std::size_t b = sort.blocks_in_work_order()[bi];
+    particles[bi] = sort.block_end(b) - sort.block_begin(b);
+  }
+  add_unit_loop(name, block_seconds, std::move(particles), seconds);
+}
+
+void WorkRecorder::add_unit_loop(const char* name, const std::vector<double>& unit_seconds,
+                                 std::vector<std::uint32_t> unit_particles, double seconds) {
+  if (!active_) return;
   const OwnTime own(steps_.back().recorder_seconds);
   WorkRegion r;
   r.name = name;
   r.schedule = RegionSchedule::Dynamic;
   r.parallel_regions = 1;
   r.seconds = seconds;
-  r.block_seconds = block_seconds;
-  r.block_particles.resize(block_seconds.size());
-  for (std::size_t bi = 0; bi < block_seconds.size(); ++bi) {
-    const std::size_t b = sort.blocks_in_work_order()[bi];
-    r.block_particles[bi] = sort.block_end(b) - sort.block_begin(b);
-  }
+  r.block_seconds = unit_seconds;
+  r.block_particles = std::move(unit_particles);
   steps_.back().regions.push_back(std::move(r));
 }
 

@@ -315,6 +315,31 @@ TEST(Cli, BenchAndRunRecordTheWorkDistribution) {
     EXPECT_GT(own, 0.0);
     EXPECT_LE(listed + own, step["seconds"].get<double>() * 1.000001);
   }
+  // MLS: the strain pass and the fit are loops over work units like the stress pass (the fit's
+  // units are columns of cells): every particle in one unit, each unit with its time
+  const fs::path mls_record = dir / "mls_record.json";
+  const Result m = run("bench --particles 2000 --threads 1 --steps 1 --record-steps 1 --mls linear --mls-radius 1 "
+                       "--record-work " + mls_record.string());
+  ASSERT_EQ(m.exit_code, 0) << m.output;
+  std::ifstream min(mls_record);
+  const nlohmann::json rm = nlohmann::json::parse(min);
+  int smooth_loops = 0, strain_loops = 0;
+  for (const auto& region : rm["steps"][0]["regions"]) {
+    if (region["name"] != "mls smooth" && region["name"] != "mls strain") continue;
+    ++(region["name"] == "mls smooth" ? smooth_loops : strain_loops);
+    EXPECT_EQ(region["schedule"], "dynamic");
+    EXPECT_EQ(region["parallel_regions"], 1);
+    ASSERT_EQ(region["block_seconds"].size(), region["block_particles"].size());
+    std::size_t sum = 0;
+    double block_total = 0.0;
+    for (const auto& n : region["block_particles"]) sum += n.get<std::size_t>();
+    for (const auto& t : region["block_seconds"]) block_total += t.get<double>();
+    EXPECT_EQ(sum, rm["steps"][0]["particles"].get<std::size_t>());
+    EXPECT_GT(block_total, 0.0);
+    EXPECT_LE(block_total, region["seconds"].get<double>() * 1.000001);  // one thread: the units within the loop
+  }
+  EXPECT_EQ(smooth_loops, 1);
+  EXPECT_EQ(strain_loops, 1);
   std::ifstream in(kInputs + "elastic_block_slide.json");
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   text.replace(text.find("\"end\": 1.0"), 10, "\"end\": 0.02");

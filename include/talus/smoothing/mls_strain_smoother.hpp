@@ -53,10 +53,15 @@ class MlsStrainSmoother {
   /// from the current ones (0: of the current positions). The drift widens the search, not the
   /// fit: a particle's result depends on the candidates' order, which is the sort's, not on the
   /// drift. The one-fit-per-cell variant fits the particles of a sorted cell about its centre, so
-  /// it wants drift 0.
+  /// it wants drift 0. The threads take work units in turn: the (i, j) columns of cells along k of
+  /// every block, the blocks heaviest first (CellSort::blocks_in_work_order()). With `unit_seconds`
+  /// (the work recorder) the seconds each unit took, in that order.
   MlsCounts smooth(const ParticleStore& particles, const CellSort& sort, const GridGeometry& grid,
                    const std::array<const double*, 6>& in, const std::array<double*, 6>& out,
-                   const std::vector<std::uint8_t>& smooth_body, double drift = 0.0) const;
+                   const std::vector<std::uint8_t>& smooth_body, double drift = 0.0,
+                   std::vector<double>* unit_seconds = nullptr) const;
+  /// The particles of each work unit of smooth(), in its order.
+  static std::vector<std::uint32_t> work_unit_particles(const CellSort& sort);
 
  private:
   MlsSettings settings_;

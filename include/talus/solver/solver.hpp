@@ -245,6 +245,7 @@ class Solver {
   WorkRecorder* recorder_ = nullptr;
   ColourPassTiming pass_timing_;
   std::vector<double> stress_block_seconds_;
+  std::vector<double> strain_block_seconds_, smooth_unit_seconds_;  // MLS: the strain pass, the fit
   /// The recorder when the current step is recorded, else null.
   WorkRecorder* recording() const { return recorder_ && recorder_->active() ? recorder_ : nullptr; }
   // MLS smoothing: allocated only when the scene enables it.

@@ -64,6 +64,10 @@ class WorkRecorder {
   void add_colour_passes(const char* name, const ColourPassTiming& timing, const CellSort& sort, bool single_pass);
   /// A schedule(dynamic, 1) loop over all blocks in sort.blocks_in_work_order().
   void add_block_loop(const char* name, const std::vector<double>& block_seconds, double seconds, const CellSort& sort);
+  /// The same for a loop over other work units (schedule(dynamic, 1) in the order given): each
+  /// unit's seconds and particles (the MLS smoother's columns of cells).
+  void add_unit_loop(const char* name, const std::vector<double>& unit_seconds, std::vector<std::uint32_t> unit_particles,
+                     double seconds);
   /// Time the caller (the run loop) spent after the last recorded step: serial (output, guards), or
   /// with items > 0 a static region of that many iterations in `parallel_regions` regions (the snapshot).
   void add_after_step(const char* name, double seconds, std::size_t items = 0, int parallel_regions = 0);
