@@ -184,6 +184,9 @@ TEST(MlsSolver, BitIdenticalForOneAndTwoThreads) {
     EXPECT_EQ(one.last_smoothing_change(), two.last_smoothing_change());  // deterministic_sum: fixed chunks
     EXPECT_EQ(one.max_smoothing_change(), two.max_smoothing_change());
     EXPECT_GT(one.max_smoothing_change(), 0.0);
+    // the sort is reused between drifts, at the same steps on any thread count
+    EXPECT_LT(one.sort_count(), one.step_count());
+    EXPECT_EQ(one.sort_count(), two.sort_count());
   }
 }
 
