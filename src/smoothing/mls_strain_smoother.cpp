@@ -199,6 +199,10 @@ struct GroupScratch {
   // Candidates: the store indices of the particles within the radius of the box of the group's
   // cells (idx), and of those the ones within the radius of the group's own box (group_idx).
   std::vector<std::int64_t> idx, group_idx;
+  // The gathered candidates' positions as columns, padded with +inf to whole vectors, for the
+  // groups' own filters (built once per gathered list, when a group is smaller than its cells).
+  std::array<std::vector<double>, 3> idx_x;
+  bool idx_x_current = false;
   // Per candidate, the lanes' scaled offsets along the basis axes and eq. 39 weights (pass 1 ->
   // pass 2): 4 x kGroup doubles, aligned for whole-vector loads.
   hwy::AlignedFreeUniquePtr<double[]> lanes;
@@ -234,18 +238,36 @@ template <class V>
 /// bit: Highway 1.0.3's CompressStore of 64-bit lanes on AVX-512 is the compressing store to memory,
 /// which AMD's Zen 4 runs as microcode, and its Compress copies a 2 KiB table onto the stack at
 /// every call (GCC 12); either took about 40% of the candidate search.
-template <class DI, class M>
-[[gnu::always_inline]] inline std::size_t store_kept_indices(DI di, M m, std::int64_t q, std::int64_t* out) {
+/// (value(lane) gives the index to store.)
+template <class DI, class M, class Value>
+[[gnu::always_inline]] inline std::size_t store_kept(DI di, M m, Value value, std::int64_t* out) {
   namespace hn = hwy::HWY_NAMESPACE;
   constexpr std::size_t kMaxLanes = HWY_MAX_BYTES / sizeof(std::int64_t);
   std::uint8_t bits[(kMaxLanes + 7) / 8] = {};
   hn::StoreMaskBits(di, m, bits);
   std::size_t n = 0;
   for (std::size_t v = 0; v < hn::Lanes(di); ++v) {
-    out[n] = q + static_cast<std::int64_t>(v);
+    out[n] = value(v);
     n += (bits[v / 8] >> (v % 8)) & 1u;
   }
   return n;
+}
+template <class DI, class M>
+[[gnu::always_inline]] inline std::size_t store_kept_indices(DI di, M m, std::int64_t q, std::int64_t* out) {
+  return store_kept(di, m, [q](std::size_t v) { return q + static_cast<std::int64_t>(v); }, out);
+}
+
+/// gap2_to_box for a vector of positions, operation for operation (the same bits per lane).
+template <class D, class V>
+[[gnu::always_inline]] inline V gap2_to_box_lanes(D, const V (&x)[3], const V (&xlo)[3], const V (&xhi)[3], V zero) {
+  namespace hn = hwy::HWY_NAMESPACE;
+  V g2 = zero;
+  for (int k = 0; k < 3; ++k) {
+    const V below = hn::Sub(xlo[k], x[k]), above = hn::Sub(x[k], xhi[k]);
+    const V gap = hn::IfThenElse(hn::Gt(below, above), below, above);
+    g2 = hn::Add(g2, hn::IfThenElseZero(hn::Gt(gap, zero), hn::Mul(gap, gap)));
+  }
+  return hn::Add(g2, hn::Mul(zero, hn::Add(hn::Add(x[0], x[1]), x[2])));
 }
 
 /// Append, to the candidates, the indices of the particles [q0, q1) that lie within the radius of
@@ -269,14 +291,7 @@ template <class DI, class M>
   std::uint32_t q = q0;
   for (; q + N <= q1; q += N) {
     const V x[3] = {hn::LoadU(d, P.x[0].data() + q), hn::LoadU(d, P.x[1].data() + q), hn::LoadU(d, P.x[2].data() + q)};
-    V g2 = zero;
-    for (int k = 0; k < 3; ++k) {
-      const V below = hn::Sub(xlo[k], x[k]), above = hn::Sub(x[k], xhi[k]);
-      const V gap = hn::IfThenElse(hn::Gt(below, above), below, above);
-      g2 = hn::Add(g2, hn::IfThenElseZero(hn::Gt(gap, zero), hn::Mul(gap, gap)));
-    }
-    g2 = hn::Add(g2, hn::Mul(zero, hn::Add(hn::Add(x[0], x[1]), x[2])));
-    const auto m = hn::RebindMask(di, hn::Lt(g2, keep));
+    const auto m = hn::RebindMask(di, hn::Lt(gap2_to_box_lanes(d, x, xlo, xhi, zero), keep));
     nc += store_kept_indices(di, m, static_cast<std::int64_t>(q), S.idx.data() + nc);
   }
   for (; q < q1; ++q) {
@@ -285,6 +300,42 @@ template <class DI, class M>
     S.idx[nc] = q;
     nc += g2 < keep2 ? 1 : 0;
   }
+}
+
+/// Of the nc gathered candidates, those within the radius (keep2) of the group's box [xlo, xhi],
+/// in their order, into S.group_idx; returns how many. The same test as append_candidates on whole
+/// vectors of the candidates' positions, which are copied into columns once per gathered list
+/// (the 2 groups of a cell on AVX2, 4 on the baseline, share it).
+inline std::size_t filter_for_group(GroupScratch& S, const ParticleStore& P, std::size_t nc, const double (&box_lo)[3],
+                                    const double (&box_hi)[3], double keep2) {
+  namespace hn = hwy::HWY_NAMESPACE;
+  const hn::ScalableTag<double> d;
+  const hn::RebindToSigned<decltype(d)> di;
+  const std::size_t N = hn::Lanes(d);
+  const std::size_t padded = (nc + N - 1) / N * N;
+  if (!S.idx_x_current) {
+    for (int k = 0; k < 3; ++k) {
+      std::vector<double>& column = S.idx_x[k];
+      if (column.size() < padded) column.resize(std::max(padded, 2 * column.size()));
+      for (std::size_t I = 0; I < nc; ++I) column[I] = P.x[k][S.idx[I]];
+      for (std::size_t I = nc; I < padded; ++I) column[I] = HUGE_VAL;  // never kept (g2 is NaN)
+    }
+    S.idx_x_current = true;
+  }
+  if (S.group_idx.size() < padded) S.group_idx.resize(std::max(padded, S.idx.size()));
+  using V = hn::Vec<decltype(d)>;
+  const V zero = hn::Zero(d), keep = hn::Set(d, keep2);
+  const V xlo[3] = {hn::Set(d, box_lo[0]), hn::Set(d, box_lo[1]), hn::Set(d, box_lo[2])};
+  const V xhi[3] = {hn::Set(d, box_hi[0]), hn::Set(d, box_hi[1]), hn::Set(d, box_hi[2])};
+  const std::int64_t* idx = S.idx.data();
+  std::size_t ng = 0;
+  for (std::size_t I = 0; I < padded; I += N) {
+    const V x[3] = {hn::LoadU(d, S.idx_x[0].data() + I), hn::LoadU(d, S.idx_x[1].data() + I),
+                    hn::LoadU(d, S.idx_x[2].data() + I)};
+    const auto m = hn::RebindMask(di, hn::Lt(gap2_to_box_lanes(d, x, xlo, xhi, zero), keep));
+    ng += store_kept(di, m, [&](std::size_t v) { return idx[I + v]; }, S.group_idx.data() + ng);
+  }
+  return ng;
 }
 
 /// Visit the particle ranges [q0, q1) of the cells that meet the ball of radius rg (cells) around
@@ -551,6 +602,7 @@ MlsCounts smooth_impl(const MlsPass& pass) {
           }
         }
         nc = gather_candidates(S, pass, box, rg);
+        S.idx_x_current = false;
         gathered_begin = range_begin;
         gathered_end = range_end;
       }
@@ -570,14 +622,7 @@ MlsCounts smooth_impl(const MlsPass& pass) {
           xlo[d] = x < xlo[d] ? x : xlo[d];
           xhi[d] = x > xhi[d] ? x : xhi[d];
         }
-      if (S.group_idx.size() < nc) S.group_idx.resize(S.idx.size());
-      std::size_t ng = 0;
-      for (std::size_t I = 0; I < nc; ++I) {
-        const std::int64_t q = S.idx[I];
-        const double x[3] = {P.x[0][q], P.x[1][q], P.x[2][q]};
-        S.group_idx[ng] = q;
-        ng += gap2_to_box<double>(x, xlo, xhi, 0.0) < keep2 ? 1 : 0;
-      }
+      const std::size_t ng = filter_for_group(S, P, nc, xlo, xhi, keep2);
       smooth_group<Degree, Axes>(S, S.group_idx.data(), ng, pass, group, n, smoothed, unsmoothed);
       n = 0;
     };
