@@ -63,7 +63,7 @@ struct MlsPass {
   double radius, min_rcond;
   bool cell_fit;         // MlsVariant::Cell: one fit per cell
   double search_radius;  // the cells walked: radius, plus the drift since the sort
-  double* unit_seconds;  // null, or per work unit (MlsStrainSmoother::work_units): its seconds
+  double* unit_seconds;  // null, or per work unit (WorkUnits order): its seconds
 };
 
 /// The fit's solve for a well-conditioned A (the common case), in plain fixed-size loops that the
@@ -233,12 +233,11 @@ template <class V>
   return g2 + zero * (x[0] + x[1] + x[2]);
 }
 
-/// Store, at out, the indices q + lane of the lanes set in m, in lane order, and return how many
-/// (out needs room for a whole vector). One unconditional store per lane, advanced by the lane's
+/// Store, at out, value(lane) for the lanes set in m, in lane order, and return how many (out
+/// needs room for a whole vector). One unconditional store per lane, advanced by the lane's
 /// bit: Highway 1.0.3's CompressStore of 64-bit lanes on AVX-512 is the compressing store to memory,
 /// which AMD's Zen 4 runs as microcode, and its Compress copies a 2 KiB table onto the stack at
 /// every call (GCC 12); either took about 40% of the candidate search.
-/// (value(lane) gives the index to store.)
 template <class DI, class M, class Value>
 [[gnu::always_inline]] inline std::size_t store_kept(DI di, M m, Value value, std::int64_t* out) {
   namespace hn = hwy::HWY_NAMESPACE;
@@ -252,6 +251,7 @@ template <class DI, class M, class Value>
   }
   return n;
 }
+/// The indices q + lane of the lanes set in m.
 template <class DI, class M>
 [[gnu::always_inline]] inline std::size_t store_kept_indices(DI di, M m, std::int64_t q, std::int64_t* out) {
   return store_kept(di, m, [q](std::size_t v) { return q + static_cast<std::int64_t>(v); }, out);

@@ -572,6 +572,31 @@ void Solver::update_stress(const NodeVectors& node_velocity, double dt, bool mov
   });
 }
 
+// One parallel loop over the sort blocks, heaviest first (schedule(dynamic, 1)), each block in chunks
+// of at most StrainIncrements::kCapacity particles: chunk(b, begin, end, inc) with a thread's own
+// increments buffer. A recorded step records the loop as `name` with each block's time.
+template <class Chunk>
+void Solver::for_blocks_in_chunks(const char* name, Chunk chunk) {
+  const std::size_t blocks = sort_.block_count();
+  WorkRecorder* const rec = recording();
+  if (rec) block_seconds_.assign(blocks, 0.0);
+  const double pass_start = rec ? omp_get_wtime() : 0.0;
+#pragma omp parallel
+  {
+    StrainIncrements inc;
+    const std::vector<std::uint32_t>& order = sort_.blocks_in_work_order();
+#pragma omp for schedule(dynamic, 1)
+    for (std::size_t bi = 0; bi < blocks; ++bi) {
+      const std::size_t b = order[bi];
+      const double block_start = rec ? omp_get_wtime() : 0.0;
+      for (std::size_t begin = sort_.block_begin(b); begin < sort_.block_end(b); begin += StrainIncrements::kCapacity)
+        chunk(b, begin, std::min<std::size_t>(begin + StrainIncrements::kCapacity, sort_.block_end(b)), inc);
+      if (rec) block_seconds_[bi] = omp_get_wtime() - block_start;
+    }
+  }
+  if (rec) rec->add_block_loop(name, block_seconds_, omp_get_wtime() - pass_start, sort_);
+}
+
 // The material update over chunks of StrainIncrements::kCapacity particles, parallel over sort
 // blocks: fill(begin, end, inc) provides the chunk's strain and spin increments. The dissipation
 // is summed per block, then over blocks in block order, so it does not depend on the thread count.
@@ -586,31 +611,12 @@ void Solver::update_material_by_chunks(double dt, bool move, FillChunk fill) {
   const WaveRateRule* const lanes = rule ? &*rule : nullptr;
   wave_rate_from_stress_pass_.reset();
   if (keep_wave_rate) block_wave_rate_.assign(blocks, 0.0);
-  WorkRecorder* const rec = recording();
-  std::vector<double>* const block_seconds = rec ? &stress_block_seconds_ : nullptr;
-  if (block_seconds) block_seconds->assign(blocks, 0.0);
-  const double pass_start = rec ? omp_get_wtime() : 0.0;
-#pragma omp parallel
-  {
-    StrainIncrements inc;
-    const std::vector<std::uint32_t>& order = sort_.blocks_in_work_order();  // heaviest first
-#pragma omp for schedule(dynamic, 1)
-    for (std::size_t bi = 0; bi < blocks; ++bi) {
-      const std::size_t b = order[bi];
-      const double block_start = block_seconds ? omp_get_wtime() : 0.0;
-      double dissipated = 0.0, wave_rate = 0.0;
-      for (std::size_t begin = sort_.block_begin(b); begin < sort_.block_end(b); begin += StrainIncrements::kCapacity) {
-        const std::size_t end = std::min<std::size_t>(begin + StrainIncrements::kCapacity, sort_.block_end(b));
-        fill(begin, end, inc);
-        dissipated += update_chunk<Shape>(begin, end, inc, dt, move);
-        if (keep_wave_rate) wave_rate = std::max(wave_rate, max_wave_rate(begin, end, lanes));
-      }
-      block_dissipation_[b] = dissipated;
-      if (keep_wave_rate) block_wave_rate_[b] = wave_rate;
-      if (block_seconds) (*block_seconds)[bi] = omp_get_wtime() - block_start;
-    }
-  }
-  if (rec) rec->add_block_loop("stress", stress_block_seconds_, omp_get_wtime() - pass_start, sort_);
+  // the blocks' sums start from the zeros assigned above, chunk by chunk in order: thread-independent
+  for_blocks_in_chunks("stress", [&](std::size_t b, std::size_t begin, std::size_t end, StrainIncrements& inc) {
+    fill(begin, end, inc);
+    block_dissipation_[b] += update_chunk<Shape>(begin, end, inc, dt, move);
+    if (keep_wave_rate) block_wave_rate_[b] = std::max(block_wave_rate_[b], max_wave_rate(begin, end, lanes));
+  });
   for (double d : block_dissipation_) work_.plastic_work += d;
   if (keep_wave_rate) {
     double max_rate = 0.0;
@@ -647,31 +653,14 @@ double Solver::update_chunk(std::size_t begin, std::size_t end, const StrainIncr
 template <class Shape, class Terrain>
 void Solver::update_stress_smoothed(const NodeVectors& node_velocity, double dt, bool move) {
   ParticleStore& P = particles_;
-  const std::size_t blocks = sort_.block_count();
-  WorkRecorder* const rec = recording();  // each loop over the blocks recorded with its blocks' times
+  WorkRecorder* const rec = recording();
   {
     ScopedPhase timer(times_, Phase::Stress);
-    std::vector<double>* const block_seconds = rec ? &strain_block_seconds_ : nullptr;
-    if (block_seconds) block_seconds->assign(blocks, 0.0);
-    const double pass_start = rec ? omp_get_wtime() : 0.0;
-#pragma omp parallel
-    {
-      StrainIncrements inc;
-      const std::vector<std::uint32_t>& order = sort_.blocks_in_work_order();  // heaviest first
-#pragma omp for schedule(dynamic, 1)
-      for (std::size_t bi = 0; bi < blocks; ++bi) {
-        const std::size_t b = order[bi];
-        const double block_start = block_seconds ? omp_get_wtime() : 0.0;
-        for (std::size_t begin = sort_.block_begin(b); begin < sort_.block_end(b); begin += StrainIncrements::kCapacity) {
-          const std::size_t end = std::min<std::size_t>(begin + StrainIncrements::kCapacity, sort_.block_end(b));
-          strain_increments<Shape, Terrain>(P, grid_, node_velocity, dt, begin, end, inc);  // eq. 53
-          for (int c = 0; c < 6; ++c) std::copy_n(inc.strain[c].data(), end - begin, raw_strain_[c].data() + begin);
-          for (int c = 0; c < 3; ++c) std::copy_n(inc.spin[c].data(), end - begin, raw_spin_[c].data() + begin);
-        }
-        if (block_seconds) (*block_seconds)[bi] = omp_get_wtime() - block_start;
-      }
-    }
-    if (rec) rec->add_block_loop("mls strain", strain_block_seconds_, omp_get_wtime() - pass_start, sort_);
+    for_blocks_in_chunks("mls strain", [&](std::size_t, std::size_t begin, std::size_t end, StrainIncrements& inc) {
+      strain_increments<Shape, Terrain>(P, grid_, node_velocity, dt, begin, end, inc);  // eq. 53
+      for (int c = 0; c < 6; ++c) std::copy_n(inc.strain[c].data(), end - begin, raw_strain_[c].data() + begin);
+      for (int c = 0; c < 3; ++c) std::copy_n(inc.spin[c].data(), end - begin, raw_spin_[c].data() + begin);
+    });
   }
   {
     ScopedPhase timer(times_, Phase::Smooth);  // eq. 54
@@ -681,10 +670,9 @@ void Solver::update_stress_smoothed(const NodeVectors& node_velocity, double dt,
       in[c] = raw_strain_[c].data();
       out[c] = smooth_strain_[c].data();
     }
-    // The search widens by the drift since the sort (the cell fit sorts every step: drift 0).
-    const double mls_drift = scene_.smoothing.mls.variant == MlsVariant::Cell ? 0.0 : sort_drift_;
+    // The search widens by the drift since the sort (mls_needs_sort).
     const double smooth_start = rec ? omp_get_wtime() : 0.0;
-    last_smoothing_ = smoother_->smooth(P, sort_, scene_.grid, in, out, smooth_body_, mls_drift,
+    last_smoothing_ = smoother_->smooth(P, sort_, scene_.grid, in, out, smooth_body_, sort_drift_,
                                         rec ? &smooth_unit_seconds_ : nullptr);
     if (rec)
       rec->add_unit_loop("mls smooth", smooth_unit_seconds_, MlsStrainSmoother::work_unit_particles(sort_),

@@ -53,7 +53,7 @@ class MlsStrainSmoother {
   /// from the current ones (0: of the current positions). The drift widens the search, not the
   /// fit: a particle's result depends on the candidates' order, which is the sort's, not on the
   /// drift. The one-fit-per-cell variant fits the particles of a sorted cell about its centre, so
-  /// it wants drift 0. The threads take work units in turn: the (i, j) columns of cells along k of
+  /// it wants the sort of the current positions (the solver sorts every step for it). The threads take work units in turn: the (i, j) columns of cells along k of
   /// every block, the blocks heaviest first (CellSort::blocks_in_work_order()). With `unit_seconds`
   /// (the work recorder) the seconds each unit took, in that order.
   MlsCounts smooth(const ParticleStore& particles, const CellSort& sort, const GridGeometry& grid,

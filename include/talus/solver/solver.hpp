@@ -158,6 +158,8 @@ class Solver {
   double update_chunk(std::size_t begin, std::size_t end, const StrainIncrements& inc, double dt, bool move);
   template <class Shape, class FillChunk>
   void update_material_by_chunks(double dt, bool move, FillChunk fill);
+  template <class Chunk>
+  void for_blocks_in_chunks(const char* name, Chunk chunk);
   /// max over particles [begin, end) of c_p + |v_p| (0 for none; a NaN rate is skipped): in lanes
   /// when `rule` (every body's shared wave-speed rule) is given, else the scalar formula. Both give
   /// the same bits, and a maximum does not depend on how the particles are split.
@@ -244,8 +246,8 @@ class Solver {
   // The work recorder (null unless attached) and its per-block timing buffers.
   WorkRecorder* recorder_ = nullptr;
   ColourPassTiming pass_timing_;
-  std::vector<double> stress_block_seconds_;
-  std::vector<double> strain_block_seconds_, smooth_unit_seconds_;  // MLS: the strain pass, the fit
+  std::vector<double> block_seconds_;        // the recorded loop's per-block times (for_blocks_in_chunks)
+  std::vector<double> smooth_unit_seconds_;  // the MLS fit's per-unit times
   /// The recorder when the current step is recorded, else null.
   WorkRecorder* recording() const { return recorder_ && recorder_->active() ? recorder_ : nullptr; }
   // MLS smoothing: allocated only when the scene enables it.
