@@ -74,6 +74,37 @@ TEST(Guards, FieldCheckNamesTheFirstBadArrayThenTheVolume) {
   EXPECT_NE(message().find("particle " + std::to_string(P.id[11]) + " "), std::string::npos) << message();
 }
 
+// The scan sums each array in eight interleaved probes plus a tail: a bad value in any lane of a
+// group of eight, and in the tail, is found and named.
+TEST(Guards, FieldCheckFindsABadValueInEveryLaneAndTheTail) {
+  const Scene scene = test::tumbling_block_scene();
+  Solver solver(scene);
+  solver.step();
+  ParticleStore all = solver.particles();
+  all.plastic_strain.assign(all.size(), 0.0);
+  // a count that leaves a tail of 5 after the groups of eight
+  const std::size_t n = all.size() - all.size() % 8 - 3;
+  ASSERT_GT(n, 16u);
+  all.for_each_double_array([&](const char*, std::vector<double>& a) {
+    if (!a.empty()) a.resize(n);
+  });
+  all.for_each_integer_array([&](const char*, auto& a) { a.resize(n); });
+  ASSERT_EQ(all.size(), n);
+  for (const std::size_t p : {std::size_t{0}, std::size_t{1}, std::size_t{2}, std::size_t{3}, std::size_t{4},
+                              std::size_t{5}, std::size_t{6}, std::size_t{7}, std::size_t{8}, n / 2, n - 5, n - 1}) {
+    ParticleStore P = all;
+    P.plastic_strain[p] = std::numeric_limits<double>::quiet_NaN();
+    try {
+      check_particle_fields(P, scene, 3, 0.5);
+      ADD_FAILURE() << "no error for particle " << p;
+    } catch (const Error& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("field plastic_strain = nan"), std::string::npos) << m;
+      EXPECT_NE(m.find("particle " + std::to_string(P.id[p]) + " "), std::string::npos) << p << ": " << m;
+    }
+  }
+}
+
 TEST(Guards, CflBreachIsDiagnosed) {
   // Much faster than the wave speed with a Courant number near 1: the particles move most of a
   // cell per step; a tight guard turns that into a diagnosed CFL breach.
