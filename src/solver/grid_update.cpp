@@ -20,10 +20,6 @@ double for_tile_nodes(const Grid& grid, std::size_t t, NodeUpdate&& node_update)
   return energy;
 }
 
-/// Active tile t holds nodes near a mirrored wall (most tiles do not: the ghost stages skip them).
-bool near_mirrored_wall(const Grid& grid, const Walls& walls, std::size_t t) {
-  return walls.near_mirrored_face(grid.node_of(grid.active_tiles()[t]), kTileEdge);
-}
 
 }  // namespace
 
@@ -108,62 +104,50 @@ void add_start_velocities(TileStages& stages, Grid& grid, const Walls& walls, do
   add_wall_projected_velocities(stages, grid, walls, mass_floor, Walls::Stage::Start, grid.velocity_l);
 }
 
-void add_fold_ghost_nodes(TileStages& stages, Grid& grid, const Walls& walls, ScatteredFields fields,
+void add_fold_ghost_nodes(TileStages& stages, Grid& grid, const GhostMap& ghosts, ScatteredFields fields,
                           const Vec3& gravity) {
-  if (!walls.has_mirrored_walls()) return;
-  stages.add(TileReach::AnyTile, [&grid, &walls, fields, gravity](std::size_t t) {
-    if (!near_mirrored_wall(grid, walls, t)) return;
+  if (ghosts.empty()) return;
+  stages.add(TileReach::AnyTile, [&grid, &ghosts, fields, gravity](std::size_t t) {
     const auto [mass, momentum, force] = fields;
-    for_tile_nodes(grid, t, [&](std::size_t n, const std::array<int, 3>& node) {
-      std::array<std::array<int, 3>, 7> ghosts;
-      std::array<std::array<double, 3>, 7> signs;
-      const int count = walls.ghosts_of(node, ghosts, signs);
-      for (int g = 0; g < count; ++g) {
-        // Each ghost has exactly one image, so this thread is the only one touching it: its values
-        // are moved (not copied) to the image, and the ghost is left empty until the mirror.
-        const std::size_t m = grid.node(ghosts[g][0], ghosts[g][1], ghosts[g][2]);
-        const auto& S = signs[g];
-        if (mass) {
-          grid.mass[n] += grid.mass[m];
-          // the body force on the ghost's share acts on the image with the factor S; the grid update
-          // adds g to the image as an acceleration of the whole folded mass, so add (S - 1) m_g g
-          for (int d = 0; d < 3; ++d) grid.force[d][n] += (S[d] - 1.0) * grid.mass[m] * gravity[d];
-          grid.mass[m] = 0.0;
+    // the tile's nodes in slot order, each with the ghosts whose image it is (Walls::ghosts_of)
+    for (const GhostMap::Pair& pair : ghosts.folds(grid.active_tiles()[t])) {
+      // Each ghost has exactly one image, so this thread is the only one touching it: its values
+      // are moved (not copied) to the image, and the ghost is left empty until the mirror.
+      const std::size_t n = pair.node, m = pair.other;
+      const auto& S = pair.sign;
+      if (mass) {
+        grid.mass[n] += grid.mass[m];
+        // the body force on the ghost's share acts on the image with the factor S; the grid update
+        // adds g to the image as an acceleration of the whole folded mass, so add (S - 1) m_g g
+        for (int d = 0; d < 3; ++d) grid.force[d][n] += (S[d] - 1.0) * grid.mass[m] * gravity[d];
+        grid.mass[m] = 0.0;
+      }
+      for (int d = 0; d < 3; ++d) {
+        if (momentum) {
+          grid.momentum[d][n] += S[d] * grid.momentum[d][m];
+          grid.momentum[d][m] = 0.0;
         }
-        for (int d = 0; d < 3; ++d) {
-          if (momentum) {
-            grid.momentum[d][n] += S[d] * grid.momentum[d][m];
-            grid.momentum[d][m] = 0.0;
-          }
-          if (force) {
-            grid.force[d][n] += S[d] * grid.force[d][m];
-            grid.force[d][m] = 0.0;
-          }
+        if (force) {
+          grid.force[d][n] += S[d] * grid.force[d][m];
+          grid.force[d][m] = 0.0;
         }
       }
-      return 0.0;
-    });
+    }
   });
 }
 
-void add_mirror_ghost_nodes(TileStages& stages, Grid& grid, const Walls& walls, GhostFields fields) {
-  if (!walls.has_mirrored_walls()) return;
+void add_mirror_ghost_nodes(TileStages& stages, Grid& grid, const GhostMap& ghosts, GhostFields fields) {
+  if (ghosts.empty()) return;
   std::vector<NodeVectors*> targets;
   if (fields == GhostFields::AfterGridUpdate) targets = {&grid.momentum, &grid.force, &grid.velocity_l};
   if (fields == GhostFields::AfterGridUpdateForRemap) targets = {&grid.force, &grid.velocity_l};
   if (fields == GhostFields::Remapped) targets = {&grid.momentum};
   if (fields == GhostFields::Start) targets = {&grid.velocity_l};
-  stages.add(TileReach::AnyTile, [&grid, &walls, targets](std::size_t t) {
-    if (!near_mirrored_wall(grid, walls, t)) return;
-    for_tile_nodes(grid, t, [&](std::size_t n, const std::array<int, 3>& node) {
-      std::array<int, 3> image;
-      std::array<double, 3> sign;
-      if (!walls.mirror(node, image, sign)) return 0.0;
-      const std::size_t m = grid.node(image[0], image[1], image[2]);
+  stages.add(TileReach::AnyTile, [&grid, &ghosts, targets](std::size_t t) {
+    // the tile's ghost nodes in slot order, each with its interior image (Walls::mirror)
+    for (const GhostMap::Pair& pair : ghosts.mirrors(grid.active_tiles()[t]))
       for (auto* field : targets)
-        for (int d = 0; d < 3; ++d) (*field)[d][n] = sign[d] * (*field)[d][m];
-      return 0.0;
-    });
+        for (int d = 0; d < 3; ++d) (*field)[d][pair.node] = pair.sign[d] * (*field)[d][pair.other];
   });
 }
 

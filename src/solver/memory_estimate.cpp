@@ -1,5 +1,6 @@
 #include "talus/solver/memory_estimate.hpp"
 
+#include "talus/boundary/ghost_map.hpp"
 #include "talus/core/error.hpp"
 #include "talus/grid/grid.hpp"
 #include "talus/particles/cell_sort.hpp"
@@ -146,6 +147,23 @@ std::optional<std::size_t> read_number(const char* path) {
   }
 }
 
+/// The ghost map's lists (boundary/ghost_map.hpp): two offsets per tile of the grid, and a fold and
+/// a mirror per ghost node, kPad layers beyond each mirrored face (fixed, and slip but for a terrain
+/// grid's bed), counted over the whole face: an upper bound.
+std::size_t ghost_map_bytes(const Scene& scene, std::size_t all_tiles) {
+  const std::array<int, 3> nodes = scene.grid.nodes();
+  std::size_t ghost_nodes = 0;
+  for (int d = 0; d < 3; ++d)
+    for (int side = 0; side < 2; ++side) {
+      const WallType type = scene.walls[d][side].type;
+      const bool mirrored = type == WallType::Fixed || (type == WallType::Slip && !(d == 2 && scene.grid.has_terrain()));
+      if (mirrored)
+        ghost_nodes += static_cast<std::size_t>(kPad) * nodes[(d + 1) % 3] * static_cast<std::size_t>(nodes[(d + 2) % 3]);
+    }
+  if (ghost_nodes == 0) return 0;
+  return 2 * (all_tiles + 1) * sizeof(std::uint32_t) + 2 * ghost_nodes * sizeof(GhostMap::Pair);
+}
+
 }  // namespace
 
 MemoryEstimate estimate_memory(const Scene& scene) {
@@ -159,6 +177,9 @@ MemoryEstimate estimate_memory(const Scene& scene) {
   for (int d = 0; d < 3; ++d) all_tiles *= static_cast<std::size_t>((nodes[d] + kTileEdge - 1) / kTileEdge);
   e.grid_bytes_bound = all_tiles * kTileNodes * kNodeBytes;
   e.grid_bytes = std::min(e.grid_bytes, e.grid_bytes_bound);
+  const std::size_t ghosts = ghost_map_bytes(scene, all_tiles);  // held for the whole run, whatever the flow covers
+  e.grid_bytes += ghosts;
+  e.grid_bytes_bound += ghosts;
   return e;
 }
 

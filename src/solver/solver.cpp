@@ -87,6 +87,7 @@ Solver::Solver(Scene scene, Comm comm) : scene_(std::move(scene)), comm_(comm) {
   }
   if (scene_.shape == ShapeKind::CpGimp) particles_.enable_domain_state();  // Edo & Matsubara 2015, eq. 57-58
   walls_ = Walls(scene_.walls, scene_.grid, grid_.profile_terrain());
+  ghosts_ = GhostMap(walls_, grid_);
   materials_ = BodyMaterials(scene_, particles_);
   // Nodes lighter than this are empty: far below any real nodal mass, far above round-off. The
   // lightest particle of the scene: on every rank the same (a rank may hold none, or not the lightest).
@@ -455,7 +456,7 @@ void Solver::step_with(double dt) {
       scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentumForce, timing, buffers);
       grid_stages = after_scatter("p2g", {.mass = true, .momentum = true, .force = true}, clear_in_box_sum);
     }
-    add_fold_ghost_nodes(grid_stages, grid_, walls_, {.mass = true, .momentum = true, .force = true}, gravity);
+    add_fold_ghost_nodes(grid_stages, grid_, ghosts_, {.mass = true, .momentum = true, .force = true}, gravity);
   } else {
     TileStages start_stages(tiles);
     {
@@ -466,16 +467,16 @@ void Solver::step_with(double dt) {
     }
     {
       ScopedPhase timer(times_, Phase::Grid);
-      add_fold_ghost_nodes(start_stages, grid_, walls_, {.mass = true, .momentum = true}, gravity);
+      add_fold_ghost_nodes(start_stages, grid_, ghosts_, {.mass = true, .momentum = true}, gravity);
       add_start_velocities(start_stages, grid_, walls_, mass_floor_);
-      add_mirror_ghost_nodes(start_stages, grid_, walls_, GhostFields::Start);
+      add_mirror_ghost_nodes(start_stages, grid_, ghosts_, GhostFields::Start);
       run_stages(rec, "start velocities", tiles, start_stages);
     }
     update_stress<Shape, Terrain>(grid_.start_velocity(), stress_dt, false);
     ScopedPhase timer(times_, Phase::P2G);
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Force, timing, buffers);
     grid_stages = after_scatter("p2g force", {.force = true});
-    add_fold_ghost_nodes(grid_stages, grid_, walls_, {.force = true}, gravity);
+    add_fold_ghost_nodes(grid_stages, grid_, ghosts_, {.force = true}, gravity);
   }
   // 3. grid: velocities, accelerations with gravity, walls.
   // With a remap the grid update leaves the momentum at zero (ghost nodes included, and the
@@ -484,7 +485,7 @@ void Solver::step_with(double dt) {
   {
     ScopedPhase timer(times_, Phase::Grid);
     add_grid_update(grid_stages, grid_, walls_, gravity, dt, mass_floor_, remap, tile_work_);
-    add_mirror_ghost_nodes(grid_stages, grid_, walls_,
+    add_mirror_ghost_nodes(grid_stages, grid_, ghosts_,
                            remap ? GhostFields::AfterGridUpdateForRemap : GhostFields::AfterGridUpdate);
     run_stages(rec, "grid update", tiles, grid_stages);
     work_.friction_work += counted_work(tile_work_, exchange_.counted());
@@ -522,9 +523,9 @@ void Solver::step_with(double dt) {
   NodeVectors node_velocity = grid_.lagrangian_velocity();
   if (remap) {
     ScopedPhase timer(times_, Phase::Remap);
-    add_fold_ghost_nodes(remap_stages, grid_, walls_, {.momentum = true}, gravity);
+    add_fold_ghost_nodes(remap_stages, grid_, ghosts_, {.momentum = true}, gravity);
     add_velocities_from_momentum(remap_stages, grid_, walls_, mass_floor_);
-    add_mirror_ghost_nodes(remap_stages, grid_, walls_, GhostFields::Remapped);
+    add_mirror_ghost_nodes(remap_stages, grid_, ghosts_, GhostFields::Remapped);
     run_stages(rec, "remap grid", tiles, remap_stages);
     node_velocity = grid_.velocity();
   }

@@ -2,6 +2,7 @@
 // The grid phase of a step: node velocities and accelerations, then the boundary conditions.
 // Each part is added as stages to a TileStages (grid/tile_stages.hpp), so that the solver runs the
 // node work between two scatters in one parallel region.
+#include "talus/boundary/ghost_map.hpp"
 #include "talus/boundary/walls.hpp"
 #include "talus/grid/grid.hpp"
 #include "talus/grid/tile_stages.hpp"
@@ -47,7 +48,8 @@ void add_start_velocities(TileStages& stages, Grid& grid, const Walls& walls, do
 /// wall work is counted on it; the node masses still sum to the particle mass); the mirror fills
 /// its velocities afterwards. Each ghost has one image: race-free and deterministic.
 /// `fields`: which of the scattered node fields it moves. No stage without mirrored walls.
-void add_fold_ghost_nodes(TileStages& stages, Grid& grid, const Walls& walls, ScatteredFields fields,
+/// `ghosts`: the walls' ghost nodes, listed per tile (boundary/ghost_map.hpp).
+void add_fold_ghost_nodes(TileStages& stages, Grid& grid, const GhostMap& ghosts, ScatteredFields fields,
                           const Vec3& gravity);
 
 /// Which node velocity fields the mirror reflects.
@@ -59,6 +61,6 @@ enum class GhostFields { AfterGridUpdate, AfterGridUpdateForRemap, Remapped, Sta
 /// (Walls::mirror): after the grid update (v, v^L - v, v^L), after the MUSL remap (v^{k+1}) or
 /// after the start velocities (v^k). Reads interior nodes only, writes ghost nodes only: race-free.
 /// No stage without mirrored walls.
-void add_mirror_ghost_nodes(TileStages& stages, Grid& grid, const Walls& walls, GhostFields fields);
+void add_mirror_ghost_nodes(TileStages& stages, Grid& grid, const GhostMap& ghosts, GhostFields fields);
 
 }  // namespace talus

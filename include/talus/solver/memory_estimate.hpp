@@ -21,8 +21,8 @@ struct MemoryEstimate {
   std::size_t particles = 0;           // exact: the particles seeding will make
   std::size_t bytes_per_particle = 0;  // every per-particle array the run holds at its peak
   std::size_t particle_bytes = 0;      // particles * bytes_per_particle
-  std::size_t grid_bytes = 0;          // node data of the tiles the bodies cover at the start
-  std::size_t grid_bytes_bound = 0;    // node data of the whole grid (a flow that covers it all)
+  std::size_t grid_bytes = 0;          // node data of the tiles the bodies cover at the start, and the ghost map
+  std::size_t grid_bytes_bound = 0;    // node data of the whole grid (a flow that covers it all), and the ghost map
   std::size_t total() const { return particle_bytes + grid_bytes; }
 };
 

@@ -1,6 +1,7 @@
 #pragma once
 // Solver: owns the particles, the grid and the time, and advances the scene one step at a time.
 // step() is the one place where the order of the phases is written down (solver.cpp).
+#include "talus/boundary/ghost_map.hpp"
 #include "talus/boundary/walls.hpp"
 #include "talus/core/comm.hpp"
 #include "talus/grid/grid.hpp"
@@ -208,6 +209,7 @@ class Solver {
   Grid grid_;
   CellSort sort_;
   Walls walls_;
+  GhostMap ghosts_;  // walls_'s ghost nodes per tile, for the fold and the mirror
   BodyMaterials materials_;                   // the constitutive model of each body
   std::vector<double> block_dissipation_;     // per sort block, this step's material dissipation
   // The time step's maximum of c_p + |v_p|, taken per block at the end of the stress pass that ends

@@ -1,0 +1,94 @@
+// GhostMap (boundary/ghost_map.hpp): the walls' ghost nodes listed once per tile must be exactly what
+// Walls::ghosts_of and Walls::mirror answer node by node, in the order the fold and the mirror visit
+// them (slot by slot, each node's ghosts in ghosts_of's order), on every tile of the grid.
+#include "talus/boundary/ghost_map.hpp"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+namespace talus {
+namespace ghost_map_test {
+namespace {
+
+struct Case {
+  const char* name;
+  std::array<int, 3> cells;
+  std::array<std::array<WallType, 2>, 3> types;
+};
+
+/// Checks every tile of the grid against Walls node by node; returns the number of folds seen.
+std::size_t expect_same_as_walls(const Case& c) {
+  GridGeometry g;
+  g.h = 0.01;
+  g.cells = c.cells;
+  std::array<std::array<WallSpec, 2>, 3> specs{};
+  for (int d = 0; d < 3; ++d)
+    for (int s = 0; s < 2; ++s) specs[d][s] = {c.types[d][s], 0.3};
+  const Walls walls(specs, g);
+  const Grid grid(g);
+  const GhostMap map(walls, grid);
+  std::size_t folds = 0;
+  for (std::size_t tile = 0; tile < grid.tile_count(); ++tile) {
+    std::vector<GhostMap::Pair> fold, mirror;
+    const std::array<int, 3> first = grid.node_of(tile);
+    for (int s = 0; s < kTileNodes; ++s) {
+      const std::array<int, 3> node = Grid::node_in_tile(first, s);
+      const std::size_t n = tile * kTileNodes + static_cast<std::size_t>(s);
+      std::array<std::array<int, 3>, 7> ghosts;
+      std::array<std::array<double, 3>, 7> signs;
+      const int count = walls.ghosts_of(node, ghosts, signs);
+      for (int k = 0; k < count; ++k) fold.push_back({n, grid.node(ghosts[k][0], ghosts[k][1], ghosts[k][2]), signs[k]});
+      std::array<int, 3> image;
+      std::array<double, 3> sign;
+      if (walls.mirror(node, image, sign)) mirror.push_back({n, grid.node(image[0], image[1], image[2]), sign});
+    }
+    const auto listed_folds = map.folds(static_cast<std::uint32_t>(tile));
+    const auto listed_mirrors = map.mirrors(static_cast<std::uint32_t>(tile));
+    EXPECT_EQ(listed_folds.size(), fold.size()) << c.name << ", tile " << tile;
+    EXPECT_EQ(listed_mirrors.size(), mirror.size()) << c.name << ", tile " << tile;
+    for (std::size_t i = 0; i < std::min(fold.size(), listed_folds.size()); ++i) {
+      EXPECT_EQ(listed_folds[i].node, fold[i].node) << c.name << ", tile " << tile << ", fold " << i;
+      EXPECT_EQ(listed_folds[i].other, fold[i].other) << c.name << ", tile " << tile << ", fold " << i;
+      EXPECT_EQ(listed_folds[i].sign, fold[i].sign) << c.name << ", tile " << tile << ", fold " << i;
+    }
+    for (std::size_t i = 0; i < std::min(mirror.size(), listed_mirrors.size()); ++i) {
+      EXPECT_EQ(listed_mirrors[i].node, mirror[i].node) << c.name << ", tile " << tile << ", mirror " << i;
+      EXPECT_EQ(listed_mirrors[i].other, mirror[i].other) << c.name << ", tile " << tile << ", mirror " << i;
+      EXPECT_EQ(listed_mirrors[i].sign, mirror[i].sign) << c.name << ", tile " << tile << ", mirror " << i;
+    }
+    folds += fold.size();
+  }
+  return folds;
+}
+
+constexpr WallType F = WallType::Fixed, S = WallType::Slip, O = WallType::Open, C = WallType::Friction;
+
+TEST(GhostMap, ListsWhatTheWallsAnswerOnEveryTile) {
+  // a thin plane-strain slice (one cell across y, both sides mirrored: two ghosts per node), a box
+  // with fixed walls (corners: up to 7 ghosts per node), mixed walls, a domain narrower than the pad
+  const Case cases[] = {
+      {"plane strain slice", {20, 1, 9}, {{{S, S}, {S, S}, {C, O}}}},
+      {"fixed box", {6, 7, 5}, {{{F, F}, {F, F}, {F, F}}}},
+      {"mixed", {9, 3, 6}, {{{F, O}, {S, C}, {S, F}}}},
+      {"thin fixed", {2, 1, 3}, {{{F, S}, {S, F}, {F, S}}}},
+  };
+  for (const Case& c : cases) EXPECT_GT(expect_same_as_walls(c), 0u) << c.name;
+}
+
+TEST(GhostMap, IsEmptyWithoutMirroredWalls) {
+  GridGeometry g;
+  g.cells = {5, 5, 5};
+  std::array<std::array<WallSpec, 2>, 3> specs{};
+  for (auto& axis : specs)
+    for (auto& side : axis) side = {WallType::Open, 0.0};
+  specs[2][0] = {WallType::Friction, 0.5};  // unilateral: not mirrored
+  const GhostMap map(Walls(specs, g), Grid(g));
+  EXPECT_TRUE(map.empty());
+  EXPECT_TRUE(map.folds(0).empty());
+  EXPECT_TRUE(map.mirrors(0).empty());
+}
+
+}  // namespace
+}  // namespace ghost_map_test
+}  // namespace talus
