@@ -6,16 +6,19 @@
 namespace talus {
 
 GhostMap::GhostMap(const Walls& walls, const Grid& grid) {
-  if (!walls.has_mirrored_walls()) return;
-  const std::size_t tiles = grid.tile_count();
-  fold_begin_.resize(tiles + 1);
-  mirror_begin_.resize(tiles + 1);
-  for (std::size_t tile = 0; tile < tiles; ++tile) {
-    fold_begin_[tile] = static_cast<std::uint32_t>(folds_.size());
-    mirror_begin_[tile] = static_cast<std::uint32_t>(mirrors_.size());
+  if (walls.has_mirrored_walls()) tiles_.resize(grid.tile_count());
+}
+
+void GhostMap::list_active_tiles(const Walls& walls, const Grid& grid) {
+  if (tiles_.empty()) return;
+  for (const std::uint32_t tile : grid.active_tiles()) {
+    Tile& entry = tiles_[tile];
+    if (entry.fold_begin != kUnlisted) continue;
+    entry.fold_begin = static_cast<std::uint32_t>(folds_.size());
+    entry.mirror_begin = static_cast<std::uint32_t>(mirrors_.size());
     const std::array<int, 3> first = grid.node_of(tile);
-    if (!walls.near_mirrored_face(first, kTileEdge)) continue;
-    const std::size_t base = tile * kTileNodes;
+    if (!walls.near_mirrored_face(first, kTileEdge)) continue;  // listed, with nothing to do
+    const std::size_t base = static_cast<std::size_t>(tile) * kTileNodes;
     for (int s = 0; s < kTileNodes; ++s) {
       const std::array<int, 3> node = Grid::node_in_tile(first, s);
       const std::size_t n = base + static_cast<std::size_t>(s);
@@ -27,17 +30,29 @@ GhostMap::GhostMap(const Walls& walls, const Grid& grid) {
       std::array<double, 3> sign;
       if (walls.mirror(node, image, sign)) mirrors_.push_back({n, grid.node(image[0], image[1], image[2]), sign});
     }
-    if (folds_.size() > std::numeric_limits<std::uint32_t>::max() ||
-        mirrors_.size() > std::numeric_limits<std::uint32_t>::max())
+    if (folds_.size() >= kUnlisted || mirrors_.size() >= kUnlisted)
       throw std::length_error("GhostMap: more than 2^32 ghost pairs");
+    entry.folds = static_cast<std::uint16_t>(folds_.size() - entry.fold_begin);
+    entry.mirrors = static_cast<std::uint16_t>(mirrors_.size() - entry.mirror_begin);
   }
-  fold_begin_[tiles] = static_cast<std::uint32_t>(folds_.size());
-  mirror_begin_[tiles] = static_cast<std::uint32_t>(mirrors_.size());
+}
+
+std::span<const GhostMap::Pair> GhostMap::folds(std::uint32_t tile) const {
+  if (tiles_.empty()) return {};
+  const Tile& t = tiles_[tile];
+  if (t.fold_begin == kUnlisted) throw std::logic_error("GhostMap: a tile that was never listed");
+  return {folds_.data() + t.fold_begin, t.folds};
+}
+
+std::span<const GhostMap::Pair> GhostMap::mirrors(std::uint32_t tile) const {
+  if (tiles_.empty()) return {};
+  const Tile& t = tiles_[tile];
+  if (t.fold_begin == kUnlisted) throw std::logic_error("GhostMap: a tile that was never listed");
+  return {mirrors_.data() + t.mirror_begin, t.mirrors};
 }
 
 std::size_t GhostMap::bytes() const {
-  return (fold_begin_.capacity() + mirror_begin_.capacity()) * sizeof(std::uint32_t) +
-         (folds_.capacity() + mirrors_.capacity()) * sizeof(Pair);
+  return tiles_.capacity() * sizeof(Tile) + (folds_.capacity() + mirrors_.capacity()) * sizeof(Pair);
 }
 
 }  // namespace talus

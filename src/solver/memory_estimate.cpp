@@ -147,21 +147,28 @@ std::optional<std::size_t> read_number(const char* path) {
   }
 }
 
-/// The ghost map's lists (boundary/ghost_map.hpp): two offsets per tile of the grid, and a fold and
-/// a mirror per ghost node, kPad layers beyond each mirrored face (fixed, and slip but for a terrain
-/// grid's bed), counted over the whole face: an upper bound.
-std::size_t ghost_map_bytes(const Scene& scene, std::size_t all_tiles) {
+/// The ghost map (boundary/ghost_map.hpp) with every tile listed: 12 B per tile of the grid, and a
+/// fold and a mirror per ghost node, kPad layers beyond each mirrored face (fixed, and slip but for a
+/// terrain grid's bed), counted over the whole face. Tiles are listed as the flow reaches them, so at
+/// the start the map holds its per-tile entries and little else.
+struct GhostMapBytes {
+  std::size_t start = 0, bound = 0;
+};
+GhostMapBytes ghost_map_bytes(const Scene& scene, std::size_t all_tiles) {
   const std::array<int, 3> nodes = scene.grid.nodes();
   std::size_t ghost_nodes = 0;
+  bool mirrored_walls = false;
   for (int d = 0; d < 3; ++d)
     for (int side = 0; side < 2; ++side) {
       const WallType type = scene.walls[d][side].type;
       const bool mirrored = type == WallType::Fixed || (type == WallType::Slip && !(d == 2 && scene.grid.has_terrain()));
-      if (mirrored)
-        ghost_nodes += static_cast<std::size_t>(kPad) * nodes[(d + 1) % 3] * static_cast<std::size_t>(nodes[(d + 2) % 3]);
+      if (!mirrored) continue;
+      mirrored_walls = true;
+      ghost_nodes += static_cast<std::size_t>(kPad) * nodes[(d + 1) % 3] * static_cast<std::size_t>(nodes[(d + 2) % 3]);
     }
-  if (ghost_nodes == 0) return 0;
-  return 2 * (all_tiles + 1) * sizeof(std::uint32_t) + 2 * ghost_nodes * sizeof(GhostMap::Pair);
+  if (!mirrored_walls) return {};
+  const std::size_t entries = all_tiles * GhostMap::kBytesPerTile;
+  return {entries, entries + 2 * ghost_nodes * sizeof(GhostMap::Pair)};
 }
 
 }  // namespace
@@ -177,9 +184,9 @@ MemoryEstimate estimate_memory(const Scene& scene) {
   for (int d = 0; d < 3; ++d) all_tiles *= static_cast<std::size_t>((nodes[d] + kTileEdge - 1) / kTileEdge);
   e.grid_bytes_bound = all_tiles * kTileNodes * kNodeBytes;
   e.grid_bytes = std::min(e.grid_bytes, e.grid_bytes_bound);
-  const std::size_t ghosts = ghost_map_bytes(scene, all_tiles);  // held for the whole run, whatever the flow covers
-  e.grid_bytes += ghosts;
-  e.grid_bytes_bound += ghosts;
+  const GhostMapBytes ghosts = ghost_map_bytes(scene, all_tiles);
+  e.grid_bytes += ghosts.start;
+  e.grid_bytes_bound += ghosts.bound;
   return e;
 }
 

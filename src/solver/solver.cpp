@@ -209,6 +209,9 @@ bool Solver::mls_needs_sort() const {
 void Solver::sort_particles() {
   ScopedPhase timer(times_, Phase::Sort);
   sort_.sort(particles_, grid_, scratch_);
+  const double listing_start = omp_get_wtime();
+  ghosts_.list_active_tiles(walls_, grid_);  // the tiles the flow has reached since the last sort (serial)
+  ghost_listing_seconds_ = omp_get_wtime() - listing_start;
   prepare_block_buffers();
   needs_sort_ = false;
   steps_since_sort_ = 0;
@@ -400,10 +403,11 @@ void Solver::step_with(double dt) {
     if (WorkRecorder* const r = recording()) {
       const double start = omp_get_wtime();
       sort_particles();
-      // serial: the sort's bookkeeping, and the block buffers' serial part of their preparation
-      // (the pairs of boxes and tiles; their run lists are written in parallel)
+      // serial: the sort's bookkeeping, the ghost map's new tiles, and the block buffers' serial
+      // part of their preparation (the pairs of boxes and tiles; their run lists are written in parallel)
       const bool buffers = block_buffers() != nullptr;
-      const double bookkeeping = sort_.last_serial_seconds() + (buffers ? block_buffers_.last_serial_seconds() : 0.0);
+      const double bookkeeping = sort_.last_serial_seconds() + ghost_listing_seconds_ +
+                                 (buffers ? block_buffers_.last_serial_seconds() : 0.0);
       const double seconds = omp_get_wtime() - start, serial = std::min(bookkeeping, seconds);
       r->add_static("sort", particles_.size(),
                     sort_.last_parallel_regions() + (buffers ? BlockBuffers::kPrepareParallelRegions : 0), seconds - serial);
@@ -825,6 +829,7 @@ void Solver::restore(ParticleStore particles, const SolverState& s, RestoreSort 
     for (std::size_t p = 0; p < n; ++p) particles_.x[2][p] = grid_.z_of(particles_.x[0][p], particles_.x[2][p]);
   const std::vector<std::int64_t> ids = particles_.id;
   sort_.sort(particles_, grid_, scratch_);
+  ghosts_.list_active_tiles(walls_, grid_);  // the tiles the flow has reached since the last sort
   prepare_block_buffers();
   if (particles_.id != ids) throw io_error("restart: the saved particle order is not the saved sort's order");
   particles_.x = std::move(x);

@@ -1,10 +1,12 @@
 // GhostMap (boundary/ghost_map.hpp): the walls' ghost nodes listed once per tile must be exactly what
 // Walls::ghosts_of and Walls::mirror answer node by node, in the order the fold and the mirror visit
-// them (slot by slot, each node's ghosts in ghosts_of's order), on every tile of the grid.
+// them (slot by slot, each node's ghosts in ghosts_of's order), on every tile of the grid, whichever
+// order the tiles become active in.
 #include "talus/boundary/ghost_map.hpp"
 
 #include <gtest/gtest.h>
 
+#include <stdexcept>
 #include <vector>
 
 namespace talus {
@@ -26,8 +28,20 @@ std::size_t expect_same_as_walls(const Case& c) {
   for (int d = 0; d < 3; ++d)
     for (int s = 0; s < 2; ++s) specs[d][s] = {c.types[d][s], 0.3};
   const Walls walls(specs, g);
-  const Grid grid(g);
-  const GhostMap map(walls, grid);
+  Grid grid(g);
+  GhostMap map(walls, grid);
+  // the tiles become active in two sorts: the odd ones first (listed once), then all, backwards
+  std::vector<std::uint32_t> odd, all;
+  for (std::uint32_t t = 0; t < grid.tile_count(); ++t) {
+    if (t % 2 == 1) odd.push_back(t);
+    all.insert(all.begin(), t);
+  }
+  grid.set_active_tiles(odd);
+  map.list_active_tiles(walls, grid);
+  grid.set_active_tiles(odd);
+  map.list_active_tiles(walls, grid);  // nothing new
+  grid.set_active_tiles(all);
+  map.list_active_tiles(walls, grid);
   std::size_t folds = 0;
   for (std::size_t tile = 0; tile < grid.tile_count(); ++tile) {
     std::vector<GhostMap::Pair> fold, mirror;
@@ -76,6 +90,28 @@ TEST(GhostMap, ListsWhatTheWallsAnswerOnEveryTile) {
   for (const Case& c : cases) EXPECT_GT(expect_same_as_walls(c), 0u) << c.name;
 }
 
+TEST(GhostMap, ListsATileWhenItFirstBecomesActive) {
+  GridGeometry g;
+  g.cells = {12, 1, 8};
+  std::array<std::array<WallSpec, 2>, 3> specs{};
+  for (auto& axis : specs)
+    for (auto& side : axis) side = {WallType::Slip, 0.0};
+  const Walls walls(specs, g);
+  Grid grid(g);
+  GhostMap map(walls, grid);
+  const std::size_t empty_bytes = map.bytes();
+  EXPECT_EQ(empty_bytes, grid.tile_count() * GhostMap::kBytesPerTile);
+  grid.set_active_tiles({0});
+  map.list_active_tiles(walls, grid);
+  const std::size_t one = map.bytes();
+  EXPECT_GT(one, empty_bytes);
+  EXPECT_FALSE(map.folds(0).empty());
+  EXPECT_THROW(map.folds(1), std::logic_error);  // never active: not listed
+  grid.set_active_tiles({0, 1});
+  map.list_active_tiles(walls, grid);
+  EXPECT_FALSE(map.folds(1).empty());  // every tile of this thin box is near a wall
+}
+
 TEST(GhostMap, IsEmptyWithoutMirroredWalls) {
   GridGeometry g;
   g.cells = {5, 5, 5};
@@ -83,7 +119,11 @@ TEST(GhostMap, IsEmptyWithoutMirroredWalls) {
   for (auto& axis : specs)
     for (auto& side : axis) side = {WallType::Open, 0.0};
   specs[2][0] = {WallType::Friction, 0.5};  // unilateral: not mirrored
-  const GhostMap map(Walls(specs, g), Grid(g));
+  Grid grid(g);
+  grid.set_active_tiles({0, 1, 2});
+  const Walls walls(specs, g);
+  GhostMap map(walls, grid);
+  map.list_active_tiles(walls, grid);
   EXPECT_TRUE(map.empty());
   EXPECT_TRUE(map.folds(0).empty());
   EXPECT_TRUE(map.mirrors(0).empty());

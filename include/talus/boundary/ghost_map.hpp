@@ -5,9 +5,13 @@
 // for every node of every tile near a mirrored wall, four times a step. On a thin domain every tile
 // is near one: the plane-strain column collapse (one cell across y, slip walls on both sides) spent
 // a quarter of its step there. The walls and the grid's geometry do not change during a run, so the
-// answers are listed once, per tile and in the order those loops visit them (slot by slot, and each
+// answers are listed once per tile, in the order those loops visit them (slot by slot, and each
 // node's ghosts in ghosts_of's order): the fold and the mirror do the same operations in the same
 // order, and give the same bits.
+//
+// A tile is listed when it first becomes active (list_active_tiles, after each sort), so the lists
+// grow with the ground the flow covers, not with the grid: a small body in a long walled grid
+// holds only its own tiles' ghosts. Memory: 12 B per grid tile, and 40 B per ghost of a listed tile.
 #include "talus/boundary/walls.hpp"
 #include "talus/grid/grid.hpp"
 
@@ -29,26 +33,32 @@ class GhostMap {
   };
 
   GhostMap() = default;
-  /// Every tile of `grid` near a mirrored wall of `walls` (none without mirrored walls).
+  /// For `grid`'s tiles and `walls` (nothing to list without mirrored walls).
   GhostMap(const Walls& walls, const Grid& grid);
 
-  bool empty() const { return fold_begin_.empty(); }
-  /// The folds of tile `tile` (a grid tile index): for each of its nodes in slot order, the ghosts
-  /// whose image it is (Walls::ghosts_of).
-  std::span<const Pair> folds(std::uint32_t tile) const { return range(folds_, fold_begin_, tile); }
-  /// The mirrors of tile `tile`: each of its nodes that is a ghost, in slot order, with its image
-  /// (Walls::mirror).
-  std::span<const Pair> mirrors(std::uint32_t tile) const { return range(mirrors_, mirror_begin_, tile); }
+  /// Lists the grid's active tiles that are not listed yet (serial; after each sort).
+  void list_active_tiles(const Walls& walls, const Grid& grid);
+
+  bool empty() const { return tiles_.empty(); }
+  /// The folds of listed tile `tile` (a grid tile index): for each of its nodes in slot order, the
+  /// ghosts whose image it is (Walls::ghosts_of).
+  std::span<const Pair> folds(std::uint32_t tile) const;
+  /// The mirrors of listed tile `tile`: each of its nodes that is a ghost, in slot order, with its
+  /// image (Walls::mirror).
+  std::span<const Pair> mirrors(std::uint32_t tile) const;
   std::size_t bytes() const;
+  /// The bytes the map holds per tile of the grid, before any tile is listed.
+  static constexpr std::size_t kBytesPerTile = 12;
 
  private:
-  static std::span<const Pair> range(const std::vector<Pair>& pairs, const std::vector<std::uint32_t>& begin,
-                                     std::uint32_t tile) {
-    if (begin.empty()) return {};
-    return {pairs.data() + begin[tile], pairs.data() + begin[tile + 1]};
-  }
+  struct Tile {
+    std::uint32_t fold_begin = kUnlisted, mirror_begin = 0;
+    std::uint16_t folds = 0, mirrors = 0;  // at most 7 and 1 per node of 64
+  };
+  static constexpr std::uint32_t kUnlisted = 0xffffffffu;
+  static_assert(sizeof(Tile) == kBytesPerTile);
 
-  std::vector<std::uint32_t> fold_begin_, mirror_begin_;  // per tile, and one past the last
+  std::vector<Tile> tiles_;
   std::vector<Pair> folds_, mirrors_;
 };
 

@@ -210,6 +210,7 @@ class Solver {
   CellSort sort_;
   Walls walls_;
   GhostMap ghosts_;  // walls_'s ghost nodes per tile, for the fold and the mirror
+  double ghost_listing_seconds_ = 0.0;  // the last sort's listing of new tiles in ghosts_ (serial)
   BodyMaterials materials_;                   // the constitutive model of each body
   std::vector<double> block_dissipation_;     // per sort block, this step's material dissipation
   // The time step's maximum of c_p + |v_p|, taken per block at the end of the stress pass that ends
