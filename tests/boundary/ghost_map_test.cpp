@@ -90,40 +90,45 @@ TEST(GhostMap, ListsWhatTheWallsAnswerOnEveryTile) {
   for (const Case& c : cases) EXPECT_GT(expect_same_as_walls(c), 0u) << c.name;
 }
 
+/// A grid of `cells` and its walls, every face of type `type` (the z- face of type `floor`).
+struct Box {
+  Box(std::array<int, 3> cells, WallType type, WallSpec floor) : geometry(with_cells(cells)), grid(geometry) {
+    std::array<std::array<WallSpec, 2>, 3> specs{};
+    for (auto& axis : specs)
+      for (auto& side : axis) side = {type, 0.0};
+    specs[2][0] = floor;
+    walls = Walls(specs, geometry);
+  }
+  static GridGeometry with_cells(std::array<int, 3> cells) {
+    GridGeometry g;
+    g.cells = cells;
+    return g;
+  }
+  GridGeometry geometry;
+  Grid grid;
+  Walls walls;
+};
+
 TEST(GhostMap, ListsATileWhenItFirstBecomesActive) {
-  GridGeometry g;
-  g.cells = {12, 1, 8};
-  std::array<std::array<WallSpec, 2>, 3> specs{};
-  for (auto& axis : specs)
-    for (auto& side : axis) side = {WallType::Slip, 0.0};
-  const Walls walls(specs, g);
-  Grid grid(g);
-  GhostMap map(walls, grid);
+  Box box({12, 1, 8}, WallType::Slip, {WallType::Slip, 0.0});
+  GhostMap map(box.walls, box.grid);
   const std::size_t empty_bytes = map.bytes();
-  EXPECT_EQ(empty_bytes, grid.tile_count() * GhostMap::kBytesPerTile);
-  grid.set_active_tiles({0});
-  map.list_active_tiles(walls, grid);
-  const std::size_t one = map.bytes();
-  EXPECT_GT(one, empty_bytes);
+  EXPECT_EQ(empty_bytes, box.grid.tile_count() * GhostMap::kBytesPerTile);
+  box.grid.set_active_tiles({0});
+  map.list_active_tiles(box.walls, box.grid);
+  EXPECT_GT(map.bytes(), empty_bytes);
   EXPECT_FALSE(map.folds(0).empty());
   EXPECT_THROW(map.folds(1), std::logic_error);  // never active: not listed
-  grid.set_active_tiles({0, 1});
-  map.list_active_tiles(walls, grid);
+  box.grid.set_active_tiles({0, 1});
+  map.list_active_tiles(box.walls, box.grid);
   EXPECT_FALSE(map.folds(1).empty());  // every tile of this thin box is near a wall
 }
 
 TEST(GhostMap, IsEmptyWithoutMirroredWalls) {
-  GridGeometry g;
-  g.cells = {5, 5, 5};
-  std::array<std::array<WallSpec, 2>, 3> specs{};
-  for (auto& axis : specs)
-    for (auto& side : axis) side = {WallType::Open, 0.0};
-  specs[2][0] = {WallType::Friction, 0.5};  // unilateral: not mirrored
-  Grid grid(g);
-  grid.set_active_tiles({0, 1, 2});
-  const Walls walls(specs, g);
-  GhostMap map(walls, grid);
-  map.list_active_tiles(walls, grid);
+  Box box({5, 5, 5}, WallType::Open, {WallType::Friction, 0.5});  // a unilateral floor is not mirrored
+  box.grid.set_active_tiles({0, 1, 2});
+  GhostMap map(box.walls, box.grid);
+  map.list_active_tiles(box.walls, box.grid);
   EXPECT_TRUE(map.empty());
   EXPECT_TRUE(map.folds(0).empty());
   EXPECT_TRUE(map.mirrors(0).empty());
