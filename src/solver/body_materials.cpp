@@ -37,6 +37,7 @@ MuIKernelConstants lane_constants(const MuI& model, const GranularOptions& granu
   MuIKernelConstants c;
   c.shear = model.shear_modulus();
   c.lame = model.lame_lambda();
+  c.bulk = model.bulk_modulus();
   c.mu_s = model.parameters().mu_s;
   c.mu_2 = model.parameters().mu_2;
   c.i0 = model.parameters().i0;

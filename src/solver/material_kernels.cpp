@@ -238,6 +238,7 @@ HWY_ATTR KernelStop MuILanes(const MaterialKernelFields& f, const MuIKernelConst
   const V mu_s = hn::Set(d, m.mu_s), mu_2 = hn::Set(d, m.mu_2), i0 = hn::Set(d, m.i0), rise = hn::Set(d, m.friction_rise);
   const V rate_constant = hn::Set(d, m.rate_constant), dt = hn::Set(d, m.dt), mu_s_i0 = hn::Set(d, m.mu_s * m.i0);
   const V i0_squared = hn::Set(d, m.i0 * m.i0);
+  const V one = hn::Set(d, 1.0), bulk = hn::Set(d, m.bulk);
   std::size_t p = begin;
   for (; p + n <= end; p += n) {
     LaneState st = load_and_rotate(f, p);
@@ -247,7 +248,22 @@ HWY_ATTR KernelStop MuILanes(const MaterialKernelFields& f, const MuIKernelConst
     elastic_trial(st, two_shear, lame, trial);
     const V mean = hn::Div(hn::Add(hn::Add(trial[0], trial[1]), trial[2]), third);
     const V pressure = hn::Neg(mean);
-    if (!hn::AllTrue(d, hn::Gt(pressure, zero))) return {p, n};  // step 2, disconnected: reference
+    // Step 2, disconnected (no contact pressure): no stress, and the work E(sigma_n) + sigma_n : d_eps
+    // released, in MuI::update's operations (MuI::elastic_energy_density, then the work in component
+    // order). A free surface puts a few such particles in many groups; the steps below give such a
+    // lane values it does not keep (a square root of a negative pressure: NaN, selected away).
+    const auto connected = hn::Gt(pressure, zero);
+    V released = zero;
+    if (!hn::AllTrue(d, connected)) {
+      const V m3 = hn::Div(hn::Add(hn::Add(st.s[0], st.s[1]), st.s[2]), third);
+      const V dxx = hn::Sub(st.s[0], m3), dyy = hn::Sub(st.s[1], m3), dzz = hn::Sub(st.s[2], m3);
+      V tau2 = hn::Mul(half, hn::Add(hn::Add(hn::Mul(dxx, dxx), hn::Mul(dyy, dyy)), hn::Mul(dzz, dzz)));
+      for (int c = 3; c < 6; ++c) tau2 = hn::Add(tau2, hn::Mul(st.s[c], st.s[c]));
+      const V energy = hn::Mul(half, hn::Add(hn::Div(hn::Mul(m3, m3), bulk), hn::Div(tau2, shear)));
+      V work = zero;
+      for (int c = 0; c < 6; ++c) work = hn::Add(work, hn::Mul(hn::Mul(c < 3 ? one : two, st.s[c]), st.de[c]));
+      released = hn::Add(energy, work);
+    }
     for (int c = 0; c < 3; ++c) s[c] = hn::Sub(trial[c], mean);
     for (int c = 3; c < 6; ++c) s[c] = trial[c];
     const V normal = hn::Add(hn::Add(hn::Mul(s[0], s[0]), hn::Mul(s[1], s[1])), hn::Mul(s[2], s[2]));
@@ -269,10 +285,12 @@ HWY_ATTR KernelStop MuILanes(const MaterialKernelFields& f, const MuIKernelConst
     const V scale = hn::Div(mu, ratio);
     for (int k = 0; k < 6; ++k) {
       const V returned = hn::Add(hn::Mul(scale, s[k]), k < 3 ? mean : zero);
-      st.s[k] = hn::IfThenElse(flowing, returned, trial[k]);
+      st.s[k] = hn::IfThenElseZero(connected, hn::IfThenElse(flowing, returned, trial[k]));
     }
-    const V plastic_shear_strain = hn::IfThenElseZero(flowing, hn::Div(hn::Sub(tau_trial, tau), shear));
-    const V plastic_work = hn::IfThenElseZero(flowing, hn::Mul(tau, plastic_shear_strain));
+    const auto yielding = hn::And(connected, flowing);
+    const V plastic_shear_strain = hn::IfThenElseZero(yielding, hn::Div(hn::Sub(tau_trial, tau), shear));
+    const V plastic_work = hn::IfThenElse(connected, hn::IfThenElseZero(flowing, hn::Mul(tau, plastic_shear_strain)),
+                                          released);
     hn::StoreU(hn::Add(hn::LoadU(d, f.plastic_strain + p), plastic_shear_strain), d, f.plastic_strain + p);
     store_stress_strain_volume(f, p, st);
     add_in_particle_order(plastic_work, st, dissipated);

@@ -73,7 +73,8 @@ class MuI {
     return shear_rate * parameters_.grain_diameter / std::sqrt(pressure / parameters_.grain_density);
   }
 
-  /// Stored elastic energy per unit volume, p^2/2K + tau^2/2G.
+  /// Stored elastic energy per unit volume, p^2/2K + tau^2/2G (the mu(I) vector kernel repeats its
+  /// operations for disconnected particles: change both together).
   double elastic_energy_density(const Sym6& stress) const {
     const double m = (stress[XX] + stress[YY] + stress[ZZ]) / 3.0;
     const double dxx = stress[XX] - m, dyy = stress[YY] - m, dzz = stress[ZZ] - m;
@@ -97,7 +98,7 @@ class MuI {
 };
 
 inline MuIResult MuI::update(Sym6& stress, const Sym6& strain_increment, double dt) const {
-  // The vector kernel of solver/material_kernels.cpp does steps 1, 3 and 4 lane by lane in exactly
+  // The vector kernel of solver/material_kernels.cpp does steps 1-4 lane by lane in exactly
   // these operations; change both together (IsaPaths compares them bit for bit).
   // 1. Elastic trial (plain arrays, as in DruckerPrager::update, for the same reason).
   const double de_v = strain_increment[XX] + strain_increment[YY] + strain_increment[ZZ];

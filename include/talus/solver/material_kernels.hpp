@@ -47,7 +47,7 @@ struct DruckerPragerKernelConstants {
 
 /// μ(I) (Jop et al. 2006 in the form of Dunatunga & Kamrin 2015; material/mu_i.hpp) for one time step.
 struct MuIKernelConstants {
-  double shear = 0.0, lame = 0.0, mu_s = 0.0, mu_2 = 0.0, i0 = 0.0;
+  double shear = 0.0, lame = 0.0, bulk = 0.0, mu_s = 0.0, mu_2 = 0.0, i0 = 0.0;
   double friction_rise = 0.0;            // mu_2 - mu_s
   double rate_constant = 0.0;            // d sqrt(rho_s) / G
   double separation_volume_ratio = 0.0;  // 0: no separation rule
