@@ -62,6 +62,9 @@ BodyMaterials::BodyMaterials(const Scene& scene, ParticleStore& particles) {
       body.plastic.push_back(body.plastic[0].with_dilatancy(m.granular.flowing_dilatancy_angle_deg));
       body.granular = m.granular;
       body.drucker_prager_lanes = lane_constants(body.plastic, body.granular);
+      // release_separated's LinearElastic::energy_density: p^2 / (2 K) + dev:dev / (4 G)
+      body.drucker_prager_lanes.separated_two_bulk = 2.0 * body.elastic.bulk();
+      body.drucker_prager_lanes.separated_four_shear = 4.0 * body.elastic.shear;
       any_plastic_ = true;
       // the back stress moves only with kinematic hardening (docs/drucker-prager.md)
       any_kinematic_ = any_kinematic_ || (m.drucker_prager.hardening_modulus > 0.0 && m.drucker_prager.kinematic_fraction > 0.0);
@@ -69,6 +72,8 @@ BodyMaterials::BodyMaterials(const Scene& scene, ParticleStore& particles) {
       body.mu_i.emplace_back(m.mu_i, "materials." + m.name + ".");
       body.granular = m.granular;  // the separation rule only
       body.mu_i_lanes = lane_constants(body.mu_i[0], body.granular);
+      body.mu_i_lanes.separated_two_bulk = 2.0 * body.elastic.bulk();
+      body.mu_i_lanes.separated_four_shear = 4.0 * body.elastic.shear;
       any_plastic_ = true;         // the equivalent plastic shear strain is kept per particle
     }
     bodies_.push_back(std::move(body));

@@ -20,6 +20,7 @@ namespace hn = hwy::HWY_NAMESPACE;
 
 using D = hn::ScalableTag<double>;
 using V = hn::Vec<D>;
+using Mask = hn::Mask<D>;
 
 /// A vector of doubles with the arithmetic operators, so that the templated expressions of the
 /// scalar code (rotate_objectively_values) run on it unchanged.
@@ -65,11 +66,25 @@ HWY_ATTR inline void store_stress_strain_volume(const MaterialKernelFields& f, s
   hn::StoreU(st.volume, d, f.volume + p);
 }
 
-// BodyMaterials' separation rule: whether any particle of the group is beyond ratio x V0 after the
-// volume update (it carries no stress; the scalar reference takes the group).
-HWY_ATTR inline bool any_separated(const MaterialKernelFields& f, std::size_t p, const LaneState& st, double ratio) {
+// BodyMaterials' separation rule, lane by lane: beyond ratio x V0 after the volume update.
+HWY_ATTR inline Mask separated_lanes(const MaterialKernelFields& f, std::size_t p, const LaneState& st, double ratio) {
   const D d;
-  return ratio > 0.0 && !hn::AllFalse(d, hn::Gt(st.volume, hn::Mul(hn::Set(d, ratio), hn::LoadU(d, f.volume0 + p))));
+  if (!(ratio > 0.0)) return hn::FirstN(d, 0);
+  return hn::Gt(st.volume, hn::Mul(hn::Set(d, ratio), hn::LoadU(d, f.volume0 + p)));
+}
+
+// What a separated particle releases per unit volume (BodyMaterials::release_separated): the elastic
+// energy density of its stress before this step's rotation, LinearElastic::energy_density's operations.
+HWY_ATTR inline V separated_energy(const MaterialKernelFields& f, std::size_t p, double two_bulk, double four_shear) {
+  const D d;
+  V s[6];
+  for (int c = 0; c < 6; ++c) s[c] = hn::LoadU(d, f.stress[c] + p);
+  const V pm = hn::Div(hn::Add(hn::Add(s[0], s[1]), s[2]), hn::Set(d, 3.0));
+  const V dxx = hn::Sub(s[0], pm), dyy = hn::Sub(s[1], pm), dzz = hn::Sub(s[2], pm);
+  const V diagonal = hn::Add(hn::Add(hn::Mul(dxx, dxx), hn::Mul(dyy, dyy)), hn::Mul(dzz, dzz));
+  const V off = hn::Add(hn::Add(hn::Mul(s[3], s[3]), hn::Mul(s[4], s[4])), hn::Mul(s[5], s[5]));
+  const V contracted = hn::Add(diagonal, hn::Mul(hn::Set(d, 2.0), off));
+  return hn::Add(hn::Div(hn::Mul(pm, pm), hn::Set(d, two_bulk)), hn::Div(contracted, hn::Set(d, four_shear)));
 }
 
 // The elastic trial of both plastic models: trial = sigma + 2 G d_eps, + lambda tr(d_eps) on the diagonal.
@@ -110,7 +125,6 @@ HWY_ATTR KernelStop ElasticLanes(const MaterialKernelFields& f, const ElasticKer
 // alone, the cone/cut-off corner, or the apex. Writes those lanes of stress, eps_p and the work
 // density; false where an apex lane's k_new / alpha equals the cut-off (std::fmin's choice between
 // +0 and -0 is not Min's).
-template <class Mask>
 HWY_ATTR bool return_to_cutoff_or_apex(const DruckerPragerKernelConstants& m, Mask rest, V i1, V xi_norm, V q, V k,
                                        const V (&xi)[6],
                                        const V (&trial)[6], V (&stress)[6], V& eps_p, V& plastic_work) {
@@ -176,7 +190,11 @@ HWY_ATTR KernelStop DruckerPragerLanes(const MaterialKernelFields& f, const Druc
   std::size_t p = begin;
   for (; p + n <= end; p += n) {
     LaneState st = load_and_rotate(f, p);
-    if (any_separated(f, p, st, m.separation_volume_ratio)) return {p, n};
+    // A separated lane keeps none of what follows: no stress, no plastic strain, and its stored
+    // energy released (BodyMaterials::release_separated).
+    const auto separated = separated_lanes(f, p, st, m.separation_volume_ratio);
+    const bool any_separated = !hn::AllFalse(d, separated);
+    const V released = any_separated ? separated_energy(f, p, m.separated_two_bulk, m.separated_four_shear) : zero;
     const V eps_p = hn::LoadU(d, f.plastic_strain + p);
     // Abe, Johansson & Konagai 2005, sec. 7: the flowing model (psi = flowing value) once eps_p is past the threshold.
     const auto flowing = hn::Gt(eps_p, flowing_strain);
@@ -204,7 +222,7 @@ HWY_ATTR KernelStop DruckerPragerLanes(const MaterialKernelFields& f, const Druc
     const V q_new = hn::Sub(q, hn::Mul(gk, dl));
     const V i1_new = hn::Sub(i1, hn::Mul(dilation, dl));
     const auto cone = hn::And(hn::And(hn::Gt(fy, zero), hn::Ge(q_new, zero)), hn::Le(i1_new, cutoff));
-    if (!hn::AllTrue(d, hn::IsFinite(fy))) return {p, n};  // a non-finite input: reference
+    if (!hn::AllTrue(d, hn::Or(hn::IsFinite(fy), separated))) return {p, n};  // a non-finite input: reference
     const V scale = hn::Div(q_new, q);
     const V m_new = hn::Div(i1_new, third);
     V stress[6];
@@ -217,11 +235,15 @@ HWY_ATTR KernelStop DruckerPragerLanes(const MaterialKernelFields& f, const Druc
     const V bracket = hn::Sub(hn::Add(k, hn::Mul(hi, dl)), hn::Mul(alpha_excess, i1_new));
     V plastic_work = hn::IfThenElseZero(cone, hn::Mul(dl, hn::IfThenElse(hn::Gt(bracket, zero), bracket, zero)));
     V eps_new = hn::IfThenElse(cone, hn::Add(eps_p, dl), eps_p);
-    const auto rest = hn::Not(hn::Or(elastic, cone));
+    const auto rest = hn::AndNot(separated, hn::Not(hn::Or(elastic, cone)));
     if (!hn::AllFalse(d, rest) &&
         !return_to_cutoff_or_apex(m, rest, i1, xi_norm, q, k, xi, trial, stress, eps_new, plastic_work))
       return {p, n};  // a tie the reference's fmin may break otherwise: reference
-    for (int c = 0; c < 6; ++c) st.s[c] = stress[c];
+    for (int c = 0; c < 6; ++c) st.s[c] = hn::IfThenZeroElse(separated, stress[c]);
+    if (any_separated) {
+      eps_new = hn::IfThenZeroElse(separated, eps_new);
+      plastic_work = hn::IfThenElse(separated, released, plastic_work);
+    }
     hn::StoreU(eps_new, d, f.plastic_strain + p);
     store_stress_strain_volume(f, p, st);
     add_in_particle_order(plastic_work, st, dissipated);
@@ -242,7 +264,10 @@ HWY_ATTR KernelStop MuILanes(const MaterialKernelFields& f, const MuIKernelConst
   std::size_t p = begin;
   for (; p + n <= end; p += n) {
     LaneState st = load_and_rotate(f, p);
-    if (any_separated(f, p, st, m.separation_volume_ratio)) return {p, n};
+    const auto separated = separated_lanes(f, p, st, m.separation_volume_ratio);  // as in DruckerPragerLanes
+    const bool any_separated = !hn::AllFalse(d, separated);
+    const V released_separated =
+        any_separated ? separated_energy(f, p, m.separated_two_bulk, m.separated_four_shear) : zero;
     // MuI::update, step 1: elastic trial, pressure and deviator.
     V trial[6], s[6];
     elastic_trial(st, two_shear, lame, trial);
@@ -289,9 +314,15 @@ HWY_ATTR KernelStop MuILanes(const MaterialKernelFields& f, const MuIKernelConst
     }
     const auto yielding = hn::And(connected, flowing);
     const V plastic_shear_strain = hn::IfThenElseZero(yielding, hn::Div(hn::Sub(tau_trial, tau), shear));
-    const V plastic_work = hn::IfThenElse(connected, hn::IfThenElseZero(flowing, hn::Mul(tau, plastic_shear_strain)),
-                                          released);
-    hn::StoreU(hn::Add(hn::LoadU(d, f.plastic_strain + p), plastic_shear_strain), d, f.plastic_strain + p);
+    V plastic_work = hn::IfThenElse(connected, hn::IfThenElseZero(flowing, hn::Mul(tau, plastic_shear_strain)),
+                                    released);
+    V eps_new = hn::Add(hn::LoadU(d, f.plastic_strain + p), plastic_shear_strain);
+    if (any_separated) {
+      for (int k = 0; k < 6; ++k) st.s[k] = hn::IfThenZeroElse(separated, st.s[k]);
+      eps_new = hn::IfThenZeroElse(separated, eps_new);
+      plastic_work = hn::IfThenElse(separated, released_separated, plastic_work);
+    }
+    hn::StoreU(eps_new, d, f.plastic_strain + p);
     store_stress_strain_volume(f, p, st);
     add_in_particle_order(plastic_work, st, dissipated);
   }

@@ -5,9 +5,10 @@
 // (BodyMaterials' per-particle update, DruckerPrager::update) in the same order, so every
 // instruction set gives the reference's bits. Drucker–Prager's returns to the cone, the tension
 // cut-off, their corner and the apex all run in the lanes. A group of particles that needs a branch
-// the kernel does not vectorise (a separated particle, a non-finite value, an apex value that ties
-// with the cut-off) is left to the scalar reference: the kernel stops before it and says how many
-// particles the reference must take.
+// the kernel does not vectorise (a non-finite value, an apex value that ties with the cut-off) is
+// left to the scalar reference: the kernel stops before it and says how many particles the reference
+// must take. Separated particles (BodyMaterials' separation rule) and, for μ(I), disconnected ones
+// run in the lanes.
 #include <array>
 #include <cstddef>
 
@@ -35,6 +36,7 @@ struct DruckerPragerKernelConstants {
   double shear_plus_kinematic = 0.0;       // G + H_kin (0 kinematic hardening here: G)
   double first_invariant_cutoff = 0.0;     // may be +inf
   double separation_volume_ratio = 0.0;    // 0: no separation rule
+  double separated_two_bulk = 0.0, separated_four_shear = 0.0;  // the body's 2 K and 4 G (the energy it releases)
   double flowing_plastic_strain = 0.0;
   std::array<double, 2> cone_denominator{};  // G + 9 K alpha alpha_g + H
   std::array<double, 2> dilation_factor{};   // 9 K alpha_g
@@ -51,6 +53,7 @@ struct MuIKernelConstants {
   double friction_rise = 0.0;            // mu_2 - mu_s
   double rate_constant = 0.0;            // d sqrt(rho_s) / G
   double separation_volume_ratio = 0.0;  // 0: no separation rule
+  double separated_two_bulk = 0.0, separated_four_shear = 0.0;  // the body's 2 K and 4 G (the energy it releases)
   double dt = 0.0;
 };
 
