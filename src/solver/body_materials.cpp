@@ -9,7 +9,8 @@ namespace talus {
 
 namespace {
 
-DruckerPragerKernelConstants lane_constants(const std::vector<DruckerPrager>& models, const GranularOptions& granular) {
+DruckerPragerKernelConstants lane_constants(const std::vector<DruckerPrager>& models, const GranularOptions& granular,
+                                            const LinearElastic& elastic) {
   DruckerPragerKernelConstants c;
   const DruckerPrager& m = models[0];  // [1] differs only in alpha_g
   c.shear = m.shear_modulus();
@@ -24,6 +25,9 @@ DruckerPragerKernelConstants lane_constants(const std::vector<DruckerPrager>& mo
   c.corner_denominator = g + hk + hi;
   c.two_shear_plus_kinematic = 2.0 * (g + hk);
   c.separation_volume_ratio = granular.separation_volume_ratio;
+  // release_separated's LinearElastic::energy_density: p^2 / (2 K) + dev:dev / (4 G)
+  c.separated_two_bulk = 2.0 * elastic.bulk();
+  c.separated_four_shear = 4.0 * elastic.shear;
   c.flowing_plastic_strain = granular.flowing_plastic_strain;
   for (int i = 0; i < 2; ++i) {
     c.cone_denominator[i] = models[i].cone_denominator();
@@ -33,7 +37,7 @@ DruckerPragerKernelConstants lane_constants(const std::vector<DruckerPrager>& mo
   return c;
 }
 
-MuIKernelConstants lane_constants(const MuI& model, const GranularOptions& granular) {
+MuIKernelConstants lane_constants(const MuI& model, const GranularOptions& granular, const LinearElastic& elastic) {
   MuIKernelConstants c;
   c.shear = model.shear_modulus();
   c.lame = model.lame_lambda();
@@ -44,6 +48,9 @@ MuIKernelConstants lane_constants(const MuI& model, const GranularOptions& granu
   c.friction_rise = model.friction_rise();
   c.rate_constant = model.rate_constant();
   c.separation_volume_ratio = granular.separation_volume_ratio;
+  // release_separated's LinearElastic::energy_density: p^2 / (2 K) + dev:dev / (4 G)
+  c.separated_two_bulk = 2.0 * elastic.bulk();
+  c.separated_four_shear = 4.0 * elastic.shear;
   return c;
 }
 
@@ -61,19 +68,14 @@ BodyMaterials::BodyMaterials(const Scene& scene, ParticleStore& particles) {
       body.plastic.emplace_back(m.drucker_prager, prefix);
       body.plastic.push_back(body.plastic[0].with_dilatancy(m.granular.flowing_dilatancy_angle_deg));
       body.granular = m.granular;
-      body.drucker_prager_lanes = lane_constants(body.plastic, body.granular);
-      // release_separated's LinearElastic::energy_density: p^2 / (2 K) + dev:dev / (4 G)
-      body.drucker_prager_lanes.separated_two_bulk = 2.0 * body.elastic.bulk();
-      body.drucker_prager_lanes.separated_four_shear = 4.0 * body.elastic.shear;
+      body.drucker_prager_lanes = lane_constants(body.plastic, body.granular, body.elastic);
       any_plastic_ = true;
       // the back stress moves only with kinematic hardening (docs/drucker-prager.md)
       any_kinematic_ = any_kinematic_ || (m.drucker_prager.hardening_modulus > 0.0 && m.drucker_prager.kinematic_fraction > 0.0);
     } else if (m.model == MaterialModel::MuI) {
       body.mu_i.emplace_back(m.mu_i, "materials." + m.name + ".");
       body.granular = m.granular;  // the separation rule only
-      body.mu_i_lanes = lane_constants(body.mu_i[0], body.granular);
-      body.mu_i_lanes.separated_two_bulk = 2.0 * body.elastic.bulk();
-      body.mu_i_lanes.separated_four_shear = 4.0 * body.elastic.shear;
+      body.mu_i_lanes = lane_constants(body.mu_i[0], body.granular, body.elastic);
       any_plastic_ = true;         // the equivalent plastic shear strain is kept per particle
     }
     bodies_.push_back(std::move(body));

@@ -148,8 +148,8 @@ std::optional<std::size_t> read_number(const char* path) {
 }
 
 /// The ghost map (boundary/ghost_map.hpp) with every tile listed: 12 B per tile of the grid, and a
-/// fold and a mirror per ghost node, kPad layers beyond each mirrored face (fixed, and slip but for a
-/// terrain grid's bed), counted over the whole face. Tiles are listed as the flow reaches them, so at
+/// fold and a mirror per ghost node, kPad layers beyond each mirrored face (Walls::mirrors), counted
+/// over the whole face. Tiles are listed as the flow reaches them, so at
 /// the start the map holds its per-tile entries and little else.
 struct GhostMapBytes {
   std::size_t start = 0, bound = 0;
@@ -160,9 +160,7 @@ GhostMapBytes ghost_map_bytes(const Scene& scene, std::size_t all_tiles) {
   bool mirrored_walls = false;
   for (int d = 0; d < 3; ++d)
     for (int side = 0; side < 2; ++side) {
-      const WallType type = scene.walls[d][side].type;
-      const bool mirrored = type == WallType::Fixed || (type == WallType::Slip && !(d == 2 && scene.grid.has_terrain()));
-      if (!mirrored) continue;
+      if (!Walls::mirrors(scene.walls[d][side].type, d, scene.grid.has_terrain())) continue;
       mirrored_walls = true;
       ghost_nodes += static_cast<std::size_t>(kPad) * nodes[(d + 1) % 3] * static_cast<std::size_t>(nodes[(d + 2) % 3]);
     }

@@ -187,9 +187,13 @@ void Solver::wrap_periodic() {
   periodic_gravity_shift_ += shift[0];
 }
 
-void Solver::prepare_block_buffers() {
-  if (!block_buffers()) return;
-  block_buffers_.prepare(sort_, grid_);
+// What a new sort invalidates or extends: the ghost map lists the tiles the flow reached since the
+// last sort (serial, timed for the work record), and the block buffers size their boxes.
+void Solver::prepare_after_sort() {
+  const double listing_start = omp_get_wtime();
+  ghosts_.list_active_tiles(walls_, grid_);
+  ghost_listing_seconds_ = omp_get_wtime() - listing_start;
+  if (block_buffers()) block_buffers_.prepare(sort_, grid_);
 }
 
 // The MLS neighbour search finds the particles through the cells they were sorted into; once some
@@ -209,10 +213,7 @@ bool Solver::mls_needs_sort() const {
 void Solver::sort_particles() {
   ScopedPhase timer(times_, Phase::Sort);
   sort_.sort(particles_, grid_, scratch_);
-  const double listing_start = omp_get_wtime();
-  ghosts_.list_active_tiles(walls_, grid_);  // the tiles the flow has reached since the last sort (serial)
-  ghost_listing_seconds_ = omp_get_wtime() - listing_start;
-  prepare_block_buffers();
+  prepare_after_sort();
   needs_sort_ = false;
   steps_since_sort_ = 0;
   sort_drift_ = 0.0;
@@ -829,8 +830,7 @@ void Solver::restore(ParticleStore particles, const SolverState& s, RestoreSort 
     for (std::size_t p = 0; p < n; ++p) particles_.x[2][p] = grid_.z_of(particles_.x[0][p], particles_.x[2][p]);
   const std::vector<std::int64_t> ids = particles_.id;
   sort_.sort(particles_, grid_, scratch_);
-  ghosts_.list_active_tiles(walls_, grid_);  // the tiles the flow has reached since the last sort
-  prepare_block_buffers();
+  prepare_after_sort();
   if (particles_.id != ids) throw io_error("restart: the saved particle order is not the saved sort's order");
   particles_.x = std::move(x);
   tiles_changed_ = true;

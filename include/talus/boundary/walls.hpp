@@ -145,10 +145,11 @@ class Walls {
   }
   /// Fixed walls and slip walls are mirrored, except a slip bed on a terrain grid: its normal is
   /// the bed normal, not the w axis the mirror reflects along (such a bed is held like the wall).
-  bool mirrored_face(int axis, int side) const {
-    const WallType type = specs_[axis][side].type;
-    if (type == WallType::Fixed) return true;
-    return type == WallType::Slip && !(axis == 2 && !bed_normal_.empty());
+  bool mirrored_face(int axis, int side) const { return mirrors(specs_[axis][side].type, axis, !bed_normal_.empty()); }
+  /// The same rule for a face of `type` on `axis`, on a terrain grid or not (for estimates made
+  /// before the walls exist).
+  static bool mirrors(WallType type, int axis, bool terrain_bed) {
+    return type == WallType::Fixed || (type == WallType::Slip && !(axis == 2 && terrain_bed));
   }
 
   /// How a frictional (unilateral) wall treats a node's velocity.

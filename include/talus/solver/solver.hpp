@@ -210,7 +210,7 @@ class Solver {
   CellSort sort_;
   Walls walls_;
   GhostMap ghosts_;  // walls_'s ghost nodes per tile, for the fold and the mirror
-  double ghost_listing_seconds_ = 0.0;  // the last sort's listing of new tiles in ghosts_ (serial)
+  double ghost_listing_seconds_ = 0.0;  // the last prepare_after_sort's listing of new tiles in ghosts_ (serial)
   BodyMaterials materials_;                   // the constitutive model of each body
   std::vector<double> block_dissipation_;     // per sort block, this step's material dissipation
   // The time step's maximum of c_p + |v_p|, taken per block at the end of the stress pass that ends
@@ -225,7 +225,7 @@ class Solver {
   // solver.scatter = "block_buffers": the blocks' node boxes (prepared after every sort), else unused.
   BlockBuffers block_buffers_;
   BlockBuffers* block_buffers() { return scene_.scatter == ScatterOrder::BlockBuffers ? &block_buffers_ : nullptr; }
-  void prepare_block_buffers();
+  void prepare_after_sort();  // the ghost map's new tiles and the block buffers' boxes
   double mass_floor_ = 0.0;
   double time_ = 0.0;
   std::int64_t step_ = 0;
