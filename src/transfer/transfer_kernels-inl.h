@@ -83,13 +83,20 @@ namespace hn = hwy::HWY_NAMESPACE;
 /// +0, and a node sum that starts at +0 never holds -0, so every node ends with the same bits
 /// (tests/solver/isa_paths_test.cpp and the bit-identity tests check it). Fields not scattered
 /// keep their lanes (a blend).
+/// Only the part of the record that holds the scattered fields is loaded and stored: the whole
+/// record, or the aligned half that holds them all (mass and momentum: the remap; the force alone),
+/// in vectors of at most 4 lanes then (RecordSlots says why).
 template <bool with_mass, bool with_momentum, bool with_force>
 class RecordScatter {
-  using D = hn::ScalableTag<double>;
+  static constexpr int kLowSlot = with_mass ? kMassSlot : with_momentum ? kMomentumSlot : kForceSlot;
+  static constexpr int kHighSlot = with_force ? kForceSlot + 2 : with_momentum ? kMomentumSlot + 2 : kMassSlot;
+  static constexpr bool kHalf = kLowSlot / 4 == kHighSlot / 4;
+  static constexpr int kWidth = kHalf ? 4 : kNodeRecord, kBase = kHalf ? kLowSlot / 4 * 4 : 0;
+  using D = hn::CappedTag<double, kWidth>;
   using V = hn::Vec<D>;
-  static constexpr int kLanes = static_cast<int>(HWY_LANES(double));
-  static constexpr int kParts = kNodeRecord / kLanes;
-  static_assert(kNodeRecord % kLanes == 0, "a node record is a whole number of vectors");
+  static constexpr int kLanes = static_cast<int>(hn::MaxLanes(D()));
+  static constexpr int kParts = kWidth / kLanes;
+  static_assert(kWidth % kLanes == 0, "the scattered part of a record is a whole number of vectors");
   static constexpr bool kAllFields = with_mass && with_momentum && with_force;
 
  public:
@@ -101,8 +108,8 @@ class RecordScatter {
       if (with_force) written[kForceSlot + d] = 1.0;
     }
     for (int i = 0; i < kParts; ++i) {
-      keep_[i] = hn::Ne(hn::Load(D(), written + i * kLanes), hn::Zero(D()));
-      const V lane = hn::Iota(D(), static_cast<double>(i * kLanes));
+      keep_[i] = hn::Ne(hn::Load(D(), written + kBase + i * kLanes), hn::Zero(D()));
+      const V lane = hn::Iota(D(), static_cast<double>(kBase + i * kLanes));
       for (int slot = 0; slot < kNodeRecord; ++slot) is_slot_[slot][i] = hn::Eq(lane, hn::Set(D(), slot));
     }
   }
@@ -152,11 +159,12 @@ class RecordScatter {
   void add_to(double* record, double wz, double gz) const {
     const V vw = hn::Set(D(), wz), vg = hn::Set(D(), gz);
     for (int i = 0; i < kParts; ++i) {
-      const V old = hn::Load(D(), record + i * kLanes);
+      double* const part = record + kBase + i * kLanes;
+      const V old = hn::Load(D(), part);
       V add = hn::Mul(a_[i], vw);
       if constexpr (with_force) add = hn::Add(add, hn::Mul(b_[i], vg));
       const V sum = hn::Add(old, add);
-      hn::Store(kAllFields ? sum : hn::IfThenElse(keep_[i], sum, old), D(), record + i * kLanes);
+      hn::Store(kAllFields ? sum : hn::IfThenElse(keep_[i], sum, old), D(), part);
     }
   }
 
@@ -167,10 +175,14 @@ class RecordScatter {
 };
 
 /// The vectors of a node record (`kStride` doubles) that hold the 3 doubles at `kSlot`: the
-/// gathers load only those (RecordGather, RecordVelocityGradient).
+/// gathers load only those (RecordGather, RecordVelocityGradient). When the three lie in one aligned
+/// quarter-line of 4 doubles, the vectors are at most 4 wide even where the CPU has 8 lanes: the lanes
+/// beyond the three are never read, and on AVX-512 a 256-bit operation costs half a 512-bit one
+/// on Zen 4's 256-bit units (and no more elsewhere).
 template <int kStride, int kSlot>
 struct RecordSlots {
-  using D = hn::CappedTag<double, kStride>;
+  static constexpr int kWidth = (kStride > 4 && kSlot / 4 == (kSlot + 2) / 4) ? 4 : kStride;
+  using D = hn::CappedTag<double, kWidth>;
   using V = hn::Vec<D>;
   static constexpr int kLanes = static_cast<int>(hn::MaxLanes(D()));
   static constexpr int kFirst = kSlot / kLanes, kLast = (kSlot + 2) / kLanes;
