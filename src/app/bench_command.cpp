@@ -377,7 +377,7 @@ void run_bench(const BenchOptions& o) {
     if (s + 1 == o.steps && solver.particles().has_plastic_state()) {
       wall += phase_clock_seconds() - start;
       rss_before_copy = peak_rss_bytes();  // the copy below is the bench's, not the solver's
-      plastic_before = solver.particles().plastic_strain;
+      plastic_before.assign(solver.particles().plastic_strain.begin(), solver.particles().plastic_strain.end());
       sorts_before = solver.sort_count();
       start = phase_clock_seconds();
     }

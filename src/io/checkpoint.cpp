@@ -57,8 +57,8 @@ std::string read_string_attribute(const H5::H5Object& where, const char* name) {
   return value;
 }
 
-template <class T>
-void write_array(H5::Group& group, const std::string& name, const std::vector<T>& data) {
+template <class T, class Allocator>
+void write_array(H5::Group& group, const std::string& name, const std::vector<T, Allocator>& data) {
   const hsize_t n = data.size();
   H5::DataSpace space(1, &n);
   H5::DataSet set = group.createDataSet(name, h5_type<T>(), space);
@@ -183,7 +183,7 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
       }
 
       H5::Group p = file.createGroup("/particles");
-      P.for_each_double_array([&](const char* name, const std::vector<double>& a) {
+      P.for_each_double_array([&](const char* name, const ParticleArray<double>& a) {
         if (!a.empty()) write_array(p, name, a);
       });
       P.for_each_integer_array([&](const char* name, const auto& a) { write_array(p, name, a); });
@@ -311,18 +311,18 @@ void restore_checkpoint(Solver& solver, const Checkpoint& c, const std::string& 
   if (c.body.size() != n) throw bad("body has another length than id");
   ParticleStore P = solver.particles();  // the scene's layout: which arrays are allocated
   std::set<std::string> used;
-  P.for_each_double_array([&](const char* name, std::vector<double>& a) {
+  P.for_each_double_array([&](const char* name, ParticleArray<double>& a) {
     if (a.empty()) return;
     auto it = c.double_arrays.find(name);
     if (it == c.double_arrays.end()) throw bad(fmt::format("particle array {} is missing", name));
     if (it->second.size() != n) throw bad(fmt::format("particle array {} has {} values for {} particles", name, it->second.size(), n));
-    a = it->second;
+    a.assign(it->second.begin(), it->second.end());
     used.insert(name);
   });
   for (const auto& [name, a] : c.double_arrays)
     if (!used.count(name)) throw bad(fmt::format("particle array {} is not used by this scene", name));
-  P.id = c.id;
-  P.body = c.body;
+  P.id.assign(c.id.begin(), c.id.end());
+  P.body.assign(c.body.begin(), c.body.end());
   for (std::uint16_t b : P.body)
     if (b >= solver.scene().bodies.size()) throw bad("a particle's body index is out of range");
   const Comm& comm = solver.comm();

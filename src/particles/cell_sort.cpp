@@ -207,7 +207,7 @@ void CellSort::sort(ParticleStore& particles, Grid& grid, ParticleScratch& scrat
   // The parallel regions of this sort (work recorder): the cell of each particle, the two above, one per permuted array.
   parallel_regions_ = 3;
   particles.for_each_integer_array([&](const char*, const auto& a) { parallel_regions_ += !a.empty(); });
-  particles.for_each_double_array([&](const char*, const std::vector<double>& a) { parallel_regions_ += !a.empty(); });
+  particles.for_each_double_array([&](const char*, const ParticleArray<double>& a) { parallel_regions_ += !a.empty(); });
 
   // What follows is serial bookkeeping over the blocks (timed for the work recorder).
   const double serial_start = omp_get_wtime();

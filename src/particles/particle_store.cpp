@@ -68,7 +68,7 @@ namespace {
 // new[i] = old[order[i]] through `buffer` (order.size() elements): gathered in one parallel loop,
 // copied back in another, and the field shortened to the order's length.
 template <class T>
-void permute_field(std::vector<T>& field, std::span<const std::uint32_t> order, std::span<T> buffer) {
+void permute_field(ParticleArray<T>& field, std::span<const std::uint32_t> order, std::span<T> buffer) {
   if (field.empty()) return;
   const std::size_t n = order.size();
   const T* const src = field.data();
@@ -92,7 +92,7 @@ void ParticleStore::permute(std::span<const std::uint32_t> order, ParticleScratc
   const std::size_t n = order.size();  // (plane() throws when the scratch holds fewer)
   permute_field(id, order, scratch.plane<std::int64_t>(plane, n));
   permute_field(body, order, scratch.plane<std::uint16_t>(plane, n));
-  for_each_double_array([&](const char*, std::vector<double>& f) { permute_field(f, order, scratch.plane<double>(plane, n)); });
+  for_each_double_array([&](const char*, ParticleArray<double>& f) { permute_field(f, order, scratch.plane<double>(plane, n)); });
 }
 
 void ParticleStore::permute(std::span<const std::uint32_t> order) {
@@ -104,13 +104,13 @@ void ParticleStore::permute(std::span<const std::uint32_t> order) {
 namespace {
 
 template <class T>
-void resize_for_copy(std::vector<T>& to, const std::vector<T>& from) {
+void resize_for_copy(ParticleArray<T>& to, const ParticleArray<T>& from) {
   if (to.size() != from.size()) to.resize(from.size());
 }
 
 // Copies from[begin, end) into to (sized already).
 template <class T>
-void copy_slice(std::vector<T>& to, const std::vector<T>& from, std::size_t begin, std::size_t end) {
+void copy_slice(ParticleArray<T>& to, const ParticleArray<T>& from, std::size_t begin, std::size_t end) {
   const std::size_t e = std::min(end, from.size());
   if (begin < e) std::copy(from.begin() + begin, from.begin() + e, to.begin() + begin);
 }
@@ -124,10 +124,10 @@ void ParticleStore::copy_from(const ParticleStore& other) {
   resize_for_copy(id, other.id);
   resize_for_copy(body, other.body);
   // (the double arrays of both stores are visited in the same order)
-  std::vector<std::vector<double>*> to;
-  std::vector<const std::vector<double>*> from;
-  for_each_double_array([&](const char*, std::vector<double>& a) { to.push_back(&a); });
-  other.for_each_double_array([&](const char*, const std::vector<double>& a) { from.push_back(&a); });
+  std::vector<ParticleArray<double>*> to;
+  std::vector<const ParticleArray<double>*> from;
+  for_each_double_array([&](const char*, ParticleArray<double>& a) { to.push_back(&a); });
+  other.for_each_double_array([&](const char*, const ParticleArray<double>& a) { from.push_back(&a); });
   for (std::size_t a = 0; a < to.size(); ++a) resize_for_copy(*to[a], *from[a]);
   const std::size_t n = other.size();
 #pragma omp parallel
@@ -143,7 +143,7 @@ void ParticleStore::copy_from(const ParticleStore& other) {
 
 std::size_t ParticleStore::bytes() const {
   std::size_t b = id.capacity() * sizeof(std::int64_t) + body.capacity() * sizeof(std::uint16_t);
-  for_each_double_array([&](const char*, const std::vector<double>& f) { b += f.capacity() * sizeof(double); });
+  for_each_double_array([&](const char*, const ParticleArray<double>& f) { b += f.capacity() * sizeof(double); });
   return b;
 }
 

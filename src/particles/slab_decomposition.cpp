@@ -25,7 +25,7 @@ std::vector<std::int64_t> SlabDecomposition::work_per_column(const std::vector<s
   return work;
 }
 
-std::vector<std::int64_t> SlabDecomposition::particles_per_column(const std::vector<double>& x,
+std::vector<std::int64_t> SlabDecomposition::particles_per_column(std::span<const double> x,
                                                                   const GridGeometry& grid) const {
   std::vector<std::int64_t> work(columns_, 0);
   for (double xp : x) ++work[column_of_cell(grid.cell_of(0, xp))];

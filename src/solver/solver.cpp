@@ -820,7 +820,7 @@ void Solver::restore(ParticleStore particles, const SolverState& s, RestoreSort 
   // Rebuild the cell sort exactly as the saved solver had it: sort with every particle placed at
   // the centre of its saved cell. The particles are already in that key order, so the (stable)
   // sort keeps their order and rebuilds the same blocks, colours and active tiles.
-  std::array<std::vector<double>, 3> x;
+  std::array<ParticleArray<double>, 3> x;
   for (int d = 0; d < 3; ++d) {
     x[d] = particles_.x[d];
     for (std::size_t p = 0; p < n; ++p) particles_.x[d][p] = scene_.grid.node_position(d, s.sort_cell[d][p]) + 0.5 * scene_.grid.h;
@@ -828,7 +828,7 @@ void Solver::restore(ParticleStore particles, const SolverState& s, RestoreSort 
   // On a terrain grid the cell centre's w maps to z = w + z_b(x) (the sort maps it back).
   if (grid_.has_terrain())
     for (std::size_t p = 0; p < n; ++p) particles_.x[2][p] = grid_.z_of(particles_.x[0][p], particles_.x[2][p]);
-  const std::vector<std::int64_t> ids = particles_.id;
+  const ParticleArray<std::int64_t> ids = particles_.id;
   sort_.sort(particles_, grid_, scratch_);
   prepare_after_sort();
   if (particles_.id != ids) throw io_error("restart: the saved particle order is not the saved sort's order");

@@ -31,9 +31,9 @@ void check_particle_fields(const ParticleStore& P, const Scene& scene, std::int6
   // particle runs only when a scan fails. One parallel region scans every array in use and the volume
   // (a region per array was a fork/join each, a serial part at many cores); the diagnosis is the same:
   // the first bad array in visit order, its first bad particle, then the volume.
-  std::vector<const std::vector<double>*> arrays;
+  std::vector<const ParticleArray<double>*> arrays;
   std::vector<const char*> names;
-  P.for_each_double_array([&](const char* name, const std::vector<double>& a) {
+  P.for_each_double_array([&](const char* name, const ParticleArray<double>& a) {
     if (a.size() != n) return;  // arrays the scene does not use are empty
     arrays.push_back(&a);
     names.push_back(name);

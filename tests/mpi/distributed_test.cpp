@@ -118,7 +118,7 @@ State state_by_id(const Solver& s) {
   std::vector<std::size_t> order(all.size());
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return all.id[a] < all.id[b]; });
-  auto sorted = [&](const std::vector<double>& a) {
+  auto sorted = [&](const ParticleArray<double>& a) {
     std::vector<double> out(order.size());
     for (std::size_t i = 0; i < order.size(); ++i) out[i] = a[order[i]];
     return broadcast(s.comm(), out);

@@ -131,7 +131,7 @@ TEST(CellSort, TheOrderIsTheStableKeyOrderForAnyThreadCount) {
       ASSERT_EQ(particles.mass[p], cloud.mass[expected[p]]);
     }
     // a second sort of the sorted store keeps its order (stable), also after the blocks changed
-    const std::vector<std::int64_t> ids = particles.id;
+    const ParticleArray<std::int64_t> ids = particles.id;
     sort.sort(particles, grid);
     EXPECT_EQ(particles.id, ids) << threads << " threads";
     EXPECT_EQ(sort.block_begin(0), 0u);
@@ -157,10 +157,10 @@ TEST(ParticleStore, ParallelCopyEqualsACopy) {
   EXPECT_EQ(b.body, a.body);
   EXPECT_EQ(b.has_plastic_state(), a.has_plastic_state());
   EXPECT_EQ(b.has_back_stress(), a.has_back_stress());
-  std::vector<const std::vector<double>*> from;
-  a.for_each_double_array([&](const char*, const std::vector<double>& f) { from.push_back(&f); });
+  std::vector<const ParticleArray<double>*> from;
+  a.for_each_double_array([&](const char*, const ParticleArray<double>& f) { from.push_back(&f); });
   std::size_t i = 0;
-  b.for_each_double_array([&](const char* name, const std::vector<double>& f) { EXPECT_EQ(f, *from[i++]) << name; });
+  b.for_each_double_array([&](const char* name, const ParticleArray<double>& f) { EXPECT_EQ(f, *from[i++]) << name; });
 }
 
 }  // namespace

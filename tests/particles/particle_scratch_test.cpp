@@ -62,7 +62,7 @@ ParticleStore random_store(std::size_t n, unsigned seed) {
           1.0 + u(rng), 1e-3 * (1.0 + u(rng)), static_cast<std::uint16_t>(p % 3));
   P.enable_plastic_state(true);
   P.enable_domain_state();
-  P.for_each_double_array([&](const char* name, std::vector<double>& a) {
+  P.for_each_double_array([&](const char* name, ParticleArray<double>& a) {
     if (name[0] == 'x') return;  // the positions stay in the grid
     for (double& value : a) value += u(rng);
   });
@@ -83,11 +83,11 @@ TEST(ParticleScratch, PermuteThroughTheScratchGathersEveryField) {
     ASSERT_EQ(after.id[i], before.id[order[i]]);
     ASSERT_EQ(after.body[i], before.body[order[i]]);
   }
-  std::vector<const std::vector<double>*> old_arrays;
-  before.for_each_double_array([&](const char*, const std::vector<double>& a) { old_arrays.push_back(&a); });
+  std::vector<const ParticleArray<double>*> old_arrays;
+  before.for_each_double_array([&](const char*, const ParticleArray<double>& a) { old_arrays.push_back(&a); });
   std::size_t array = 0, checked = 0;
-  after.for_each_double_array([&](const char* name, const std::vector<double>& a) {
-    const std::vector<double>& old = *old_arrays[array++];
+  after.for_each_double_array([&](const char* name, const ParticleArray<double>& a) {
+    const ParticleArray<double>& old = *old_arrays[array++];
     if (old.empty()) return;
     ASSERT_EQ(a.size(), order.size()) << name;
     for (std::size_t i = 0; i < order.size(); ++i) ASSERT_EQ(a[i], old[order[i]]) << name << " " << i;

@@ -85,7 +85,7 @@ TEST(Guards, FieldCheckFindsABadValueInEveryLaneAndTheTail) {
   // a count that leaves a tail of 5 after the groups of eight
   const std::size_t n = all.size() - all.size() % 8 - 3;
   ASSERT_GT(n, 16u);
-  all.for_each_double_array([&](const char*, std::vector<double>& a) {
+  all.for_each_double_array([&](const char*, ParticleArray<double>& a) {
     if (!a.empty()) a.resize(n);
   });
   all.for_each_integer_array([&](const char*, auto& a) { a.resize(n); });

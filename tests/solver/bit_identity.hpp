@@ -6,6 +6,7 @@
 #include <omp.h>
 
 #include <cstring>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -14,7 +15,7 @@ namespace talus::test {
 
 /// Bit-for-bit equality of two arrays. memcmp on an empty vector's null data() is undefined
 /// behaviour (UBSan), so sizes are compared first.
-inline bool same_bits(const std::vector<double>& x, const std::vector<double>& y) {
+inline bool same_bits(std::span<const double> x, std::span<const double> y) {
   return x.size() == y.size() && (x.empty() || std::memcmp(x.data(), y.data(), x.size() * sizeof(double)) == 0);
 }
 

@@ -48,8 +48,8 @@ class Comm {
 
   /// The ranks' vectors concatenated in rank order on rank 0 (empty elsewhere); `counts` (if given)
   /// receives each rank's length on rank 0.
-  template <class T>
-  std::vector<T> gather(const std::vector<T>& local, std::vector<std::int64_t>* counts = nullptr) const {
+  template <class T, class Allocator>
+  std::vector<T> gather(const std::vector<T, Allocator>& local, std::vector<std::int64_t>* counts = nullptr) const {
     static_assert(std::is_trivially_copyable_v<T>);
     std::vector<std::int64_t> byte_counts;
     std::vector<unsigned char> bytes = gather_bytes(local.data(), local.size() * sizeof(T), byte_counts);

@@ -3,6 +3,7 @@
 // phase loops stream through memory and vectorise. Particles are kept sorted by cell (see
 // cell_sort.hpp); the permutation is applied to every field, and `id` keeps each particle's
 // identity across sorts. Field groups a scene does not need are left empty (size 0).
+#include "talus/core/staggered_allocator.hpp"
 #include "talus/core/types.hpp"
 #include "talus/particles/particle_scratch.hpp"
 
@@ -15,23 +16,23 @@ namespace talus {
 
 struct ParticleStore {
   // Always present.
-  std::vector<std::int64_t> id;               // stable identity, assigned at seeding
-  std::array<std::vector<double>, 3> x;       // position [m]
-  std::array<std::vector<double>, 3> v;       // velocity [m/s]
-  std::vector<double> mass;                   // [kg], constant
-  std::vector<double> volume;                 // current volume [m^3] (Edo & Matsubara 2015, eq. 35)
-  std::vector<double> volume0;                // volume at seeding [m^3] (sets the GIMP domain)
-  std::array<std::vector<double>, 6> stress;  // Cauchy stress, Voigt xx yy zz yz xz xy [Pa]
-  std::array<std::vector<double>, 6> strain;  // accumulated (log-like) strain, tensor components
-  std::vector<std::uint16_t> body;            // index into Scene::bodies
+  ParticleArray<std::int64_t> id;               // stable identity, assigned at seeding
+  std::array<ParticleArray<double>, 3> x;       // position [m]
+  std::array<ParticleArray<double>, 3> v;       // velocity [m/s]
+  ParticleArray<double> mass;                   // [kg], constant
+  ParticleArray<double> volume;                 // current volume [m^3] (Edo & Matsubara 2015, eq. 35)
+  ParticleArray<double> volume0;                // volume at seeding [m^3] (sets the GIMP domain)
+  std::array<ParticleArray<double>, 6> stress;  // Cauchy stress, Voigt xx yy zz yz xz xy [Pa]
+  std::array<ParticleArray<double>, 6> strain;  // accumulated (log-like) strain, tensor components
+  ParticleArray<std::uint16_t> body;            // index into Scene::bodies
 
   // Drucker-Prager state: allocated only when some body uses that material.
-  std::vector<double> plastic_strain;            // equivalent plastic strain
-  std::array<std::vector<double>, 6> back_stress;  // kinematic hardening centre [Pa]; only with kinematic hardening
+  ParticleArray<double> plastic_strain;            // equivalent plastic strain
+  std::array<ParticleArray<double>, 6> back_stress;  // kinematic hardening centre [Pa]; only with kinematic hardening
 
   // cpGIMP particle domain: current half widths per axis [m] (Edo & Matsubara 2015, eq. 57-58); allocated only
   // when the scene uses cpGIMP.
-  std::array<std::vector<double>, 3> domain;
+  std::array<ParticleArray<double>, 3> domain;
 
   std::size_t size() const { return id.size(); }
   bool has_plastic_state() const { return plastic_enabled_; }

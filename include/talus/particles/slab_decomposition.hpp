@@ -10,6 +10,7 @@
 #include "talus/grid/grid.hpp"
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace talus {
@@ -36,7 +37,7 @@ class SlabDecomposition {
 
   /// The particles at x coordinates `x` per block column of `grid` (this rank's share: a run sums it
   /// over the ranks).
-  std::vector<std::int64_t> particles_per_column(const std::vector<double>& x, const GridGeometry& grid) const;
+  std::vector<std::int64_t> particles_per_column(std::span<const double> x, const GridGeometry& grid) const;
   /// The work per cell of the constructor, summed per column.
   std::vector<std::int64_t> work_per_column(const std::vector<std::int64_t>& work_per_cell) const;
 
