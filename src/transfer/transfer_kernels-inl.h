@@ -74,62 +74,63 @@ namespace {
 
 namespace hn = hwy::HWY_NAMESPACE;
 
-/// One particle's scatter into node records with vector registers: a record's 8 doubles are one
-/// AVX-512 vector (two AVX2, more on narrower targets), and every node gets
-/// record += A wz[c] + B gz[c], with, per (a, b) row,
-///   A = (m, m v) wxy | (-V sigma) . (gxy, wgy, 0)   and   B = 0 | (-V sigma) . (0, 0, wxy) (- slope term).
-/// Bits: each field's operations are the scalar scatter's (Mul and Add, no FMA) plus additions of
-/// exact zeros from the lanes of the other fields (0 wxy, 0 gz, ...). Those can only turn a -0 into
-/// +0, and a node sum that starts at +0 never holds -0, so every node ends with the same bits
-/// (tests/solver/isa_paths_test.cpp and the bit-identity tests check it). Fields not scattered
-/// keep their lanes (a blend).
-/// Only the part of the record that holds the scattered fields is loaded and stored: the whole
-/// record, or the aligned half that holds them all (mass and momentum: the remap; the force alone),
-/// in vectors of at most 4 lanes then (RecordSlots says why).
+/// One particle's scatter into node records with vector registers. A record's 8 doubles are two
+/// halves: mass and momentum (slots 0-3), force and an unused slot (4-7), each one vector of 4 lanes
+/// (two on narrower targets). Every node gets
+///   low half  += A wz[c],                 A = (m, m v) wxy,
+///   high half += F wz[c] + G gz[c],       F = (-V sigma) . (gxy, wgy, 0),  G = (-V sigma) . (0, 0, wxy) (- slope term),
+/// per (a, b) row. Vectors of 4 even where the CPU has 8 lanes: one 8-lane vector per record did
+/// the force's terms on the mass and momentum lanes too (multiplied by exact zeros), and Zen 4 runs
+/// a 512-bit operation as two 256-bit halves. Only the halves that hold scattered fields are loaded
+/// and stored (the remap's momentum: the low half; USF's force: the high half).
+/// Bits: each field's operations are the scalar scatter's (Mul and Add, no FMA), plus, on the
+/// lanes of a half that hold no field of this particle's sum, additions of exact zeros. Those can
+/// only turn a -0 into +0, and a node sum that starts at +0 never holds -0, so every node ends with
+/// the same bits (tests/solver/isa_paths_test.cpp and the bit-identity tests check it). Slots of
+/// fields not scattered keep their values (a blend).
 template <bool with_mass, bool with_momentum, bool with_force>
 class RecordScatter {
-  static constexpr int kLowSlot = with_mass ? kMassSlot : with_momentum ? kMomentumSlot : kForceSlot;
-  static constexpr int kHighSlot = with_force ? kForceSlot + 2 : with_momentum ? kMomentumSlot + 2 : kMassSlot;
-  static constexpr bool kHalf = kLowSlot / 4 == kHighSlot / 4;
-  static constexpr int kWidth = kHalf ? 4 : kNodeRecord, kBase = kHalf ? kLowSlot / 4 * 4 : 0;
-  using D = hn::CappedTag<double, kWidth>;
+  using D = hn::CappedTag<double, 4>;
   using V = hn::Vec<D>;
   static constexpr int kLanes = static_cast<int>(hn::MaxLanes(D()));
-  static constexpr int kParts = kWidth / kLanes;
-  static_assert(kWidth % kLanes == 0, "the scattered part of a record is a whole number of vectors");
-  static constexpr bool kAllFields = with_mass && with_momentum && with_force;
+  static constexpr int kParts = 4 / kLanes;  // vectors per half record
+  static_assert(4 % kLanes == 0 && kMassSlot == 0 && kMomentumSlot == 1 && kForceSlot == 4,
+                "the halves: mass and momentum in slots 0-3, the force in slots 4-6");
+  static constexpr bool kLow = with_mass || with_momentum, kHigh = with_force;
+  static constexpr bool kBlendLow = !(with_mass && with_momentum);
 
  public:
   RecordScatter() {
-    alignas(64) double written[kNodeRecord] = {};
+    alignas(64) double written[4] = {};  // the low half's; the high half's unused slot 7 gets exact zeros
     if (with_mass) written[kMassSlot] = 1.0;
-    for (int d = 0; d < 3; ++d) {
+    for (int d = 0; d < 3; ++d)
       if (with_momentum) written[kMomentumSlot + d] = 1.0;
-      if (with_force) written[kForceSlot + d] = 1.0;
-    }
     for (int i = 0; i < kParts; ++i) {
-      keep_[i] = hn::Ne(hn::Load(D(), written + kBase + i * kLanes), hn::Zero(D()));
-      const V lane = hn::Iota(D(), static_cast<double>(kBase + i * kLanes));
-      for (int slot = 0; slot < kNodeRecord; ++slot) is_slot_[slot][i] = hn::Eq(lane, hn::Set(D(), slot));
+      keep_low_[i] = hn::Ne(hn::Load(D(), written + i * kLanes), hn::Zero(D()));
+      for (int half = 0; half < 2; ++half) {
+        const V lane = hn::Iota(D(), static_cast<double>(4 * half + i * kLanes));
+        for (int slot = 0; slot < 4; ++slot) is_slot_[half][slot][i] = hn::Eq(lane, hn::Set(D(), 4 * half + slot));
+      }
     }
   }
 
   /// The particle's mass, momentum and -V sigma (Voigt: xx, yy, zz, yz, xz, xy).
-  /// The four vectors are put together in registers, a broadcast blended into each lane. Written
+  /// The vectors are put together in registers, a broadcast blended into each lane. Written
   /// into a table on the stack and loaded as vectors, they cost a failed store-to-load forward per
   /// vector (several narrow stores read by one wide load): 41% of cpGIMP's scatter sat there.
   void set_particle(double m, const double mv[3], const double s[6]) {
     const double rows[3][3] = {{s[0], s[5], s[4]}, {s[5], s[1], s[3]}, {s[4], s[3], s[2]}};  // sigma_dj
     for (int i = 0; i < kParts; ++i) {
-      V p0 = hn::IfThenElseZero(is_slot_[kMassSlot][i], hn::Set(D(), m));
-      for (int d = 0; d < 3; ++d) p0 = hn::IfThenElse(is_slot_[kMomentumSlot + d][i], hn::Set(D(), mv[d]), p0);
-      p0_[i] = p0;
-      if constexpr (with_force) {
+      if constexpr (kLow) {
+        V p0 = hn::IfThenElseZero(is_slot_[0][kMassSlot][i], hn::Set(D(), m));
+        for (int d = 0; d < 3; ++d) p0 = hn::IfThenElse(is_slot_[0][kMomentumSlot + d][i], hn::Set(D(), mv[d]), p0);
+        p0_[i] = p0;
+      }
+      if constexpr (kHigh) {
         V sj[3];
         for (int j = 0; j < 3; ++j) {
-          sj[j] = hn::IfThenElseZero(is_slot_[kForceSlot][i], hn::Set(D(), rows[0][j]));
-          for (int d = 1; d < 3; ++d)
-            sj[j] = hn::IfThenElse(is_slot_[kForceSlot + d][i], hn::Set(D(), rows[d][j]), sj[j]);
+          sj[j] = hn::IfThenElseZero(is_slot_[1][0][i], hn::Set(D(), rows[0][j]));
+          for (int d = 1; d < 3; ++d) sj[j] = hn::IfThenElse(is_slot_[1][d][i], hn::Set(D(), rows[d][j]), sj[j]);
         }
         s1_[i] = sj[0];
         s2_[i] = sj[1];
@@ -143,35 +144,39 @@ class RecordScatter {
   template <bool kTerrain>
   void set_row(double wxy, double gxy, double wgy, double t) {
     const V w = hn::Set(D(), wxy);
-    [[maybe_unused]] const V g = hn::Set(D(), gxy), wg = hn::Set(D(), wgy);
     for (int i = 0; i < kParts; ++i) {
-      if constexpr (with_force) {
-        a_[i] = hn::Add(hn::Add(hn::Mul(p0_[i], w), hn::Mul(s1_[i], g)), hn::Mul(s2_[i], wg));
-        b_[i] = hn::Mul(s3_[i], w);
-        if constexpr (kTerrain) b_[i] = hn::Sub(b_[i], hn::Mul(s1_[i], hn::Set(D(), t)));
-      } else {
-        a_[i] = hn::Mul(p0_[i], w);
+      if constexpr (kLow) a_[i] = hn::Mul(p0_[i], w);
+      if constexpr (kHigh) {
+        f_[i] = hn::Add(hn::Mul(s1_[i], hn::Set(D(), gxy)), hn::Mul(s2_[i], hn::Set(D(), wgy)));
+        g_[i] = hn::Mul(s3_[i], w);
+        if constexpr (kTerrain) g_[i] = hn::Sub(g_[i], hn::Mul(s1_[i], hn::Set(D(), t)));
       }
     }
   }
 
-  /// record += A wz + B gz (B only with the force).
+  /// record += (A wz | F wz + G gz), each half only when it holds scattered fields.
   void add_to(double* record, double wz, double gz) const {
-    const V vw = hn::Set(D(), wz), vg = hn::Set(D(), gz);
+    const V vw = hn::Set(D(), wz);
     for (int i = 0; i < kParts; ++i) {
-      double* const part = record + kBase + i * kLanes;
-      const V old = hn::Load(D(), part);
-      V add = hn::Mul(a_[i], vw);
-      if constexpr (with_force) add = hn::Add(add, hn::Mul(b_[i], vg));
-      const V sum = hn::Add(old, add);
-      hn::Store(kAllFields ? sum : hn::IfThenElse(keep_[i], sum, old), D(), part);
+      if constexpr (kLow) {
+        double* const part = record + i * kLanes;
+        const V old = hn::Load(D(), part);
+        const V sum = hn::Add(old, hn::Mul(a_[i], vw));
+        hn::Store(kBlendLow ? hn::IfThenElse(keep_low_[i], sum, old) : sum, D(), part);
+      }
+      if constexpr (kHigh) {
+        double* const part = record + 4 + i * kLanes;
+        const V old = hn::Load(D(), part);
+        const V sum = hn::Add(old, hn::Add(hn::Mul(f_[i], vw), hn::Mul(g_[i], hn::Set(D(), gz))));
+        hn::Store(sum, D(), part);
+      }
     }
   }
 
  private:
-  V p0_[kParts], s1_[kParts], s2_[kParts], s3_[kParts], a_[kParts], b_[kParts];
-  hn::Mask<D> keep_[kParts];
-  hn::Mask<D> is_slot_[kNodeRecord][kParts];  // lane == slot, per part of the record
+  V p0_[kParts], s1_[kParts], s2_[kParts], s3_[kParts], a_[kParts], f_[kParts], g_[kParts];
+  hn::Mask<D> keep_low_[kParts];
+  hn::Mask<D> is_slot_[2][4][kParts];  // lane == slot, per half and part of the record
 };
 
 /// The vectors of a node record (`kStride` doubles) that hold the 3 doubles at `kSlot`: the
