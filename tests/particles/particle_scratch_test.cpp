@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <random>
+#include <set>
 #include <stdexcept>
 #include <vector>
 
@@ -39,6 +40,19 @@ TEST(ParticleScratch, PlanesAreAlignedAndDisjoint) {
   for (int k = 0; k < ParticleScratch::kPlanes; k += 2) {
     const auto d = scratch.plane<double>(k, n);
     for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(d[i], k + 1e-3 * static_cast<double>(i));
+  }
+}
+
+// The arrays a phase streams together start on different cache sets, also for a particle count
+// whose planes would otherwise be whole pages (2^20 particles: 4 MiB planes).
+TEST(ParticleScratch, PlanesStartOnDistinctCacheLinesOfAPage) {
+  for (const std::size_t n : {std::size_t{1} << 20, std::size_t{1000000}, std::size_t{15584}}) {
+    ParticleScratch scratch;
+    scratch.reserve(n);
+    std::set<std::uintptr_t> lines;
+    for (int k = 0; k < ParticleScratch::kPlanes; ++k)
+      lines.insert(reinterpret_cast<std::uintptr_t>(scratch.plane<std::uint32_t>(k, n).data()) % 4096 / 64);
+    EXPECT_EQ(lines.size(), static_cast<std::size_t>(ParticleScratch::kPlanes)) << n << " particles";
   }
 }
 
