@@ -83,8 +83,7 @@ ParticleStore gather_particles(const Comm& comm, const ParticleStore& local) {
   if (!comm.distributed()) return all;
   auto gather = [&](const char* name, auto& array) {
     if (!particle_array_in_use(local, name)) return;
-    const auto gathered = comm.gather(array);
-    array.assign(gathered.begin(), gathered.end());
+    array = comm.gather(array);
   };
   all.for_each_double_array(gather);
   all.for_each_integer_array(gather);

@@ -20,7 +20,6 @@ double for_tile_nodes(const Grid& grid, std::size_t t, NodeUpdate&& node_update)
   return energy;
 }
 
-
 }  // namespace
 
 void add_grid_update(TileStages& stages, Grid& grid, const Walls& walls, const Vec3& gravity, double dt,

@@ -181,9 +181,9 @@ class RecordScatter {
 
 /// The vectors of a node record (`kStride` doubles) that hold the 3 doubles at `kSlot`: the
 /// gathers load only those (RecordGather, RecordVelocityGradient). When the three lie in one aligned
-/// quarter-line of 4 doubles, the vectors are at most 4 wide even where the CPU has 8 lanes: the lanes
-/// beyond the three are never read, and on AVX-512 a 256-bit operation costs half a 512-bit one
-/// on Zen 4's 256-bit units (and no more elsewhere).
+/// group of 4 doubles (half a record, half a cache line), the vectors are at most 4 wide even where
+/// the CPU has 8 lanes: the other lanes were never used, and Zen 4 runs a 512-bit operation as two
+/// 256-bit halves.
 template <int kStride, int kSlot>
 struct RecordSlots {
   static constexpr int kWidth = (kStride > 4 && kSlot / 4 == (kSlot + 2) / 4) ? 4 : kStride;

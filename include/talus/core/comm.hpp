@@ -48,12 +48,14 @@ class Comm {
 
   /// The ranks' vectors concatenated in rank order on rank 0 (empty elsewhere); `counts` (if given)
   /// receives each rank's length on rank 0.
+  /// The result has the input's allocator (a ParticleArray gathers into a ParticleArray).
   template <class T, class Allocator>
-  std::vector<T> gather(const std::vector<T, Allocator>& local, std::vector<std::int64_t>* counts = nullptr) const {
+  std::vector<T, Allocator> gather(const std::vector<T, Allocator>& local,
+                                   std::vector<std::int64_t>* counts = nullptr) const {
     static_assert(std::is_trivially_copyable_v<T>);
     std::vector<std::int64_t> byte_counts;
     std::vector<unsigned char> bytes = gather_bytes(local.data(), local.size() * sizeof(T), byte_counts);
-    std::vector<T> out(bytes.size() / sizeof(T));
+    std::vector<T, Allocator> out(bytes.size() / sizeof(T));
     if (!bytes.empty()) std::memcpy(out.data(), bytes.data(), bytes.size());
     if (counts) {
       counts->clear();
