@@ -1,5 +1,6 @@
 #include "talus/boundary/ghost_map.hpp"
 
+#include <algorithm>
 #include <limits>
 #include <stdexcept>
 
@@ -25,16 +26,33 @@ void GhostMap::list_active_tiles(const Walls& walls, const Grid& grid) {
       std::array<std::array<int, 3>, 7> ghosts;
       std::array<std::array<double, 3>, 7> signs;
       const int count = walls.ghosts_of(node, ghosts, signs);
-      for (int g = 0; g < count; ++g) folds_.push_back({n, grid.node(ghosts[g][0], ghosts[g][1], ghosts[g][2]), signs[g]});
+      for (int g = 0; g < count; ++g) {
+        // The ghost phase (grid_update.cpp) mirrors a ghost from its image's fold pair: the fold's
+        // factors must be the mirror's.
+        std::array<int, 3> image;
+        std::array<double, 3> sign;
+        if (!walls.mirror(ghosts[g], image, sign) || image != node || sign != signs[g])
+          throw std::logic_error("GhostMap: a ghost's fold and mirror disagree");
+        folds_.push_back({n, grid.node(ghosts[g][0], ghosts[g][1], ghosts[g][2]), signs[g], true});
+      }
       std::array<int, 3> image;
       std::array<double, 3> sign;
-      if (walls.mirror(node, image, sign)) mirrors_.push_back({n, grid.node(image[0], image[1], image[2]), sign});
+      if (walls.mirror(node, image, sign)) {
+        const int folded_by_image = walls.ghosts_of(image, ghosts, signs);
+        const bool folded = std::find(ghosts.begin(), ghosts.begin() + folded_by_image, node) != ghosts.begin() + folded_by_image;
+        mirrors_.push_back({n, grid.node(image[0], image[1], image[2]), sign, folded});
+      }
     }
     if (folds_.size() >= kUnlisted || mirrors_.size() >= kUnlisted)
       throw std::length_error("GhostMap: more than 2^32 ghost pairs");
     entry.folds = static_cast<std::uint16_t>(folds_.size() - entry.fold_begin);
     entry.mirrors = static_cast<std::uint16_t>(mirrors_.size() - entry.mirror_begin);
   }
+  mirrors_after_barrier_ = false;
+  for (const std::uint32_t tile : grid.active_tiles())
+    for (const Pair& pair : mirrors(tile))
+      if (!pair.folded && pair.other / kTileNodes != tile && grid.tile_active(pair.other / kTileNodes))
+        mirrors_after_barrier_ = true;
 }
 
 std::span<const GhostMap::Pair> GhostMap::folds(std::uint32_t tile) const {

@@ -15,6 +15,7 @@ Grid::Grid(const GridGeometry& geometry) : geometry_(geometry), profile_(grid_be
   stride_y_ = static_cast<std::size_t>(tiles_[2]) * kTileNodes;
   stride_x_ = static_cast<std::size_t>(tiles_[1]) * stride_y_;
   const std::size_t count = tile_count() * kTileNodes;
+  tile_active_.assign(tile_count(), 0);
   records_ = LazyArray(count * kNodeRecord);
   lagrangian_ = LazyArray(count * kLagrangianRecord);
   double* r = records_.data();
@@ -31,6 +32,12 @@ std::array<int, 3> Grid::node_of(std::size_t tile) const {
   const int tj = static_cast<int>((tile / tiles_[2]) % tiles_[1]);
   const int ti = static_cast<int>(tile / (static_cast<std::size_t>(tiles_[2]) * tiles_[1]));
   return {ti * kTileEdge, tj * kTileEdge, tk * kTileEdge};
+}
+
+void Grid::set_active_tiles(std::vector<std::uint32_t> tiles) {
+  for (std::uint32_t t : active_tiles_) tile_active_[t] = 0;
+  active_tiles_ = std::move(tiles);
+  for (std::uint32_t t : active_tiles_) tile_active_[t] = 1;
 }
 
 void Grid::clear_tile(std::size_t tile) {

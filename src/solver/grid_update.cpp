@@ -7,26 +7,119 @@ namespace talus {
 
 namespace {
 
-/// node_update(n, node) on every node of active tile t, in slot order (n: the node's index, node: its
-/// (i, j, k)); returns the sum of what it returns (the tile's energy).
+/// node_update(n, node) on every node of active tile t but the slots set in `skip`, in slot order
+/// (n: the node's index, node: its (i, j, k)); returns the sum of what it returns (the tile's energy).
 template <class NodeUpdate>
-double for_tile_nodes(const Grid& grid, std::size_t t, NodeUpdate&& node_update) {
+double for_tile_nodes(const Grid& grid, std::size_t t, std::uint64_t skip, NodeUpdate&& node_update) {
   const std::uint32_t tile = grid.active_tiles()[t];
   const std::size_t begin = static_cast<std::size_t>(tile) * kTileNodes;
   const std::array<int, 3> first = grid.node_of(tile);
   double energy = 0.0;
   for (int s = 0; s < kTileNodes; ++s)
-    energy += node_update(begin + s, Grid::node_in_tile(first, s));
+    if (!((skip >> s) & 1u)) energy += node_update(begin + s, Grid::node_in_tile(first, s));
   return energy;
+}
+
+/// The fields the mirror reflects (GhostFields).
+std::vector<NodeVectors*> mirrored_fields(Grid& grid, GhostFields fields) {
+  switch (fields) {
+    case GhostFields::AfterGridUpdate: return {&grid.momentum, &grid.force, &grid.velocity_l};
+    case GhostFields::AfterGridUpdateForRemap: return {&grid.force, &grid.velocity_l};
+    case GhostFields::Remapped: return {&grid.momentum};
+    case GhostFields::Start: return {&grid.velocity_l};
+  }
+  return {};
+}
+
+/// Active tile t's fold: the fields of each ghost whose image is one of t's nodes move to the image
+/// (add_fold_ghost_nodes in the header says what and why).
+void fold_tile(Grid& grid, const GhostMap& ghosts, ScatteredFields fields, const Vec3& gravity, std::size_t t) {
+  const auto [mass, momentum, force] = fields;
+  // the tile's nodes in slot order, each with the ghosts whose image it is (Walls::ghosts_of)
+  for (const GhostMap::Pair& pair : ghosts.folds(grid.active_tiles()[t])) {
+    // Each ghost has exactly one image, so this thread is the only one touching it: its values
+    // are moved (not copied) to the image, and the ghost is left empty until the mirror.
+    const std::size_t n = pair.node, m = pair.other;
+    const auto& S = pair.sign;
+    if (mass) {
+      grid.mass[n] += grid.mass[m];
+      // the body force on the ghost's share acts on the image with the factor S; the grid update
+      // adds g to the image as an acceleration of the whole folded mass, so add (S - 1) m_g g
+      for (int d = 0; d < 3; ++d) grid.force[d][n] += (S[d] - 1.0) * grid.mass[m] * gravity[d];
+      grid.mass[m] = 0.0;
+    }
+    for (int d = 0; d < 3; ++d) {
+      if (momentum) {
+        grid.momentum[d][n] += S[d] * grid.momentum[d][m];
+        grid.momentum[d][m] = 0.0;
+      }
+      if (force) {
+        grid.force[d][n] += S[d] * grid.force[d][m];
+        grid.force[d][m] = 0.0;
+      }
+    }
+  }
+}
+
+/// Adds a node phase: per active tile, node_work(t, skip) over the tile's nodes but those in skip.
+/// With mirrored walls, the phase folds the ghosts into their images first and mirrors them back
+/// after, in one loop over the tiles (the header says how), and, only where an unfolded ghost's
+/// image lies on another active tile, a second loop after a barrier that mirrors those.
+template <class NodeWork>
+void add_node_phase(TileStages& stages, Grid& grid, const GhostMap& ghosts, ScatteredFields fold, const Vec3& gravity,
+                    GhostFields mirror, NodeWork node_work) {
+  if (ghosts.empty()) {
+    stages.add(TileReach::OwnTile, [node_work](std::size_t t) { node_work(t, 0); });
+    return;
+  }
+  const std::vector<NodeVectors*> targets = mirrored_fields(grid, mirror);
+  auto copy = [&grid, targets](const GhostMap::Pair& pair, std::size_t to, std::size_t from) {
+    for (auto* field : targets)
+      for (int d = 0; d < 3; ++d) (*field)[d][to] = pair.sign[d] * (*field)[d][from];
+  };
+  stages.add(TileReach::AnyTile, [&grid, &ghosts, fold, gravity, copy, node_work](std::size_t t) {
+    const std::uint32_t tile = grid.active_tiles()[t];
+    fold_tile(grid, ghosts, fold, gravity, t);
+    // This tile's folded ghosts whose image is active belong to the image's tile in this phase: it
+    // folded them (above, on its own thread) and mirrors them (below). Nothing here touches them.
+    std::uint64_t skip = 0;
+    const std::size_t first = static_cast<std::size_t>(tile) * kTileNodes;
+    for (const GhostMap::Pair& pair : ghosts.mirrors(tile))
+      if (pair.folded && grid.tile_active(pair.other / kTileNodes)) skip |= std::uint64_t{1} << (pair.node - first);
+    node_work(t, skip);
+    // The mirror of the ghosts this tile folded, pushed now that its nodes are done (an inactive
+    // ghost gets none).
+    for (const GhostMap::Pair& pair : ghosts.folds(tile))
+      if (grid.tile_active(pair.other / kTileNodes)) copy(pair, pair.other, pair.node);
+    // The mirror of this tile's other ghosts, pulled from an image that nobody writes in this loop:
+    // an inactive one, or an unfolded ghost's image on this tile (done above, on this thread).
+    for (const GhostMap::Pair& pair : ghosts.mirrors(tile)) {
+      const std::size_t image_tile = pair.other / kTileNodes;
+      if (!grid.tile_active(image_tile) || (!pair.folded && image_tile == tile)) copy(pair, pair.node, pair.other);
+    }
+  });
+  if (!ghosts.mirrors_after_barrier()) return;
+  // An unfolded ghost whose image is on another active tile: its node work ran on its own tile, the
+  // image's on the image's, so the mirror waits for both.
+  stages.add(TileReach::AnyTile, [&grid, &ghosts, copy](std::size_t t) {
+    const std::uint32_t tile = grid.active_tiles()[t];
+    for (const GhostMap::Pair& pair : ghosts.mirrors(tile)) {
+      const std::size_t image_tile = pair.other / kTileNodes;
+      if (!pair.folded && image_tile != tile && grid.tile_active(image_tile)) copy(pair, pair.node, pair.other);
+    }
+  });
 }
 
 }  // namespace
 
-void add_grid_update(TileStages& stages, Grid& grid, const Walls& walls, const Vec3& gravity, double dt,
-                     double mass_floor, bool zero_momentum, std::vector<double>& tile_work) {
+void add_grid_update(TileStages& stages, Grid& grid, const Walls& walls, const GhostMap& ghosts, ScatteredFields fold,
+                     const Vec3& gravity, double dt, double mass_floor, bool zero_momentum,
+                     std::vector<double>& tile_work) {
   tile_work.assign(grid.active_tiles().size(), 0.0);
-  stages.add(TileReach::OwnTile, [&grid, &walls, &tile_work, gravity, dt, mass_floor, zero_momentum](std::size_t t) {
-    tile_work[t] = for_tile_nodes(grid, t, [&](std::size_t n, const std::array<int, 3>& node) {
+  const GhostFields mirror = zero_momentum ? GhostFields::AfterGridUpdateForRemap : GhostFields::AfterGridUpdate;
+  add_node_phase(stages, grid, ghosts, fold, gravity, mirror,
+                 [&grid, &walls, &tile_work, gravity, dt, mass_floor, zero_momentum](std::size_t t, std::uint64_t skip) {
+    tile_work[t] = for_tile_nodes(grid, t, skip, [&](std::size_t n, const std::array<int, 3>& node) {
       // the node's record and its v^L record, read and written in place (NodeField's run-time
       // stride made this loop 1.8x slower)
       double* const record = grid.record(n);
@@ -64,19 +157,22 @@ double update_grid(Grid& grid, const Walls& walls, const Vec3& gravity, double d
                    const std::vector<std::uint8_t>& counted, bool zero_momentum) {
   TileStages stages(grid.active_tiles().size());
   std::vector<double> tile_work;
-  add_grid_update(stages, grid, walls, gravity, dt, mass_floor, zero_momentum, tile_work);
+  add_grid_update(stages, grid, walls, GhostMap(), {}, gravity, dt, mass_floor, zero_momentum, tile_work);
   stages.run();
   return counted_work(tile_work, counted);
 }
 
 namespace {
 
-/// v = momentum / m with the walls at `stage`, written into `target` (zero on empty nodes). For the
-/// remap, `velocity_l` still holds this step's v^L: the contact state of the grid update.
-void add_wall_projected_velocities(TileStages& stages, Grid& grid, const Walls& walls, double mass_floor,
+/// v = momentum / m with the walls at `stage`, written into `target` (zero on empty nodes), as a node
+/// phase with the ghosts' fold of `fold` and their mirror of `mirror`. For the remap, `velocity_l`
+/// still holds this step's v^L: the contact state of the grid update.
+void add_wall_projected_velocities(TileStages& stages, Grid& grid, const Walls& walls, const GhostMap& ghosts,
+                                   ScatteredFields fold, GhostFields mirror, const Vec3& gravity, double mass_floor,
                                    Walls::Stage stage, NodeVectors& target) {
-  stages.add(TileReach::OwnTile, [&grid, &walls, &target, mass_floor, stage](std::size_t t) {
-    for_tile_nodes(grid, t, [&](std::size_t n, const std::array<int, 3>& node) {
+  add_node_phase(stages, grid, ghosts, fold, gravity, mirror,
+                 [&grid, &walls, &target, mass_floor, stage](std::size_t t, std::uint64_t skip) {
+    for_tile_nodes(grid, t, skip, [&](std::size_t n, const std::array<int, 3>& node) {
       const double m = grid.mass[n];
       if (m <= mass_floor) {
         for (int d = 0; d < 3; ++d) target[d][n] = 0.0;
@@ -95,59 +191,16 @@ void add_wall_projected_velocities(TileStages& stages, Grid& grid, const Walls& 
 
 }  // namespace
 
-void add_velocities_from_momentum(TileStages& stages, Grid& grid, const Walls& walls, double mass_floor) {
-  add_wall_projected_velocities(stages, grid, walls, mass_floor, Walls::Stage::Remap, grid.momentum);
+void add_velocities_from_momentum(TileStages& stages, Grid& grid, const Walls& walls, const GhostMap& ghosts,
+                                  const Vec3& gravity, double mass_floor) {
+  add_wall_projected_velocities(stages, grid, walls, ghosts, {.momentum = true}, GhostFields::Remapped, gravity,
+                                mass_floor, Walls::Stage::Remap, grid.momentum);
 }
 
-void add_start_velocities(TileStages& stages, Grid& grid, const Walls& walls, double mass_floor) {
-  add_wall_projected_velocities(stages, grid, walls, mass_floor, Walls::Stage::Start, grid.velocity_l);
-}
-
-void add_fold_ghost_nodes(TileStages& stages, Grid& grid, const GhostMap& ghosts, ScatteredFields fields,
-                          const Vec3& gravity) {
-  if (ghosts.empty()) return;
-  stages.add(TileReach::AnyTile, [&grid, &ghosts, fields, gravity](std::size_t t) {
-    const auto [mass, momentum, force] = fields;
-    // the tile's nodes in slot order, each with the ghosts whose image it is (Walls::ghosts_of)
-    for (const GhostMap::Pair& pair : ghosts.folds(grid.active_tiles()[t])) {
-      // Each ghost has exactly one image, so this thread is the only one touching it: its values
-      // are moved (not copied) to the image, and the ghost is left empty until the mirror.
-      const std::size_t n = pair.node, m = pair.other;
-      const auto& S = pair.sign;
-      if (mass) {
-        grid.mass[n] += grid.mass[m];
-        // the body force on the ghost's share acts on the image with the factor S; the grid update
-        // adds g to the image as an acceleration of the whole folded mass, so add (S - 1) m_g g
-        for (int d = 0; d < 3; ++d) grid.force[d][n] += (S[d] - 1.0) * grid.mass[m] * gravity[d];
-        grid.mass[m] = 0.0;
-      }
-      for (int d = 0; d < 3; ++d) {
-        if (momentum) {
-          grid.momentum[d][n] += S[d] * grid.momentum[d][m];
-          grid.momentum[d][m] = 0.0;
-        }
-        if (force) {
-          grid.force[d][n] += S[d] * grid.force[d][m];
-          grid.force[d][m] = 0.0;
-        }
-      }
-    }
-  });
-}
-
-void add_mirror_ghost_nodes(TileStages& stages, Grid& grid, const GhostMap& ghosts, GhostFields fields) {
-  if (ghosts.empty()) return;
-  std::vector<NodeVectors*> targets;
-  if (fields == GhostFields::AfterGridUpdate) targets = {&grid.momentum, &grid.force, &grid.velocity_l};
-  if (fields == GhostFields::AfterGridUpdateForRemap) targets = {&grid.force, &grid.velocity_l};
-  if (fields == GhostFields::Remapped) targets = {&grid.momentum};
-  if (fields == GhostFields::Start) targets = {&grid.velocity_l};
-  stages.add(TileReach::AnyTile, [&grid, &ghosts, targets](std::size_t t) {
-    // the tile's ghost nodes in slot order, each with its interior image (Walls::mirror)
-    for (const GhostMap::Pair& pair : ghosts.mirrors(grid.active_tiles()[t]))
-      for (auto* field : targets)
-        for (int d = 0; d < 3; ++d) (*field)[d][pair.node] = pair.sign[d] * (*field)[d][pair.other];
-  });
+void add_start_velocities(TileStages& stages, Grid& grid, const Walls& walls, const GhostMap& ghosts,
+                          const Vec3& gravity, double mass_floor) {
+  add_wall_projected_velocities(stages, grid, walls, ghosts, {.mass = true, .momentum = true}, GhostFields::Start,
+                                gravity, mass_floor, Walls::Stage::Start, grid.velocity_l);
 }
 
 }  // namespace talus

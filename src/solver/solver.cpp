@@ -454,14 +454,15 @@ void Solver::step_with(double dt) {
   //    The node work after each scatter (the box sum, the ghost fold, the velocities and the
   //    mirror) runs as the stages of one parallel region, timed in the grid phase.
   TileStages grid_stages(tiles);
+  ScatteredFields folded;  // what the grid update's ghost fold moves: what the last scatter wrote
   if (!scheme.stress_first) {
     {
       ScopedPhase timer(times_, Phase::P2G);
       clear_grid();
       scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentumForce, timing, buffers);
-      grid_stages = after_scatter("p2g", {.mass = true, .momentum = true, .force = true}, clear_in_box_sum);
+      folded = {.mass = true, .momentum = true, .force = true};
+      grid_stages = after_scatter("p2g", folded, clear_in_box_sum);
     }
-    add_fold_ghost_nodes(grid_stages, grid_, ghosts_, {.mass = true, .momentum = true, .force = true}, gravity);
   } else {
     TileStages start_stages(tiles);
     {
@@ -472,16 +473,14 @@ void Solver::step_with(double dt) {
     }
     {
       ScopedPhase timer(times_, Phase::Grid);
-      add_fold_ghost_nodes(start_stages, grid_, ghosts_, {.mass = true, .momentum = true}, gravity);
-      add_start_velocities(start_stages, grid_, walls_, mass_floor_);
-      add_mirror_ghost_nodes(start_stages, grid_, ghosts_, GhostFields::Start);
+      add_start_velocities(start_stages, grid_, walls_, ghosts_, gravity, mass_floor_);
       run_stages(rec, "start velocities", tiles, start_stages);
     }
     update_stress<Shape, Terrain>(grid_.start_velocity(), stress_dt, false);
     ScopedPhase timer(times_, Phase::P2G);
     scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Force, timing, buffers);
-    grid_stages = after_scatter("p2g force", {.force = true});
-    add_fold_ghost_nodes(grid_stages, grid_, ghosts_, {.force = true}, gravity);
+    folded = {.force = true};
+    grid_stages = after_scatter("p2g force", folded);
   }
   // 3. grid: velocities, accelerations with gravity, walls.
   // With a remap the grid update leaves the momentum at zero (ghost nodes included, and the
@@ -489,9 +488,7 @@ void Solver::step_with(double dt) {
   const bool remap = scheme.remap;
   {
     ScopedPhase timer(times_, Phase::Grid);
-    add_grid_update(grid_stages, grid_, walls_, gravity, dt, mass_floor_, remap, tile_work_);
-    add_mirror_ghost_nodes(grid_stages, grid_, ghosts_,
-                           remap ? GhostFields::AfterGridUpdateForRemap : GhostFields::AfterGridUpdate);
+    add_grid_update(grid_stages, grid_, walls_, ghosts_, folded, gravity, dt, mass_floor_, remap, tile_work_);
     run_stages(rec, "grid update", tiles, grid_stages);
     work_.friction_work += counted_work(tile_work_, exchange_.counted());
   }
@@ -528,9 +525,7 @@ void Solver::step_with(double dt) {
   NodeVectors node_velocity = grid_.lagrangian_velocity();
   if (remap) {
     ScopedPhase timer(times_, Phase::Remap);
-    add_fold_ghost_nodes(remap_stages, grid_, ghosts_, {.momentum = true}, gravity);
-    add_velocities_from_momentum(remap_stages, grid_, walls_, mass_floor_);
-    add_mirror_ghost_nodes(remap_stages, grid_, ghosts_, GhostFields::Remapped);
+    add_velocities_from_momentum(remap_stages, grid_, walls_, ghosts_, gravity, mass_floor_);
     run_stages(rec, "remap grid", tiles, remap_stages);
     node_velocity = grid_.velocity();
   }

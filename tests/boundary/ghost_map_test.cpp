@@ -19,8 +19,9 @@ struct Case {
   std::array<std::array<WallType, 2>, 3> types;
 };
 
-/// Checks every tile of the grid against Walls node by node; returns the number of folds seen.
-std::size_t expect_same_as_walls(const Case& c) {
+/// Checks every tile of the grid against Walls node by node; returns the number of folds seen, and
+/// in `unfolded` the mirrored ghosts no fold takes.
+std::size_t expect_same_as_walls(const Case& c, std::size_t& unfolded) {
   GridGeometry g;
   g.h = 0.01;
   g.cells = c.cells;
@@ -55,7 +56,15 @@ std::size_t expect_same_as_walls(const Case& c) {
       for (int k = 0; k < count; ++k) fold.push_back({n, grid.node(ghosts[k][0], ghosts[k][1], ghosts[k][2]), signs[k]});
       std::array<int, 3> image;
       std::array<double, 3> sign;
-      if (walls.mirror(node, image, sign)) mirror.push_back({n, grid.node(image[0], image[1], image[2]), sign});
+      if (walls.mirror(node, image, sign)) {
+        // folded: the image's fold takes this ghost (an image in the padding beyond an open or
+        // frictional face takes none)
+        const int by_image = walls.ghosts_of(image, ghosts, signs);
+        bool folded = false;
+        for (int k = 0; k < by_image; ++k) folded = folded || ghosts[k] == node;
+        mirror.push_back({n, grid.node(image[0], image[1], image[2]), sign, folded});
+        unfolded += folded ? 0 : 1;
+      }
     }
     const auto listed_folds = map.folds(static_cast<std::uint32_t>(tile));
     const auto listed_mirrors = map.mirrors(static_cast<std::uint32_t>(tile));
@@ -70,6 +79,7 @@ std::size_t expect_same_as_walls(const Case& c) {
       EXPECT_EQ(listed_mirrors[i].node, mirror[i].node) << c.name << ", tile " << tile << ", mirror " << i;
       EXPECT_EQ(listed_mirrors[i].other, mirror[i].other) << c.name << ", tile " << tile << ", mirror " << i;
       EXPECT_EQ(listed_mirrors[i].sign, mirror[i].sign) << c.name << ", tile " << tile << ", mirror " << i;
+      EXPECT_EQ(listed_mirrors[i].folded, mirror[i].folded) << c.name << ", tile " << tile << ", mirror " << i;
     }
     folds += fold.size();
   }
@@ -87,7 +97,9 @@ TEST(GhostMap, ListsWhatTheWallsAnswerOnEveryTile) {
       {"mixed", {9, 3, 6}, {{{F, O}, {S, C}, {S, F}}}},
       {"thin fixed", {2, 1, 3}, {{{F, S}, {S, F}, {F, S}}}},
   };
-  for (const Case& c : cases) EXPECT_GT(expect_same_as_walls(c), 0u) << c.name;
+  std::size_t unfolded = 0;
+  for (const Case& c : cases) EXPECT_GT(expect_same_as_walls(c, unfolded), 0u) << c.name;
+  EXPECT_GT(unfolded, 0u);  // the corners next to the frictional and open faces
 }
 
 /// A grid of `cells` and its walls, every face of type `type` (the z- face of type `floor`).

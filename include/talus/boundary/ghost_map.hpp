@@ -11,7 +11,7 @@
 //
 // A tile is listed when it first becomes active (list_active_tiles, after each sort), so the lists
 // grow with the ground the flow covers, not with the grid: a small body in a long walled grid
-// holds only its own tiles' ghosts. Memory: 12 B per grid tile, and 40 B per ghost of a listed tile.
+// holds only its own tiles' ghosts. Memory: 12 B per grid tile, and 48 B per ghost of a listed tile.
 #include "talus/boundary/walls.hpp"
 #include "talus/grid/grid.hpp"
 
@@ -25,19 +25,26 @@ namespace talus {
 
 class GhostMap {
  public:
-  /// A ghost node and its interior image, with the mirror's factor per velocity component.
+  /// A ghost node and its image, with the mirror's factor per velocity component.
   struct Pair {
     std::size_t node;   // fold: the image (the tile's node); mirror: the ghost (the tile's node)
     std::size_t other;  // fold: the ghost whose fields move to the image; mirror: the image it copies
     std::array<double, 3> sign;
+    // mirror: whether the image folds this ghost (it lies inside the domain; an image in the padding
+    // beyond an open or frictional face, next to a corner, is mirrored but folds nothing); fold: true
+    bool folded;
   };
 
   GhostMap() = default;
   /// For `grid`'s tiles and `walls` (nothing to list without mirrored walls).
   GhostMap(const Walls& walls, const Grid& grid);
 
-  /// Lists the grid's active tiles that are not listed yet (serial; after each sort).
+  /// Lists the grid's active tiles that are not listed yet, and notes whether mirrors_after_barrier()
+  /// (serial; after each sort).
   void list_active_tiles(const Walls& walls, const Grid& grid);
+  /// Whether an active tile holds a ghost that is not folded and whose image lies on another active
+  /// tile: the node phase mirrors those after a barrier (solver/grid_update.hpp).
+  bool mirrors_after_barrier() const { return mirrors_after_barrier_; }
 
   bool empty() const { return tiles_.empty(); }
   /// The folds of listed tile `tile` (a grid tile index): for each of its nodes in slot order, the
@@ -60,6 +67,7 @@ class GhostMap {
 
   std::vector<Tile> tiles_;
   std::vector<Pair> folds_, mirrors_;
+  bool mirrors_after_barrier_ = false;
 };
 
 }  // namespace talus

@@ -166,8 +166,11 @@ class Grid {
   }
 
   /// Replace the set of tiles in use. Only those tiles are cleared and updated each step.
-  void set_active_tiles(std::vector<std::uint32_t> tiles) { active_tiles_ = std::move(tiles); }
+  void set_active_tiles(std::vector<std::uint32_t> tiles);
   const std::vector<std::uint32_t>& active_tiles() const { return active_tiles_; }
+  /// Whether grid tile `tile` is in the active set (the ghost nodes' phase asks it of a ghost's and
+  /// an image's tile, grid_update.hpp).
+  bool tile_active(std::size_t tile) const { return tile_active_[tile] != 0; }
   /// Zero every field on the active tiles.
   void clear_active();
   /// Zero every field of one tile (clear_active does this for each active tile, in parallel).
@@ -213,6 +216,7 @@ class Grid {
   std::array<int, 3> tiles_{0, 0, 0};
   std::size_t stride_x_ = 0, stride_y_ = 0;
   std::vector<std::uint32_t> active_tiles_;
+  std::vector<std::uint8_t> tile_active_;     // per grid tile: in active_tiles_
   LazyArray records_;                         // kNodeRecord doubles per node
   LazyArray lagrangian_;                      // kLagrangianRecord doubles per node
 };
