@@ -9,14 +9,21 @@ namespace {
 
 /// node_update(n, node) on every node of active tile t but the slots set in `skip`, in slot order
 /// (n: the node's index, node: its (i, j, k)); returns the sum of what it returns (the tile's energy).
+/// (Inlined into the stage, as the loops were before the ghosts' skip: out of line, the remap's
+/// velocities took a third longer.)
 template <class NodeUpdate>
-double for_tile_nodes(const Grid& grid, std::size_t t, std::uint64_t skip, NodeUpdate&& node_update) {
+[[gnu::always_inline]] inline double for_tile_nodes(const Grid& grid, std::size_t t, std::uint64_t skip,
+                                                    NodeUpdate&& node_update) {
   const std::uint32_t tile = grid.active_tiles()[t];
   const std::size_t begin = static_cast<std::size_t>(tile) * kTileNodes;
   const std::array<int, 3> first = grid.node_of(tile);
   double energy = 0.0;
-  for (int s = 0; s < kTileNodes; ++s)
-    if (!((skip >> s) & 1u)) energy += node_update(begin + s, Grid::node_in_tile(first, s));
+  if (skip == 0) {
+    for (int s = 0; s < kTileNodes; ++s) energy += node_update(begin + s, Grid::node_in_tile(first, s));
+  } else {
+    for (int s = 0; s < kTileNodes; ++s)
+      if (!((skip >> s) & 1u)) energy += node_update(begin + s, Grid::node_in_tile(first, s));
+  }
   return energy;
 }
 
@@ -32,7 +39,7 @@ std::vector<NodeVectors*> mirrored_fields(Grid& grid, GhostFields fields) {
 }
 
 /// Active tile t's fold: the fields of each ghost whose image is one of t's nodes move to the image
-/// (add_fold_ghost_nodes in the header says what and why).
+/// (the header's comment before add_grid_update says what and why).
 void fold_tile(Grid& grid, const GhostMap& ghosts, ScatteredFields fields, const Vec3& gravity, std::size_t t) {
   const auto [mass, momentum, force] = fields;
   // the tile's nodes in slot order, each with the ghosts whose image it is (Walls::ghosts_of)

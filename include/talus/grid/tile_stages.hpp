@@ -6,12 +6,13 @@
 // sum, fold, velocities and mirror). Each used to be a parallel region of its own: a fork/join per
 // loop, which costs more than the loop itself on a small scene at 16 threads. TileStages runs them
 // as `omp for` loops of one parallel region:
-//   - a stage that reads and writes only tile t's nodes (OwnTile: the box sum, the grid update, the
-//     remap's velocities) runs on tile t right after the stage before it, in the same loop, when
-//     that loop holds only OwnTile stages: the static schedule gives tile t to one thread, which
-//     finishes the earlier stages there first;
-//   - a stage that reads or writes other tiles' nodes (AnyTile: the ghost fold and mirror) starts a
-//     loop of its own, after a barrier, and the next stage starts another after a barrier.
+//   - a stage that reads and writes only tile t's nodes (OwnTile: the box sum; the grid update and
+//     the remap's velocities where no wall is mirrored) runs on tile t right after the stage before
+//     it, in the same loop, when that loop holds only OwnTile stages: the static schedule gives tile
+//     t to one thread, which finishes the earlier stages there first;
+//   - a stage that reads or writes other tiles' nodes (AnyTile: a node phase with the ghosts' fold
+//     and mirror, solver/grid_update.hpp) starts a loop of its own, after a barrier, and the next
+//     stage starts another after a barrier.
 // Every node sees the same operations in the same order as with one region per loop, so the
 // results are the same bits, for any thread count.
 #include <cstddef>
