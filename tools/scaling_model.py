@@ -217,7 +217,7 @@ def predict(record, threads, barrier, schedule, work, bandwidth=None, contention
     return total
 
 
-LOOP_REGIONS = ("output and guards", "snapshot")
+LOOP_REGIONS = ("output and guards", "snapshot", "history row")
 
 
 def with_run_mean_output(record):
@@ -227,7 +227,10 @@ def with_run_mean_output(record):
     none by chance: the flume's 176 recorded steps of 6504 held 3 frames where 0.3 were due, 475 us of
     output per step against the run's 200. The run's totals are exact: run_other_seconds (the loop
     outside the steps, start and finish included) and, of it, run_snapshot_seconds (the field checks
-    and copies of the snapshots, parallel, in run_snapshot_regions regions), and beside them
+    and copies of the snapshots, parallel, in run_snapshot_regions regions) and run_history_seconds
+    (the history rows: the energies' parallel sum, the runout's parallel loops and sort, and the
+    rows' file writes, which are serial but small; in run_history_regions regions, counted as on many
+    threads; records before 2026-12-05 hold the rows in the serial rest), and beside them
     run_background_seconds: the frames' compression and writes on the writer's thread, which overlap
     the steps. The model shares that work among the cores, as a parallel part without a region of its
     own (a background write on a core slows the steps' work on that core). Records without totals
@@ -238,6 +241,8 @@ def with_run_mean_output(record):
     other = record["run_other_seconds"]
     snapshot = record.get("run_snapshot_seconds", 0.0)
     regions_per_step = record.get("run_snapshot_regions", 0) / steps_total
+    history = record.get("run_history_seconds", 0.0)
+    history_regions_per_step = record.get("run_history_regions", 0) / steps_total
     background = record.get("run_background_seconds", 0.0)
     out = dict(record)
     out["steps"] = []
@@ -245,12 +250,16 @@ def with_run_mean_output(record):
         kept = [r for r in step["regions"] if r["name"] not in LOOP_REGIONS]
         removed = sum(r["seconds"] for r in step["regions"] if r["name"] in LOOP_REGIONS)
         kept.append({"name": "output and guards (run mean)", "schedule": "serial", "parallel_regions": 0,
-                     "seconds": (other - snapshot) / steps_total})
-        added = (other - snapshot) / steps_total
+                     "seconds": (other - snapshot - history) / steps_total})
+        added = (other - snapshot - history) / steps_total
         if snapshot > 0.0:
             kept.append({"name": "snapshot (run mean)", "schedule": "static", "items": step["particles"],
                          "parallel_regions": regions_per_step, "seconds": snapshot / steps_total})
             added += snapshot / steps_total
+        if history > 0.0:
+            kept.append({"name": "history rows (run mean)", "schedule": "static", "items": step["particles"],
+                         "parallel_regions": history_regions_per_step, "seconds": history / steps_total})
+            added += history / steps_total
         if background > 0.0:
             # one thread's work; a static region's seconds are wall time on the recording's threads
             wall = background / steps_total / max(int(record.get("threads", 1)), 1)

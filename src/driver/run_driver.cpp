@@ -1,6 +1,7 @@
 #include "talus/driver/run_driver.hpp"
 
 #include "talus/core/error.hpp"
+#include "talus/core/parallel_sort.hpp"
 #include "talus/driver/run_outputs.hpp"
 #include "talus/io/runout_output.hpp"
 #include "talus/io/vtu_writer.hpp"
@@ -103,6 +104,10 @@ class ProgressLine {
   bool tty_;
 };
 
+/// A thread count beyond any node's, for the regions the history row opens on many threads (the
+/// runout's sort then cuts as many chunks as its length allows).
+constexpr int kManyThreads = 1 << 16;
+
 /// With a work recorder (talus run --record-work): the solver's steps timed apart from the rest of
 /// the loop (outputs, guards, snapshot), which is added to each recorded step as serial time, and
 /// both totals over the run for the model's run prediction (solver/work_recorder.hpp).
@@ -126,20 +131,25 @@ class LoopRecording {
   void step_done() {
     if (recorder_) step_end_ = Clock::now();
   }
-  /// Runs f(), a parallel part of the loop's work after a step: the field check before a snapshot
-  /// (one parallel scan per particle array) and the snapshot (parallel copies of the particles and
-  /// the sort state); returns what f returns. Timed apart from the serial rest (output, guards).
+  /// The parallel parts of the loop's work after a step, each timed apart from the serial rest
+  /// (output, guards): the snapshot (the field check before it, one parallel scan per particle
+  /// array, and the parallel copies of the particles and the sort state), and the history row (the
+  /// energies, one parallel sum, and the runout's parallel loops and sort; its file writes ride along).
+  enum class Part { Snapshot, History };
+  /// Runs f() as a `part` of `regions` parallel regions; returns what f returns (false: not done,
+  /// and not counted).
   template <class F>
-  bool parallel_part(F&& f, int regions) {
+  bool parallel_part(Part part, F&& f, int regions) {
     if (!recorder_) return f();
     const Clock::time_point start = Clock::now();
     const bool done = f();
     if (!done) return false;
     const double s = seconds(start, Clock::now());
-    snapshot_step_seconds_ += s;
-    snapshot_step_regions_ += regions;
-    snapshot_seconds_ += s;
-    snapshot_regions_ += regions;
+    PartTimes& t = part == Part::Snapshot ? snapshot_ : history_;
+    t.step_seconds += s;
+    t.step_regions += regions;
+    t.seconds += s;
+    t.regions += regions;
     return true;
   }
   /// The loop's work after the step (outputs, guards, snapshot) is done.
@@ -148,18 +158,29 @@ class LoopRecording {
     solver_seconds_ += seconds(step_start_, step_end_);
     if (recorder_->steps().size() > recorded_before_) {
       const double loop = seconds(step_end_, Clock::now());
-      if (snapshot_step_regions_ > 0)
-        recorder_->add_after_step("snapshot", snapshot_step_seconds_, solver_.particles().size(), snapshot_step_regions_);
-      recorder_->add_after_step("output and guards", loop - snapshot_step_seconds_);
+      const std::size_t particles = solver_.particles().size();
+      if (snapshot_.step_regions > 0)
+        recorder_->add_after_step("snapshot", snapshot_.step_seconds, particles, snapshot_.step_regions);
+      if (history_.step_regions > 0)
+        recorder_->add_after_step("history row", history_.step_seconds, particles, history_.step_regions);
+      recorder_->add_after_step("output and guards", loop - snapshot_.step_seconds - history_.step_seconds);
     }
-    snapshot_step_seconds_ = 0.0;
-    snapshot_step_regions_ = 0;
+    for (PartTimes* t : {&snapshot_, &history_}) {
+      t->step_seconds = 0.0;
+      t->step_regions = 0;
+    }
   }
   /// `background_seconds`: the frames' writes on the writer's thread, beside the steps.
   void finish(double wall_seconds, double background_seconds) {
     if (recorder_)
-      recorder_->set_totals(solver_.step_count() - first_step_, solver_seconds_, wall_seconds - solver_seconds_,
-                            snapshot_seconds_, snapshot_regions_, background_seconds);
+      recorder_->set_totals({.steps = solver_.step_count() - first_step_,
+                             .solver_seconds = solver_seconds_,
+                             .other_seconds = wall_seconds - solver_seconds_,
+                             .snapshot_seconds = snapshot_.seconds,
+                             .snapshot_regions = snapshot_.regions,
+                             .history_seconds = history_.seconds,
+                             .history_regions = history_.regions,
+                             .background_seconds = background_seconds});
   }
 
  private:
@@ -171,9 +192,13 @@ class LoopRecording {
   std::int64_t first_step_;
   std::size_t recorded_before_ = 0;
   Clock::time_point step_start_, step_end_;
-  double solver_seconds_ = 0.0, snapshot_seconds_ = 0.0, snapshot_step_seconds_ = 0.0;
-  std::int64_t snapshot_regions_ = 0;
-  int snapshot_step_regions_ = 0;
+  double solver_seconds_ = 0.0;
+  struct PartTimes {
+    double seconds = 0.0, step_seconds = 0.0;  // the run's, and the current step's
+    std::int64_t regions = 0;
+    int step_regions = 0;
+  };
+  PartTimes snapshot_, history_;
 };
 
 /// The last state that passed every guard, kept in memory to be written when a later step fails.
@@ -258,7 +283,7 @@ RunSummary RunLoop::run() {
     }
     // The snapshot never predates a frame or checkpoint, so the failure path writes in order.
     // ParticleStore::copy_from and Solver::state: two parallel loops
-    if (keep) recording_.parallel_part([&] { return take_snapshot(); }, 2);
+    if (keep) recording_.parallel_part(LoopRecording::Part::Snapshot, [&] { return take_snapshot(); }, 2);
     recording_.loop_done();
     int sig = signals_.caught();
     if (comm_.distributed()) {  // every rank stops at the same step when any was signalled
@@ -321,7 +346,11 @@ bool RunLoop::step_and_write() {
   const double t = solver_.time();
   const bool last = solver_.finished();
   // The history (and the energy guard that reads it): every step when it has no interval.
-  if (history_schedule_.interval <= 0.0 || history_schedule_.reached(t) || last) write_history_row();
+  if (history_schedule_.interval <= 0.0 || history_schedule_.reached(t) || last) {
+    // its parallel regions on many threads: the energies' sum, the runout's two loops and its sort
+    const int regions = 1 + (runout_.enabled() ? 2 + parallel_sort_regions(solver_.particles().size(), kManyThreads) : 0);
+    recording_.parallel_part(LoopRecording::Part::History, [&] { write_history_row(); return true; }, regions);
+  }
   const bool frame_due = frame_schedule_.reached(t) || last;
   const bool checkpoint_due = checkpoint_schedule_.reached(t) && !last;
   const bool snapshot_due = frame_due || checkpoint_due ||
@@ -330,7 +359,8 @@ bool RunLoop::step_and_write() {
   // What is written or kept as the last good state is checked in every field first (the solver
   // scans them only every few steps, stability_guards.hpp).
   // (Solver::check_particles: one parallel region)
-  if (snapshot_due) recording_.parallel_part([&] { solver_.check_particles(); return true; }, 1);
+  if (snapshot_due)
+    recording_.parallel_part(LoopRecording::Part::Snapshot, [&] { solver_.check_particles(); return true; }, 1);
   if (frame_due) {
     write_frame();
     frame_schedule_.advance_past(t);

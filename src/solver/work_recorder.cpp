@@ -126,16 +126,6 @@ void WorkRecorder::add_after_step(const char* name, double seconds, std::size_t 
   steps_.back().seconds += seconds;
 }
 
-void WorkRecorder::set_totals(std::int64_t steps, double solver_seconds, double other_seconds, double snapshot_seconds,
-                              std::int64_t snapshot_regions, double background_seconds) {
-  total_steps_ = steps;
-  solver_seconds_ = solver_seconds;
-  other_seconds_ = other_seconds;
-  snapshot_seconds_ = snapshot_seconds;
-  snapshot_regions_ = snapshot_regions;
-  background_seconds_ = background_seconds;
-}
-
 namespace {
 
 /// For T = 1 .. max_threads threads, the best of 5 trials of `seconds(T)` (the seconds one
@@ -219,13 +209,16 @@ nlohmann::json WorkRecorder::to_json(const nlohmann::json& meta) const {
     steps.push_back(std::move(js));
   }
   j["steps"] = std::move(steps);
-  if (total_steps_ > 0) {
-    j["run_steps"] = total_steps_;
-    j["run_solver_seconds"] = solver_seconds_;
-    j["run_other_seconds"] = other_seconds_;  // includes the snapshots
-    j["run_snapshot_seconds"] = snapshot_seconds_;  // field checks and copies of the snapshots (parallel)
-    j["run_snapshot_regions"] = snapshot_regions_;
-    j["run_background_seconds"] = background_seconds_;  // frames written on the writer's thread
+  if (totals_.steps > 0) {
+    const RunTotals& t = totals_;
+    j["run_steps"] = t.steps;
+    j["run_solver_seconds"] = t.solver_seconds;
+    j["run_other_seconds"] = t.other_seconds;  // includes the snapshots and the history rows
+    j["run_snapshot_seconds"] = t.snapshot_seconds;  // field checks and copies of the snapshots (parallel)
+    j["run_snapshot_regions"] = t.snapshot_regions;
+    j["run_history_seconds"] = t.history_seconds;  // the history rows (mostly parallel)
+    j["run_history_regions"] = t.history_regions;
+    j["run_background_seconds"] = t.background_seconds;  // frames written on the writer's thread
   }
   return j;
 }

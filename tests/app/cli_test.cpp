@@ -359,6 +359,11 @@ TEST(Cli, BenchAndRunRecordTheWorkDistribution) {
   EXPECT_EQ(rr["omp_wait_policy"], wait_policy ? wait_policy : "unset");
   EXPECT_GE(rr["fork_join_seconds"].size(), 2u);
   EXPECT_GT(rr["run_background_seconds"].get<double>(), 0.0);  // the frames, written on their own thread
+  // the history rows, timed apart as a parallel part of the loop (at least the last row: the energies' sum)
+  EXPECT_GT(rr["run_history_seconds"].get<double>(), 0.0);
+  EXPECT_LT(rr["run_history_seconds"].get<double>() + rr["run_snapshot_seconds"].get<double>(),
+            rr["run_other_seconds"].get<double>());
+  EXPECT_GE(rr["run_history_regions"].get<std::int64_t>(), 1);
   // Frames in the foreground are the run loop's own time: nothing in the background.
   const Result f = run("run " + (dir / "short.json").string() + " --out " + (dir / "out").string() +
                        " --threads 1 --quiet --foreground-frames --record-work " + run_record.string());

@@ -43,6 +43,15 @@ TEST(ParallelSort, GivesStdSortsResultForAnyThreadCount) {
   }
 }
 
+TEST(ParallelSort, CountsItsChunksAndRegions) {
+  // the default flume's particles on 16 threads: 8 chunks of at least kParallelSortMinChunk, then 3 levels of merges
+  EXPECT_EQ(parallel_sort_chunks(15584, 16), 8);
+  EXPECT_EQ(parallel_sort_regions(15584, 16), 4);
+  EXPECT_EQ(parallel_sort_chunks(15584, 3), 2);  // a power of two, at most the threads
+  EXPECT_EQ(parallel_sort_regions(15584, 1), 0);  // one chunk: std::sort, no region
+  EXPECT_EQ(parallel_sort_regions(kParallelSortMinChunk, 64), 0);
+}
+
 TEST(ParallelSort, SortsInsideAParallelRegionToo) {
   std::vector<Keyed> expected = shuffled(20000);
   std::sort(expected.begin(), expected.end(), key_then_id);

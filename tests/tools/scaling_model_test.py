@@ -137,6 +137,27 @@ class Records(unittest.TestCase):
         self.assertAlmostEqual(kept[0]["seconds"], 0.5 * MS, delta=1e-15)  # 50 ms over 100 steps
         self.assertAlmostEqual(mean["steps"][0]["seconds"], rec["steps"][0]["seconds"] - 29.5 * MS, delta=1e-12)
 
+    def test_the_history_rows_enter_as_a_parallel_part(self):
+        output = {"name": "output and guards", "schedule": "serial", "parallel_regions": 0, "seconds": 2 * MS}
+        history = {"name": "history row", "schedule": "static", "items": 800, "parallel_regions": 5,
+                   "seconds": 4 * MS}
+        rec = record([dynamic([1 * MS] * 8), history, output], run_steps=100, run_other_seconds=60 * MS,
+                     run_history_seconds=40 * MS, run_history_regions=500)
+        mean = sm.with_run_mean_output(rec)
+        by_name = {r["name"]: r for r in mean["steps"][0]["regions"]}
+        self.assertNotIn("history row", by_name)  # the sampled row: 4 ms in this step
+        self.assertAlmostEqual(by_name["output and guards (run mean)"]["seconds"], 0.2 * MS, delta=1e-15)
+        rows = by_name["history rows (run mean)"]
+        self.assertEqual(rows["schedule"], "static")
+        self.assertAlmostEqual(rows["seconds"], 0.4 * MS, delta=1e-15)  # 40 ms over 100 steps
+        self.assertAlmostEqual(rows["parallel_regions"], 5.0)
+        # on 4 threads the rows' 0.4 ms a step (less the 5 fork/joins recorded on 1 thread) take a quarter,
+        # plus 5 fork/joins at b(4); serial, they would stay 0.4 ms
+        serial = dict(rows, schedule="serial", parallel_regions=0)
+        as_serial = dict(mean, steps=[dict(mean["steps"][0], regions=[serial if r is rows else r
+                                                                        for r in mean["steps"][0]["regions"]])])
+        self.assertAlmostEqual(seconds_at(as_serial, 4) - seconds_at(mean, 4), 0.4 * MS - (0.4 * MS - 5 * B[1]) / 4 - 5 * B[4], delta=1e-12)
+
 
 if __name__ == "__main__":
     unittest.main()

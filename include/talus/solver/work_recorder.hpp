@@ -71,14 +71,21 @@ class WorkRecorder {
   /// Time the caller (the run loop) spent after the last recorded step: serial (output, guards), or
   /// with items > 0 a static region of that many iterations in `parallel_regions` regions (the snapshot).
   void add_after_step(const char* name, double seconds, std::size_t items = 0, int parallel_regions = 0);
-  /// Time outside the steps over a whole run, for the model's run prediction; of it, the parallel
-  /// parts (the field checks before and the copies of the snapshots, in `snapshot_regions` parallel
-  /// regions). The run loop's output is spiky (a frame every few hundred steps), so the model takes
-  /// its run mean rather than the sampled steps' share.
-  /// `background_seconds`: the frames' writes on the writer's thread (FrameSeries), beside the
-  /// steps and not part of any of the times above; the model shares them among the cores.
-  void set_totals(std::int64_t steps, double solver_seconds, double other_seconds, double snapshot_seconds = 0.0,
-                  std::int64_t snapshot_regions = 0, double background_seconds = 0.0);
+  /// A whole run's times, for the model's run prediction. The run loop's output is spiky (a frame
+  /// every few hundred steps), so the model takes its run mean rather than the sampled steps' share.
+  struct RunTotals {
+    std::int64_t steps = 0;
+    double solver_seconds = 0.0;
+    double other_seconds = 0.0;  // outside the steps; of it, the parallel parts below
+    double snapshot_seconds = 0.0;  // the field checks before and the copies of the snapshots
+    std::int64_t snapshot_regions = 0;
+    double history_seconds = 0.0;  // the history rows: energies, runout (parallel loops and sort), files
+    std::int64_t history_regions = 0;  // as on many threads (the sort's merge levels)
+    // the frames' writes on the writer's thread (FrameSeries), beside the steps and not part of any of
+    // the times above; the model shares them among the cores
+    double background_seconds = 0.0;
+  };
+  void set_totals(const RunTotals& totals) { totals_ = totals; }
 
   const std::vector<WorkStep>& steps() const { return steps_; }
   /// Wall time of an empty `omp parallel for` (fork, a loop of `threads` iterations, barrier) at
@@ -106,9 +113,7 @@ class WorkRecorder {
   std::int64_t offered_ = 0;
   bool active_ = false;
   std::vector<WorkStep> steps_;
-  std::int64_t total_steps_ = 0;
-  double solver_seconds_ = 0.0, other_seconds_ = 0.0, snapshot_seconds_ = 0.0, background_seconds_ = 0.0;
-  std::int64_t snapshot_regions_ = 0;
+  RunTotals totals_;
 };
 
 }  // namespace talus
