@@ -64,6 +64,25 @@ void print_runout(const RunoutResult& r, const RunSummary& summary) {
              summary.deposit_path.empty() ? "" : "; deposit thickness: " + summary.deposit_path);
 }
 
+// A run on many threads whose colour passes hold fewer blocks than twice the threads: most threads
+// wait at each pass's barrier. The scaling model and the 16-core node both found block buffers
+// faster there (the default flume: 1.3-1.5x measured at 8 and 16 threads, 1.7x modelled at 16;
+// docs/performance.md "Scaling"); the same test picks out the 1 M bench only from 32 threads.
+// Nothing changes by itself: the two scatters differ at round-off, and a run's results must not
+// depend on its thread count.
+std::optional<std::string> scatter_hint(const Scene& scene, const CellSort& sort, int threads) {
+  constexpr int kColours = 8;
+  if (scene.scatter != ScatterOrder::ColourPasses || scene.grid.has_periodic_axes() || threads < 8) return std::nullopt;
+  std::size_t blocks = 0;
+  for (int c = 0; c < kColours; ++c) blocks += sort.colour(c).size();
+  const double per_pass = static_cast<double>(blocks) / kColours;
+  if (per_pass >= 2.0 * threads) return std::nullopt;
+  return fmt::format(
+      "talus: note: {:.1f} blocks per colour pass on {} threads: most threads wait at each of the {} passes' barriers; "
+      "for this scene solver.scatter = \"block_buffers\" scales better (docs/performance.md, \"Scaling\")",
+      per_pass, threads, kColours);
+}
+
 }  // namespace
 
 void add_run_command(CLI::App& app) {
@@ -122,6 +141,8 @@ void add_run_command(CLI::App& app) {
       fmt::print("talus: {} particles, {}{} thread{}, {} kernels, about {} of memory{}, output in {}\n", start.particles,
                  world.distributed() ? fmt::format("{} ranks x ", world.size()) : "", threads, threads == 1 ? "" : "s",
                  active_isa(), format_bytes(double(memory.total())), world.distributed() ? " (all ranks)" : "", dir);
+    if (world.root() && !world.distributed())
+      if (const auto hint = scatter_hint(solver.scene(), solver.cell_sort(), threads)) fmt::print("{}\n", *hint);
     RunOptions options;
     options.out_dir = dir;
     options.progress = !*quiet;

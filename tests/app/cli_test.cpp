@@ -387,5 +387,34 @@ TEST(Cli, RunWithRunoutDiagnosticsPrintsTheRunoutAndItsFiles) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, RunOnManyThreadsSuggestsBlockBuffersForFewBlocksPerColourPass) {
+  // the default flume at the start: 10 blocks a colour pass on average; 8 threads would want 16 or more
+  const fs::path dir = temp_dir("scatter_hint");
+  fs::create_directories(dir);
+  for (const char* name : {"denlinger_flume", "denlinger_flume_block_buffers"}) {
+    std::ifstream in(kInputs + name + ".json");
+    nlohmann::json scene = nlohmann::json::parse(in);
+    scene["time"]["end"] = 0.0005;
+    scene["output"]["frame_interval"] = 0.0005;
+    std::ofstream(dir / (std::string(name) + ".json")) << scene.dump();
+  }
+  auto run_flume = [&](const std::string& name, int threads) {
+    return run("run " + (dir / (name + ".json")).string() + " --quiet --threads " + std::to_string(threads) +
+               " --out " + (dir / "out").string());
+  };
+  const std::string note = "blocks per colour pass on 8 threads";
+  const Result many = run_flume("denlinger_flume", 8);
+  ASSERT_EQ(many.exit_code, 0) << many.output;
+  EXPECT_NE(many.output.find(note), std::string::npos) << many.output;
+  EXPECT_NE(many.output.find("solver.scatter = \"block_buffers\""), std::string::npos) << many.output;
+  const Result few = run_flume("denlinger_flume", 2);
+  ASSERT_EQ(few.exit_code, 0) << few.output;
+  EXPECT_EQ(few.output.find("blocks per colour pass"), std::string::npos) << few.output;
+  const Result buffers = run_flume("denlinger_flume_block_buffers", 8);
+  ASSERT_EQ(buffers.exit_code, 0) << buffers.output;
+  EXPECT_EQ(buffers.output.find("blocks per colour pass"), std::string::npos) << buffers.output;
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace cli_test
