@@ -19,6 +19,8 @@ struct Entry {
 
 }  // namespace
 
+int measure_runout_regions(std::size_t n, int threads) { return 2 + parallel_sort_regions(n, threads); }
+
 RunoutSample measure_runout(const ParticleStore& P, const FlumeCoordinates& c, double front_quantile,
                             double tail_quantile) {
   RunoutSample r;

@@ -1,7 +1,7 @@
 #include "talus/driver/run_driver.hpp"
 
 #include "talus/core/error.hpp"
-#include "talus/core/parallel_sort.hpp"
+#include "talus/diagnostics/runout.hpp"
 #include "talus/driver/run_outputs.hpp"
 #include "talus/io/runout_output.hpp"
 #include "talus/io/vtu_writer.hpp"
@@ -347,8 +347,9 @@ bool RunLoop::step_and_write() {
   const bool last = solver_.finished();
   // The history (and the energy guard that reads it): every step when it has no interval.
   if (history_schedule_.interval <= 0.0 || history_schedule_.reached(t) || last) {
-    // its parallel regions on many threads: the energies' sum, the runout's two loops and its sort
-    const int regions = 1 + (runout_.enabled() ? 2 + parallel_sort_regions(solver_.particles().size(), kManyThreads) : 0);
+    // its parallel regions on many threads: the energies' sum (one), the runout's
+    const std::size_t n = solver_.particles().size();
+    const int regions = 1 + (runout_.enabled() ? measure_runout_regions(n, kManyThreads) : 0);
     recording_.parallel_part(LoopRecording::Part::History, [&] { write_history_row(); return true; }, regions);
   }
   const bool frame_due = frame_schedule_.reached(t) || last;

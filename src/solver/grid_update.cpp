@@ -89,21 +89,25 @@ void add_node_phase(TileStages& stages, Grid& grid, const GhostMap& ghosts, Scat
     fold_tile(grid, ghosts, fold, gravity, t);
     // This tile's folded ghosts whose image is active belong to the image's tile in this phase: it
     // folded them (above, on its own thread) and mirrors them (below). Nothing here touches them.
-    std::uint64_t skip = 0;
+    // The others are mirrored here after the node work, pulled from an image that nobody writes in
+    // this loop: an inactive one, or an unfolded ghost's image on this tile (done on this thread).
+    std::uint64_t skip = 0, pull = 0;
     const std::size_t first = static_cast<std::size_t>(tile) * kTileNodes;
-    for (const GhostMap::Pair& pair : ghosts.mirrors(tile))
-      if (pair.folded && grid.tile_active(pair.other / kTileNodes)) skip |= std::uint64_t{1} << (pair.node - first);
+    for (const GhostMap::Pair& pair : ghosts.mirrors(tile)) {
+      const std::size_t image_tile = pair.other / kTileNodes;
+      const bool image_active = grid.tile_active(image_tile);
+      const std::uint64_t bit = std::uint64_t{1} << (pair.node - first);
+      if (pair.folded && image_active) skip |= bit;
+      if (!image_active || (!pair.folded && image_tile == tile)) pull |= bit;
+    }
     node_work(t, skip);
     // The mirror of the ghosts this tile folded, pushed now that its nodes are done (an inactive
     // ghost gets none).
     for (const GhostMap::Pair& pair : ghosts.folds(tile))
       if (grid.tile_active(pair.other / kTileNodes)) copy(pair, pair.other, pair.node);
-    // The mirror of this tile's other ghosts, pulled from an image that nobody writes in this loop:
-    // an inactive one, or an unfolded ghost's image on this tile (done above, on this thread).
-    for (const GhostMap::Pair& pair : ghosts.mirrors(tile)) {
-      const std::size_t image_tile = pair.other / kTileNodes;
-      if (!grid.tile_active(image_tile) || (!pair.folded && image_tile == tile)) copy(pair, pair.node, pair.other);
-    }
+    if (pull)
+      for (const GhostMap::Pair& pair : ghosts.mirrors(tile))
+        if ((pull >> (pair.node - first)) & 1u) copy(pair, pair.node, pair.other);
   });
   if (!ghosts.mirrors_after_barrier()) return;
   // An unfolded ghost whose image is on another active tile: its node work ran on its own tile, the

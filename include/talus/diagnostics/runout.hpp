@@ -33,6 +33,9 @@ struct RunoutSample {
 /// One sample of the particle set (front_velocity left 0; RunoutMonitor fills it in).
 RunoutSample measure_runout(const ParticleStore& particles, const FlumeCoordinates& coordinates,
                             double front_quantile, double tail_quantile);
+/// The parallel regions measure_runout opens for n particles on `threads` threads: its two loops and
+/// its sort's (the work recorder counts them, talus run --record-work).
+int measure_runout_regions(std::size_t n, int threads);
 
 /// The deposit thickness on the bed: a raster of cells ds x dy in (s, y); thickness = the particle
 /// volume (current volume V_p) whose s and y fall in the cell, divided by the cell's bed area ds dy.
