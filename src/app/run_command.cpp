@@ -66,8 +66,9 @@ void print_runout(const RunoutResult& r, const RunSummary& summary) {
 
 // A run on many threads whose colour passes hold fewer blocks than twice the threads: most threads
 // wait at each pass's barrier. The scaling model and the 16-core node both found block buffers
-// faster there (the default flume: 1.3-1.5x measured at 8 and 16 threads, 1.7x modelled at 16;
-// docs/performance.md "Scaling"); the same test picks out the 1 M bench only from 32 threads.
+// faster there (the default flume: 1.3-1.5x measured at 8 and 16 threads, with OMP_WAIT_POLICY=PASSIVE;
+// 1.7x modelled at 16; docs/performance.md "Scaling"); the same test picks out the 1 M bench only
+// from 32 threads.
 // Nothing changes by itself: the two scatters differ at round-off, and a run's results must not
 // depend on its thread count.
 std::optional<std::string> scatter_hint(const Scene& scene, const CellSort& sort, int threads) {
