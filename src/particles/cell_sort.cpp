@@ -58,21 +58,6 @@ int CellSort::block_edge(int reach_low, int reach_high, int requested) {
   return edge;
 }
 
-long long CellSort::active_block_of_cell(int i, int j, int k) const {
-  i -= block_shift_[0];
-  j -= block_shift_[1];
-  k -= block_shift_[2];
-  if (i < 0 || j < 0 || k < 0) return -1;
-  const int bi = i / block_cells_, bj = j / block_cells_, bk = k / block_cells_;
-  if (bi >= block_counts_[0] || bj >= block_counts_[1] || bk >= block_counts_[2]) return -1;
-  const std::uint32_t index =
-      static_cast<std::uint32_t>((static_cast<std::size_t>(bi) * block_counts_[1] + bj) * block_counts_[2] + bk);
-  // bbox_block_index_ holds the compact index for active blocks and 0 elsewhere; 0 is also block
-  // 0's index, so confirm against blocks_.
-  const std::uint32_t b = bbox_block_index_[index];
-  return b < blocks_.size() && blocks_[b] == index ? static_cast<long long>(b) : -1;
-}
-
 void CellSort::sort(ParticleStore& particles, Grid& grid) {
   own_scratch_.reserve(particles.size());
   sort(particles, grid, own_scratch_);

@@ -58,6 +58,52 @@ TEST(CellSort, EveryParticleSitsInTheCellItsOffsetsSay) {
   EXPECT_EQ(seen, s.particles.size());
 }
 
+// The blocks by their coordinates (CellSort::active_block, which the MLS search walks with): every
+// active block is found from its origin, and every other coordinate, outside the bounding box too,
+// gives -1. On periodic axes the blocks start at the domain's first cell (block_shift() = kPad).
+void expect_blocks_found_by_coordinates(const CellSort& sort) {
+  const int bc = sort.block_cells();
+  std::set<std::array<int, 3>> origins;
+  for (std::size_t b = 0; b < sort.block_count(); ++b) {
+    const auto o = sort.block_origin(b);
+    std::array<int, 3> c{};
+    for (int d = 0; d < 3; ++d) {
+      ASSERT_EQ((o[d] - sort.block_shift()[d]) % bc, 0) << "block " << b;
+      c[d] = (o[d] - sort.block_shift()[d]) / bc;
+    }
+    EXPECT_EQ(sort.active_block(c[0], c[1], c[2]), static_cast<long long>(b));
+    origins.insert(c);
+  }
+  std::size_t found = 0;
+  for (int i = -2; i < 12; ++i)
+    for (int j = -2; j < 12; ++j)
+      for (int k = -2; k < 12; ++k) {
+        const long long b = sort.active_block(i, j, k);
+        EXPECT_EQ(b >= 0, origins.count({i, j, k}) == 1) << i << " " << j << " " << k;
+        found += b >= 0 ? 1 : 0;
+      }
+  EXPECT_EQ(found, sort.block_count());
+}
+
+TEST(CellSort, EveryActiveBlockIsFoundByItsCoordinates) {
+  const SortedCloud s;
+  EXPECT_EQ(s.sort.block_shift(), (std::array<int, 3>{0, 0, 0}));
+  expect_blocks_found_by_coordinates(s.sort);
+  GridGeometry g;  // periodic along x: the blocks start at cell kPad
+  g.h = 0.1;
+  g.cells = {16, 8, 6};
+  g.periodic = {true, false, false};
+  Grid grid(g);
+  ParticleStore particles;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int p = 0; p < 500; ++p) particles.add(p, Vec3(1.6 * u(rng), 0.4 * u(rng), 0.3 * u(rng)), Vec3::Zero(), 1.0, 1e-3, 0);
+  CellSort sort(grid, 0, 1);
+  sort.sort(particles, grid);
+  EXPECT_EQ(sort.block_shift(), (std::array<int, 3>{kPad, 0, 0}));
+  expect_blocks_found_by_coordinates(sort);
+}
+
 TEST(CellSort, TheSortIsStableAndAPermutation) {
   const SortedCloud s;
   std::set<std::int64_t> ids(s.particles.id.begin(), s.particles.id.end());

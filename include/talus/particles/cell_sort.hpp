@@ -75,9 +75,22 @@ class CellSort {
   void set_block_order(BlockOrder order);
   /// Particles of cell (local index l in block b): [cell_start[b*cells_per_block + l], ... + 1).
   const std::vector<std::uint32_t>& cell_start() const { return cell_start_; }
-  /// Compact index of the active block that holds padded cell (i, j, k) (cell coordinates as
-  /// floor(GridGeometry::to_grid)), or -1 when no particle was sorted into that block.
-  long long active_block_of_cell(int i, int j, int k) const;
+  /// The padded cell where the blocks start along each axis: block (bi, bj, bk) holds the cells
+  /// block_shift + b * block_cells ... + block_cells - 1 (0, or kPad along a periodic axis).
+  const std::array<int, 3>& block_shift() const { return block_shift_; }
+  /// Compact index of active block (bi, bj, bk) (block coordinates from block_shift()), or -1 when
+  /// the block is outside the bounding box or no particle was sorted into it. Inline: the MLS
+  /// search asks for every column of cells it walks.
+  long long active_block(int bi, int bj, int bk) const {
+    if (bi < 0 || bj < 0 || bk < 0 || bi >= block_counts_[0] || bj >= block_counts_[1] || bk >= block_counts_[2])
+      return -1;
+    const std::uint32_t index =
+        static_cast<std::uint32_t>((static_cast<std::size_t>(bi) * block_counts_[1] + bj) * block_counts_[2] + bk);
+    // bbox_block_index_ holds the compact index for active blocks and 0 elsewhere; 0 is also block
+    // 0's index, so confirm against blocks_.
+    const std::uint32_t b = bbox_block_index_[index];
+    return b < blocks_.size() && blocks_[b] == index ? static_cast<long long>(b) : -1;
+  }
 
   /// The last sort's serial bookkeeping (colour lists, hand-out order, active tiles) in seconds, and
   /// its number of parallel regions: what the work recorder splits the sort into.
