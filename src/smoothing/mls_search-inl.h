@@ -1,7 +1,8 @@
 // The MLS smoother's per-target pieces that its two fits share (smoothing/mls_strain_smoother.cpp
-// and smoothing/mls_cell_fit.cpp include this once per Highway target): the eq. 39 weight and the
-// square root on lanes, the search's walk over the cells near a box, and the compacting store of the
-// kept candidates' indices.
+// and smoothing/mls_cell_fit.cpp include this once per Highway target): the choice of a compiled
+// basis (with_basis), which particles are fitted (is_fitted, copy_unfitted), the eq. 39 weight and
+// the square root on lanes, the search's walk over the cells near a box, and the compacting store
+// of the kept candidates' indices.
 
 // Highway's per-target include guard: foreach_target includes this once for each target.
 #if defined(TALUS_MLS_SEARCH_INL_H_) == defined(HWY_TARGET_TOGGLE)
