@@ -198,17 +198,11 @@ MlsCounts smooth_cells_impl(const MlsPass& pass) {
   const int bc = sort.block_cells();
   const std::size_t cells_per_block = static_cast<std::size_t>(bc) * bc * bc;
   const std::vector<std::uint32_t>& cell_start = sort.cell_start();
-  const mls_detail::WorkUnits work(sort);
-  const std::int64_t units = static_cast<std::int64_t>(work.count());
   const double rg = pass.search_radius / grid.h;  // radius in cells
-  std::size_t smoothed = 0, unsmoothed = 0;
-#pragma omp parallel reduction(+ : smoothed, unsmoothed)
-  {
+  return for_each_work_unit(pass, [&](MlsCounts& counts, auto&& for_units) {
     CellScratch S;
     std::vector<std::uint8_t> fits;  // per particle of the cell: fitted (smoothed body, finite position)
-#pragma omp for schedule(dynamic, 1)
-    for (std::int64_t u = 0; u < units; ++u) {
-      const double unit_start = pass.unit_seconds ? omp_get_wtime() : 0.0;
+    for_units([&](const mls_detail::WorkUnits& work, std::int64_t u) {
       const std::size_t bi = work.block(u);
       const std::array<int, 3> origin = sort.block_origin(bi);
       const std::size_t base = bi * cells_per_block;
@@ -219,7 +213,7 @@ MlsCounts smooth_cells_impl(const MlsPass& pass) {
         fits.assign(p_end - p_begin, 0);
         for (std::uint32_t q = p_begin; q < p_end; ++q) {
           if (!is_fitted(pass, q)) {
-            copy_unfitted(pass, q, unsmoothed);
+            copy_unfitted(pass, q, counts.unsmoothed);
             continue;
           }
           fits[q - p_begin] = 1;
@@ -237,8 +231,8 @@ MlsCounts smooth_cells_impl(const MlsPass& pass) {
           one_body = one_body && (!fits[q - p_begin] || P.body[q] == P.body[first_fit]);
         if (one_body) {
           if (first_fit < p_end)
-            smooth_cell<Degree, Axes>(S, pass, rg, xc, P.body[first_fit], p_begin, p_end, fits.data(), smoothed,
-                                      unsmoothed);
+            smooth_cell<Degree, Axes>(S, pass, rg, xc, P.body[first_fit], p_begin, p_end, fits.data(),
+                                      counts.smoothed, counts.unsmoothed);
           continue;
         }
         for (std::uint32_t q = p_begin; q < p_end; ++q) {
@@ -246,13 +240,12 @@ MlsCounts smooth_cells_impl(const MlsPass& pass) {
           bool first = true;
           for (std::uint32_t o = p_begin; o < q && first; ++o) first = !(fits[o - p_begin] && P.body[o] == P.body[q]);
           if (first)
-            smooth_cell<Degree, Axes>(S, pass, rg, xc, P.body[q], p_begin, p_end, fits.data(), smoothed, unsmoothed);
+            smooth_cell<Degree, Axes>(S, pass, rg, xc, P.body[q], p_begin, p_end, fits.data(), counts.smoothed,
+                                      counts.unsmoothed);
         }
       }
-      if (pass.unit_seconds) pass.unit_seconds[u] = omp_get_wtime() - unit_start;
-    }
-  }
-  return {smoothed, unsmoothed};
+    });
+  });
 }
 
 }  // namespace

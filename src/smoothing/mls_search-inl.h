@@ -1,6 +1,6 @@
 // The MLS smoother's per-target pieces that its two fits share (smoothing/mls_strain_smoother.cpp
 // and smoothing/mls_cell_fit.cpp include this once per Highway target): the choice of a compiled
-// basis (with_basis), which particles are fitted (is_fitted, copy_unfitted), the eq. 39 weight and
+// basis (with_basis), the loop over the work units (for_each_work_unit), which particles are fitted (is_fitted, copy_unfitted), the eq. 39 weight and
 // the square root on lanes, the search's walk over the cells near a box, and the compacting store
 // of the kept candidates' indices.
 
@@ -13,6 +13,7 @@
 #endif
 
 #include <hwy/highway.h>
+#include <omp.h>
 
 #include "smoothing/mls_pass.hpp"
 
@@ -46,6 +47,33 @@ MlsCounts with_basis(const MlsPass& pass, Impl&& impl) {
     case 2: return with_axes.template operator()<2>();
     default: return with_axes.template operator()<3>();
   }
+}
+
+/// Both fits' loop over the work units (mls_detail::WorkUnits): one parallel region, in which
+/// thread(counts, for_units) runs once per thread with scratch of its own; for_units(fit_unit) hands
+/// the thread units one at a time (`schedule(dynamic, 1)`, the sort's work order) and calls
+/// fit_unit(work, u) for each, timing it into pass.unit_seconds when asked. The counts the threads
+/// add up are summed.
+template <class Thread>
+MlsCounts for_each_work_unit(const MlsPass& pass, Thread&& thread) {
+  const mls_detail::WorkUnits work(*pass.sort);
+  const std::int64_t units = static_cast<std::int64_t>(work.count());
+  std::size_t smoothed = 0, unsmoothed = 0;
+#pragma omp parallel reduction(+ : smoothed, unsmoothed)
+  {
+    MlsCounts counts;
+    thread(counts, [&](auto&& fit_unit) {
+#pragma omp for schedule(dynamic, 1)
+      for (std::int64_t u = 0; u < units; ++u) {
+        const double unit_start = pass.unit_seconds ? omp_get_wtime() : 0.0;
+        fit_unit(work, u);
+        if (pass.unit_seconds) pass.unit_seconds[u] = omp_get_wtime() - unit_start;
+      }
+    });
+    smoothed += counts.smoothed;
+    unsmoothed += counts.unsmoothed;
+  }
+  return {smoothed, unsmoothed};
 }
 
 /// Whether particle q is fitted: of a smoothed body, at a finite position. Otherwise

@@ -347,12 +347,8 @@ MlsCounts smooth_impl(const MlsPass& pass) {
   const int bc = sort.block_cells();
   const std::size_t cells_per_block = static_cast<std::size_t>(bc) * bc * bc;
   const std::vector<std::uint32_t>& cell_start = sort.cell_start();
-  const mls_detail::WorkUnits work(sort);
-  const std::int64_t units = static_cast<std::int64_t>(work.count());
   const double rg = pass.search_radius / grid.h;  // radius in cells
-  std::size_t smoothed = 0, unsmoothed = 0;
-#pragma omp parallel reduction(+ : smoothed, unsmoothed)
-  {
+  return for_each_work_unit(pass, [&](MlsCounts& counts, auto&& for_units) {
     GroupScratch S;
     std::uint32_t group[kGroup];
     int n = 0;
@@ -388,7 +384,7 @@ MlsCounts smooth_impl(const MlsPass& pass) {
       // A group of every fittable particle of its cells (one group per cell on AVX-512) has the
       // gathered box as its own: the gathered list is its list.
       if (static_cast<std::size_t>(n) == fittable_in_range) {
-        smooth_group<Degree, Axes>(S, S.idx.data(), nc, pass, group, n, smoothed, unsmoothed);
+        smooth_group<Degree, Axes>(S, S.idx.data(), nc, pass, group, n, counts.smoothed, counts.unsmoothed);
         n = 0;
         return;
       }
@@ -402,12 +398,10 @@ MlsCounts smooth_impl(const MlsPass& pass) {
           xhi[d] = x > xhi[d] ? x : xhi[d];
         }
       const std::size_t ng = filter_for_group(S, P, nc, xlo, xhi, keep2);
-      smooth_group<Degree, Axes>(S, S.group_idx.data(), ng, pass, group, n, smoothed, unsmoothed);
+      smooth_group<Degree, Axes>(S, S.group_idx.data(), ng, pass, group, n, counts.smoothed, counts.unsmoothed);
       n = 0;
     };
-#pragma omp for schedule(dynamic, 1)
-    for (std::int64_t u = 0; u < units; ++u) {
-      const double unit_start = pass.unit_seconds ? omp_get_wtime() : 0.0;
+    for_units([&](const mls_detail::WorkUnits& work, std::int64_t u) {
       // Groups: up to kGroup particles from consecutive cells of one column along k (their box
       // stays about one cell wide); a cell joins the open group only if all of it fits. A group
       // never spans two columns (it is flushed at the end of each).
@@ -420,7 +414,7 @@ MlsCounts smooth_impl(const MlsPass& pass) {
           flush();
         for (std::uint32_t q = p_begin; q < p_end; ++q) {
           if (!is_fitted(pass, q)) {
-            copy_unfitted(pass, q, unsmoothed);
+            copy_unfitted(pass, q, counts.unsmoothed);
             continue;
           }
           if (n == kGroup) flush();
@@ -430,10 +424,8 @@ MlsCounts smooth_impl(const MlsPass& pass) {
         }
       }
       flush();
-      if (pass.unit_seconds) pass.unit_seconds[u] = omp_get_wtime() - unit_start;
-    }
-  }
-  return {smoothed, unsmoothed};
+    });
+  });
 }
 
 }  // namespace
