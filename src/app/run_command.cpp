@@ -106,7 +106,8 @@ void add_run_command(CLI::App& app) {
   auto record_interval = std::make_shared<int>(37);  // prime: does not alias with sort_interval (20) or output cadences
   cmd->add_option("--record-work", *record_path,
                   "Record the work of every block and parallel region of every --record-interval-th step, as JSON "
-                  "(tools/scaling_model.py, docs/performance.md \"Scaling\")");
+                  "(tools/scaling_model.py, docs/performance.md \"Scaling\"); a record keeps at most 1000 steps: "
+                  "past that it keeps every third one and triples the interval, so that it spans the whole run");
   cmd->add_option("--record-interval", *record_interval, "Steps between the steps --record-work records")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
@@ -151,7 +152,7 @@ void add_run_command(CLI::App& app) {
     if (checkpoint) options.resume = &checkpoint->run;
     std::unique_ptr<WorkRecorder> recorder;
     if (!record_path->empty()) {
-      recorder = std::make_unique<WorkRecorder>(1000, *record_interval);
+      recorder = std::make_unique<WorkRecorder>(1000, *record_interval, RecordSpan::WholeRun);
       options.recorder = recorder.get();
     }
     RunSummary summary;

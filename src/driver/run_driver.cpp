@@ -125,7 +125,6 @@ class LoopRecording {
 
   void step_begins() {
     if (!recorder_) return;
-    recorded_before_ = recorder_->steps().size();
     step_start_ = step_end_ = Clock::now();
   }
   void step_done() {
@@ -156,7 +155,7 @@ class LoopRecording {
   void loop_done() {
     if (!recorder_) return;
     solver_seconds_ += seconds(step_start_, step_end_);
-    if (recorder_->steps().size() > recorded_before_) {
+    if (recorder_->last_step_recorded()) {
       const double loop = seconds(step_end_, Clock::now());
       const std::size_t particles = solver_.particles().size();
       if (snapshot_.step_regions > 0)
@@ -190,7 +189,6 @@ class LoopRecording {
   Solver& solver_;
   WorkRecorder* recorder_;
   std::int64_t first_step_;
-  std::size_t recorded_before_ = 0;
   Clock::time_point step_start_, step_end_;
   double solver_seconds_ = 0.0;
   struct PartTimes {

@@ -26,8 +26,24 @@ class OwnTime {
 
 }  // namespace
 
+namespace {
+constexpr int kThinning = 3;  // a full RecordSpan::WholeRun record keeps every kThinning-th step
+}  // namespace
+
 bool WorkRecorder::begin_step(std::int64_t step, std::size_t particles, std::size_t blocks) {
-  active_ = !full() && (offered_++ % interval_) == 0;
+  const std::int64_t offered = offered_++;
+  if (offered % interval_ == 0 && full() && span_ == RecordSpan::WholeRun) {
+    // The recorded steps were offered at 0, i, 2i, ...: keep 0, 3i, 6i, ... and go on every 3i.
+    // Three, not two: an interval coprime with the sort's cadence (every 20 steps) stays so. Doubling
+    // 7 gave 56 within three thinnings, and then every 5th recorded step was a sort step, not every 20th.
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < steps_.size(); k += kThinning, ++kept)
+      if (kept != k) steps_[kept] = std::move(steps_[k]);  // a vector moved onto itself would empty
+    steps_.resize(kept);
+    interval_ *= kThinning;
+  }
+  active_ = !full() && offered % interval_ == 0;
+  last_recorded_ = active_;
   if (active_) {
     steps_.emplace_back();
     steps_.back().step = step;
@@ -181,6 +197,7 @@ std::vector<double> WorkRecorder::measure_barrier(int max_threads) {
 nlohmann::json WorkRecorder::to_json(const nlohmann::json& meta) const {
   nlohmann::json j = meta;
   j["format"] = "talus-work-record/1";
+  j["record_interval"] = interval_;  // steps between the recorded ones (at the end of a thinned run record)
   nlohmann::json steps = nlohmann::json::array();
   for (const WorkStep& s : steps_) {
     nlohmann::json js;

@@ -45,16 +45,30 @@ struct WorkStep {
   std::vector<WorkRegion> regions;
 };
 
+/// Which steps a recorder keeps once it holds `max_steps` of them.
+enum class RecordSpan {
+  FirstSteps,  // stop recording (talus bench: the steps after the untimed one)
+  WholeRun,    // thin out (talus run): keep every third recorded step and triple the interval, so
+               // that the record keeps sampling the whole run evenly, however long it is
+};
+
 class WorkRecorder {
  public:
-  /// Record every `interval`-th step that is offered (begin_step), at most `max_steps` of them.
-  explicit WorkRecorder(int max_steps, int interval = 1) : max_steps_(max_steps), interval_(interval < 1 ? 1 : interval) {}
+  /// Record every `interval`-th step that is offered (begin_step), at most `max_steps` of them;
+  /// `span` says what happens when that many are held.
+  explicit WorkRecorder(int max_steps, int interval = 1, RecordSpan span = RecordSpan::FirstSteps)
+      : max_steps_(max_steps), interval_(interval < 1 ? 1 : interval), span_(span) {}
 
   /// Called by the solver at the start of each step; true when this step is recorded.
   bool begin_step(std::int64_t step, std::size_t particles, std::size_t blocks);
   void end_step(double seconds);
   bool active() const { return active_; }
+  /// Whether the last step offered was recorded (it stays true after end_step, until the next
+  /// begin_step): the run loop adds its own time after such a step to it.
+  bool last_step_recorded() const { return last_recorded_; }
   bool full() const { return static_cast<int>(steps_.size()) >= max_steps_; }
+  /// Steps between two recorded ones now (tripled at each thinning of a RecordSpan::WholeRun record).
+  int interval() const { return interval_; }
 
   /// A static region: `items` iterations in `parallel_regions` parallel regions, with `barriers`
   /// barriers between loops inside them (TileStages: one region, a barrier between its loops).
@@ -110,8 +124,9 @@ class WorkRecorder {
 
  private:
   int max_steps_, interval_;
+  RecordSpan span_;
   std::int64_t offered_ = 0;
-  bool active_ = false;
+  bool active_ = false, last_recorded_ = false;
   std::vector<WorkStep> steps_;
   RunTotals totals_;
 };
