@@ -132,17 +132,23 @@ void Solver::size_scratch() {
 // carries (kinetic, stored strain, gravitational, as in energies()) and its mass are added to the
 // outflow, so the energy budget still closes. The CFL guard (at most max_step_displacement = 1
 // cell per step) keeps a particle inside the 2 ghost cells until it is removed.
-void Solver::remove_outflow() {
-  ParticleStore& P = particles_;
-  const std::size_t n = P.size();
-  auto beyond = [&](std::size_t p) {
-    const double point[3] = {P.x[0][p], P.x[1][p], grid_.w_of(P.x[0][p], P.x[2][p])};  // w on a terrain grid
-    return gather_limits_.beyond_open_face(point);  // the test G2P flagged the step with
-  };
+bool Solver::beyond_open_face(std::size_t p) const {
+  const ParticleStore& P = particles_;
+  const double point[3] = {P.x[0][p], P.x[1][p], grid_.w_of(P.x[0][p], P.x[2][p])};  // w on a terrain grid
+  return gather_limits_.beyond_open_face(point);  // the test G2P flagged the step with
+}
+
+std::size_t Solver::count_outflow() const {
+  const std::size_t n = particles_.size();
   std::size_t leaving = 0;
 #pragma omp parallel for schedule(static) reduction(+ : leaving)
-  for (std::size_t p = 0; p < n; ++p) leaving += beyond(p) ? 1 : 0;
-  if (leaving == 0) return;
+  for (std::size_t p = 0; p < n; ++p) leaving += beyond_open_face(p) ? 1 : 0;
+  return leaving;
+}
+
+void Solver::remove_outflow(std::size_t leaving) {
+  ParticleStore& P = particles_;
+  const std::size_t n = P.size();
   wave_rate_from_stress_pass_.reset();  // the maximum included the particles that leave
   if (leaving == n && !comm_.distributed())  // a distributed run checks the total at the next step
     throw instability_error(fmt::format("step {}, t = {:.6g} s: every particle has left the grid through its open faces",
@@ -150,7 +156,7 @@ void Solver::remove_outflow() {
   std::vector<std::uint32_t> kept;
   kept.reserve(n - leaving);
   for (std::size_t p = 0; p < n; ++p) {
-    if (!beyond(p)) {
+    if (!beyond_open_face(p)) {
       kept.push_back(static_cast<std::uint32_t>(p));
       continue;
     }
@@ -161,9 +167,6 @@ void Solver::remove_outflow() {
   }
   P.permute(kept, scratch_, 0);  // the step's displacement is spent: the scratch is free
   size_scratch();
-  // Sort now: the cell offsets describe the old particle set, and state() (a checkpoint, the last
-  // good state) reads them before the next step would sort.
-  sort_particles();
 }
 
 // A particle that left through a periodic face re-enters through the opposite one: its position
@@ -208,6 +211,25 @@ bool Solver::mls_needs_sort() const {
   if (scene_.smoothing.mls.variant == MlsVariant::Cell) return true;
   constexpr double kMaxDriftCells = 0.25;
   return !(sort_drift_ <= kMaxDriftCells * scene_.grid.h);  // NaN (never: G2P stops the run): sort
+}
+
+void Solver::sort_particles_recorded() {
+  WorkRecorder* const r = recording();
+  if (!r) {
+    sort_particles();
+    return;
+  }
+  const double start = omp_get_wtime();
+  sort_particles();
+  // serial: the sort's bookkeeping, the ghost map's new tiles, and the block buffers' serial
+  // part of their preparation (the pairs of boxes and tiles; their run lists are written in parallel)
+  const bool buffers = block_buffers() != nullptr;
+  const double bookkeeping =
+      sort_.last_serial_seconds() + ghost_listing_seconds_ + (buffers ? block_buffers_.last_serial_seconds() : 0.0);
+  const double seconds = omp_get_wtime() - start, serial = std::min(bookkeeping, seconds);
+  r->add_static("sort", particles_.size(),
+                sort_.last_parallel_regions() + (buffers ? BlockBuffers::kPrepareParallelRegions : 0), seconds - serial);
+  r->add_serial("sort bookkeeping", serial);
 }
 
 void Solver::sort_particles() {
@@ -362,8 +384,17 @@ void Solver::step() {
   // G2P flagged these while it computed the displacements and the new positions; the scans that
   // name the particle (CFL guard) or remove the leaving ones run only when flagged.
   if (large_displacement_) check_step_displacement(particles_, displacement(), scene_, step_, time_);  // stability_guards.hpp
-  // the outflow: a parallel count, then a serial rebuild and a sort (recorded as serial)
-  if (crosses_open_face_) recorded(recording(), RegionSchedule::Serial, "outflow", 0, 0, [&] { remove_outflow(); });
+  // The outflow: a parallel count, then a serial rebuild, then a sort now: the cell offsets
+  // describe the old particle set, and state() (a checkpoint, the last good state) reads them
+  // before the next step would sort.
+  if (crosses_open_face_) {
+    std::size_t leaving = 0;
+    recorded(recording(), RegionSchedule::Static, "outflow count", particles_.size(), 1, [&] { leaving = count_outflow(); });
+    if (leaving > 0) {
+      recorded(recording(), RegionSchedule::Serial, "outflow", 0, 0, [&] { remove_outflow(leaving); });
+      sort_particles_recorded();
+    }
+  }
   if ((step_ + 1) % kFieldCheckInterval == 0) {
     // one parallel region scans every particle array in use and the volume
     recorded(recording(), RegionSchedule::Static, "field check", particles_.size(), 1,
@@ -401,21 +432,7 @@ void Solver::step_with(double dt) {
                             : mls_needs_sort() || needs_sort_ || steps_since_sort_ >= scene_.sort_interval;
   if (sort_now) {
     if (comm_.distributed()) recorded(recording(), RegionSchedule::Serial, "redistribute", 0, 0, [&] { redistribute(); });
-    if (WorkRecorder* const r = recording()) {
-      const double start = omp_get_wtime();
-      sort_particles();
-      // serial: the sort's bookkeeping, the ghost map's new tiles, and the block buffers' serial
-      // part of their preparation (the pairs of boxes and tiles; their run lists are written in parallel)
-      const bool buffers = block_buffers() != nullptr;
-      const double bookkeeping = sort_.last_serial_seconds() + ghost_listing_seconds_ +
-                                 (buffers ? block_buffers_.last_serial_seconds() : 0.0);
-      const double seconds = omp_get_wtime() - start, serial = std::min(bookkeeping, seconds);
-      r->add_static("sort", particles_.size(),
-                    sort_.last_parallel_regions() + (buffers ? BlockBuffers::kPrepareParallelRegions : 0), seconds - serial);
-      r->add_serial("sort bookkeeping", serial);
-    } else {
-      sort_particles();
-    }
+    sort_particles_recorded();
   }
   if (comm_.distributed() && (sort_now || setup_exchange_)) {
     exchange_.setup(comm_, grid_);

@@ -173,9 +173,13 @@ class Solver {
     double kinetic, strain, gravity;
   };
   ParticleEnergy particle_energy(std::size_t p) const;
-  /// Remove the particles beyond an open face (after they moved), adding their energy and mass to
-  /// the outflow; deterministic (the kept particles keep their order).
-  void remove_outflow();
+  /// Whether particle p is beyond an open face (the test G2P flags the step with).
+  bool beyond_open_face(std::size_t p) const;
+  /// How many particles are beyond an open face (after they moved): one parallel count.
+  std::size_t count_outflow() const;
+  /// Remove the `leaving` particles beyond an open face, adding their energy and mass to the
+  /// outflow; deterministic (the kept particles keep their order). The caller sorts after it.
+  void remove_outflow(std::size_t leaving);
   void wrap_periodic();
   /// Size the per-particle scratch arrays to the current particle count.
   void size_scratch();
@@ -184,6 +188,9 @@ class Solver {
   /// The body force at time t: scene gravity, ramped over scene.gravity_ramp_time.
   Vec3 gravity_at(double t) const;
   void sort_particles();
+  /// sort_particles(), recorded for the work record as its parallel loops (a static region) and its
+  /// serial bookkeeping.
+  void sort_particles_recorded();
   /// restore(): the time, the counters and the accumulated ledger.
   void restore_counters(const SolverState& s);
   /// Distributed runs: move the slab bounds if the work is out of balance, and send every particle
