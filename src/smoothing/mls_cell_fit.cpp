@@ -192,13 +192,7 @@ void smooth_cell(CellScratch& S, const MlsPass& pass, double rg, const double (&
 
 template <int Degree, int Axes>
 MlsCounts smooth_cells_impl(const MlsPass& pass) {
-  const ParticleStore& P = *pass.particles;
-  const CellSort& sort = *pass.sort;
-  const GridGeometry& grid = *pass.grid;
-  const int bc = sort.block_cells();
-  const std::size_t cells_per_block = static_cast<std::size_t>(bc) * bc * bc;
-  const std::vector<std::uint32_t>& cell_start = sort.cell_start();
-  const double rg = pass.search_radius / grid.h;  // radius in cells
+  const auto& [P, sort, grid, bc, cells_per_block, cell_start, rg] = mls_detail::PassCells(pass);
   return for_each_work_unit(pass, [&](MlsCounts& counts, auto&& for_units) {
     CellScratch S;
     std::vector<std::uint8_t> fits;  // per particle of the cell: fitted (smoothed body, finite position)

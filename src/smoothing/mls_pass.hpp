@@ -50,6 +50,26 @@ struct MlsPass {
   double* unit_seconds;  // null, or per work unit (WorkUnits order): its seconds
 };
 
+/// What both fits read of a pass as they walk its blocks' cells, under the names they use:
+/// `const auto& [P, sort, grid, bc, cells_per_block, cell_start, rg] = PassCells(pass);`
+struct PassCells {
+  const ParticleStore& P;
+  const CellSort& sort;
+  const GridGeometry& grid;
+  int bc;                                      // block edge in cells
+  std::size_t cells_per_block;                 // bc^3
+  const std::vector<std::uint32_t>& cell_start;  // the sorted store's range of each cell
+  double rg;                                   // the search radius in cells
+  explicit PassCells(const MlsPass& pass)
+      : P(*pass.particles),
+        sort(*pass.sort),
+        grid(*pass.grid),
+        bc(sort.block_cells()),
+        cells_per_block(static_cast<std::size_t>(bc) * bc * bc),
+        cell_start(sort.cell_start()),
+        rg(pass.search_radius / grid.h) {}
+};
+
 /// The fit's solve for a well-conditioned A (the common case), in plain fixed-size loops that the
 /// compiler unrolls: Cholesky A = L L^T, then A^-1 = L^-T L^-1 explicitly, a = A^-1 e_0 its first
 /// column, and the exact reciprocal condition number 1 / (|A|_1 |A^-1|_1). Eigen's rcond() is an
