@@ -1,50 +1,19 @@
 // `talus dem-springs` as a user runs it: one JSON object on success, exit code 2 and one line on
 // stderr for a continuum the packing cannot represent. Expected values come from the Abe 1996
 // formulas written out here, not from the library.
+#include "program_fixture.hpp"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <cmath>
-#include <cstdlib>
-#include <fstream>
 #include <numbers>
-#include <sstream>
 #include <string>
-#include <vector>
 
 namespace dem_springs_cli_test {
 namespace {
 
-struct CommandResult {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string read_file(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
-}
-
-CommandResult run_talus(const std::string& arguments) {
-  static int counter = 0;
-  // ctest runs each test in its own process (and CI may run two at once): the process id keeps
-  // their output files apart
-  const std::string stem =
-      ::testing::TempDir() + "dem_springs_cli_" + std::to_string(getpid()) + "_" + std::to_string(counter++);
-  const std::string command = std::string("\"") + TALUS_BINARY + "\" " + arguments + " >" + stem + ".out 2>" + stem + ".err";
-  const int status = std::system(command.c_str());
-  CommandResult result;
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  result.out = read_file(stem + ".out");
-  result.err = read_file(stem + ".err");
-  return result;
-}
+using talus::test::ProgramResult;
 
 int line_count(const std::string& text) {
   int lines = 0;
@@ -52,16 +21,18 @@ int line_count(const std::string& text) {
   return lines;
 }
 
-void expect_refused(const CommandResult& r, const std::string& start) {
+class DemSpringsCli : public talus::test::ProgramTest {};
+
+void expect_refused(const ProgramResult& r, const std::string& start) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_TRUE(r.out.empty()) << r.out;
   EXPECT_EQ(line_count(r.err), 1) << r.err;
   EXPECT_EQ(r.err.rfind("talus: error: " + start, 0), 0u) << r.err;
 }
 
-TEST(DemSpringsCli, HexPrintsEq34SpringsAsJson) {
+TEST_F(DemSpringsCli, HexPrintsEq34SpringsAsJson) {
   const double young = 1.0e7, nu = 0.2;
-  const CommandResult r = run_talus("dem-springs --E 1e7 --nu 0.2 --packing hex");
+  const ProgramResult r = run("dem-springs --E 1e7 --nu 0.2 --packing hex");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
   const double shear = young / (2.0 * (1.0 + nu));
@@ -71,9 +42,9 @@ TEST(DemSpringsCli, HexPrintsEq34SpringsAsJson) {
   EXPECT_EQ(j.at("packing"), "hex");
 }
 
-TEST(DemSpringsCli, ShearModulusIsAnAlternativeToYoungsModulus) {
-  const CommandResult from_e = run_talus("dem-springs --E 2.6e7 --nu 0.3 --packing hex --plane-stress");
-  const CommandResult from_g = run_talus("dem-springs --G 1e7 --nu 0.3 --packing hex --plane-stress");
+TEST_F(DemSpringsCli, ShearModulusIsAnAlternativeToYoungsModulus) {
+  const ProgramResult from_e = run("dem-springs --E 2.6e7 --nu 0.3 --packing hex --plane-stress");
+  const ProgramResult from_g = run("dem-springs --G 1e7 --nu 0.3 --packing hex --plane-stress");
   ASSERT_EQ(from_e.exit_code, 0) << from_e.err;
   ASSERT_EQ(from_g.exit_code, 0) << from_g.err;
   const auto e = nlohmann::json::parse(from_e.out);
@@ -82,11 +53,11 @@ TEST(DemSpringsCli, ShearModulusIsAnAlternativeToYoungsModulus) {
   // Plane stress: eq. 34 with nu read as nu/(1+nu).
   const double nu_star = 0.3 / 1.3;
   EXPECT_NEAR(g.at("kN").get<double>() / (2.0 / std::sqrt(3.0) * 1e7 / (1.0 - 2.0 * nu_star)), 1.0, 1e-14);
-  expect_refused(run_talus("dem-springs --nu 0.3 --packing hex"), "give exactly one of --E and --G");
+  expect_refused(run("dem-springs --nu 0.3 --packing hex"), "give exactly one of --E and --G");
 }
 
-TEST(DemSpringsCli, Random3dNeedsARadiusAndUsesTheUniformStrainRelation) {
-  const CommandResult r = run_talus("dem-springs --E 5e7 --nu 0.1 --packing random3d --radius 0.002");
+TEST_F(DemSpringsCli, Random3dNeedsARadiusAndUsesTheUniformStrainRelation) {
+  const ProgramResult r = run("dem-springs --E 5e7 --nu 0.1 --packing random3d --radius 0.002");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   const double alpha = j.at("kT").get<double>() / j.at("kN").get<double>();
@@ -95,18 +66,18 @@ TEST(DemSpringsCli, Random3dNeedsARadiusAndUsesTheUniformStrainRelation) {
   const double kn = j.at("kN").get<double>();
   const double young = 0.64 * 6.0 * kn * (2.0 + 3.0 * alpha) / (2.0 * std::numbers::pi * 0.002 * (4.0 + alpha));
   EXPECT_NEAR(young / 5e7, 1.0, 1e-13);
-  expect_refused(run_talus("dem-springs --E 5e7 --nu 0.1 --packing random3d"), "--radius is required");
+  expect_refused(run("dem-springs --E 5e7 --nu 0.1 --packing random3d"), "--radius is required");
 }
 
-TEST(DemSpringsCli, PoissonRatioAboveTheLimitExitsWithCode2AndOneLine) {
-  expect_refused(run_talus("dem-springs --E 1e7 --nu 0.3 --packing hex"), "--nu = 0.3 is above the limit 0.25");
-  expect_refused(run_talus("dem-springs --E 1e7 --nu 0.26 --packing random2d"), "--nu = 0.26 is above the limit 0.25");
-  expect_refused(run_talus("dem-springs --E 1e7 --nu 0.26 --packing random3d --radius 0.01"),
+TEST_F(DemSpringsCli, PoissonRatioAboveTheLimitExitsWithCode2AndOneLine) {
+  expect_refused(run("dem-springs --E 1e7 --nu 0.3 --packing hex"), "--nu = 0.3 is above the limit 0.25");
+  expect_refused(run("dem-springs --E 1e7 --nu 0.26 --packing random2d"), "--nu = 0.26 is above the limit 0.25");
+  expect_refused(run("dem-springs --E 1e7 --nu 0.26 --packing random3d --radius 0.01"),
                  "--nu = 0.26 is above the limit 0.25");
-  expect_refused(run_talus("dem-springs --E 1e7 --nu 0.34 --packing hex --plane-stress"),
+  expect_refused(run("dem-springs --E 1e7 --nu 0.34 --packing hex --plane-stress"),
                  "--nu = 0.34 is above the limit 0.333333");
-  expect_refused(run_talus("dem-springs --E 1e7 --nu 0.1 --packing square"), "--nu = 0.1 cannot be represented");
-  const CommandResult square = run_talus("dem-springs --E 1e7 --nu 0 --packing square");
+  expect_refused(run("dem-springs --E 1e7 --nu 0.1 --packing square"), "--nu = 0.1 cannot be represented");
+  const ProgramResult square = run("dem-springs --E 1e7 --nu 0 --packing square");
   ASSERT_EQ(square.exit_code, 0) << square.err;
   const auto j = nlohmann::json::parse(square.out);
   EXPECT_DOUBLE_EQ(j.at("kN").get<double>(), 1e7);  // Abe 1996, eq. 31: kN = kT = E
