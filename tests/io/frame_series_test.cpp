@@ -52,6 +52,34 @@ std::vector<std::string> pvd_files(const fs::path& pvd) {
 
 void touch(const fs::path& path) { std::ofstream(path) << "x"; }
 
+// An output schedule moves its next time past the time just written: by whole intervals when the
+// interval is usable, and to the next representable time when it is far below the time step or
+// below t's rounding step (such intervals used to hang the run in this loop).
+TEST(OutputSchedule, AdvancesByWholeIntervalsAndNeverHangsOnATinyInterval) {
+  double next = 0.0;
+  OutputSchedule usual{0.01, next};
+  usual.advance_past(0.0);
+  EXPECT_EQ(next, 0.01);
+  usual.advance_past(0.0345);
+  EXPECT_EQ(next, 0.01 + 0.01 + 0.01 + 0.01);
+  for (double tiny : {1e-9, 1e-20, 1e-300}) {
+    SCOPED_TRACE(tiny);
+    double due = 0.0;
+    OutputSchedule schedule{tiny, due};
+    for (double t : {1.0e-4, 2.5e-4, 3.7}) {
+      ASSERT_TRUE(schedule.reached(t));
+      schedule.advance_past(t);
+      EXPECT_GT(due, t);
+      EXPECT_LE(due, t + 64 * tiny + t * 1e-15);  // at the latest at the next step
+    }
+  }
+  double none = 0.0;
+  OutputSchedule off{0.0, none};
+  off.advance_past(5.0);
+  EXPECT_EQ(none, 0.0);
+  EXPECT_FALSE(off.reached(5.0));
+}
+
 TEST(FrameSeries, NamesFramesSummariesAndPieces) {
   EXPECT_EQ(frame_name(7), "frames/particles_000007.vtu");
   EXPECT_EQ(frame_name(7, false), "frames/particles_000007.vtu");

@@ -19,6 +19,7 @@
 #include "talus/io/vtu_writer.hpp"
 #include "talus/solver/solver.hpp"
 
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -33,9 +34,15 @@ struct OutputSchedule {
   double& next;
   /// Whether time t has reached the next output time (never when there is no interval).
   bool reached(double t) const { return interval > 0.0 && t >= next; }
-  /// Move the next output time past t (an output just written at t).
+  /// Move the next output time past t (an output just written at t). One or two steps of
+  /// `interval` do that when the interval is at least the time step. A far smaller one would take
+  /// (t - next) / interval steps, and one below t's rounding step none at all (next + interval ==
+  /// next): the run hung in this loop. An output is then due at every step anyway, so after a
+  /// bounded number of steps the next time becomes the smallest time after t.
   void advance_past(double t) {
-    while (interval > 0.0 && next <= t) next += interval;
+    if (interval <= 0.0) return;
+    for (int i = 0; i < 64 && next <= t; ++i) next += interval;
+    if (next <= t) next = std::nextafter(t, HUGE_VAL);
   }
 };
 
