@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <optional>
@@ -165,7 +166,11 @@ void with_key_path(const std::string& prefix, Check&& check) {
 }
 
 /// The whole text of a file; nothing when it cannot be opened (the caller names the file's role).
+/// The whole file, or nothing when it cannot be read (a folder cannot: reading one gave an empty text
+/// and a puzzling "unexpected end of input").
 inline std::optional<std::string> read_text_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) return std::nullopt;
   std::ifstream in(path);
   if (!in) return std::nullopt;
   std::stringstream text;
@@ -173,10 +178,71 @@ inline std::optional<std::string> read_text_file(const std::string& path) {
   return text.str();
 }
 
+/// Refuses a key that an object holds twice. nlohmann's parser keeps the last value, so `"end": 0.1,
+/// ..., "end": 5000` would run with 5000 and nothing would say so. The key is named by its full path
+/// (`time.end`, `bodies[1].box.min`).
+class DuplicateKeyCheck {
+ public:
+  explicit DuplicateKeyCheck(std::string source) : source_(std::move(source)) {}
+
+  bool operator()(int /*depth*/, Json::parse_event_t event, Json& parsed) {
+    using E = Json::parse_event_t;
+    switch (event) {
+      case E::object_start:
+      case E::array_start:
+        count_element();
+        frames_.push_back(Frame{event == E::object_start, {}, {}, 0});
+        break;
+      case E::object_end:
+      case E::array_end:
+        frames_.pop_back();
+        break;
+      case E::key: {
+        Frame& f = frames_.back();
+        f.key = parsed.get<std::string>();
+        if (!f.keys.insert(f.key).second)
+          throw input_error(fmt::format("{}: duplicate key {} (each key may appear once in an object)", source_, path()));
+        break;
+      }
+      case E::value:
+        count_element();
+        break;
+    }
+    return true;
+  }
+
+ private:
+  struct Frame {
+    bool object;
+    std::set<std::string> keys;
+    std::string key;        // an object's key being read
+    std::size_t elements;   // an array's elements started so far
+  };
+  void count_element() {
+    if (!frames_.empty() && !frames_.back().object) ++frames_.back().elements;
+  }
+  std::string path() const {
+    std::string p;
+    for (const Frame& f : frames_) {
+      if (f.object)
+        p += (p.empty() ? "" : ".") + f.key;
+      else
+        p += fmt::format("[{}]", f.elements - 1);
+    }
+    return p;
+  }
+
+  std::string source_;
+  std::vector<Frame> frames_;
+};
+
 /// Parse a whole input file; a syntax error is an input error naming `source`, the line and column.
 inline Json parse_json(const std::string& text, const std::string& source) {
+  // nlohmann's parser stops at a NUL byte as if the text ended there, so whatever followed passed unread.
+  if (const auto nul = text.find('\0'); nul != std::string::npos)
+    throw input_error(fmt::format("{}: malformed JSON: a NUL byte at offset {} (not a text file?)", source, nul));
   try {
-    return Json::parse(text);
+    return Json::parse(text, DuplicateKeyCheck(source));
   } catch (const Json::exception& e) {
     // nlohmann's message already names the line and column. Not only parse_error: a number that
     // overflows a double (1e999) is an out_of_range error.

@@ -11,6 +11,7 @@
 #include "talus/shape/linear.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 
 namespace talus::scene_detail {
@@ -846,6 +847,13 @@ Field<SceneDraft> bodies_field() {
           b.scene = &d;
           ObjectReader one(bj[i], fmt::format("bodies[{}]", i));
           read_fields(one, b, body_table());
+          // Smoothing selects bodies by name, and diagnostics report them by name: two of one name
+          // would make both ambiguous.
+          for (std::size_t k = 0; k < i; ++k)
+            if (d.scene.bodies[k].name == b.body.name)
+              throw input_error(fmt::format("bodies[{}].name = \"{}\" is the name of bodies[{}] as well; body names must "
+                                            "differ",
+                                            i, b.body.name, k));
           d.scene.bodies.push_back(std::move(b.body));
         }
         resolve_smoothing_bodies(d);
@@ -863,9 +871,23 @@ Table<SceneDraft> make_scene_table() {
           "comment", "any", "", "", "a note; ignored", Json::object(), [](ObjectReader& r, SceneDraft&) { r.allow("comment"); },
           [](const SceneDraft&, Json&) {}),
       custom<SceneDraft>(
-          "name", "string", "`\"scene\"`", "", "names the default output folder `runs/<name>`",
-          {{"type", "string"}, {"default", "scene"}},
-          [](ObjectReader& r, SceneDraft& d) { d.scene.name = r.string_or("name", "scene"); },
+          "name", "string", "`\"scene\"`", "letters, digits, `_`, `-`, `.`; not starting with `.`",
+          "names the default output folder `runs/<name>`",
+          {{"type", "string"}, {"default", "scene"}, {"pattern", "^[A-Za-z0-9_-][A-Za-z0-9_.-]*$"}},
+          [](ObjectReader& r, SceneDraft& d) {
+            // The name becomes a folder under runs/, whose output files a run replaces: a name such as
+            // "..", "" or "a/b" would put them (and the clearing of an earlier run's) elsewhere.
+            const std::string name = r.string_or("name", "scene");
+            const bool plain = !name.empty() && name.size() <= 200 && name[0] != '.' &&
+                               std::all_of(name.begin(), name.end(), [](char c) {
+                                 return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.';
+                               });
+            if (!plain)
+              throw input_error(fmt::format("name = {} must be a plain folder name (1-200 letters, digits, '_', '-', "
+                                            "'.'; not starting with '.')",
+                                            Json(name).dump()));
+            d.scene.name = name;
+          },
           [](const SceneDraft& d, Json& j) { j["name"] = d.scene.name; }),
       string<SceneDraft>("description", TALUS_AT(scene.description), "free text, printed by `talus check`"),
       section("grid", grid_table, false, "the grid: a box of cubic cells"),

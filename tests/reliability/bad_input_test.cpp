@@ -54,6 +54,18 @@ TEST(BadInput, EveryMistakeNamesTheKeyPathInOneLine) {
       {"grid too large", "\"size\": [1.0, 0.4, 0.4], \"cell_size\": 0.05", "\"size\": [1000, 1000, 1000], \"cell_size\": 0.05",
        "at most 1e9"},
       {"key with a newline", "\"courant\": 0.3", "\"courant\": 0.3, \"a\\nb\": 1", "unknown key time.a\\nb"},
+      // nlohmann keeps a duplicate key's last value: the run would have used end = 5000 unannounced
+      {"duplicate key", "\"end\": 0.1", "\"end\": 0.1, \"end\": 5000", "duplicate key time.end"},
+      {"duplicate key in an array's object", "\"material\": \"sand\",", "\"material\": \"sand\", \"material\": \"sand\",",
+       "duplicate key bodies[1].material"},
+      {"duplicate material", "\"rubber\": {", "\"sand\": {}, \"rubber\": {", "duplicate key materials.sand"},
+      {"duplicate body name", "\"name\": \"heap\"", "\"name\": \"block\"",
+       "bodies[1].name = \"block\" is the name of bodies[0] as well"},
+      // the name is a folder under runs/ whose files a run replaces and clears
+      {"name ..", "\"name\": \"valid\"", "\"name\": \"..\"", "name = \"..\" must be a plain folder name"},
+      {"name with a slash", "\"name\": \"valid\"", "\"name\": \"../x\"", "name = \"../x\" must be a plain folder name"},
+      {"empty name", "\"name\": \"valid\"", "\"name\": \"\"", "name = \"\" must be a plain folder name"},
+      {"name with a newline", "\"name\": \"valid\"", "\"name\": \"a\\nb\"", "name = \"a\\nb\" must be a plain folder name"},
   };
   for (const Case& c : cases) {
     std::string text = kValid;
@@ -76,6 +88,18 @@ TEST(BadInput, EveryMistakeNamesTheKeyPathInOneLine) {
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), Error::Kind::Input);
     EXPECT_NE(std::string(e.what()).find("cannot open scene file /nonexistent/scene.json"), std::string::npos);
+  }
+  try {
+    read_scene_file("/");  // a folder: reading it gave an empty text
+    ADD_FAILURE() << "a folder accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot open scene file /"), std::string::npos) << e.what();
+  }
+  try {
+    parse_scene(kValid + std::string(1, '\0') + "{ junk", "scene.json");  // the parser stopped at the NUL
+    ADD_FAILURE() << "text after a NUL byte passed unread";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("scene.json: malformed JSON: a NUL byte at offset"), std::string::npos) << e.what();
   }
 }
 
