@@ -5,6 +5,7 @@
 #include "talus/core/error.hpp"
 #include "talus/io/checkpoint.hpp"
 #include "talus/driver/run_driver.hpp"
+#include "talus/driver/run_outputs.hpp"
 #include "talus/scene/scene_json.hpp"
 #include "talus/solver/memory_estimate.hpp"
 #include "talus/solver/solver.hpp"
@@ -84,6 +85,27 @@ std::optional<std::string> scatter_hint(const Scene& scene, const CellSort& sort
       per_pass, threads, kColours);
 }
 
+/// Refuses a run that would replace one of its own inputs, before anything is written: the scene
+/// file among the files the run writes or clears in its folder (`talus run proj/scene.json --out proj` replaced the user's scene by the resolved one),
+/// or the work record written over the scene, the checkpoint or one of those files.
+void require_outputs_spare_inputs(const std::filesystem::path& dir, const std::string& scene_path,
+                                  const std::string& restart_path, const std::string& record_path) {
+  for (const std::filesystem::path& output : run_output_files(dir)) {
+    if (same_file(scene_path, output))
+      throw input_error(fmt::format("output folder {}: the run would replace the scene file {} by its {}; choose "
+                                    "another folder (--out)",
+                                    dir.string(), scene_path, output.filename().string()));
+    if (!record_path.empty() && same_file(record_path, output))
+      throw input_error(fmt::format("--record-work {}: the run writes its {} there; choose another file", record_path,
+                                    output.filename().string()));
+  }
+  if (!record_path.empty() && same_file(record_path, scene_path))
+    throw input_error(fmt::format("--record-work {}: that is the scene file; choose another file", record_path));
+  if (!record_path.empty() && !restart_path.empty() && same_file(record_path, restart_path))
+    throw input_error(fmt::format("--record-work {}: that is the checkpoint to resume from; choose another file",
+                                  record_path));
+}
+
 }  // namespace
 
 void add_run_command(CLI::App& app) {
@@ -134,9 +156,10 @@ void add_run_command(CLI::App& app) {
       restore_checkpoint(solver, *checkpoint, *restart);
       if (out_dir->empty()) dir = std::filesystem::path(*restart).parent_path().string();
       if (dir.empty()) dir = ".";
-      if (world.root())
-        fmt::print("talus: restart from {} at step {}, t = {:.6g} s\n", *restart, solver.step_count(), solver.time());
     }
+    require_outputs_spare_inputs(dir, *scene_path, *restart, *record_path);
+    if (checkpoint && world.root())
+      fmt::print("talus: restart from {} at step {}, t = {:.6g} s\n", *restart, solver.step_count(), solver.time());
     const int threads = omp_get_max_threads();
     const DistributionStats start = solver.distribution();
     if (world.root())

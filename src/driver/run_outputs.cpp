@@ -54,10 +54,27 @@ void clear_output_folder(const fs::path& dir, const RunProgress* resume) {
     if (!listed) fs::remove(entry.path(), ec);
   }
   if (resume) return;
+  for (const fs::path& f : run_output_files(dir)) fs::remove(f, ec);
+}
+
+}  // namespace
+
+std::vector<fs::path> run_output_files(const fs::path& dir) {
+  std::vector<fs::path> files;
   for (const char* f : {"particles.pvd", "energy.csv", "scene.json", "checkpoint.h5", "runout.csv", "runout.json",
                         "deposit.csv", "terrain.vtu"})
-    fs::remove(dir / f, ec);
+    files.push_back(dir / f);
+  return files;
 }
+
+bool same_file(const fs::path& a, const fs::path& b) {
+  std::error_code ec;
+  if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec);
+  const fs::path ca = fs::weakly_canonical(fs::absolute(a, ec), ec), cb = fs::weakly_canonical(fs::absolute(b, ec), ec);
+  return ca == cb;
+}
+
+namespace {
 
 /// The file of frame i of a resumed series: the kind this run writes, unless only the other kind
 /// is on disk (a run resumed with another number of ranks keeps its earlier frames).

@@ -208,6 +208,32 @@ TEST(Crash, BadSceneExitsTwoWithOneLineAndWritesNothing) {
   fs::remove_all(dir);
 }
 
+// A run never replaces its own inputs: the scene in the folder it writes to (the run writes its
+// resolved scene.json there), or the work record written over the scene or over one of the run's files.
+TEST(Crash, ARunThatWouldReplaceItsOwnInputsExitsTwoAndTouchesNothing) {
+  const fs::path dir = test::temp_dir("own_inputs");
+  const std::string text = test::small_slide_json(0.02, 0.0);
+  std::ofstream(dir / "scene.json") << text;
+  const std::string scene = (dir / "scene.json").string();
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"run " + scene + " --out " + dir.string(), "would replace the scene file"},
+      {"run " + scene + " --out " + (dir / "." / "").string(), "would replace the scene file"},
+      {"run " + scene + " --out " + (dir / "out").string() + " --record-work " + scene, "that is the scene file"},
+      {"run " + scene + " --out " + (dir / "out").string() + " --record-work " + (dir / "out" / "energy.csv").string(),
+       "the run writes its energy.csv there"},
+  };
+  for (const auto& [args, expect] : cases) {
+    const auto [code, out] = run_captured(args + " --quiet --threads 1");
+    EXPECT_EQ(code, 2) << args << ": " << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+    EXPECT_NE(out.find(expect), std::string::npos) << out;
+    EXPECT_EQ(test::read_text(dir / "scene.json"), text) << args;
+    EXPECT_FALSE(fs::exists(dir / "out")) << args;
+    EXPECT_FALSE(fs::exists(dir / "frames")) << args;
+  }
+  fs::remove_all(dir);
+}
+
 TEST(Crash, InstabilityExitsThreeWithOneLineAndTheLastGoodState) {
   const fs::path dir = test::temp_dir("unstable");
   // The block slides off the grid through an open x+ face (an outflow boundary) until no particle

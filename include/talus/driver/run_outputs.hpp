@@ -25,6 +25,7 @@
 #include <fstream>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace talus {
 
@@ -52,6 +53,14 @@ struct OutputSchedule {
 /// of a killed writer. In a distributed run rank 0 alone creates and deletes; every rank returns
 /// once it is done (and throws its error, if it met one).
 void prepare_output_folder(const std::filesystem::path& dir, const RunProgress* resume, const Comm& comm = Comm());
+
+/// The files a run writes, replaces or clears at the top of its output folder (the frames aside):
+/// what a run's inputs must not be.
+std::vector<std::filesystem::path> run_output_files(const std::filesystem::path& dir);
+
+/// Whether two paths name the same file: the same inode when both exist, else the same normalised
+/// absolute path (a file the run is yet to create).
+bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
 
 /// energy.csv: time, step, dt, every term of the energy ledger, total.
 class EnergyHistory {
