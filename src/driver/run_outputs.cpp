@@ -242,9 +242,15 @@ FrameSeries::FrameSeries(const fs::path& dir, bool compress, RunProgress& progre
       comm_(comm),
       pvd_path_((dir / "particles.pvd").string()),
       pvd_(pvd_path_, comm.root()) {
+  // The index lists the checkpoint's earlier frames that are in this folder. A run resumed into
+  // another folder (--restart with --out) has none of them there: listing them anyway gave a .pvd that
+  // ParaView cannot open. Their indices stay taken, so the new frames do not reuse the names.
   std::vector<std::pair<double, std::string>> entries;
-  for (std::size_t i = 0; i < progress.frame_times.size(); ++i)
-    entries.emplace_back(progress.frame_times[i], kept_frame_name(dir, i, comm.distributed()));
+  for (std::size_t i = 0; i < progress.frame_times.size(); ++i) {
+    std::string name = kept_frame_name(dir, i, comm.distributed());
+    std::error_code ec;
+    if (fs::exists(dir / name, ec)) entries.emplace_back(progress.frame_times[i], std::move(name));
+  }
   if (!entries.empty()) pvd_.assign(std::move(entries));
 }
 

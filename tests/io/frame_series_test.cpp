@@ -143,6 +143,20 @@ TEST(FrameSeries, ResumeKeepsTheListedFramesOfEveryKindAndNoOther) {
   frames.complete(solver);
   EXPECT_EQ(pvd_files(frames.pvd_path()).back(), "frames/particles_000002.vtu");
 
+  // Resumed into another folder (--restart with --out), the series lists none of the checkpoint's
+  // earlier frames, which are not there, and its own frames take the next indices.
+  const fs::path elsewhere = temp_dir("resume_elsewhere");
+  RunProgress resumed_elsewhere;  // the checkpoint's two frames (`resume` has the series' third by now)
+  resumed_elsewhere.frame_times = {0.0, 0.1};
+  resumed_elsewhere.frame_steps = {0, 10};
+  prepare_output_folder(elsewhere, &resumed_elsewhere);
+  FrameSeries other(elsewhere, false, resumed_elsewhere, Comm());
+  EXPECT_FALSE(fs::exists(other.pvd_path()));
+  EXPECT_EQ(other.write(solver), "frames/particles_000002.vtu");
+  other.complete(solver);
+  EXPECT_EQ(pvd_files(other.pvd_path()), (std::vector<std::string>{"frames/particles_000002.vtu"}));
+  fs::remove_all(elsewhere);
+
   // A fresh run removes every frame, summary and piece.
   prepare_output_folder(dir, nullptr);
   EXPECT_EQ(files_in(dir / "frames"), (std::vector<std::string>{"notes.txt"}));
