@@ -103,6 +103,12 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
         "solver.smoothing.radius_factor = {} is above {} cells: MLS smoothing at 3 cells and more went unstable on "
         "the column (1.2 s) and the sliding block (docs/verification.md, \"MLS radius\")",
         radius, kMlsStableRadiusFactor));
+  // A stiff material or a fine grid can ask for more steps than any run will take: say so before it starts.
+  const double steps = scene.end_time / scene.initial_time_step();
+  if (steps > 1e8)
+    warnings.push_back(fmt::format("the run would take about {:.3g} steps (initial time step {:.3g} s to time.end = {} s): "
+                                   "check the materials' young and density, grid.cell_size and time.end",
+                                   steps, scene.initial_time_step(), scene.end_time));
   if (scene.smoothing.enabled && scene.smoothing.mls.variant == MlsVariant::Cell)
     warnings.push_back(
         "solver.smoothing.variant = \"cell\" is not energy-stable: one fit per cell fed energy into the elastic block "

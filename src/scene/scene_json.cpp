@@ -3,6 +3,7 @@
 #include "scene_fields.hpp"
 
 #include <cmath>
+#include <fmt/core.h>
 
 namespace talus {
 
@@ -25,6 +26,23 @@ void check_problem_size(const Scene& s) {
                                   "fewer particles_per_cell)", particles));
 }
 
+// The first time step comes from each body's wave speed plus its initial speed (Scene::initial_time_step).
+// A density of 1e-320 or a velocity of 1e300 m/s passes every range but makes that rate infinite
+// and the step zero: the run then stopped at step 0 without saying which body or key was to blame.
+void check_time_step(const Scene& s) {
+  for (std::size_t b = 0; b < s.bodies.size(); ++b) {
+    const BodySpec& body = s.bodies[b];
+    const MaterialSpec& m = s.materials[body.material];
+    const double wave = std::sqrt(m.p_wave_modulus() / m.density), speed = body.velocity.norm();
+    const double dt = s.courant * s.grid.h / (wave + speed);
+    if (std::isfinite(wave + speed) && std::isnormal(dt)) continue;
+    throw input_error(fmt::format(
+        "bodies[{}] (\"{}\"): no time step resolves its wave speed sqrt(M / materials.{}.density) = {:.3g} m/s "
+        "(density = {:.3g}) plus its speed |bodies[{}].velocity| = {:.3g} m/s",
+        b, body.name, m.name, wave, m.density, b, speed));
+  }
+}
+
 }  // namespace
 
 Scene parse_scene(const std::string& text, const std::string& source) {
@@ -33,6 +51,7 @@ Scene parse_scene(const std::string& text, const std::string& source) {
   ObjectReader r(root, "");
   read_fields(r, draft, scene_detail::scene_table());  // every section, in file order of the docs
   check_problem_size(draft.scene);
+  check_time_step(draft.scene);
   return draft.scene;
 }
 

@@ -61,6 +61,11 @@ TEST(BadInput, EveryMistakeNamesTheKeyPathInOneLine) {
       {"duplicate material", "\"rubber\": {", "\"sand\": {}, \"rubber\": {", "duplicate key materials.sand"},
       {"duplicate body name", "\"name\": \"heap\"", "\"name\": \"block\"",
        "bodies[1].name = \"block\" is the name of bodies[0] as well"},
+      // values within their ranges that leave no time step (the run stopped at step 0 naming nothing)
+      {"subnormal density", "\"density\": 1000.0", "\"density\": 1e-320",
+       "bodies[0] (\"block\"): no time step resolves its wave speed sqrt(M / materials.rubber.density) = inf m/s"},
+      {"overflowing speed", "\"material\": \"rubber\",", "\"material\": \"rubber\", \"velocity\": [1e300, 1e300, 0],",
+       "|bodies[0].velocity| = inf m/s"},
       // the name is a folder under runs/ whose files a run replaces and clears
       {"name ..", "\"name\": \"valid\"", "\"name\": \"..\"", "name = \"..\" must be a plain folder name"},
       {"name with a slash", "\"name\": \"valid\"", "\"name\": \"../x\"", "name = \"../x\" must be a plain folder name"},

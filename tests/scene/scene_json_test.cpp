@@ -37,6 +37,18 @@ TEST(SceneJson, DefaultsAndRoundTrip) {
   EXPECT_EQ(scene_to_json(again), scene_to_json(s));
 }
 
+// A scene that would take more steps than any run will (young = 1e29: about 1e10 steps) is warned
+// about before it starts; the minimal scene (about 30 steps) is not.
+TEST(SceneJson, AnEndlessNumberOfStepsIsWarnedAbout) {
+  const auto warned = [](const Scene& s) {
+    for (const std::string& w : scene_warnings(s))
+      if (w.find("the run would take about") != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_FALSE(warned(parse_scene(kMinimal, "t")));
+  EXPECT_TRUE(warned(parse_scene(replace_once(kMinimal, "\"young\": 1e6", "\"young\": 1e29"), "t")));
+}
+
 TEST(SceneJson, BadInputNamesTheKeyAndTheRange) {
   const std::string ok = kMinimal;
   test::expect_variant_error(ok, "\"poisson\": 0.3", "\"poisson\": 0.5", "materials.m.poisson = 0.5 is outside the allowed range (-1, 0.5)");
