@@ -55,9 +55,12 @@ class ObjectReader {
     const Json& j = raw(key);
     if (!j.is_number_integer())
       throw input_error(fmt::format("{} must be an integer in [{}, {}], got {}", key_path(key), lo, hi, j.dump()));
+    // A non-negative literal is unsigned to the parser, and past 2^63 - 1 its long long wraps to a
+    // negative number: compare it unsigned, and show the number as written.
+    const bool past_long_long = j.is_number_unsigned() && j.get<unsigned long long>() > 9223372036854775807ull;
     const long long v = j.get<long long>();
-    if (v < lo || v > hi)
-      throw input_error(fmt::format("{} = {} is outside the allowed range [{}, {}]", key_path(key), v, lo, hi));
+    if (past_long_long || v < lo || v > hi)
+      throw input_error(fmt::format("{} = {} is outside the allowed range [{}, {}]", key_path(key), j.dump(), lo, hi));
     return static_cast<int>(v);
   }
   int integer_or(const std::string& key, int fallback, int lo, int hi) {
@@ -128,9 +131,12 @@ class ObjectReader {
   /// Mark a key as understood without reading it (e.g. "comment").
   void allow(const std::string& key) { used_.insert(key); }
 
+  /// An end at this magnitude or beyond is unbounded; values beyond it are refused all the same.
+  static constexpr double kUnbounded = 1e30;
+
   /// The interval as messages write it; an end at 1e30 or beyond is unbounded: (0, inf).
   static std::string interval(double lo, double hi, bool open_lo, bool open_hi) {
-    constexpr double unbounded = 1e30;
+    constexpr double unbounded = kUnbounded;
     const bool no_lo = lo <= -unbounded, no_hi = hi >= unbounded;
     return fmt::format("{}{}, {}{}", open_lo || no_lo ? "(" : "[", no_lo ? std::string("-inf") : fmt::format("{}", lo),
                        no_hi ? std::string("inf") : fmt::format("{}", hi), open_hi || no_hi ? ")" : "]");
@@ -141,7 +147,11 @@ class ObjectReader {
     if (!j.is_number()) throw input_error(fmt::format("{} must be a number in {}, got {}", path, range, j.dump()));
     const double v = j.get<double>();
     const bool ok = std::isfinite(v) && (open_lo ? v > lo : v >= lo) && (open_hi ? v < hi : v <= hi);
-    if (!ok) throw input_error(fmt::format("{} = {} is outside the allowed range {}", path, v, range));
+    // young = 1e308 was refused as "outside (0, inf)": say which limit it broke.
+    const bool beyond = std::isfinite(v) && ((v > hi && hi >= kUnbounded) || (v < lo && lo <= -kUnbounded));
+    if (!ok)
+      throw input_error(fmt::format("{} = {} is outside the allowed range {}{}", path, v, range,
+                                    beyond ? " (magnitudes of 1e30 and more are refused)" : ""));
     return v;
   }
 

@@ -66,6 +66,11 @@ TEST(BadInput, EveryMistakeNamesTheKeyPathInOneLine) {
        "bodies[0] (\"block\"): no time step resolves its wave speed sqrt(M / materials.rubber.density) = inf m/s"},
       {"overflowing speed", "\"material\": \"rubber\",", "\"material\": \"rubber\", \"velocity\": [1e300, 1e300, 0],",
        "|bodies[0].velocity| = inf m/s"},
+      // the message says which limit a number broke, and shows it as written
+      {"beyond 1e30", "\"young\": 1.0e6", "\"young\": 1e308",
+       "materials.rubber.young = 1e+308 is outside the allowed range (0, inf) (magnitudes of 1e30 and more are refused)"},
+      {"integer past 2^64", "\"courant\": 0.3", "\"courant\": 0.3, \"max_steps\": 18446744073709551615",
+       "time.max_steps = 18446744073709551615 is outside the allowed range"},
       // the name is a folder under runs/ whose files a run replaces and clears
       {"name ..", "\"name\": \"valid\"", "\"name\": \"..\"", "name = \"..\" must be a plain folder name"},
       {"name with a slash", "\"name\": \"valid\"", "\"name\": \"../x\"", "name = \"../x\" must be a plain folder name"},
