@@ -706,6 +706,9 @@ Table<SceneDraft> make_guards_table() {
       number<SceneDraft>("energy_growth_factor", TALUS_AT(scene.guards.energy_growth_factor), {0.0, kHuge, true},
                          "stop when the total energy grew by more than this times the energy available (initial "
                          "kinetic + strain + potential released)"),
+      number<SceneDraft>("min_volume_ratio", TALUS_AT(scene.guards.min_volume_ratio), {0.0, 1.0, false, true},
+                         "stop when a particle's volume falls below this fraction of its seeded volume (mass / "
+                         "material density): compression no granular or elastic body survives (0: off)"),
       integer<SceneDraft>("snapshot_interval", TALUS_AT(scene.guards.snapshot_interval), 0, 1000000,
                           "steps between in-memory copies of the last good state, written as a frame and checkpoint "
                           "when a guard trips (0: none)"),
