@@ -49,6 +49,21 @@ TEST(SceneJson, AnEndlessNumberOfStepsIsWarnedAbout) {
   EXPECT_TRUE(warned(parse_scene(replace_once(kMinimal, "\"young\": 1e6", "\"young\": 1e29"), "t")));
 }
 
+// Two boxes sharing a volume seed it twice: warned about; boxes that only touch are not.
+TEST(SceneJson, OverlappingBoxesAreWarnedAbout) {
+  const auto warnings_of = [](const std::string& second_box) {
+    const std::string text = replace_once(
+        kMinimal, "\"max\": [0.5, 0.5, 0.5] } } ]",
+        "\"max\": [0.5, 0.5, 0.5] } }, { \"name\": \"c\", \"material\": \"m\", \"box\": " + second_box + " } ]");
+    int overlaps = 0;
+    for (const std::string& w : scene_warnings(parse_scene(text, "t")))
+      overlaps += w.find("bodies[0] (\"b\") and bodies[1] (\"c\") overlap") != std::string::npos;
+    return overlaps;
+  };
+  EXPECT_EQ(warnings_of(R"({ "min": [0.4, 0.2, 0.2], "max": [0.8, 0.5, 0.5] })"), 1);
+  EXPECT_EQ(warnings_of(R"({ "min": [0.5, 0.2, 0.2], "max": [0.8, 0.5, 0.5] })"), 0);  // touching
+}
+
 TEST(SceneJson, BadInputNamesTheKeyAndTheRange) {
   const std::string ok = kMinimal;
   test::expect_variant_error(ok, "\"poisson\": 0.3", "\"poisson\": 0.5", "materials.m.poisson = 0.5 is outside the allowed range (-1, 0.5)");
