@@ -3,6 +3,7 @@
 // as `talus run` splits it (slabs along x); rank 0 prints and writes for all of them. See
 // docs/performance.md, "Distributed runs (MPI)".
 #include "commands.hpp"
+#include "option_checks.hpp"
 #include "talus/core/comm.hpp"
 #include "talus/core/simd_dispatch.hpp"
 #include "talus/core/error.hpp"
@@ -567,35 +568,36 @@ void add_bench_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "bench", "Measure speed: particle-updates per second, time per phase, memory per particle (under mpirun: of all ranks, with the bytes they exchange)");
   cmd->add_option("--scene", o->scene, "block (a cube sliding on a frictional floor) | column (a sand column collapsing, 2:1) | shear (the block's sand in simple shear at yield: every particle plastic every step; --material dp or mu_i) | update (the constitutive update alone, every particle plastic; --material dp or mu_i)")->capture_default_str();
-  cmd->add_option("--particles", o->particles, "Approximate particle count")->check(CLI::Range(1000LL, 100000000LL))->capture_default_str();
+  check_range(cmd->add_option("--particles", o->particles, "Approximate particle count"), 1000LL, 100000000LL)
+      ->capture_default_str();
   cmd->add_option("--shape", o->shape, "linear | ugimp | cpgimp | bspline2")
       ->capture_default_str();
   cmd->add_option("--scheme", o->scheme, "musl | usl | usf | usavg")
       ->capture_default_str();
   cmd->add_option("--material", o->material, "elastic | dp (Drucker-Prager sand, Abe, Johansson & Konagai 2005, Table 2) | mu_i (glass beads, Jop et al. 2006)")->capture_default_str();
   cmd->add_option("--mls", o->mls, "off | linear | quadratic | cubic")->capture_default_str();
-  cmd->add_option("--mls-radius", o->mls_radius, "MLS radius in cells (solver.smoothing.radius_factor)")
-      ->check(CLI::Range(0.5, 8.0))
+  check_range(cmd->add_option("--mls-radius", o->mls_radius, "MLS radius in cells (solver.smoothing.radius_factor)"),
+              0.5, 8.0)
       ->capture_default_str();
   cmd->add_option("--mls-variant", o->mls_variant,
                   "particle (one fit per particle, the reference) | cell (one fit per cell: solver.smoothing.variant)")
       ->capture_default_str();
-  cmd->add_option("--threads", o->threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)")->check(CLI::Range(1, 4096));
-  cmd->add_option("--steps", o->steps, "Timed steps (after one untimed step)")->check(CLI::Range(1, 1000000))->capture_default_str();
+  check_range(cmd->add_option("--threads", o->threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)"), 1, 4096);
+  check_range(cmd->add_option("--steps", o->steps, "Timed steps (after one untimed step)"), 1, 1000000)
+      ->capture_default_str();
   cmd->add_option("--json", o->json_path, "Also write the results as JSON to this file");
   cmd->add_option("--record-work", o->record_path,
                   "Also record the work of every block and parallel region for --record-steps more steps, as JSON "
                   "(tools/scaling_model.py)");
-  cmd->add_option("--block-cells", o->block_cells, "solver.block_cells: colour-block edge in cells (0: automatic)")
-      ->check(CLI::Range(0, 64))
+  check_range(cmd->add_option("--block-cells", o->block_cells, "solver.block_cells: colour-block edge in cells (0: automatic)"),
+              0, 64)
       ->capture_default_str();
   cmd->add_option("--scatter", o->scatter,
                   "solver.scatter: colour_passes (8 passes over the colour blocks) or block_buffers (one pass into "
                   "per-block node boxes, then their sum)")
       ->check(CLI::IsMember({"colour_passes", "block_buffers"}))
       ->capture_default_str();
-  cmd->add_option("--record-steps", o->record_steps, "Steps recorded by --record-work")
-      ->check(CLI::Range(1, 1000))
+  check_range(cmd->add_option("--record-steps", o->record_steps, "Steps recorded by --record-work"), 1, 1000)
       ->capture_default_str();
   cmd->add_flag("--cpu-time", o->cpu_time,
                 "Time with the process's CPU time instead of the wall clock (phases and the rate): on a shared "

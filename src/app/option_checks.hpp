@@ -1,0 +1,35 @@
+#pragma once
+// Checks of command-line values that every command shares, made while the options are parsed or
+// before any work, so that bad input stops at once with one line and exit code 2 (talus::input_error).
+#include "talus/core/error.hpp"
+
+#include <CLI/CLI.hpp>
+#include <fmt/core.h>
+
+#include <string>
+#include <string_view>
+#include <type_traits>
+
+namespace talus::app {
+
+/// Limits a number option to [lo, hi], in place of CLI::Range, which lets NaN through (every comparison
+/// with NaN is false) and calls text that is no number "not in range". The message reads as the
+/// scene's do: "--mls-radius = nan is outside [0.5, 8]", "--threads = abc is not an integer". It is
+/// thrown rather than returned because CLI11 would prefix "--threads: " to a returned one.
+template <typename T>
+CLI::Option* check_range(CLI::Option* option, T lo, T hi) {
+  static_assert(std::is_arithmetic_v<T>);
+  const std::string name = option->get_name(), range = fmt::format("[{}, {}]", lo, hi);
+  return option->check(CLI::Validator(
+      [name, range, lo, hi](std::string& text) {
+        T value{};
+        if (!CLI::detail::lexical_cast(text, value))
+          throw input_error(fmt::format("{} = {} is not {}; allowed {}", name, text,
+                                        std::is_integral_v<T> ? "an integer" : "a number", range));
+        if (!(value >= lo && value <= hi)) throw input_error(fmt::format("{} = {} is outside {}", name, text, range));
+        return std::string();
+      },
+      range));
+}
+
+}  // namespace talus::app
