@@ -339,9 +339,25 @@ PhaseSpread phase_spread(const std::vector<RankTimes>& ranks) {
   return s;
 }
 
+/// --json and --record-work, checked before the bench runs (it can take minutes). Only rank 0 writes
+/// them; the other ranks stop with it, so that none waits for rank 0 in a collective.
+void refuse_unwritable_outputs(const BenchOptions& o, const Comm& world) {
+  std::string refusal;
+  if (world.root()) {
+    try {
+      if (!o.json_path.empty()) check_writable_file(o.json_path, "--json");
+      if (!o.record_path.empty()) check_writable_file(o.record_path, "--record-work");
+    } catch (const Error& e) {
+      refusal = e.what();
+    }
+  }
+  if (world.any(!refusal.empty())) throw input_error(refusal);
+}
+
 void run_bench(const BenchOptions& o) {
   refuse_unavailable(o);
   const Comm world = Comm::world();
+  refuse_unwritable_outputs(o, world);
   if (world.distributed() && o.scene == "update")
     throw input_error("--scene update: one rank only (it has no grid to split); run it without mpirun");
   if (world.distributed() && !o.record_path.empty())

@@ -5,6 +5,7 @@
 // A spec whose material has "model": "mu_i" runs the μ(I) steady simple shear instead
 // (talus::run_mu_i_shear_test; spec and columns in docs/mu-i.md).
 #include "commands.hpp"
+#include "option_checks.hpp"
 #include "talus/core/error.hpp"
 #include "talus/material/element_test.hpp"
 #include "talus/material/mu_i_shear_test.hpp"
@@ -13,6 +14,7 @@
 #include <fmt/core.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <string>
@@ -35,6 +37,11 @@ void run_mu_i_test_command(const MuIShearSpec& spec, const std::string& out_file
 }
 
 void run_element_test_command(const std::string& spec_file, const std::string& out_file) {
+  check_writable_file(out_file, "--out");
+  // The CSV would replace the spec it was computed from.
+  std::error_code ec;
+  if (std::filesystem::equivalent(spec_file, out_file, ec))
+    throw input_error(fmt::format("--out {} is the spec file itself; write the CSV to another file", out_file));
   const ElementTestRequest request = read_element_test_request(spec_file);  // the scene's reader and rules
   if (request.model == ElementTestRequest::Model::MuI) return run_mu_i_test_command(request.mu_i, out_file);
   const ElementTestSpec& spec = request.drucker_prager;

@@ -32,4 +32,9 @@ CLI::Option* check_range(CLI::Option* option, T lo, T hi) {
       range));
 }
 
+/// Refuses, before any work, an output file that cannot be written: its folder missing or not
+/// writable, or the path itself a folder. `option` names the option in the message ("--json").
+/// A command that learns this only when it writes has done all its work for nothing.
+void check_writable_file(const std::string& path, std::string_view option);
+
 }  // namespace talus::app

@@ -38,5 +38,27 @@ TEST_F(CliErrors, BenchNumberOptionsRefuseNonFiniteValuesAndNonNumbersNamingTheR
   expect_error_line(run("bench --particles 1e6"), "--particles = 1e6 is not an integer; allowed [1000, 100000000]");
 }
 
+// The bench learned that it could not write its files only after it had run (minutes at 1e6
+// particles) and printed its results.
+TEST_F(CliErrors, BenchRefusesAnUnwritableOutputBeforeAnyWork) {
+  const std::string bench = "bench --particles 1000 --threads 1 --steps 1 ";
+  const std::string missing = (dir_ / "no_such_folder" / "b.json").string();
+  expect_error_line(run(bench + "--json " + missing),
+                    "--json " + missing + ": cannot write there: the folder " + (dir_ / "no_such_folder").string() +
+                        " does not exist");
+  expect_error_line(run(bench + "--record-work " + missing),
+                    "--record-work " + missing + ": cannot write there: the folder " +
+                        (dir_ / "no_such_folder").string() + " does not exist");
+  expect_error_line(run(bench + "--json " + dir_.string()), "--json " + dir_.string() + ": is a folder, not a file");
+  if (::geteuid() != 0) {  // root writes into a read-only folder all the same
+    const fs::path locked = dir_ / "locked";
+    fs::create_directories(locked);
+    fs::permissions(locked, fs::perms::owner_read | fs::perms::owner_exec);
+    const std::string file = (locked / "b.json").string();
+    expect_error_line(run(bench + "--json " + file), "--json " + file + ": cannot write there: no write permission");
+    fs::permissions(locked, fs::perms::owner_all);
+  }
+}
+
 }  // namespace
 }  // namespace cli_errors_test

@@ -96,6 +96,28 @@ TEST_F(ElementTestCli, UnknownKeyAndBadPathValuesExitTwoNamingTheKey) {
   }
 }
 
+// `-o SPEC` replaced the spec with the CSV, and an unwritable --out was found only after the test ran.
+TEST_F(ElementTestCli, OutputThatIsTheSpecOrCannotBeWrittenIsRefusedBeforeAnyWork) {
+  const std::string text = slurp(fs::path(TALUS_SOURCE_DIR) / "inputs" / "element_tests" / "fig13b_simple_shear_psi10.json");
+  const fs::path spec = write("spec.json", text);
+  const Result same = run("element-test \"" + spec.string() + "\" -o \"" + spec.string() + "\"");
+  EXPECT_EQ(same.exit_code, 2);
+  EXPECT_EQ(same.out, "");
+  EXPECT_EQ(same.err, "talus: error: --out " + spec.string() + " is the spec file itself; write the CSV to another file\n");
+  EXPECT_EQ(slurp(spec), text);
+  // the same file by another name
+  const Result dotted = run("element-test \"" + spec.string() + "\" -o \"" + (dir_ / "." / "spec.json").string() + "\"");
+  EXPECT_EQ(dotted.exit_code, 2);
+  EXPECT_NE(dotted.err.find("is the spec file itself"), std::string::npos) << dotted.err;
+  EXPECT_EQ(slurp(spec), text);
+  const std::string missing = (dir_ / "no_such_folder" / "x.csv").string();
+  const Result unwritable = run("element-test \"" + spec.string() + "\" -o \"" + missing + "\"");
+  EXPECT_EQ(unwritable.exit_code, 2);
+  EXPECT_EQ(unwritable.out, "");
+  EXPECT_EQ(unwritable.err, "talus: error: --out " + missing + ": cannot write there: the folder " +
+                                (dir_ / "no_such_folder").string() + " does not exist\n");
+}
+
 TEST_F(ElementTestCli, MissingSpecFileExitsTwo) {
   const Result r = run("element-test \"" + (dir_ / "nope.json").string() + "\" --out \"" +
                     (dir_ / "x.csv").string() + "\"");
