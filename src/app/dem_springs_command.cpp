@@ -4,6 +4,7 @@
 #include "commands.hpp"
 #include "talus/core/error.hpp"
 #include "talus/dem/contact_calibration.hpp"
+#include "talus/dem/number_text.hpp"
 #include "talus/dem/packing.hpp"
 
 #include <fmt/core.h>
@@ -25,6 +26,26 @@ struct DemSpringsOptions {
   bool plane_stress = false;
   dem::PackingParameters parameters;
 };
+
+/// The inputs are finite, but a double may not hold what follows from them (--E 1e300 with --radius
+/// 1e10 gives kN = inf): refuse, naming the inputs, rather than print null.
+void refuse_non_finite(const nlohmann::ordered_json& out, const DemSpringsOptions& options) {
+  for (const auto& [key, value] : out.items()) {
+    if (!value.is_number_float() || std::isfinite(value.get<double>())) continue;
+    std::string inputs;
+    auto add = [&inputs](const char* option, const std::optional<double>& v) {
+      if (v) inputs += fmt::format("{}{} = {}", inputs.empty() ? "" : " and ", option, dem::number_text(*v));
+    };
+    add("--E", options.young);
+    add("--G", options.shear);
+    add("--density-ratio", options.parameters.density_ratio);
+    add("--coordination", options.parameters.coordination);
+    add("--radius", options.parameters.radius);
+    const double bad = value.get<double>();
+    throw input_error(fmt::format("{} = {}: the springs of {} are beyond the range of a double (about 1e-308 to 1.8e308)",
+                                  key, std::isnan(bad) ? "nan" : dem::number_text(bad), inputs));
+  }
+}
 
 nlohmann::ordered_json compute_dem_springs(const DemSpringsOptions& options) {
   const dem::Packing packing = dem::parse_packing(options.packing);
@@ -61,6 +82,7 @@ nlohmann::ordered_json compute_dem_springs(const DemSpringsOptions& options) {
   out["density_ratio"] = geometry.density_ratio;
   out["coordination"] = geometry.coordination;
   if (dem::is_three_dimensional(packing)) out["radius"] = geometry.radius;
+  refuse_non_finite(out, options);
   return out;
 }
 

@@ -28,12 +28,13 @@ std::string plane_suffix(Packing packing, PlaneCondition plane) {
 void check_target(const IsotropicElasticity& target, const PackingGeometry& geometry, PlaneCondition plane) {
   const double g = target.shear_modulus;
   const double nu = target.poisson_ratio;
-  if (!std::isfinite(g) || g <= 0.0) {
-    throw input_error("the shear modulus G = " + number_text(g) + " must be a finite number > 0 (from --E or --G)");
-  }
-  // An isotropic solid is stable only for -1 < nu < 1/2 (positive G and bulk modulus).
+  // An isotropic solid is stable only for -1 < nu < 1/2 (positive G and bulk modulus). Checked before
+  // G, which comes from nu when --E is given (nu = nan or -1 would be reported as G = nan or inf).
   if (!std::isfinite(nu) || nu <= -1.0 || nu >= 0.5) {
     throw input_error("--nu = " + number_text(nu) + " is outside (-1, 0.5), the range of a stable isotropic solid");
+  }
+  if (!std::isfinite(g) || g <= 0.0) {
+    throw input_error("the shear modulus G = " + number_text(g) + " must be a finite number > 0 (from --E or --G)");
   }
   if (is_three_dimensional(geometry.packing) && plane == PlaneCondition::stress) {
     throw input_error("--plane-stress does not apply to packing '" + std::string(packing_name(geometry.packing)) +

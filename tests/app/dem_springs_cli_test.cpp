@@ -84,5 +84,22 @@ TEST_F(DemSpringsCli, PoissonRatioAboveTheLimitExitsWithCode2AndOneLine) {
   EXPECT_DOUBLE_EQ(j.at("kT").get<double>(), 1e7);
 }
 
+// With --E, G = E / (2 (1 + nu)) comes from nu: nu = nan or -1 was reported as "G = nan (from --E
+// or --G)", which named neither --nu nor its range.
+TEST_F(DemSpringsCli, PoissonRatioOutsideTheStableRangeIsNamedBeforeTheShearModulus) {
+  for (const std::string nu : {"nan", "-1", "-5", "0.5"})
+    expect_refused(run("dem-springs --E 1e9 --nu " + nu + " --packing hex"), "--nu = " + nu + " is outside (-1, 0.5)");
+}
+
+// Finite inputs whose springs a double cannot hold printed "kN": null and exited 0.
+TEST_F(DemSpringsCli, SpringsBeyondTheRangeOfADoubleAreRefusedNamingTheInputs) {
+  expect_refused(run("dem-springs --E 1e300 --nu 0.2 --packing random3d --radius 1e10"),
+                 "kN = inf: the springs of --E = 1e+300 and --radius = 1e+10 are beyond the range of a double");
+  expect_refused(run("dem-springs --E 1e-320 --nu 0.2 --packing random3d --radius 1e-10"),
+                 "kT_over_kN = nan: the springs of --E = 1e-320 and --radius = 1e-10 are beyond the range of a double");
+  expect_refused(run("dem-springs --G 1e308 --nu 0.2 --packing hex"),
+                 "kN = inf: the springs of --G = 1e+308 are beyond the range of a double");
+}
+
 }  // namespace
 }  // namespace dem_springs_cli_test
