@@ -4,6 +4,7 @@
 #include "talus/core/error.hpp"
 #include "talus/core/tensor.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <ostream>
@@ -14,6 +15,18 @@ std::vector<MuIShearPoint> run_mu_i_shear_test(const MuIShearSpec& spec) {
   const MuI model(spec.material, "material.");
   if (!(spec.pressure > 0.0) || !(spec.strain_increment > 0.0) || spec.increments < 1)
     throw input_error("path: pressure and strain_increment must be > 0 and increments >= 1");
+  // J2 squares the stress: a steady shear stress mu(I) p below ~1e-154 Pa squares to a subnormal or
+  // to zero, and tau/p comes out wrong or NaN (p = 1e-170 Pa gave tau = 0). The smallest mu(I) is
+  // that of the smallest I (mu rises with I); 1e-150 Pa leaves the squares normal with room to spare.
+  constexpr double kSmallestShearStress = 1e-150;  // [Pa]
+  if (!spec.inertial_numbers.empty()) {
+    const double i_min = *std::min_element(spec.inertial_numbers.begin(), spec.inertial_numbers.end());
+    const double p_min = kSmallestShearStress / model.friction(i_min);
+    if (!(spec.pressure >= p_min))
+      throw_out_of_range("path.", "pressure", spec.pressure,
+                         "p >= " + number_g(p_min) + " Pa (the steady shear stress mu(I) p at I = " + number_g(i_min) +
+                             " must be >= 1e-150 Pa, or squaring it underflows)");
+  }
   std::vector<MuIShearPoint> points;
   for (const double i : spec.inertial_numbers) {
     MuIShearPoint pt;

@@ -72,6 +72,41 @@ TEST_F(MuICli, BadElementTestParameterExitsTwoNamingTheKey) {
   EXPECT_FALSE(fs::exists(dir_ / "x.csv"));
 }
 
+// J2 squares the stress: at p = 1e-300 Pa the steady shear stress squared to zero and the CSV was
+// full of NaN, with exit code 0. The limit is where mu(I_min) p reaches 1e-150 Pa; just above it every
+// value is finite and tau/p is mu(I).
+TEST_F(MuICli, PressureTooSmallForADoubleIsRefusedWithTheLimitThatWorks) {
+  const std::string shipped = slurp(kInputs + "element_tests/mu_i_simple_shear.json");
+  const std::string key = "\"pressure\": 1.0e3";
+  ASSERT_NE(shipped.find(key), std::string::npos);
+  auto with_pressure = [&](const std::string& p) {
+    std::string text = shipped;
+    text.replace(text.find(key), key.size(), "\"pressure\": " + p);
+    return write("p" + p + ".json", text);
+  };
+  const fs::path csv = dir_ / "x.csv";
+  const Result tiny = run("element-test \"" + with_pressure("1e-300").string() + "\" --out \"" + csv.string() + "\"");
+  EXPECT_EQ(tiny.exit_code, 2);
+  EXPECT_EQ(std::count(tiny.err.begin(), tiny.err.end(), '\n'), 1) << tiny.err;
+  EXPECT_NE(tiny.err.find("path.pressure = 1e-300 is out of range; allowed p >= 2.6181e-150 Pa"), std::string::npos)
+      << tiny.err;
+  EXPECT_FALSE(fs::exists(csv));
+  const Result at_limit = run("element-test \"" + with_pressure("2.62e-150").string() + "\" --out \"" + csv.string() + "\"");
+  ASSERT_EQ(at_limit.exit_code, 0) << at_limit.err;
+  std::ifstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line)) {
+    std::stringstream fields(line);
+    std::string f;
+    std::vector<double> v;
+    while (std::getline(fields, f, ',')) v.push_back(std::stod(f));
+    ASSERT_EQ(v.size(), 10u) << line;
+    for (const double x : v) EXPECT_TRUE(std::isfinite(x)) << line;
+    EXPECT_LT(std::abs(v[7]), 1e-12) << line;  // relative_error of tau/p against mu(I)
+  }
+}
+
 // Each bad value in the shipped μ(I) scene: exit 2, one line naming materials.beads.<key> and its
 // range, no output folder.
 TEST_F(MuICli, BadSceneParametersExitTwoNamingTheKeyAndRange) {
