@@ -8,6 +8,28 @@
 #include <fmt/core.h>
 
 #include <exception>
+#include <string>
+
+namespace {
+
+/// A CLI11 parse error as talus prints every error: one line after "talus: error: ", with where to read
+/// more. CLI11's own print is two lines without the prefix, and for a word that is no command it
+/// says only that a subcommand is required.
+std::string parse_error_line(CLI::App& app, const CLI::ParseError& e) {
+  const std::vector<CLI::App*> given = app.get_subcommands();  // require_subcommand(1): at most one
+  if (!given.empty()) return fmt::format("{} (see talus {} --help)", e.what(), given.front()->get_name());
+  std::string commands;
+  for (const CLI::App* command : app.get_subcommands([](const CLI::App*) { return true; }))
+    commands += (commands.empty() ? "" : ", ") + command->get_name();
+  const std::vector<std::string> words = app.remaining();
+  std::string what = e.what();
+  if (words.empty()) what = "a command is required: one of " + commands;
+  else if (words.front().rfind('-', 0) == 0) what = fmt::format("unknown option {}", words.front());
+  else what = fmt::format("unknown command '{}'; the commands are {}", words.front(), commands);
+  return what + " (see talus --help)";
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   // Under mpirun (and with an MPI build) every rank runs this same program; otherwise nothing changes.
@@ -32,7 +54,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::Success& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    app.exit(e);
+    if (world.root()) fmt::print(stderr, "talus: error: {}\n", talus::Error::one_line(parse_error_line(app, e)));
     return 2;
   } catch (const talus::Error& e) {
     // Errors that reach here are those every rank meets alike (the scene, the options): rank 0

@@ -60,5 +60,25 @@ TEST_F(CliErrors, BenchRefusesAnUnwritableOutputBeforeAnyWork) {
   }
 }
 
+// CLI11 printed its errors in two lines without the prefix, and "talus bogus" as "A subcommand is
+// required".
+TEST_F(CliErrors, ParseErrorsAreOneLineWithWhereToReadMore) {
+  const std::string commands = "run, check, bench, element-test, dem-springs, schema";
+  expect_error_line(run("bogus"), "unknown command 'bogus'; the commands are " + commands + " (see talus --help)");
+  expect_error_line(run(""), "a command is required: one of " + commands + " (see talus --help)");
+  expect_error_line(run("--bogus"), "unknown option --bogus (see talus --help)");
+  expect_error_line(run("run"), "scene is required (see talus run --help)");
+  expect_error_line(run("bench --bogus"), "The following argument was not expected: --bogus (see talus bench --help)");
+  expect_error_line(run("dem-springs --E 1 --G 1 --nu 0 --packing hex"),
+                    "--E excludes --G (see talus dem-springs --help)");
+  // help and version are no errors
+  for (const std::string args : {"--help", "bench --help", "--version"}) {
+    const ProgramResult r = run(args);
+    EXPECT_EQ(r.exit_code, 0) << args;
+    EXPECT_EQ(r.err, "") << args;
+    EXPECT_FALSE(r.out.empty()) << args;
+  }
+}
+
 }  // namespace
 }  // namespace cli_errors_test
