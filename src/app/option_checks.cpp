@@ -18,4 +18,16 @@ void check_writable_file(const std::string& path, std::string_view option) {
     throw input_error(fmt::format("{} {}: cannot write there: no write permission", option, path));
 }
 
+void check_writable_folder(const std::string& dir, std::string_view what) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::path existing = fs::path(dir).lexically_normal();
+  while (!existing.empty() && !fs::exists(existing, ec)) existing = existing.parent_path();
+  if (existing.empty()) existing = ".";
+  if (!fs::is_directory(existing, ec))
+    throw input_error(fmt::format("{} {}: cannot make it: {} is a file, not a folder", what, dir, existing.string()));
+  if (::access(existing.c_str(), W_OK | X_OK) != 0)
+    throw input_error(fmt::format("{} {}: cannot write there: no write permission in {}", what, dir, existing.string()));
+}
+
 }  // namespace talus::app

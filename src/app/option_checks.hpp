@@ -37,4 +37,9 @@ CLI::Option* check_range(CLI::Option* option, T lo, T hi) {
 /// A command that learns this only when it writes has done all its work for nothing.
 void check_writable_file(const std::string& path, std::string_view option);
 
+/// Refuses, before any work, an output folder that cannot be made or written: the nearest part of
+/// its path that exists must be a writable folder (`--out results.csv/run` or a read-only tree
+/// failed only after the solver was built and its banner printed).
+void check_writable_folder(const std::string& dir, std::string_view what);
+
 }  // namespace talus::app

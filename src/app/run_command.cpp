@@ -1,6 +1,7 @@
 // `talus run SCENE`: run a scene and write its outputs. `talus check SCENE`: validate it and print
 // what a run would do, writing nothing.
 #include "commands.hpp"
+#include "option_checks.hpp"
 #include "talus/core/simd_dispatch.hpp"
 #include "talus/core/error.hpp"
 #include "talus/io/checkpoint.hpp"
@@ -118,7 +119,7 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("scene", *scene_path, "Scene file (JSON); see docs/scene-reference.md")->required();
   add_isa_option(cmd, isa);
   cmd->add_option("--out", *out_dir, "Output folder (default: runs/<scene name>)");
-  cmd->add_option("--threads", *threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)")->check(CLI::Range(1, 4096));
+  check_range(cmd->add_option("--threads", *threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)"), 1, 4096);
   cmd->add_flag("--quiet", *quiet, "No progress line");
   auto restart = std::make_shared<std::string>();
   cmd->add_option("--restart", *restart,
@@ -130,8 +131,8 @@ void add_run_command(CLI::App& app) {
                   "Record the work of every block and parallel region of every --record-interval-th step, as JSON "
                   "(tools/scaling_model.py, docs/performance.md \"Scaling\"); a record keeps at most 1000 steps: "
                   "past that it keeps every third one and triples the interval, so that it spans the whole run");
-  cmd->add_option("--record-interval", *record_interval, "Steps between the steps --record-work records")
-      ->check(CLI::Range(1, 1000000))
+  check_range(cmd->add_option("--record-interval", *record_interval, "Steps between the steps --record-work records"), 1,
+              1000000)
       ->capture_default_str();
   auto foreground_frames = std::make_shared<bool>(false);
   cmd->add_flag("--foreground-frames", *foreground_frames,
@@ -158,6 +159,9 @@ void add_run_command(CLI::App& app) {
       if (dir.empty()) dir = ".";
     }
     require_outputs_spare_inputs(dir, *scene_path, *restart, *record_path);
+    // Every rank sees the same folder and stops alike (rank 0 reports); --record-work is refused under mpirun.
+    check_writable_folder(dir, "output folder");
+    if (!record_path->empty()) check_writable_file(*record_path, "--record-work");
     if (checkpoint && world.root())
       fmt::print("talus: restart from {} at step {}, t = {:.6g} s\n", *restart, solver.step_count(), solver.time());
     const int threads = omp_get_max_threads();

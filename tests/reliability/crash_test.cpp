@@ -234,6 +234,30 @@ TEST(Crash, ARunThatWouldReplaceItsOwnInputsExitsTwoAndTouchesNothing) {
   fs::remove_all(dir);
 }
 
+// An output that cannot be written is refused before the solver is built: one line, no banner
+// (the folder under a file failed only once the run started; the work record after the whole run).
+TEST(Crash, UnwritableOutputsAreRefusedBeforeAnyWork) {
+  const fs::path dir = test::temp_dir("unwritable");
+  std::ofstream(dir / "s.json") << test::small_slide_json(0.02, 0.0);
+  std::ofstream(dir / "a_file") << "x";
+  const std::string scene = (dir / "s.json").string();
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"--out " + (dir / "a_file" / "out").string(), "is a file, not a folder"},
+      {"--out " + (dir / "out").string() + " --record-work " + (dir / "none" / "r.json").string(),
+       "--record-work " + (dir / "none" / "r.json").string() + ": cannot write there: the folder"},
+      {"--out " + (dir / "out").string() + " --record-work " + dir.string(), "is a folder, not a file"},
+  };
+  for (const auto& [args, expect] : cases) {
+    const auto [code, out] = run_captured("run " + scene + " " + args + " --quiet --threads 1");
+    EXPECT_EQ(code, 2) << args << ": " << out;
+    EXPECT_EQ(out.rfind("talus: error: ", 0), 0u) << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+    EXPECT_NE(out.find(expect), std::string::npos) << out;
+    EXPECT_FALSE(fs::exists(dir / "out")) << args;
+  }
+  fs::remove_all(dir);
+}
+
 TEST(Crash, InstabilityExitsThreeWithOneLineAndTheLastGoodState) {
   const fs::path dir = test::temp_dir("unstable");
   // The block slides off the grid through an open x+ face (an outflow boundary) until no particle
