@@ -40,11 +40,7 @@ TEST(SceneJson, DefaultsAndRoundTrip) {
 // A scene that would take more steps than any run will (young = 1e29: about 1e10 steps) is warned
 // about before it starts; the minimal scene (about 30 steps) is not.
 TEST(SceneJson, AnEndlessNumberOfStepsIsWarnedAbout) {
-  const auto warned = [](const Scene& s) {
-    for (const std::string& w : scene_warnings(s))
-      if (w.find("the run would take about") != std::string::npos) return true;
-    return false;
-  };
+  const auto warned = [](const Scene& s) { return test::warnings_with(s, "the run would take about") > 0; };
   EXPECT_FALSE(warned(parse_scene(kMinimal, "t")));
   EXPECT_TRUE(warned(parse_scene(replace_once(kMinimal, "\"young\": 1e6", "\"young\": 1e29"), "t")));
 }
@@ -55,10 +51,7 @@ TEST(SceneJson, OverlappingBoxesAreWarnedAbout) {
     const std::string text = replace_once(
         kMinimal, "\"max\": [0.5, 0.5, 0.5] } } ]",
         "\"max\": [0.5, 0.5, 0.5] } }, { \"name\": \"c\", \"material\": \"m\", \"box\": " + second_box + " } ]");
-    int overlaps = 0;
-    for (const std::string& w : scene_warnings(parse_scene(text, "t")))
-      overlaps += w.find("bodies[0] (\"b\") and bodies[1] (\"c\") overlap") != std::string::npos;
-    return overlaps;
+    return test::warnings_with(parse_scene(text, "t"), "bodies[0] (\"b\") and bodies[1] (\"c\") overlap");
   };
   EXPECT_EQ(warnings_of(R"({ "min": [0.4, 0.2, 0.2], "max": [0.8, 0.5, 0.5] })"), 1);
   EXPECT_EQ(warnings_of(R"({ "min": [0.5, 0.2, 0.2], "max": [0.8, 0.5, 0.5] })"), 0);  // touching

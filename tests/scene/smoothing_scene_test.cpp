@@ -32,11 +32,7 @@ TEST(SmoothingScene, TheFitVariantIsReadAndWrittenBack) {
 }
 
 TEST(SmoothingScene, TheCellFitIsWarnedAbout) {
-  const auto warned = [](const Scene& s) {
-    for (const std::string& w : scene_warnings(s))
-      if (w.find("variant = \"cell\" is not energy-stable") != std::string::npos) return true;
-    return false;
-  };
+  const auto warned = [](const Scene& s) { return test::warnings_with(s, "variant = \"cell\" is not energy-stable") > 0; };
   EXPECT_TRUE(warned(parse_scene(kSmoothed, "t")));
   EXPECT_FALSE(warned(parse_scene(test::replace_once(kSmoothed, "\"cell\"", "\"particle\""), "t")));
   EXPECT_FALSE(warned(parse_scene(test::replace_once(kSmoothed, "\"basis\"", "\"enabled\": false, \"basis\""), "t")));

@@ -20,6 +20,13 @@ inline std::string replace_once(std::string text, const std::string& from, const
   return text.replace(at, from.size(), to);
 }
 
+/// How many of the scene's warnings (scene_warnings, printed by run and check) hold `fragment`.
+inline int warnings_with(const Scene& scene, const std::string& fragment) {
+  int count = 0;
+  for (const std::string& w : scene_warnings(scene)) count += w.find(fragment) != std::string::npos;
+  return count;
+}
+
 /// How far scene_error_of takes a scene text: reading it, or reading it and seeding its bodies.
 enum class SceneStage { Read, ReadAndSeed };
 
