@@ -118,7 +118,14 @@ void add_run_command(CLI::App& app) {
   auto isa = std::make_shared<std::string>();
   cmd->add_option("scene", *scene_path, "Scene file (JSON); see docs/scene-reference.md")->required();
   add_isa_option(cmd, isa);
-  cmd->add_option("--out", *out_dir, "Output folder (default: runs/<scene name>)");
+  cmd->add_option("--out", *out_dir, "Output folder (default: runs/<scene name>)")
+      ->check(CLI::Validator(
+          [](std::string& dir) {
+            // An empty --out (an unset shell variable) fell back to runs/<name> without a word.
+            if (dir.empty()) throw input_error("--out is empty: give a folder, or leave --out out for runs/<scene name>");
+            return std::string();
+          },
+          ""));
   check_range(cmd->add_option("--threads", *threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)"), 1, 4096);
   cmd->add_flag("--quiet", *quiet, "No progress line");
   auto restart = std::make_shared<std::string>();

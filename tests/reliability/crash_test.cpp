@@ -246,6 +246,7 @@ TEST(Crash, UnwritableOutputsAreRefusedBeforeAnyWork) {
       {"--out " + (dir / "out").string() + " --record-work " + (dir / "none" / "r.json").string(),
        "--record-work " + (dir / "none" / "r.json").string() + ": cannot write there: the folder"},
       {"--out " + (dir / "out").string() + " --record-work " + dir.string(), "is a folder, not a file"},
+      {"--out ''", "--out is empty"},  // an unset shell variable: it fell back to runs/<name>
   };
   for (const auto& [args, expect] : cases) {
     const auto [code, out] = run_captured("run " + scene + " " + args + " --quiet --threads 1");
