@@ -25,6 +25,8 @@ namespace {
 
 void run_mu_i_test_command(const MuIShearSpec& spec, const std::string& out_file) {
   const std::vector<MuIShearPoint> points = run_mu_i_shear_test(spec);
+  if (const std::string shortfall = mu_i_shear_strain_shortfall(spec); !shortfall.empty())
+    fmt::print(stderr, "talus: warning: {}\n", shortfall);
   std::ofstream out(out_file);
   if (!out) throw io_error(fmt::format("cannot write {}", out_file));
   write_mu_i_shear_csv(out, points);

@@ -54,6 +54,23 @@ std::vector<MuIShearPoint> run_mu_i_shear_test(const MuIShearSpec& spec) {
   return points;
 }
 
+std::string mu_i_shear_strain_shortfall(const MuIShearSpec& spec) {
+  if (spec.inertial_numbers.empty()) return {};
+  const MuI model(spec.material, "material.");
+  const double i_max = *std::max_element(spec.inertial_numbers.begin(), spec.inertial_numbers.end());
+  const double tau = model.friction(i_max) * spec.pressure;
+  const double needed = tau / model.shear_modulus();  // engineering shear strain of the elastic approach
+  const double given = spec.strain_increment * spec.increments;
+  if (given >= needed) return {};
+  char text[512];
+  std::snprintf(text, sizeof text,
+                "path.increments x path.strain_increment = %.3g is below the shear strain %.3g that the elastic "
+                "response needs to reach the steady stress mu(I) p = %.3g Pa at I = %.3g (shear modulus %.3g Pa): "
+                "those samples never flow, and tau/p reads below mu(I); raise the increments or the strain increment",
+                given, needed, tau, i_max, model.shear_modulus());
+  return text;
+}
+
 void write_mu_i_shear_csv(std::ostream& out, const std::vector<MuIShearPoint>& points) {
   out << "I,shear_rate,dt,p,tau,tau_over_p,mu_analytic,relative_error,plastic_shear_rate,last_change\n";
   char buffer[512];

@@ -72,6 +72,27 @@ TEST_F(MuICli, BadElementTestParameterExitsTwoNamingTheKey) {
   EXPECT_FALSE(fs::exists(dir_ / "x.csv"));
 }
 
+// A spec whose total shear strain is below the elastic approach to mu(I_max) p (p = 100 MPa with the
+// shipped strain of 0.1: 15 needed) leaves the samples elastic and tau/p 99% low with every number
+// finite: the command warns, naming the keys; the shipped spec (0.00015 needed) gets no warning.
+TEST_F(MuICli, AStrainTooSmallToReachSteadyFlowIsWarnedAbout) {
+  const std::string shipped = slurp(kInputs + "element_tests/mu_i_simple_shear.json");
+  const std::string key = "\"pressure\": 1.0e3";
+  ASSERT_NE(shipped.find(key), std::string::npos);
+  std::string stiff = shipped;
+  stiff.replace(stiff.find(key), key.size(), "\"pressure\": 1.0e8");
+  const fs::path csv = dir_ / "x.csv";
+  const Result warned = run("element-test \"" + write("p1e8.json", stiff).string() + "\" --out \"" + csv.string() + "\"");
+  EXPECT_EQ(warned.exit_code, 0) << warned.err;
+  EXPECT_EQ(std::count(warned.err.begin(), warned.err.end(), '\n'), 1) << warned.err;
+  EXPECT_NE(warned.err.find("talus: warning: path.increments x path.strain_increment = 0.1 is below the shear strain 15"),
+            std::string::npos)
+      << warned.err;
+  const Result quiet = run("element-test \"" + kInputs + "element_tests/mu_i_simple_shear.json\" --out \"" + csv.string() + "\"");
+  EXPECT_EQ(quiet.exit_code, 0) << quiet.err;
+  EXPECT_EQ(quiet.err, "");
+}
+
 // J2 squares the stress: at p = 1e-300 Pa the steady shear stress squared to zero and the CSV was
 // full of NaN, with exit code 0. The limit is where mu(I_min) p reaches 1e-150 Pa; just above it every
 // value is finite and tau/p is mu(I).

@@ -8,6 +8,7 @@
 #include "talus/material/mu_i.hpp"
 
 #include <iosfwd>
+#include <string>
 #include <vector>
 
 namespace talus {
@@ -34,6 +35,12 @@ struct MuIShearPoint {
 };
 
 std::vector<MuIShearPoint> run_mu_i_shear_test(const MuIShearSpec& spec);
+
+/// Why the spec's total shear strain, increments x strain_increment, cannot bring every sample to
+/// steady flow: below tau / G for the largest steady stress tau = mu(I_max) p the sample stays
+/// elastic, and tau/p reads far below mu(I) (p = 1e8 Pa with the shipped spec: 99% low, every
+/// number finite). Empty when the strain suffices.
+std::string mu_i_shear_strain_shortfall(const MuIShearSpec& spec);
 
 /// CSV with a header row: I,shear_rate,dt,p,tau,tau_over_p,mu_analytic,relative_error,plastic_shear_rate,last_change
 void write_mu_i_shear_csv(std::ostream& out, const std::vector<MuIShearPoint>& points);
