@@ -47,6 +47,11 @@ void fold_tile(Grid& grid, const GhostMap& ghosts, ScatteredFields fields, const
     // Each ghost has exactly one image, so this thread is the only one touching it: its values
     // are moved (not copied) to the image, and the ghost is left empty until the mirror.
     const std::size_t n = pair.node, m = pair.other;
+    // A ghost on an inactive tile holds nothing of this step: no particle reaches it, and the grid
+    // clear skips it. What it may hold is the mirror of the last step in which its tile was active
+    // (momentum, force, no mass): folded in, that momentum without its mass flung the image's
+    // particles 1.1 cells in one step, at the first sort after the block moved off the wall.
+    if (!grid.tile_active(m / kTileNodes)) continue;
     const auto& S = pair.sign;
     if (mass) {
       grid.mass[n] += grid.mass[m];

@@ -124,7 +124,7 @@ struct WalledGrid {
 };
 
 /// The fold done on its own, node by node from Walls (not GhostMap): each active tile's nodes take
-/// their ghosts' fields (grid_update.hpp).
+/// the fields of their ghosts on active tiles (grid_update.hpp).
 void fold_separately(WalledGrid& w, ScatteredFields f, const Vec3& g) {
   Grid& grid = w.grid;
   for (std::uint32_t tile : grid.active_tiles())
@@ -135,6 +135,7 @@ void fold_separately(WalledGrid& w, ScatteredFields f, const Vec3& g) {
       std::array<std::array<double, 3>, 7> signs;
       for (int k = 0, count = w.walls.ghosts_of(node, ghosts, signs); k < count; ++k) {
         const std::size_t ghost = grid.node(ghosts[k][0], ghosts[k][1], ghosts[k][2]);
+        if (!grid.tile_active(ghost / kTileNodes)) continue;  // no particle reached it: it holds no sums
         if (f.mass) {
           grid.mass[image] += grid.mass[ghost];
           for (int d = 0; d < 3; ++d) grid.force[d][image] += (signs[k][d] - 1.0) * grid.mass[ghost] * g[d];
@@ -206,7 +207,7 @@ double run_phase(WalledGrid& w, Phase phase, bool separately, int threads) {
 TEST(GhostPhase, IsTheFoldThePhaseAndTheMirrorOneAfterTheOther) {
   // Active sets: every tile; and tiles left out at random, so that ghosts and images fall on
   // active and inactive tiles in every combination (a ghost whose image is inactive copies it
-  // stale; an inactive ghost is folded but gets no mirror).
+  // stale; an inactive ghost is neither folded nor mirrored: what it holds is stale).
   WalledGrid probe(0);
   const std::size_t tiles = probe.grid.tile_count();
   for (unsigned set = 0; set < 4; ++set) {

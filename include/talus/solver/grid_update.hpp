@@ -31,7 +31,9 @@ enum class GhostFields { AfterGridUpdate, AfterGridUpdateForRemap, Remapped, Sta
 // work on its own nodes, then writes its ghosts' mirrors; the thread of a ghost's tile leaves the
 // ghost alone. Each ghost has one image, so no node is touched by two threads. A ghost whose image's
 // tile is inactive (no fold reaches it) has the node work of its own tile and then copies the image,
-// which nobody writes in the phase; a ghost on an inactive tile gets no mirror. Every node sees the
+// which nobody writes in the phase; a ghost on an inactive tile is neither folded nor mirrored (no
+// particle reaches it and the clear skips it, so it holds only a stale mirror: folding that in gave
+// momentum without mass, guards_test.cpp "BlockReboundingOffASlipWallRunsOn"). Every node sees the
 // operations of the separate fold, node work and mirror in the same order: the same bits.
 // `ghosts`: the walls' ghost nodes, listed per tile (boundary/ghost_map.hpp); without mirrored
 // walls the phase is the node work alone, an OwnTile stage.
