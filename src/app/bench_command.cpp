@@ -233,7 +233,7 @@ void record_work(Solver& solver, const BenchOptions& o, const nlohmann::json& be
 /// return in every pass. No grid, no transfers: the ratio of two materials here is the ratio of
 /// their updates per particle (docs/performance.md, "μ(I) against Drucker-Prager").
 void run_update_bench(const BenchOptions& o) {
-  if (o.threads > 0) omp_set_num_threads(o.threads);
+  set_threads(o.threads);
   const std::size_t n = static_cast<std::size_t>(o.particles);
   const double dt = 1.0e-4, rate = 1.0, shear = 2.0e6 / (2.0 * 1.3);
   std::array<std::vector<double>, 6> stress;
@@ -366,7 +366,7 @@ void run_bench(const BenchOptions& o) {
     run_update_bench(o);
     return;
   }
-  if (o.threads > 0) omp_set_num_threads(o.threads);
+  set_threads(o.threads);
   phase_clock() = o.cpu_time ? PhaseClock::ProcessCpu : PhaseClock::Wall;
   g_block_cells = o.block_cells;
   g_scatter = o.scatter;
@@ -622,7 +622,7 @@ void add_bench_command(CLI::App& app) {
   auto isa = std::make_shared<std::string>();
   add_isa_option(cmd, isa);
   cmd->callback([o, isa]() {
-    if (!isa->empty()) select_isa(*isa);
+    select_isa_option(*isa);
     run_bench(*o);
   });
 }

@@ -23,5 +23,10 @@ int& exit_code();
 /// The --isa option of the commands that run the solver (core/simd_dispatch.hpp); apply it with
 /// select_isa(*value) in the callback: "auto" (default) or a path of available_isas().
 void add_isa_option(CLI::App* command, const std::shared_ptr<std::string>& value);
+/// The OpenMP threads: `threads` (--threads) when > 0, else OMP_NUM_THREADS or all cores, refused
+/// beyond 4096 as --threads is.
+void set_threads(int threads);
+/// Selects the kernels' vector path: `value` (the command's --isa) when given, else TALUS_ISA.
+void select_isa_option(const std::string& value);
 
 }  // namespace talus::app

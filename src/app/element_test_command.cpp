@@ -8,6 +8,7 @@
 #include "option_checks.hpp"
 #include "talus/core/error.hpp"
 #include "talus/material/element_test.hpp"
+#include "talus/io/vtu_writer.hpp"
 #include "talus/material/mu_i_shear_test.hpp"
 #include "talus/scene/element_test_json.hpp"
 
@@ -17,21 +18,28 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <sstream>
 #include <string>
 
 namespace talus::app {
 
 namespace {
 
+/// The CSV that `write` produces, written through a temporary file and a rename: a test stopped
+/// mid-write (a 1e7-increment path writes hundreds of MB) left a truncated CSV under its name, and
+/// the earlier CSV was gone before the new one was complete.
+template <class Write>
+void write_csv(const std::string& out_file, Write write) {
+  std::ostringstream text;
+  write(text);
+  write_file_atomically(out_file, text.str());
+}
+
 void run_mu_i_test_command(const MuIShearSpec& spec, const std::string& out_file) {
   const std::vector<MuIShearPoint> points = run_mu_i_shear_test(spec);
   if (const std::string shortfall = mu_i_shear_strain_shortfall(spec); !shortfall.empty())
     fmt::print(stderr, "talus: warning: {}\n", shortfall);
-  std::ofstream out(out_file);
-  if (!out) throw io_error(fmt::format("cannot write {}", out_file));
-  write_mu_i_shear_csv(out, points);
-  out.close();
-  if (!out) throw io_error(fmt::format("error while writing {}", out_file));
+  write_csv(out_file, [&](std::ostream& out) { write_mu_i_shear_csv(out, points); });
   double worst = 0.0;
   for (const MuIShearPoint& p : points) worst = std::fmax(worst, std::abs(p.relative_error));
   fmt::print("element-test: mu(I) simple shear at {} inertial numbers, largest |tau/p / mu(I) - 1| = {:.2e}, wrote {}\n",
@@ -49,11 +57,7 @@ void run_element_test_command(const std::string& spec_file, const std::string& o
   const ElementTestSpec& spec = request.drucker_prager;
   const std::vector<ElementTestPoint> points = run_element_test(spec);
 
-  std::ofstream out(out_file);
-  if (!out) throw io_error(fmt::format("cannot write {}", out_file));
-  write_element_test_csv(out, points);
-  out.close();
-  if (!out) throw io_error(fmt::format("error while writing {}", out_file));
+  write_csv(out_file, [&](std::ostream& out) { write_element_test_csv(out, points); });
   fmt::print("element-test: {} increments, final regime {}, wrote {}\n", points.size() - 1,
              regime_name(points.back().regime), out_file);
 }

@@ -6,6 +6,7 @@
 #include "talus/core/version.hpp"
 
 #include <fmt/core.h>
+#include <omp.h>
 
 #include <exception>
 #include <string>
@@ -48,8 +49,7 @@ int main(int argc, char** argv) {
   talus::app::add_schema_command(app);
 
   try {
-    talus::select_isa_from_environment();  // TALUS_ISA; a command's --isa overrides it
-    app.parse(argc, argv);
+    app.parse(argc, argv);  // the commands that run kernels choose their path (select_isa_option)
     return talus::app::exit_code();
   } catch (const CLI::Success& e) {
     return app.exit(e);
@@ -83,6 +83,27 @@ void add_isa_option(CLI::App* command, const std::shared_ptr<std::string>& value
                         for (const std::string& n : available_isas()) names += (names.empty() ? "" : ", ") + n;
                         return names;
                       }() + " (reference: the plain C++ path). Every path gives the same bits; also TALUS_ISA");
+}
+
+void set_threads(int threads) {
+  if (threads > 0) {
+    omp_set_num_threads(threads);
+    return;
+  }
+  // OMP_NUM_THREADS=70000 crashed in the first parallel region (libgomp could not make the threads):
+  // hold the environment to the range --threads has.
+  const int from_environment = omp_get_max_threads();
+  if (from_environment > 4096)
+    throw input_error(fmt::format("OMP_NUM_THREADS = {} is outside [1, 4096] (or give --threads)", from_environment));
+}
+
+void select_isa_option(const std::string& value) {
+  // --isa, else TALUS_ISA. Read here, by the commands that run kernels, and not before parsing: a bad
+  // TALUS_ISA made even --help and --version fail, and --isa could not override it.
+  if (!value.empty())
+    select_isa(value);
+  else
+    select_isa_from_environment();
 }
 
 }  // namespace talus::app

@@ -28,10 +28,6 @@ namespace talus::app {
 
 namespace {
 
-void set_threads(int threads) {
-  if (threads > 0) omp_set_num_threads(threads);
-}
-
 void print_warnings(const Scene& scene) {
   for (const std::string& w : scene_warnings(scene)) fmt::print(stderr, "talus: warning: {}\n", w);
 }
@@ -147,7 +143,7 @@ void add_run_command(CLI::App& app) {
                 "run on a thread of their own while the next steps run)");
   cmd->callback([=]() {
     set_threads(*threads);
-    if (!isa->empty()) select_isa(*isa);
+    select_isa_option(*isa);
     // Under mpirun: every rank reads the scene and builds its slab of the solver; rank 0 speaks.
     const Comm world = Comm::world();
     if (world.distributed() && !record_path->empty())
@@ -267,6 +263,7 @@ void add_check_command(CLI::App& app) {
   cmd->add_option("scene", *scene_path, "Scene file (JSON)")->required();
   cmd->callback([=]() {
     const Scene scene = read_scene_file(*scene_path);
+    available_memory();  // a bad TALUS_MEMORY_LIMIT stops here, not halfway through the summary
     print_warnings(scene);
     const MemoryEstimate memory = estimate_memory(scene);
     print_scene_summary(scene, memory);

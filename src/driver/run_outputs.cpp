@@ -50,7 +50,8 @@ void clear_output_folder(const fs::path& dir, const RunProgress* resume) {
     if (ext != ".vtu" && ext != ".pvtu") continue;
     // A resumed run keeps the frames its checkpoint lists, whatever their kind.
     const std::optional<unsigned long> index = frame_index(entry.path().filename().string());
-    const bool listed = resume && index && *index < resume->frame_times.size();
+    if (!index) continue;  // not a frame of ours (a user's mesh.vtu stays)
+    const bool listed = resume && *index < resume->frame_times.size();
     if (!listed) fs::remove(entry.path(), ec);
   }
   if (resume) return;

@@ -213,10 +213,10 @@ Field<S> choice(std::string key, At at, std::vector<std::pair<std::string, E>> n
   return f;
 }
 
-/// Three numbers; `range` applies to each.
+/// Three numbers; `range` applies to each (by default: finite, below 1e30 in magnitude like every
+/// number, so that gravity = [0, 0, -1e308] is refused rather than flinging the particles at step 0).
 template <class S, class At>
-Field<S> vec3(std::string key, At at, std::string doc, FieldOptions o = {},
-              Range range = {std::numeric_limits<double>::lowest(), std::numeric_limits<double>::max()}) {
+Field<S> vec3(std::string key, At at, std::string doc, FieldOptions o = {}, Range range = {-kHuge, kHuge}) {
   S blank{};
   const Vec3 fallback = at(blank);
   Json item = {{"type", "number"}};

@@ -131,8 +131,11 @@ std::optional<std::size_t> parse_size(std::string text) {
   if (scale != 1.0) text.pop_back();
   char* end = nullptr;
   const double value = std::strtod(text.c_str(), &end);
-  if (end == text.c_str() || *end != '\0' || !(value > 0.0) || !std::isfinite(value)) return std::nullopt;
-  return static_cast<std::size_t>(value * scale);
+  if (end == text.c_str() || *end != '\0' || !std::isfinite(value)) return std::nullopt;
+  // At least a byte, and at most 2^63 (1e30 cast to an integer was undefined and read as 0 bytes).
+  const double bytes = value * scale;
+  if (!(bytes >= 1.0) || !(bytes <= 9.2e18)) return std::nullopt;
+  return static_cast<std::size_t>(bytes);
 }
 
 /// A number from a one-line file (cgroup v2), nullopt for "max" or an unreadable file.
@@ -192,7 +195,7 @@ std::optional<std::size_t> available_memory() {
   if (const char* limit = std::getenv("TALUS_MEMORY_LIMIT")) {
     const std::optional<std::size_t> bytes = parse_size(limit);
     if (!bytes)
-      throw input_error(fmt::format("TALUS_MEMORY_LIMIT = \"{}\" is not a memory size (a positive number of bytes, "
+      throw input_error(fmt::format("TALUS_MEMORY_LIMIT = \"{}\" is not a memory size (1 byte to 9.2e18 bytes, "
                                     "optionally with K, M, G or T: 8G)", limit));
     return bytes;
   }

@@ -17,7 +17,16 @@ namespace fs = std::filesystem;
 
 using talus::test::ProgramResult;
 
-class CliErrors : public talus::test::ProgramTest {};
+class CliErrors : public talus::test::ProgramTest {
+ protected:
+  /// Runs `args` with the environment variable `name` set to `value` (the child inherits it).
+  ProgramResult run_with_env(const char* name, const char* value, const std::string& args) const {
+    ::setenv(name, value, 1);
+    ProgramResult r = run(args);
+    ::unsetenv(name);
+    return r;
+  }
+};
 
 /// Exit code 2, nothing on stdout (no work done), exactly `line` on stderr.
 void expect_error_line(const ProgramResult& r, const std::string& line) {
@@ -78,6 +87,31 @@ TEST_F(CliErrors, ParseErrorsAreOneLineWithWhereToReadMore) {
     EXPECT_EQ(r.err, "") << args;
     EXPECT_FALSE(r.out.empty()) << args;
   }
+}
+
+
+const std::string kScene = std::string(TALUS_SOURCE_DIR) + "/inputs/elastic_block_slide.json";
+
+// The environment is input too: a bad TALUS_ISA made even --version fail, and --isa could not
+// override it; OMP_NUM_THREADS = 70000 crashed in libgomp; TALUS_MEMORY_LIMIT = 1e30 overflowed to
+// 0 bytes and 0.5 was truncated to 0.
+TEST_F(CliErrors, EnvironmentVariablesAreCheckedAndTheOptionsOverrideThem) {
+  const ProgramResult version = run_with_env("TALUS_ISA", "bogus", "--version");
+  EXPECT_EQ(version.exit_code, 0) << version.err;
+  const ProgramResult check = run_with_env("TALUS_ISA", "bogus", "check " + kScene);
+  EXPECT_EQ(check.exit_code, 0) << check.err;  // check runs no kernel
+  const ProgramResult bad_isa = run_with_env("TALUS_ISA", "bogus", "run " + kScene + " --out " + (dir_ / "a").string());
+  EXPECT_EQ(bad_isa.exit_code, 2);
+  EXPECT_EQ(bad_isa.err.rfind("talus: error: TALUS_ISA = 'bogus' is not available", 0), 0u) << bad_isa.err;
+  EXPECT_FALSE(fs::exists(dir_ / "a"));
+  const ProgramResult overridden = run_with_env("TALUS_ISA", "bogus", "bench --isa reference --steps 1 --particles 1000");
+  EXPECT_EQ(overridden.exit_code, 0) << overridden.err;
+  expect_error_line(run_with_env("OMP_NUM_THREADS", "70000", "run " + kScene + " --out " + (dir_ / "b").string()),
+                    "OMP_NUM_THREADS = 70000 is outside [1, 4096] (or give --threads)");
+  for (const char* limit : {"1e30", "0.5", "-3G"})
+    expect_error_line(run_with_env("TALUS_MEMORY_LIMIT", limit, "check " + kScene),
+                      std::string("TALUS_MEMORY_LIMIT = \"") + limit +
+                          "\" is not a memory size (1 byte to 9.2e18 bytes, optionally with K, M, G or T: 8G)");
 }
 
 }  // namespace

@@ -120,18 +120,18 @@ TEST(FrameSeries, ResumeKeepsTheListedFramesOfEveryKindAndNoOther) {
   const fs::path dir = temp_dir("resume_frames");
   fs::create_directories(dir / "frames");
   // Frame 0 by one rank, frame 1 by two, frame 2 by three ranks, frame 3 by one; a killed writer's
-  // temporary file; a file of the user's.
+  // temporary file; files of the user's (a .vtu among them: only talus's frame names are removed).
   for (const char* f : {"particles_000000.vtu", "particles_000001.pvtu", "particles_000001_0000.vtu",
                         "particles_000001_0001.vtu", "particles_000002.pvtu", "particles_000002_0000.vtu",
                         "particles_000002_0001.vtu", "particles_000002_0002.vtu", "particles_000003.vtu",
-                        "particles_000004.vtu.tmp", "notes.txt"})
+                        "particles_000004.vtu.tmp", "notes.txt", "mesh.vtu"})
     touch(dir / "frames" / f);
   RunProgress resume;
   resume.frame_times = {0.0, 0.1};
   resume.frame_steps = {0, 10};
   prepare_output_folder(dir, &resume);
   EXPECT_EQ(files_in(dir / "frames"),
-            (std::vector<std::string>{"notes.txt", "particles_000000.vtu", "particles_000001.pvtu",
+            (std::vector<std::string>{"mesh.vtu", "notes.txt", "particles_000000.vtu", "particles_000001.pvtu",
                                       "particles_000001_0000.vtu", "particles_000001_0001.vtu"}));
 
   // The resumed series lists each kept frame under the kind on disk, and goes on in its own kind.
@@ -159,7 +159,7 @@ TEST(FrameSeries, ResumeKeepsTheListedFramesOfEveryKindAndNoOther) {
 
   // A fresh run removes every frame, summary and piece.
   prepare_output_folder(dir, nullptr);
-  EXPECT_EQ(files_in(dir / "frames"), (std::vector<std::string>{"notes.txt"}));
+  EXPECT_EQ(files_in(dir / "frames"), (std::vector<std::string>{"mesh.vtu", "notes.txt"}));  // the user's files stay
   EXPECT_FALSE(fs::exists(dir / "particles.pvd"));
   fs::remove_all(dir);
 }
