@@ -103,6 +103,23 @@ void require_outputs_spare_inputs(const std::filesystem::path& dir, const std::s
                                   record_path));
 }
 
+/// A run resumed into another folder than its checkpoint's (--restart with --out) starts that
+/// folder's files afresh from the checkpoint's step. Into a folder holding another run's output it
+/// kept that run's frames and energy rows below the step and stitched the two runs together.
+void require_fresh_folder_for_restart(const std::filesystem::path& dir, const std::string& restart_path) {
+  std::error_code ec;
+  if (std::filesystem::equivalent(dir, std::filesystem::path(restart_path).parent_path().empty()
+                                           ? std::filesystem::path(".")
+                                           : std::filesystem::path(restart_path).parent_path(),
+                                  ec))
+    return;  // its own folder: the restart continues the files there
+  for (const std::filesystem::path& output : run_output_files(dir))
+    if (std::filesystem::exists(output, ec))
+      throw input_error(fmt::format("--out {}: it holds another run's {}; resume into the checkpoint's own folder, or "
+                                    "into a new or empty one",
+                                    dir.string(), output.filename().string()));
+}
+
 }  // namespace
 
 void add_run_command(CLI::App& app) {
@@ -162,6 +179,7 @@ void add_run_command(CLI::App& app) {
       if (dir.empty()) dir = ".";
     }
     require_outputs_spare_inputs(dir, *scene_path, *restart, *record_path);
+    if (checkpoint && !out_dir->empty()) require_fresh_folder_for_restart(dir, *restart);
     // Every rank sees the same folder and stops alike (rank 0 reports); --record-work is refused under mpirun.
     check_writable_folder(dir, "output folder");
     if (!record_path->empty()) check_writable_file(*record_path, "--record-work");
