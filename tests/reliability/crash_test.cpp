@@ -175,27 +175,6 @@ TEST(Crash, RestartRefusesAnotherSceneWithOneLineAndExitTwo) {
   EXPECT_FALSE(fs::exists(out / "energy.csv"));
 }
 
-// A restart into a folder that holds another run's output (not the checkpoint's own folder) kept
-// that run's frames and energy rows below the checkpoint's step: refused, the folder untouched.
-TEST(Crash, RestartIntoAnotherRunsFolderIsRefused) {
-  const Reference& ref = reference();
-  const fs::path other = ref.root / "other_run";
-  fs::create_directories(other);
-  fs::copy_file(ref.out / "energy.csv", other / "energy.csv", fs::copy_options::overwrite_existing);
-  const std::string command = std::string(TALUS_BINARY) + " run " + ref.scene.string() + " --restart " +
-                              (ref.out / "checkpoint.h5").string() + " --out " + other.string() + " --quiet 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string text;
-  char buffer[4096];
-  while (fgets(buffer, sizeof buffer, pipe)) text += buffer;
-  const int status = pclose(pipe);
-  EXPECT_EQ(WEXITSTATUS(status), 2) << text;
-  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
-  EXPECT_NE(text.find("it holds another run's energy.csv"), std::string::npos) << text;
-  EXPECT_EQ(test::read_text(other / "energy.csv"), test::read_text(ref.out / "energy.csv"));
-  EXPECT_FALSE(fs::exists(other / "particles.pvd"));
-}
-
 std::string ref_scene_for_missing(const fs::path& dir) {
   std::ofstream(dir / "ok.json") << test::small_slide_json();
   return (dir / "ok.json").string();
@@ -208,6 +187,22 @@ std::pair<int, std::string> run_captured(const std::string& args) {
   while (fgets(buffer, sizeof buffer, pipe)) text += buffer;
   const int status = pclose(pipe);
   return {WEXITSTATUS(status), text};
+}
+
+// A restart into a folder that holds another run's output (not the checkpoint's own folder) kept
+// that run's frames and energy rows below the checkpoint's step: refused, the folder untouched.
+TEST(Crash, RestartIntoAnotherRunsFolderIsRefused) {
+  const Reference& ref = reference();
+  const fs::path other = ref.root / "other_run";
+  fs::create_directories(other);
+  fs::copy_file(ref.out / "energy.csv", other / "energy.csv", fs::copy_options::overwrite_existing);
+  const auto [code, text] = run_captured("run " + ref.scene.string() + " --restart " + (ref.out / "checkpoint.h5").string() +
+                                         " --out " + other.string() + " --quiet");
+  EXPECT_EQ(code, 2) << text;
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
+  EXPECT_NE(text.find("it holds another run's energy.csv"), std::string::npos) << text;
+  EXPECT_EQ(test::read_text(other / "energy.csv"), test::read_text(ref.out / "energy.csv"));
+  EXPECT_FALSE(fs::exists(other / "particles.pvd"));
 }
 
 TEST(Crash, BadSceneExitsTwoWithOneLineAndWritesNothing) {
