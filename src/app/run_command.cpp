@@ -88,7 +88,10 @@ std::optional<std::string> scatter_hint(const Scene& scene, const CellSort& sort
 void require_outputs_spare_inputs(const std::filesystem::path& dir, const std::string& scene_path,
                                   const std::string& restart_path, const std::string& record_path) {
   for (const std::filesystem::path& output : run_output_files(dir)) {
-    if (same_file(scene_path, output))
+    // A resumed run may read the scene.json its first part wrote (`talus run runs/x/scene.json
+    // --restart runs/x/checkpoint.h5`): it matches the checkpoint, and is written back unchanged.
+    const bool resumed_from_its_own_scene = !restart_path.empty() && output.filename() == "scene.json";
+    if (same_file(scene_path, output) && !resumed_from_its_own_scene)
       throw input_error(fmt::format("output folder {}: the run would replace the scene file {} by its {}; choose "
                                     "another folder (--out)",
                                     dir.string(), scene_path, output.filename().string()));

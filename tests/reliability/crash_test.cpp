@@ -203,6 +203,14 @@ TEST(Crash, RestartIntoAnotherRunsFolderIsRefused) {
   EXPECT_NE(text.find("it holds another run's energy.csv"), std::string::npos) << text;
   EXPECT_EQ(test::read_text(other / "energy.csv"), test::read_text(ref.out / "energy.csv"));
   EXPECT_FALSE(fs::exists(other / "particles.pvd"));
+  // Resuming from the scene.json a run wrote into its own folder is allowed: it is written back unchanged.
+  const fs::path own = ref.root / "own_scene";
+  fs::remove_all(own);
+  fs::copy(ref.out, own, fs::copy_options::recursive);
+  const auto [resumed, resumed_text] = run_captured("run " + (own / "scene.json").string() + " --restart " +
+                                                    (own / "checkpoint.h5").string() + " --quiet --threads 1");
+  EXPECT_EQ(resumed, 0) << resumed_text;
+  EXPECT_EQ(test::read_text(own / "scene.json"), test::read_text(ref.out / "scene.json"));
 }
 
 TEST(Crash, BadSceneExitsTwoWithOneLineAndWritesNothing) {
