@@ -43,6 +43,18 @@ void check_time_step(const Scene& s) {
   }
 }
 
+// The runout diagnostics measure along x (the flume coordinate s): on a periodic x axis the flow
+// wraps and the front read 0.1 m beyond the gate after 0.5 m of travel; a gate outside the grid
+// (gate_x = 1e20) gave a runout of -1e20 m.
+void check_runout(const Scene& s) {
+  if (!s.runout.enabled) return;
+  if (s.grid.periodic[0])
+    throw input_error("diagnostics.runout cannot run with periodic x faces (the flow wraps, so no front or runout along x exists)");
+  const double x0 = s.grid.origin[0], x1 = x0 + s.grid.cells[0] * s.grid.h;
+  if (s.runout.has_gate && !(s.runout.gate_x >= x0 && s.runout.gate_x <= x1))
+    throw input_error(fmt::format("diagnostics.runout.gate_x = {} is outside the grid along x, [{}, {}]", s.runout.gate_x, x0, x1));
+}
+
 }  // namespace
 
 Scene parse_scene(const std::string& text, const std::string& source) {
@@ -52,6 +64,7 @@ Scene parse_scene(const std::string& text, const std::string& source) {
   read_fields(r, draft, scene_detail::scene_table());  // every section, in file order of the docs
   check_problem_size(draft.scene);
   check_time_step(draft.scene);
+  check_runout(draft.scene);
   return draft.scene;
 }
 

@@ -98,7 +98,7 @@ void check_particle_fields(const ParticleStore& P, const Scene& scene, std::int6
       if (compressed(p)) {
         const double ratio = P.volume[p] * seeded_density[P.body[p]] / P.mass[p];
         throw instability_error(fmt::format(
-            "step {}, t = {:.6g} s: {} field volume = {:.6g} m^3 is {:.3g} of its seeded volume, below "
+            "step {}, t = {:.6g} s: {} field volume = {:.6g} m^3 is {:.6g} of its seeded volume, below "
             "guards.min_volume_ratio = {} (density {:.3g} kg/m^3); {}",
             step, time, particle_label(P, scene, p), P.volume[p], ratio, min_ratio, P.mass[p] / P.volume[p], where(P, p)));
       }

@@ -48,6 +48,12 @@ TEST(PeriodicScene, BadUseNamesTheKey) {
                              "grid.cells[0] = 12 with periodic x faces: must be 8 or a multiple of 16");
   test::expect_variant_error(ok, "\"time\"", "\"solver\": { \"smoothing\": {} }, \"time\"",
                              "boundaries.x- = \"periodic\" cannot run with solver.smoothing");
+  // the runout is measured along x, where a periodic flow wraps (it read a front 0.1 m past the gate)
+  test::expect_variant_error(ok, "\"time\"", "\"diagnostics\": { \"runout\": {} }, \"time\"",
+                             "diagnostics.runout cannot run with periodic x faces");
+  test::expect_variant_error(test::replace_once(ok, "\"x-\": \"periodic\", \"x+\": \"periodic\", ", ""), "\"time\"",
+                             "\"diagnostics\": { \"runout\": { \"gate_x\": 1e20 } }, \"time\"",
+                             "diagnostics.runout.gate_x = 1e+20 is outside the grid along x, [0, 0.8]");
   test::expect_variant_error(ok, "\"time\"", "\"solver\": { \"scatter\": \"block_buffers\" }, \"time\"",
                              "boundaries.x- = \"periodic\" cannot run with solver.scatter = \"block_buffers\"");
   test::expect_variant_error(ok, "\"time\"", "\"solver\": { \"scatter\": \"blocks\" }, \"time\"",
