@@ -111,11 +111,8 @@ void require_outputs_spare_inputs(const std::filesystem::path& dir, const std::s
 /// kept that run's frames and energy rows below the step and stitched the two runs together.
 void require_fresh_folder_for_restart(const std::filesystem::path& dir, const std::string& restart_path) {
   std::error_code ec;
-  if (std::filesystem::equivalent(dir, std::filesystem::path(restart_path).parent_path().empty()
-                                           ? std::filesystem::path(".")
-                                           : std::filesystem::path(restart_path).parent_path(),
-                                  ec))
-    return;  // its own folder: the restart continues the files there
+  const std::filesystem::path own = std::filesystem::path(restart_path).parent_path();
+  if (std::filesystem::equivalent(dir, own.empty() ? "." : own, ec)) return;  // its own folder: the restart continues the files there
   for (const std::filesystem::path& output : run_output_files(dir))
     if (std::filesystem::exists(output, ec))
       throw input_error(fmt::format("--out {}: it holds another run's {}; resume into the checkpoint's own folder, or "

@@ -17,11 +17,13 @@ double MaterialSpec::p_wave_modulus() const { return bulk_modulus() + 4.0 / 3.0 
 
 double Scene::initial_time_step() const {
   double max_rate = 0.0;
-  for (const BodySpec& body : bodies) {
-    const MaterialSpec& m = materials[body.material];
-    max_rate = std::max(max_rate, std::sqrt(m.p_wave_modulus() / m.density) + body.velocity.norm());
-  }
+  for (const BodySpec& body : bodies) max_rate = std::max(max_rate, wave_speed(body) + body.velocity.norm());
   return courant * grid.h / max_rate;
+}
+
+double Scene::wave_speed(const BodySpec& body) const {
+  const MaterialSpec& m = materials[body.material];
+  return std::sqrt(m.p_wave_modulus() / m.density);
 }
 
 const char* to_string(SchemeKind scheme) {
@@ -118,11 +120,11 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
             a, p.name, b, q.name, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]));
     }
   // A stiff material or a fine grid can ask for more steps than any run will take: say so before it starts.
-  const double steps = scene.end_time / scene.initial_time_step();
+  const double dt = scene.initial_time_step(), steps = scene.end_time / dt;
   if (steps > 1e8)
     warnings.push_back(fmt::format("the run would take about {:.3g} steps (initial time step {:.3g} s to time.end = {} s): "
                                    "check the materials' young and density, grid.cell_size and time.end",
-                                   steps, scene.initial_time_step(), scene.end_time));
+                                   steps, dt, scene.end_time));
   if (scene.smoothing.enabled && scene.smoothing.mls.variant == MlsVariant::Cell)
     warnings.push_back(
         "solver.smoothing.variant = \"cell\" is not energy-stable: one fit per cell fed energy into the elastic block "

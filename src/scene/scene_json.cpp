@@ -33,7 +33,7 @@ void check_time_step(const Scene& s) {
   for (std::size_t b = 0; b < s.bodies.size(); ++b) {
     const BodySpec& body = s.bodies[b];
     const MaterialSpec& m = s.materials[body.material];
-    const double wave = std::sqrt(m.p_wave_modulus() / m.density), speed = body.velocity.norm();
+    const double wave = s.wave_speed(body), speed = body.velocity.norm();
     const double dt = s.courant * s.grid.h / (wave + speed);
     if (std::isfinite(wave + speed) && std::isnormal(dt)) continue;
     throw input_error(fmt::format(

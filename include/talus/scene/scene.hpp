@@ -137,6 +137,8 @@ struct Scene {
   /// The first step's Courant time step, courant h / max over bodies of (c + |v0|), c = sqrt(M / rho):
   /// what Solver::stable_time_step gives for the freshly seeded particles, known before seeding.
   double initial_time_step() const;
+  /// A body's elastic wave speed c = sqrt(M / rho) at its seeded state [m/s]; initial_time_step adds |v0|.
+  double wave_speed(const BodySpec& body) const;
 };
 
 /// Settings that are valid but were measured to misbehave (each line says what was measured and
