@@ -30,8 +30,9 @@ std::vector<double> axis_points(double origin, double h, int n, double lo, doubl
 /// are the cell-local points of the body's bounding box, and the third axis is z. On a terrain grid
 /// they are the cell-local points of the (x, y, w) cells of the grid, mapped to z = w + z_b(x) (z_b:
 /// the grid's bed, terrain.hpp); the map has unit Jacobian, so each still carries the volume
-/// (h/n)^3. A physical box keeps the points inside it: the bed clips a box that reaches below it
-/// (candidates exist only above the bed), and a box with no point above the bed is an input error.
+/// (h/n)^3. A physical body keeps the points inside it: the bed clips a body that reaches below it
+/// (candidates exist only in the grid's w column; the scene warns, seeding_warnings), a body with no
+/// point in the column is an input error, and so is one with a point above the grid's top.
 /// A terrain-frame box reads its third coordinate as w directly. The y range of the candidates is
 /// the body's, so the test does not depend on y: counting can multiply by the number of ys.
 class BodyCandidates {
@@ -43,10 +44,43 @@ class BodyCandidates {
     xs_ = axis_points(g.origin[0], g.h, n, body_.box_min[0], body_.box_max[0]);
     ys_ = axis_points(g.origin[1], g.h, n, body_.box_min[1], body_.box_max[1]);
     w_top_ = g.origin[2] + g.cells[2] * g.h;
-    // On a terrain grid: every point of the grid's w column, and one cell of points above the top:
-    // a body that holds one of those reaches above the grid.
-    third_ = terrain_ ? axis_points(g.origin[2], g.h, n, g.origin[2], w_top_ + g.h)
+    // On a terrain grid: every point of the grid's w column.
+    third_ = terrain_ ? axis_points(g.origin[2], g.h, n, g.origin[2], w_top_)
                       : axis_points(g.origin[2], g.h, n, body_.box_min[2], body_.box_max[2]);
+  }
+
+  /// The points the body holds in the plane of the first y (the test does not depend on y).
+  std::size_t points_in_first_plane() const {
+    std::size_t in_xz = 0;
+    if (!ys_.empty())
+      for (double px : xs_) {
+        const double zb = terrain_ ? bed_.height(px) : 0.0;
+        for (double third : third_) in_xz += inside(px, ys_.front(), third, zb);
+      }
+    return in_xz;
+  }
+
+  /// The points of a physical body on a terrain grid that lie outside the grid's w column, in the
+  /// plane of the first y (the test does not depend on y): below its bottom (the bed clips them)
+  /// and above its top. Zero for other bodies.
+  struct OutsideColumn {
+    std::size_t below = 0, above = 0;
+  };
+  OutsideColumn outside_column() const {
+    OutsideColumn out;
+    if (!terrain_ || body_.frame == BoxFrame::Terrain || ys_.empty()) return out;
+    const GridGeometry& g = grid_;
+    const int n = body_.particles_per_cell;
+    for (double px : xs_) {
+      const double zb = bed_.height(px);
+      const double w_lo = body_.box_min[2] - zb, w_hi = body_.box_max[2] - zb;
+      if (w_lo < g.origin[2])
+        for (double w : axis_points(g.origin[2], g.h, n, w_lo, g.origin[2]))
+          out.below += inside(px, ys_.front(), w, zb);
+      if (w_hi > w_top_)
+        for (double w : axis_points(g.origin[2], g.h, n, w_top_, w_hi)) out.above += inside(px, ys_.front(), w, zb);
+    }
+    return out;
   }
 
   /// Visit every kept point in seeding order (x, then y, then the third axis): f(Vec3 position).
@@ -56,36 +90,28 @@ class BodyCandidates {
       const double zb = terrain_ ? bed_.height(px) : 0.0;
       for (double py : ys_)
         for (double third : third_)
-          if (keeps(px, py, third, zb)) f(Vec3(px, py, terrain_ ? third + zb : third));
+          if (inside(px, py, third, zb)) f(Vec3(px, py, terrain_ ? third + zb : third));
     }
   }
 
   /// The number of points the body holds. Throws the input errors of a body that reaches above a
   /// terrain grid or holds no particle, naming the body by its label.
   std::size_t count() const {
-    std::size_t in_xz = 0;
-    bool above_top = false;
-    if (!ys_.empty())
-      for (double px : xs_) {
-        const double zb = terrain_ ? bed_.height(px) : 0.0;
-        for (double third : third_) {
-          if (!inside(px, ys_.front(), third, zb)) continue;
-          if (terrain_ && third >= w_top_) above_top = true;
-          else ++in_xz;
-        }
-      }
+    const std::size_t in_xz = points_in_first_plane();
     const double spacing = grid_.h / body_.particles_per_cell;
     const bool box = body_.shape == BodyShapeKind::Box;
-    if (above_top)
+    const OutsideColumn outside = outside_column();
+    if (outside.above > 0)
       throw input_error(fmt::format(
           "{} (\"{}\") reaches above the grid's top (w = {} above the bed: grid.origin[2] + grid.size[2] with "
-          "grid.terrain) over part of its x range",
-          label_, body_.name, w_top_));
+          "grid.terrain) over {} its x range",
+          label_, body_.name, w_top_, in_xz == 0 && outside.below == 0 ? "all of" : "part of"));
     if (terrain_ && in_xz == 0)
       throw input_error(fmt::format(
-          "{} (\"{}\") holds no particle: it lies below the bed (grid.terrain) or is thinner than the "
-          "particle spacing h/n = {}",
-          label_, body_.name, spacing));
+          "{} (\"{}\") holds no particle: {}",
+          label_, body_.name, outside.below > 0
+              ? "it lies below the bed (grid.terrain; the body's z is physical, the bed's height at x is z_b(x))"
+              : fmt::format("it is thinner than the particle spacing h/n = {}", spacing)));
     if (xs_.empty() || ys_.empty() || third_.empty())
       throw input_error(fmt::format(
           "{} (\"{}\") holds no particle: its {} is thinner than the particle spacing h/n = {} "
@@ -104,9 +130,6 @@ class BodyCandidates {
     if (!terrain_) return body_.shape == BodyShapeKind::Box || body_contains(body_, Vec3(px, py, third));
     if (body_.frame == BoxFrame::Terrain) return third >= body_.box_min[2] && third < body_.box_max[2];
     return body_contains(body_, Vec3(px, py, third + zb));
-  }
-  bool keeps(double px, double py, double third, double zb) const {
-    return inside(px, py, third, zb) && !(terrain_ && third >= w_top_);
   }
 
   const GridGeometry& grid_;
@@ -149,6 +172,23 @@ ParticleStore seed_particles(const GridGeometry& grid, const std::vector<BodySpe
     });
   }
   return store;
+}
+
+std::vector<std::string> seeding_warnings(const GridGeometry& grid, const std::vector<BodySpec>& bodies,
+                                          const BodyLabel& label) {
+  std::vector<std::string> warnings;
+  const ProfileTerrain bed = grid_bed(grid);
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    const BodyCandidates candidates(grid, bodies[b], name_of(label, b), bed);
+    const std::size_t below = candidates.outside_column().below, kept = candidates.points_in_first_plane();
+    // A body wholly below the bed is an input error (count_particles): only a partial clip warns.
+    if (below > 0 && kept > 0)
+      warnings.push_back(fmt::format(
+          "{} (\"{}\") reaches below the bed (grid.terrain) over part of its x range: the bed clips it, {:.3g}% of "
+          "its particles are not seeded (raise it, or seed a layer on the bed with box.frame = \"terrain\")",
+          name_of(label, b), bodies[b].name, 100.0 * below / (below + kept)));
+  }
+  return warnings;
 }
 
 std::vector<std::int64_t> particles_per_x_cell(const GridGeometry& grid, const std::vector<BodySpec>& bodies,

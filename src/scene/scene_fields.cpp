@@ -453,7 +453,8 @@ Table<BodyDraft> make_box_table() {
       custom<BodyDraft>(
           "frame", "string", "`\"physical\"`", "`physical`, `terrain` (needs `grid.terrain`)",
           "`terrain`: the box's third coordinate is w, the height above the bed: a layer of uniform vertical thickness "
-          "over the bed, made of whole isoparametric cells (a block on a slope is a parallelogram with vertical sides)",
+          "over the bed, made of whole isoparametric cells (a block on a slope is a parallelogram with vertical sides). "
+          "`physical` on a terrain grid: the bed clips the part of the box below it (a warning gives the share lost)",
           {{"type", "string"}, {"enum", {"physical", "terrain"}}, {"default", "physical"}},
           [](ObjectReader& r, BodyDraft& d) {
             if (!r.has("frame")) return;

@@ -10,6 +10,8 @@
 #include "talus/shape/linear.hpp"
 #include "talus/transfer/stencil.hpp"
 
+#include <fmt/core.h>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -185,6 +187,26 @@ TEST(TerrainGrid, SeedingFillsTheBoxAboveTheBedWithEqualVolumes) {
   // the box above the straight 30-degree bed: a trapezoid of area int_{0.5}^{1.5} (1.2 - z_b) dx
   const double area = 1.0 * (1.2 - (2.0 - 1.0) * kTan30);
   EXPECT_NEAR(volume / (area * 0.5), 1.0, 0.04);
+  // the clip is not silent: the scene warns once, with the share of the box's points the bed took
+  // (the seed lattice is w = (k + 1/2) 0.125 above the straight bed z_b = (2 - x) tan 30 in every
+  // column x; the box holds the lattice points with 0 <= w + z_b < 1.2, k < 0 among them below the bed)
+  const std::vector<std::string> warnings = scene_warnings(scene);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("bodies[0] (\"pile\") reaches below the bed"), std::string::npos) << warnings[0];
+  int in_box = 0, above_bed = 0;
+  for (int i = 0; i < 8; ++i) {
+    const double zb = (2.0 - (0.5 + (i + 0.5) * 0.125)) * kTan30;
+    for (int k = -20; k < 20; ++k) {
+      const double z = (k + 0.5) * 0.125 + zb;
+      if (z < 0.0 || z >= 1.2) continue;
+      ++in_box;
+      above_bed += k >= 0;
+    }
+  }
+  ASSERT_EQ(static_cast<std::size_t>(above_bed) * 4, P.size());  // 4 planes along y
+  const double share = 100.0 * (in_box - above_bed) / in_box;
+  EXPECT_NE(warnings[0].find(fmt::format("{:.3g}% of its particles are not seeded", share)), std::string::npos)
+      << warnings[0] << " (expected " << share << "%)";
   // a terrain-frame box: cells of the grid, whole
   const Scene layer = slope_scene(R"({ "name": "layer", "material": "m", "particles_per_cell": 2,
       "box": { "min": [0.5, 0, 0], "max": [1.5, 0.5, 0.5], "frame": "terrain" } })");
@@ -219,6 +241,11 @@ TEST(TerrainGrid, BadTerrainInputNamesTheKey) {
   const std::string m = message(below, R"("terrain": { "points": [[0, 1.1547005383792515], [2, 0], [4, 0]] })");
   EXPECT_NE(m.find("buried"), std::string::npos) << m;
   EXPECT_NE(m.find("below the bed"), std::string::npos) << m;
+  // a body wholly above the grid's top is not said to lie below the bed
+  const std::string high = R"({ "name": "high", "material": "m", "box": { "min": [0.5, 0, 5.0], "max": [1.5, 0.5, 6.0] } })";
+  const std::string h = message(high, R"("terrain": { "points": [[0, 1.1547005383792515], [2, 0], [4, 0]] })");
+  EXPECT_NE(h.find("\"high\") reaches above the grid's top"), std::string::npos) << h;
+  EXPECT_NE(h.find("all of its x range"), std::string::npos) << h;
   // a body reaching above the grid's top (w = 2 above the bed)
   const std::string tall = R"({ "name": "tall", "material": "m", "box": { "min": [2.5, 0, 0], "max": [3.5, 0.5, 2.5] } })";
   EXPECT_NE(message(tall, R"("terrain": { "points": [[0, 1.1547005383792515], [2, 0], [4, 0]] })").find("tall"),

@@ -26,6 +26,11 @@ ParticleStore seed_particles(const GridGeometry& grid, const std::vector<BodySpe
                              const std::vector<double>& material_density, const BodyLabel& label = {},
                              const SeedFilter& keep = {});
 
+/// What seeding leaves out without an error: a physical body on a terrain grid that reaches below
+/// the bed loses the points there (one warning per such body, with the share it loses).
+std::vector<std::string> seeding_warnings(const GridGeometry& grid, const std::vector<BodySpec>& bodies,
+                                          const BodyLabel& label = {});
+
 /// The seed points per padded cell along x (GridGeometry::cell_of(0, x), clamped to the grid's
 /// cells), without making them: how a distributed run cuts its slabs before it seeds.
 std::vector<std::int64_t> particles_per_x_cell(const GridGeometry& grid, const std::vector<BodySpec>& bodies,
