@@ -8,6 +8,8 @@
 #include <fmt/core.h>
 #include <omp.h>
 
+#include <algorithm>
+#include <cstdlib>
 #include <exception>
 #include <string>
 
@@ -89,6 +91,26 @@ void set_threads(int threads) {
   if (threads > 0) {
     omp_set_num_threads(threads);
     return;
+  }
+  // libgomp ignores an OMP_NUM_THREADS it cannot read (0, abc, 2.5: it warns as the program loads
+  // and uses every core): refuse it, as --threads would. It is a list of positive whole numbers,
+  // one a nesting level (4 or 4,2).
+  if (const char* text = std::getenv("OMP_NUM_THREADS")) {
+    const std::string value = text;
+    bool readable = !value.empty();
+    std::size_t at = 0;
+    while (readable && at <= value.size()) {
+      const std::size_t end = std::min(value.find(',', at), value.size());
+      const std::string item = value.substr(at, end - at);
+      const std::size_t first = item.find_first_not_of(" \t"), last = item.find_last_not_of(" \t");
+      const std::string digits = first == std::string::npos ? "" : item.substr(first, last - first + 1);
+      readable = !digits.empty() && digits.find_first_not_of("0123456789") == std::string::npos &&
+                 digits.find_first_not_of('0') != std::string::npos;
+      at = end + 1;
+    }
+    if (!readable)
+      throw input_error(fmt::format("OMP_NUM_THREADS = '{}' is not a whole number of threads in [1, 4096] "
+                                    "(or give --threads)", value));
   }
   // OMP_NUM_THREADS=70000 crashed in the first parallel region (libgomp could not make the threads):
   // hold the environment to the range --threads has.

@@ -80,6 +80,8 @@ TEST_F(CliErrors, ParseErrorsAreOneLineWithWhereToReadMore) {
   expect_error_line(run("bench --bogus"), "The following argument was not expected: --bogus (see talus bench --help)");
   expect_error_line(run("dem-springs --E 1 --G 1 --nu 0 --packing hex"),
                     "--E excludes --G (see talus dem-springs --help)");
+  // element-test specs have no Markdown table: the flag was ignored and the scene table printed
+  expect_error_line(run("schema --markdown --element-test"), "--markdown excludes --element-test (see talus schema --help)");
   // help and version are no errors
   for (const std::string args : {"--help", "bench --help", "--version"}) {
     const ProgramResult r = run(args);
@@ -108,6 +110,19 @@ TEST_F(CliErrors, EnvironmentVariablesAreCheckedAndTheOptionsOverrideThem) {
   EXPECT_EQ(overridden.exit_code, 0) << overridden.err;
   expect_error_line(run_with_env("OMP_NUM_THREADS", "70000", "run " + kScene + " --out " + (dir_ / "b").string()),
                     "OMP_NUM_THREADS = 70000 is outside [1, 4096] (or give --threads)");
+  // libgomp warns of a value it cannot read and then uses every core; talus refuses it (after
+  // libgomp's own line, which it prints as the program loads)
+  for (const char* threads : {"0", "abc", "2.5", "4,"}) {
+    const ProgramResult r = run_with_env("OMP_NUM_THREADS", threads, "run " + kScene + " --out " + (dir_ / "c").string());
+    EXPECT_EQ(r.exit_code, 2) << threads;
+    EXPECT_NE(r.err.find(std::string("talus: error: OMP_NUM_THREADS = '") + threads +
+                         "' is not a whole number of threads in [1, 4096] (or give --threads)\n"),
+              std::string::npos)
+        << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "c")) << threads;
+  }
+  const ProgramResult nested = run_with_env("OMP_NUM_THREADS", "2,1", "bench --particles 1000 --steps 1");
+  EXPECT_EQ(nested.exit_code, 0) << nested.err;  // a list, one number a nesting level, is valid OpenMP
   for (const char* limit : {"1e30", "0.5", "-3G"})
     expect_error_line(run_with_env("TALUS_MEMORY_LIMIT", limit, "check " + kScene),
                       std::string("TALUS_MEMORY_LIMIT = \"") + limit +
