@@ -269,7 +269,12 @@ void add_run_command(CLI::App& app) {
       fmt::print("talus: {} particles ({:.4g} kg, {:.2f}% of the mass) left through open faces (removed; energy column "
                  "'outflow')\n",
                  outflow_particles, outflow_mass, 100.0 * outflow_mass / mass);
-    fmt::print("talus: ParaView series: {} ({} frames); energy history: {}/energy.csv\n", summary.pvd_path, summary.frames, dir);
+    // (a resumed run's series holds the frames before the checkpoint too)
+    const std::string written = summary.frames_in_series == summary.frames
+                                    ? ""
+                                    : fmt::format(", {} written by this run", summary.frames);
+    fmt::print("talus: ParaView series: {} ({} frame{}{}); energy history: {}/energy.csv\n", summary.pvd_path,
+               summary.frames_in_series, summary.frames_in_series == 1 ? "" : "s", written, dir);
     if (!summary.terrain_path.empty()) fmt::print("talus: terrain surface: {} (open it with the series)\n", summary.terrain_path);
     if (summary.runout) print_runout(*summary.runout, summary);
   });

@@ -429,6 +429,7 @@ void RunLoop::finish() {
   summary_.wall_seconds = progress_line_.elapsed();
   recording_.finish(summary_.wall_seconds, frames_.background_seconds());
   summary_.final = solver_.energies();
+  summary_.frames_in_series = progress_.frame_times.size();
 }
 
 }  // namespace

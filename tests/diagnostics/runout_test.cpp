@@ -304,10 +304,12 @@ TEST(RunoutOutput, RestartContinuesTheHistoryBitForBit) {
   options.out_dir = dir.string();
   options.progress = false;
   options.handle_signals = false;
+  RunSummary whole;
   {
     Solver solver(scene);
-    run_scene(solver, options);
+    whole = run_scene(solver, options);
   }
+  EXPECT_EQ(whole.frames_in_series, whole.frames);
   const std::string reference = read_text(dir / "runout.csv");
   const std::string reference_result = read_text(dir / "runout.json");
   const std::string checkpoint_path = (dir / "checkpoint.h5").string();
@@ -316,7 +318,12 @@ TEST(RunoutOutput, RestartContinuesTheHistoryBitForBit) {
   Solver resumed(scene);
   restore_checkpoint(resumed, checkpoint, checkpoint_path);
   options.resume = &checkpoint.run;
-  run_scene(resumed, options);
+  const RunSummary rest = run_scene(resumed, options);
+  // The series lists every frame again; this call wrote only those after the checkpoint (the run's
+  // summary line said "(1 frames)").
+  EXPECT_EQ(rest.frames_in_series, whole.frames);
+  EXPECT_GT(rest.frames, 0u);
+  EXPECT_LT(rest.frames, whole.frames);
   // The rows after the checkpoint are rewritten identically, front velocity included (it needs
   // the last row before the checkpoint), and the runout is measured from the same gate.
   EXPECT_EQ(read_text(dir / "runout.csv"), reference);

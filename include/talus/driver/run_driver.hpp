@@ -44,7 +44,8 @@ struct RunSummary {
   std::int64_t steps = 0;
   double time = 0.0;
   double wall_seconds = 0.0;
-  std::size_t frames = 0;
+  std::size_t frames = 0;            // frames written by this call
+  std::size_t frames_in_series = 0;  // frames the .pvd lists (a resumed run's earlier ones too)
   EnergyBudget initial, final;
   std::string pvd_path;
   std::string checkpoint_path;  // <out_dir>/checkpoint.h5
