@@ -11,6 +11,7 @@
 #include "talus/scene/scene_json.hpp"
 #include "talus/material/drucker_prager.hpp"
 #include "talus/material/mu_i.hpp"
+#include "talus/solver/memory_estimate.hpp"
 #include "talus/solver/solver.hpp"
 
 #include <fmt/core.h>
@@ -20,12 +21,14 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cstdlib>
 #include <cmath>
 #include <functional>
 #include <fstream>
 #include <initializer_list>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace talus::app {
@@ -226,6 +229,23 @@ void start_in_simple_shear(Solver& solver) {
 
 void record_work(Solver& solver, const BenchOptions& o, const nlohmann::json& bench);
 
+/// A bench scene too large for this machine stops before it allocates (--particles 1e8 at ~300 B
+/// each was killed by the kernel's out-of-memory killer), with the count that fits.
+void require_bench_fits(const Scene& scene, long long particles) {
+  const MemoryEstimate e = estimate_memory(scene, MemoryScope::Solver);
+  const std::optional<std::size_t> available = available_memory();
+  if (!available || e.total() <= *available) return;
+  // the bench's grid grows with its particles: what fits is in proportion
+  const double fits = double(e.particles) * double(*available) / double(e.total());
+  const double suggested = std::floor(0.9 * fits / 1000.0) * 1000.0;  // 10% spare: the program and the allocator
+  throw input_error(fmt::format("--particles {} needs about {} ({:.0f} B a particle with the grid) but {} is available{}; {}",
+                                particles, format_bytes(double(e.total())), double(e.total()) / double(e.particles),
+                                format_bytes(double(*available)),
+                                std::getenv("TALUS_MEMORY_LIMIT") ? " (TALUS_MEMORY_LIMIT)" : "",
+                                suggested >= 1000.0 ? fmt::format("use --particles {:.0f} or fewer", suggested)
+                                                    : std::string("not even --particles 1000 fits")));
+}
+
 /// The update scene: the constitutive update alone, as BodyMaterials runs it per particle (objective
 /// rotation, then the model), over N particles held in structure-of-arrays like the particle store,
 /// each in simple shear at its yield stress (overburden p = 1 kPa ... 17 kPa across the particles)
@@ -377,9 +397,10 @@ void run_bench(const BenchOptions& o) {
       o.mls == "off" ? std::string()
                      : fmt::format(R"(, "smoothing": {{ "basis": "{}", "radius_factor": {}, "variant": "{}" }})", o.mls,
                                    o.mls_radius, o.mls_variant);
-  Solver solver(o.scene == "column" ? column_scene(o.particles, o.shape, o.scheme, o.material, mls_json)
-                                    : block_scene(o.particles, o.shape, o.scheme, o.material, mls_json),
-                world);
+  Scene scene = o.scene == "column" ? column_scene(o.particles, o.shape, o.scheme, o.material, mls_json)
+                                    : block_scene(o.particles, o.shape, o.scheme, o.material, mls_json);
+  require_bench_fits(scene, o.particles);
+  Solver solver(std::move(scene), world);
   if (o.scene == "shear") start_in_simple_shear(solver);
   solver.step();  // first step: first touch of the grid pages; not timed
   solver.phase_times() = PhaseTimes{};

@@ -39,7 +39,7 @@ constexpr std::size_t kSortCell = 3 * 4;                  // the sort state a sn
 constexpr std::size_t kFrameArrays = 24 + 24 + 8 + 48 + 48 + 8 + 8 + 8 + 2 + 4 + 4;
 constexpr std::size_t kNodeBytes = Grid::kFieldCount * sizeof(double);
 
-std::size_t bytes_per_particle(const Scene& scene) {
+std::size_t bytes_per_particle(const Scene& scene, MemoryScope scope) {
   bool plastic = false, kinematic = false;
   for (const BodySpec& body : scene.bodies) {
     const MaterialSpec& m = scene.materials[body.material];
@@ -52,8 +52,10 @@ std::size_t bytes_per_particle(const Scene& scene) {
   if (plastic) fields += kPlasticStrain;
   if (kinematic) fields += kBackStress;
   if (scene.shape == ShapeKind::CpGimp) fields += kGimpDomain;
-  std::size_t bytes = fields + kParticleScratch + kFrameArrays;
+  std::size_t bytes = fields + kParticleScratch;
   if (scene.smoothing.enabled) bytes += kSmoothing;
+  if (scope == MemoryScope::Solver) return bytes;
+  bytes += kFrameArrays;
   if (scene.guards.snapshot_interval > 0) bytes += fields + kSortCell;  // the last good state
   return bytes;
 }
@@ -174,10 +176,10 @@ GhostMapBytes ghost_map_bytes(const Scene& scene, std::size_t all_tiles) {
 
 }  // namespace
 
-MemoryEstimate estimate_memory(const Scene& scene) {
+MemoryEstimate estimate_memory(const Scene& scene, MemoryScope scope) {
   MemoryEstimate e;
   e.particles = count_particles(scene);
-  e.bytes_per_particle = bytes_per_particle(scene);
+  e.bytes_per_particle = bytes_per_particle(scene, scope);
   e.particle_bytes = e.particles * e.bytes_per_particle;
   e.grid_bytes = start_grid_bytes(scene);
   const std::array<int, 3> nodes = scene.grid.nodes();

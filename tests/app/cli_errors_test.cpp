@@ -123,6 +123,14 @@ TEST_F(CliErrors, EnvironmentVariablesAreCheckedAndTheOptionsOverrideThem) {
   }
   const ProgramResult nested = run_with_env("OMP_NUM_THREADS", "2,1", "bench --particles 1000 --steps 1");
   EXPECT_EQ(nested.exit_code, 0) << nested.err;  // a list, one number a nesting level, is valid OpenMP
+  // a bench too large for the memory stops before it allocates (1e8 particles met the OOM killer)
+  const ProgramResult big = run_with_env("TALUS_MEMORY_LIMIT", "100M", "bench --particles 1000000 --steps 1");
+  EXPECT_EQ(big.exit_code, 2);
+  EXPECT_EQ(big.out, "");
+  EXPECT_EQ(big.err.rfind("talus: error: --particles 1000000 needs about ", 0), 0u) << big.err;
+  EXPECT_NE(big.err.find("but 100.0 MB is available (TALUS_MEMORY_LIMIT); use --particles "), std::string::npos) << big.err;
+  const ProgramResult fits = run_with_env("TALUS_MEMORY_LIMIT", "100M", "bench --particles 100000 --steps 1 --threads 1");
+  EXPECT_EQ(fits.exit_code, 0) << fits.err;
   for (const char* limit : {"1e30", "0.5", "-3G"})
     expect_error_line(run_with_env("TALUS_MEMORY_LIMIT", limit, "check " + kScene),
                       std::string("TALUS_MEMORY_LIMIT = \"") + limit +

@@ -26,9 +26,13 @@ struct MemoryEstimate {
   std::size_t total() const { return particle_bytes + grid_bytes; }
 };
 
+/// What the estimate counts: a run (the solver, a frame's arrays while it is written, the guard's
+/// snapshot of the last good state) or the solver alone (what `talus bench` holds).
+enum class MemoryScope { Run, Solver };
+
 /// Counts the particles (particles/seeding.hpp count_particles: same input errors, no allocation)
-/// and sizes what the solver and the run's outputs will hold.
-MemoryEstimate estimate_memory(const Scene& scene);
+/// and sizes what the solver and, for a run, the run's outputs will hold.
+MemoryEstimate estimate_memory(const Scene& scene, MemoryScope scope = MemoryScope::Run);
 
 /// Memory this process may still use [bytes]: the environment variable TALUS_MEMORY_LIMIT when set
 /// (bytes, or with a K/M/G/T suffix: a share of a node for one run), else the smaller of the
