@@ -197,7 +197,11 @@ void add_run_command(CLI::App& app) {
     options.out_dir = dir;
     options.progress = !*quiet;
     options.frames_in_background = !*foreground_frames;
-    if (checkpoint) options.resume = &checkpoint->run;
+    if (checkpoint) {
+      options.resume = &checkpoint->run;
+      options.resume_dir = std::filesystem::path(*restart).parent_path().string();
+      if (options.resume_dir.empty()) options.resume_dir = ".";
+    }
     std::unique_ptr<WorkRecorder> recorder;
     if (!record_path->empty()) {
       recorder = std::make_unique<WorkRecorder>(1000, *record_interval, RecordSpan::WholeRun);
@@ -248,13 +252,16 @@ void add_run_command(CLI::App& app) {
     }
     const double e0 = summary.initial.total();
     const double scale = std::max({std::abs(e0), summary.initial.kinetic + summary.initial.strain + std::abs(summary.initial.gravity), 1e-300});
-    fmt::print("talus: done: {} steps to t = {:.6g} s in {:.2f} s ({:.2f} M particle-updates/s)\n", summary.steps, summary.time,
-               summary.wall_seconds, summary.steps * double(end.particles) / summary.wall_seconds / 1e6);
+    // (a resumed run's rate counts the steps it took, not those before its checkpoint)
+    const std::int64_t taken = summary.steps - summary.first_step;
+    fmt::print("talus: done: {} steps to t = {:.6g} s{} in {:.2f} s ({:.2f} M particle-updates/s)\n", summary.steps,
+               summary.time, taken == summary.steps ? "" : fmt::format(" ({} in this run)", taken), summary.wall_seconds,
+               taken * double(end.particles) / summary.wall_seconds / 1e6);
     if (world.distributed())
       fmt::print("talus: {} ranks: slabs out of balance by at most {:.2f} (largest rank's particles / mean), {} rebalances, "
                  "{} particles migrated, {:.3g} MB of node sums exchanged ({:.3g} kB a step)\n",
                  end.ranks, end.max_imbalance, end.rebalances, end.migrated, end.exchange_bytes / 1e6,
-                 summary.steps > 0 ? end.exchange_bytes / 1e3 / summary.steps : 0.0);
+                 taken > 0 ? end.exchange_bytes / 1e3 / taken : 0.0);
     fmt::print("talus: energy budget closes to {:.3e} of the initial energy\n", (summary.final.total() - e0) / scale);
     if (solver.smoother() && solver.smoothing_passes() > 0) {
       const double passes = static_cast<double>(solver.smoothing_passes());

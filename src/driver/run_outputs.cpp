@@ -179,22 +179,36 @@ void EnergyHistory::write(const Solver& solver, const EnergyBudget& e) {
 // ---- runout.csv, runout.json, deposit.csv -------------------------------------------------------
 
 RunoutFiles::RunoutFiles(const Scene& scene, const fs::path& dir, std::optional<std::int64_t> resume_step,
-                         const Comm& comm)
+                         const Comm& comm, const fs::path& resume_dir)
     : scene_(scene), dir_(dir), comm_(comm) {
   if (!scene.runout.enabled) return;
   monitor_.emplace(scene.runout, flume_coordinates_of(scene));
   history_path_ = (dir / "runout.csv").string();
   if (!comm_.root()) return;  // rank 0 measures and writes
   if (resume_step) {
-    // Keep the rows up to the checkpoint's step; the monitor continues from the first and last.
+    // The monitor continues from the first and last rows up to the checkpoint's step: the first
+    // is the initial front (the default gate), the last the front velocity's difference.
     std::optional<RunoutSample> first, last;
-    cut_csv(history_path_, runout_csv_header(), [&](const std::string& line) {
+    const auto up_to_checkpoint = [&](const std::string& line) {
       const auto row = parse_runout_csv_row(line);
       if (!row || row->step > *resume_step) return false;
       if (!first) first = row;
       last = row;
       return true;
-    });
+    };
+    if (resume_dir.empty() || same_file(resume_dir, dir)) {
+      cut_csv(history_path_, runout_csv_header(), up_to_checkpoint);  // keep those rows, drop later ones
+    } else {
+      // Resumed into another folder: the rows before the checkpoint stay in the checkpoint's
+      // folder (read, not changed); this folder's history starts at the checkpoint. (Without
+      // them the gate was the front at the checkpoint: 18% short on a flume.)
+      std::ifstream before(resume_dir / "runout.csv");
+      std::string line;
+      std::getline(before, line);  // its header
+      while (std::getline(before, line) && up_to_checkpoint(line)) {
+      }
+      cut_csv(history_path_, runout_csv_header(), [](const std::string&) { return false; });
+    }
     if (first) monitor_->resume(*first, *last);
   }
   file_.open(history_path_, resume_step ? std::ios::app : std::ios::trunc);

@@ -331,6 +331,45 @@ TEST(RunoutOutput, RestartContinuesTheHistoryBitForBit) {
   fs::remove_all(dir);
 }
 
+// talus run --restart DIR/checkpoint.h5 --out OTHER: the rows before the checkpoint stay in DIR.
+// The monitor lost them: the default gate became the front at the checkpoint (18% short on a
+// flume) and the first row's front velocity was 0.
+TEST(RunoutOutput, RestartIntoAnotherFolderMeasuresFromTheSameGate) {
+  Scene scene = parse_scene(kSlideScene, "slide");
+  scene.output.checkpoint_interval = 0.012;  // one checkpoint, mid-run
+  scene.runout.has_gate = false;             // the gate is the initial front
+  const fs::path dir = temp_dir("runout_restart_elsewhere");
+  RunOptions options;
+  options.out_dir = (dir / "first").string();
+  options.progress = false;
+  options.handle_signals = false;
+  {
+    Solver solver(scene);
+    run_scene(solver, options);
+  }
+  const std::string reference = read_text(dir / "first" / "runout.csv");
+  const std::string checkpoint_path = (dir / "first" / "checkpoint.h5").string();
+  const Checkpoint checkpoint = read_checkpoint(checkpoint_path);
+  ASSERT_GT(checkpoint.solver.step, 0);
+  Solver resumed(scene);
+  restore_checkpoint(resumed, checkpoint, checkpoint_path);
+  options.out_dir = (dir / "second").string();
+  options.resume = &checkpoint.run;
+  options.resume_dir = (dir / "first").string();
+  run_scene(resumed, options);
+  // The same result, and the new history is the reference's rows after the checkpoint, under the header.
+  EXPECT_EQ(read_text(dir / "second" / "runout.json"), read_text(dir / "first" / "runout.json"));
+  const std::string rest = read_text(dir / "second" / "runout.csv");
+  const std::size_t header_end = rest.find('\n') + 1;
+  ASSERT_GT(rest.size(), header_end);
+  EXPECT_EQ(reference.substr(0, header_end), rest.substr(0, header_end));
+  const std::string rows = rest.substr(header_end);
+  ASSERT_GE(reference.size(), rows.size());
+  EXPECT_EQ(reference.substr(reference.size() - rows.size()), rows);
+  EXPECT_EQ(read_text(dir / "first" / "runout.csv"), reference);  // the checkpoint's folder is read, not changed
+  fs::remove_all(dir);
+}
+
 TEST(RunoutSpec, BadDiagnosticsKeysAreRefusedNamingTheKey) {
   auto error_of = [](const std::string& runout) {
     std::string json = kSlideScene;

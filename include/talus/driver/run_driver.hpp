@@ -30,6 +30,10 @@ struct RunOptions {
   /// Continue a run from a checkpoint already restored into the solver (restore_checkpoint): keep
   /// its frames and history up to the checkpoint, drop what came later.
   const RunProgress* resume = nullptr;
+  /// The checkpoint's folder, when it is not out_dir (talus run --restart ... --out DIR): the
+  /// runout history before the checkpoint stays there, and the runout monitor reads its first and
+  /// last rows from it (the initial front is the default gate).
+  std::string resume_dir;
   /// Catch SIGINT/SIGTERM: finish the step, write a checkpoint and return (interrupted_signal).
   bool handle_signals = true;
   /// Work recorder (talus run --record-work): attached to the solver for the run; the time the
@@ -42,10 +46,11 @@ struct RunOptions {
 
 struct RunSummary {
   std::int64_t steps = 0;
+  std::int64_t first_step = 0;  // the step this call started from (a resumed run's checkpoint step)
   double time = 0.0;
   double wall_seconds = 0.0;
   std::size_t frames = 0;            // frames written by this call
-  std::size_t frames_in_series = 0;  // frames the .pvd lists (a resumed run's earlier ones too)
+  std::size_t frames_in_series = 0;  // frames the .pvd lists (a run resumed in its folder: the earlier ones too)
   EnergyBudget initial, final;
   std::string pvd_path;
   std::string checkpoint_path;  // <out_dir>/checkpoint.h5

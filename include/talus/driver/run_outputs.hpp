@@ -84,8 +84,10 @@ class EnergyHistory {
 class RunoutFiles {
  public:
   /// In a distributed run the particles are gathered to rank 0, which measures and writes.
+  /// `resume_dir`: the checkpoint's folder when a resumed run writes elsewhere (its runout.csv
+  /// holds the rows before the checkpoint, which the monitor continues from); empty: `dir`.
   RunoutFiles(const Scene& scene, const std::filesystem::path& dir, std::optional<std::int64_t> resume_step,
-              const Comm& comm = Comm());
+              const Comm& comm = Comm(), const std::filesystem::path& resume_dir = {});
   bool enabled() const { return monitor_.has_value(); }
   /// One row of runout.csv, on the history schedule (collective).
   void write(const Solver& solver);
@@ -139,6 +141,8 @@ class FrameSeries {
   /// Whether the last frame is of this step already.
   bool has_frame_of_step(std::int64_t step) const;
   const std::string& pvd_path() const { return pvd_path_; }
+  /// The frames the .pvd lists.
+  std::size_t listed() const { return pvd_.size(); }
   /// The seconds the writer's thread spent on the frames completed so far, in the background (0
   /// without background writes: the run loop waited for them). The work recorder's run total.
   double background_seconds() const { return background_seconds_; }
