@@ -52,10 +52,23 @@ def main():
     ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--cpu-time", action="store_true",
                     help="talus bench --cpu-time: phases on the process's CPU time (a shared machine, 1 thread)")
-    ap.add_argument("--skip", default="", help="comma-separated case names to leave out")
+    ap.add_argument("--skip", default="",
+                    help="case numbers to leave out, comma-separated, 1 = the first case of the table (the names hold commas)")
     ap.add_argument("--json")
     a = ap.parse_args()
     paths = a.paths.split(",")
+    try:
+        skipped = {int(n) for n in a.skip.split(",") if n.strip()}
+    except ValueError:
+        sys.exit(f"bench_kernels.py: --skip {a.skip}: give case numbers 1..{len(CASES)}, comma-separated")
+    if not skipped <= set(range(1, len(CASES) + 1)):
+        sys.exit(f"bench_kernels.py: --skip {a.skip}: the cases are 1..{len(CASES)}: " +
+                 "; ".join(f"{i} {name}" for i, (name, _) in enumerate(CASES, start=1)))
+    for binary in [a.talus] + [b for b in (a.mpm_limit, a.stream) if b]:
+        if not (os.path.isfile(binary) and os.access(binary, os.X_OK)):
+            sys.exit(f"bench_kernels.py: {binary} is not an executable file")
+    if a.json and not os.path.isdir(os.path.dirname(os.path.abspath(a.json))):
+        sys.exit(f"bench_kernels.py: --json {a.json}: its folder does not exist")  # found before the runs, not after
     print(time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()), os.getloadavg(), flush=True)
     results = {"paths": paths, "cpu_time": a.cpu_time, "threads": a.threads, "particles": a.particles, "cases": {}, "mpm_limit": [], "stream": []}
     env1 = dict(os.environ, OMP_NUM_THREADS=str(a.threads))
@@ -69,8 +82,8 @@ def main():
             gbs = float(run([a.stream], env=env1).split()[-1])
             results["stream"].append(gbs)
             print(f"STREAM triad: {gbs:.2f} GB/s", flush=True)
-        for name, args in CASES:
-            if name in a.skip.split(","):
+        for number, (name, args) in enumerate(CASES, start=1):
+            if number in skipped:
                 continue
             row = results["cases"].setdefault(name, {p: [] for p in paths})
             for p in paths:

@@ -52,7 +52,12 @@ def main():
     parser.add_argument("--root", type=pathlib.Path, default=pathlib.Path(__file__).resolve().parent.parent)
     parser.add_argument("--layers", nargs="+", required=True, help="layer folders, lowest first")
     args = parser.parse_args()
-    found = violations(args.root.resolve(), args.layers)
+    root = args.root.resolve()
+    missing = [str(root / d) for d in ("src", "include/talus") if not (root / d).is_dir()]
+    if missing:  # a wrong --root checked no file and said "layers ok"
+        print(f"check_layers.py: --root {args.root}: no {' and no '.join(missing)}", file=sys.stderr)
+        return 2
+    found = violations(root, args.layers)
     for line in found:
         print(line)
     if found:

@@ -99,12 +99,20 @@ def main():
     ap.add_argument("--scene", action="append", help="a scene file (repeatable; default: the set above)")
     ap.add_argument("--variants", action="store_true", help="every scheme with each scatter, on two scenes")
     a = ap.parse_args()
-    cases = [(p, None, None, None) for p in (a.scene or DEFAULT_SCENES)]
+    for binary in (a.old, a.new):
+        if not (os.path.isfile(binary) and os.access(binary, os.X_OK)):
+            sys.exit(f"compare_binaries.py: {binary} is not an executable file")
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the defaults are the repo's inputs
+    in_repo = lambda path: os.path.join(root, path)
+    cases = [(p, None, None, None) for p in (a.scene or [in_repo(p) for p in DEFAULT_SCENES])]
     if not a.scene:
-        cases += [("inputs/elastic_block_slide.json", None, None, mls) for mls in MLS_3D_CASES]
+        cases += [(in_repo("inputs/elastic_block_slide.json"), None, None, mls) for mls in MLS_3D_CASES]
     if a.variants:
-        cases += [(p, scheme, scatter, None) for p in VARIANT_SCENES for scheme in ("musl", "usl", "usf", "usavg")
+        cases += [(in_repo(p), scheme, scatter, None) for p in VARIANT_SCENES for scheme in ("musl", "usl", "usf", "usavg")
                   for scatter in ("colour_passes", "block_buffers")]
+    for path, *_ in cases:
+        if not os.path.isfile(path):
+            sys.exit(f"compare_binaries.py: scene {path} does not exist")
     os.makedirs(a.work, exist_ok=True)
     bad = failed = 0
     for path, scheme, scatter, mls in cases:
@@ -130,7 +138,7 @@ def main():
         bad += bool(diffs)
     print(f"{len(cases) - bad - failed} of {len(cases)} scenes give the same bits"
           + (f"; {failed} failed on both sides (nothing compared)" if failed else ""))
-    sys.exit(1 if bad else 0)
+    sys.exit(1 if bad or failed else 0)  # a scene that failed on both sides compared nothing
 
 
 if __name__ == "__main__":

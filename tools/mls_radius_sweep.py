@@ -19,7 +19,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from speed_vs_error import OUT, benchmark_parser, find_talus, load, variant, run, column_metrics  # noqa: E402
+from speed_vs_error import benchmark_parser, out_folder, find_talus, load, variant, run, column_metrics  # noqa: E402
 from plot_mls import with_mls  # noqa: E402
 from talus_plot import finish_axes, save_figure, write_csv_rows  # noqa: E402
 
@@ -34,7 +34,9 @@ def main():
     talus = find_talus(a.talus)
     radii = [float(r) for r in a.radii.split(",")]
     shapes = a.shapes.split(",")
-    os.makedirs(OUT, exist_ok=True)
+    # radii or shapes other than the defaults are a partial sweep: not into the docs' folder unless --out says so
+    out = out_folder(a, scratch=(a.radii, a.shapes) != (ap.get_default("radii"), ap.get_default("shapes")))
+    print(f"writing into {out}", flush=True)
     base = load("column_w12500")
     b = base["gravity"][0]
 
@@ -71,8 +73,8 @@ def main():
         finish_axes(axes[0][col], None, "roughness without / with MLS" if col == 0 else None,
                     f"{shape}: column W = 12500, t = {base['time']['end']} s", fontsize=7)
         finish_axes(axes[1][col], "MLS radius [cells]", "L2 error [%]" if col == 0 else None, None, fontsize=7)
-    save_figure(fig, os.path.join(OUT, "mls_column_radius_sweep.png"), 110)
-    write_csv_rows(os.path.join(OUT, "mls_column_radius_sweep.csv"), rows)
+    save_figure(fig, os.path.join(out, "mls_column_radius_sweep.png"), 110)
+    write_csv_rows(os.path.join(out, "mls_column_radius_sweep.csv"), rows)
 
 
 if __name__ == "__main__":

@@ -87,6 +87,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--cells", type=int, default=50)
     ap.add_argument("--radii", default="1.5:6:0.25", help="first:last:step, in cells")
+    ap.add_argument("--out", default=OUT, help=f"folder of the CSV and the plot (default: {os.path.relpath(OUT, ROOT)}, "
+                                               "the ones the docs show)")
     a = ap.parse_args()
     first, last, step = (float(v) for v in a.radii.split(":"))
     radii = np.arange(first, last + 0.5 * step, step)
@@ -114,9 +116,9 @@ def main():
     finish_axes(ax, None, "softest mode / fundamental",
                 f"uGIMP bar, {a.cells} cells, {PPC} per cell, undeformed: stiffness with MLS", fontsize=7)
     finish_axes(bx, "MLS radius [cells]", "largest growth rate [c / cell]", None, fontsize=7)
-    os.makedirs(OUT, exist_ok=True)
-    save_figure(fig, os.path.join(OUT, "mls_soft_modes.png"), 110)
-    write_csv_rows(os.path.join(OUT, "mls_soft_modes.csv"), rows)
+    os.makedirs(a.out, exist_ok=True)
+    save_figure(fig, os.path.join(a.out, "mls_soft_modes.png"), 110)
+    write_csv_rows(os.path.join(a.out, "mls_soft_modes.csv"), rows)
 
 
 if __name__ == "__main__":

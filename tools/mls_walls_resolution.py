@@ -23,7 +23,7 @@ import numpy as np  # noqa: E402
 import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from speed_vs_error import OUT, benchmark_parser, parse_benchmark_args, load, variant, run  # noqa: E402
+from speed_vs_error import benchmark_parser, out_folder, parse_benchmark_args, load, variant, run  # noqa: E402
 from talus_plot import finish_axes, save_figure, write_csv_rows  # noqa: E402
 
 CELLS = [0.5, 0.25, 0.125, 0.0625]
@@ -43,6 +43,8 @@ def main():
     ap = benchmark_parser(__doc__)
     ap.add_argument("--jobs", type=int, default=2, help="runs at the same time (each on --threads threads)")
     a, talus = parse_benchmark_args(ap)
+    out = out_folder(a)
+    print(f"writing into {out}", flush=True)
     base = load("block_between_walls")
     cases = [(h, shape, mode) for h in CELLS for shape in SHAPES for mode in MODES]
 
@@ -62,7 +64,7 @@ def main():
                          "flight_drift": round(flight, 5), "wall_s": round(res["wall"], 2)})
             print(f"h {h:<6g} {shape:6s} {mode:5s} impact {impact:+.4f} flight {flight:+.4f} ({res['wall']:.0f} s)",
                   flush=True)
-    write_csv_rows(os.path.join(OUT, "mls_walls_resolution.csv"), rows)
+    write_csv_rows(os.path.join(out, "mls_walls_resolution.csv"), rows)
 
     fig, axes = plt.subplots(1, 3, figsize=(14, 4.3))
     colours = dict(zip(CELLS, ["C0", "C1", "C2", "C3"]))
@@ -91,7 +93,7 @@ def main():
         ax.set_xticks(CELLS)
         ax.set_xticklabels([f"{h:g}" for h in CELLS])
         ax.minorticks_off()
-    save_figure(fig, os.path.join(OUT, "mls_walls_resolution.png"), 110)
+    save_figure(fig, os.path.join(out, "mls_walls_resolution.png"), 110)
 
 
 if __name__ == "__main__":

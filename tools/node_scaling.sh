@@ -16,8 +16,13 @@
 # which measured the waking of sleeping threads (about 100 us per region at 16 threads).
 set -u
 OUT=${1:?usage: tools/node_scaling.sh OUT}
+# OUT and TALUS are read from the caller's folder, before the cd (a relative OUT lost its results:
+# pack() runs tar inside the temporary folder)
+OUT=$(realpath -m "$OUT")
+[ -n "${TALUS:-}" ] && TALUS=$(realpath -m "$TALUS")
 cd "$(dirname "$0")/.."
-TALUS=${TALUS:-build/talus}
+TALUS=${TALUS:-$PWD/build/talus}
+[ -x "$TALUS" ] || { echo "node_scaling.sh: $TALUS is not an executable talus (build it: bash tools/build.sh, or set TALUS)" >&2; exit 2; }
 BUDGET=${BUDGET:-510}
 MPM_LIMIT_SRC=${MPM_LIMIT_SRC:-../shared/bench/mpm_limit.cpp}
 STREAM_SRC=${STREAM_SRC:-../shared/bench/stream.cpp}
@@ -26,7 +31,9 @@ W=$(mktemp -d); S=$(mktemp -d); mkdir -p "$OUT"  # W: results, S: scratch
 trap 'rm -rf "$W" "$S"' EXIT
 exec > >(tee -a "$OUT/log.txt") 2>&1
 el() { echo $(( $(date +%s) - T0 )); }
-pack() { (cd "$W" && tar czf "$OUT/results.tar.gz" . 2>/dev/null); echo "[$(el) s] packed"; }
+pack() {
+  if (cd "$W" && tar czf "$OUT/results.tar.gz" .); then echo "[$(el) s] packed"; else echo "[$(el) s] packing into $OUT/results.tar.gz FAILED"; fi
+}
 phase() { # name, seconds it needs
   local left=$(( BUDGET - $(el) ))
   if [ $left -lt "$2" ]; then echo "[$(el) s] SKIP $1 (needs $2 s, $left left)"; return 1; fi

@@ -24,7 +24,7 @@ import numpy as np  # noqa: E402
 import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from speed_vs_error import E, RHO0, L0, OUT, benchmark_parser, parse_benchmark_args, load, variant, run, profile, column_metrics  # noqa: E402
+from speed_vs_error import E, RHO0, L0, benchmark_parser, out_folder, parse_benchmark_args, load, variant, run, profile, column_metrics  # noqa: E402
 from talus_plot import finish_axes, save_figure, write_csv_rows  # noqa: E402
 
 SHAPES = ["linear", "ugimp", "cpgimp"]
@@ -70,6 +70,8 @@ def main():
     ap.add_argument("--variants", default="particle", help="the MLS fits to run: particle, cell or particle,cell")
     ap.add_argument("--tag", default="", help="appended to the names of the plots and the CSV")
     a, talus = parse_benchmark_args(ap)
+    folder = out_folder(a)
+    print(f"writing into {folder}", flush=True)
     rows = []
     fits = a.variants.split(",")
     modes = ["off"] + [a.basis if fit == "particle" else f"{a.basis}-{fit}" for fit in fits]
@@ -77,7 +79,7 @@ def main():
              f"{a.basis}-cell": f"MLS {a.basis} ({a.axes}), one fit per cell"}
 
     def out(name, ext):
-        return os.path.join(OUT, f"{name}{a.tag}.{ext}")
+        return os.path.join(folder, f"{name}{a.tag}.{ext}")
 
     # 1. Column W = 12500 (Edo & Matsubara 2015, Fig. 6-7).
     base = load("column_w12500")

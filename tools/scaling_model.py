@@ -336,6 +336,8 @@ def main():
     counts = parse_counts(a.threads)
     contention = parse_pairs(a.contention) if a.contention else None
     labels = a.labels.split(",") if a.labels else [os.path.basename(r) for r in a.records]
+    if len(labels) != len(a.records):  # zip() below dropped the records past the shorter list
+        sys.exit(f"--labels: {len(labels)} labels for {len(a.records)} records")
     stream = parse_pairs(a.stream) if a.stream else {}
     bandwidth = None
     if a.bytes_per_update > 0 and stream:
@@ -345,6 +347,8 @@ def main():
     outputs = a.output.split(",")
     if len(outputs) == 1:
         outputs = outputs * len(a.records)
+    if len(outputs) != len(a.records):
+        sys.exit(f"--output: {len(outputs)} values for {len(a.records)} records (give one, or one per record)")
     for path, label, output in zip(a.records, labels, outputs):
         if output not in ("run-mean", "sampled"):
             sys.exit(f"--output: {output} is not run-mean or sampled")

@@ -48,14 +48,23 @@ def benchmark_parser(doc):
     ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--talus")
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--out", help=f"folder of the CSV files and plots (default: {os.path.relpath(OUT, ROOT)}, the ones the "
+                                  "docs show: a partial sweep there replaces them)")
     return ap
 
 
+def out_folder(a, scratch=False):
+    """Where a driver writes: --out, else the docs' folder; `scratch` (a partial sweep such as --quick)
+    defaults to build/ so that it does not replace the files the docs show."""
+    folder = a.out or (os.path.join(ROOT, "build", "verification_scratch") if scratch else OUT)
+    os.makedirs(folder, exist_ok=True)
+    return folder
+
+
 def parse_benchmark_args(ap):
-    """Parse a benchmark driver's command line; returns (args, the talus program), with OUT created."""
+    """Parse a benchmark driver's command line; returns (args, the talus program)."""
     a = ap.parse_args()
     talus = find_talus(a.talus)
-    os.makedirs(OUT, exist_ok=True)
     return a, talus
 
 
@@ -151,6 +160,8 @@ def main():
                     help="rate and plots from the wall clock (default: the run's CPU time, which a shared machine does "
                          "not inflate at 1 thread; with more threads CPU time sums the threads, so use --wall there)")
     a, talus = parse_benchmark_args(ap)
+    out = out_folder(a, scratch=a.quick)
+    print(f"writing into {out}", flush=True)
     global TIME_KEY
     TIME_KEY = "wall" if a.wall or a.threads > 1 else "cpu"
     time_col = TIME_KEY + "_s"
@@ -208,7 +219,7 @@ def main():
             record(name, shape, scheme, base["grid"]["cell_size"], 2, res, worst, "max |E - E0| / E0",
                    f"final={final:+.4g}")
 
-    write_csv_rows(os.path.join(OUT, "speed_vs_error.csv"), rows)
+    write_csv_rows(os.path.join(out, "speed_vs_error.csv"), rows)
 
     # Plots: error vs time per benchmark.
     markers = {"linear": "o", "ugimp": "s", "cpgimp": "^", "bspline2": "D"}
@@ -238,7 +249,7 @@ def main():
         ax.set_title(f"{bench}: error vs time")
         ax.legend(fontsize=7)
         ax.grid(True, which="both", alpha=0.3)
-        save_figure(fig, os.path.join(OUT, f"{bench}_error_vs_time.png"), 110)
+        save_figure(fig, os.path.join(out, f"{bench}_error_vs_time.png"), 110)
 
     # Convergence of the column error with cell size (ppc 2).
     conv = []
@@ -258,10 +269,10 @@ def main():
     ax.set_title("column W = 10000: convergence")
     ax.legend(fontsize=8)
     ax.grid(True, which="both", alpha=0.3)
-    save_figure(fig, os.path.join(OUT, "column_convergence.png"), 110)
+    save_figure(fig, os.path.join(out, "column_convergence.png"), 110)
     if conv:
         keys = sorted({k for c in conv for k in c}, key=lambda k: (k != "shape", k != "rate", k))
-        write_csv_rows(os.path.join(OUT, "column_convergence.csv"), conv, keys)
+        write_csv_rows(os.path.join(out, "column_convergence.csv"), conv, keys)
         for c in conv:
             print("convergence", c)
 
@@ -272,7 +283,7 @@ def main():
             if n == name:
                 ax.plot(e["time"], e["total"] / e["total"][0], label=f"{shape} {scheme}", lw=1)
         finish_axes(ax, "time [s]", "total energy / initial", f"{name}: energy history", fontsize=7)
-        save_figure(fig, os.path.join(OUT, f"{name}_energy.png"), 110)
+        save_figure(fig, os.path.join(out, f"{name}_energy.png"), 110)
 
 
 if __name__ == "__main__":
