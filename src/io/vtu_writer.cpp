@@ -36,8 +36,9 @@ vtkNew<vtkDoubleArray> make_array(const char* name, int components, vtkIdType n)
   return a;
 }
 
-void name_voigt_components(vtkDoubleArray* a) {
-  const char* names[6] = {"xx", "yy", "zz", "yz", "xz", "xy"};
+// VTK's order of a symmetric tensor (vtk_symmetric_component): the names say it too.
+void name_symmetric_components(vtkDoubleArray* a) {
+  const char* names[6] = {"xx", "yy", "zz", "xy", "yz", "xz"};
   for (int c = 0; c < 6; ++c) a->SetComponentName(c, names[c]);
 }
 
@@ -55,8 +56,8 @@ vtkSmartPointer<vtkUnstructuredGrid> particle_grid(const ParticleStore& P, bool 
   auto strain = make_array("strain", 6, n);
   auto density = make_array("density", 1, n);
   auto volume = make_array("volume", 1, n);
-  name_voigt_components(stress);
-  name_voigt_components(strain);
+  name_symmetric_components(stress);
+  name_symmetric_components(strain);
   vtkNew<vtkTypeInt64Array> id;
   id->SetName("id");
   id->SetNumberOfTuples(n);
@@ -91,8 +92,8 @@ vtkSmartPointer<vtkUnstructuredGrid> particle_grid(const ParticleStore& P, bool 
     }
     spd[p] = std::sqrt(v2);
     for (int c = 0; c < 6; ++c) {
-      sig[6 * p + c] = P.stress[c][p];
-      eps[6 * p + c] = P.strain[c][p];
+      sig[6 * p + vtk_symmetric_component(c)] = P.stress[c][p];
+      eps[6 * p + vtk_symmetric_component(c)] = P.strain[c][p];
     }
     rho[p] = P.mass[p] / P.volume[p];
     vol[p] = P.volume[p];

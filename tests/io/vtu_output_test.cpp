@@ -52,7 +52,15 @@ TEST(VtuOutput, FrameReadsBackWithAllArrays) {
     double x[3];
     grid->GetPoint(static_cast<vtkIdType>(p), x);
     for (int d = 0; d < 3; ++d) EXPECT_EQ(x[d], P.x[d][p]);
-    EXPECT_EQ(pd->GetArray("stress")->GetComponent(static_cast<vtkIdType>(p), XY), P.stress[XY][p]);
+    // VTK's order of a symmetric tensor: xx yy zz xy yz xz, each component named
+    for (int c = 0; c < 6; ++c)
+      EXPECT_EQ(pd->GetArray("stress")->GetComponent(static_cast<vtkIdType>(p), vtk_symmetric_component(c)),
+                P.stress[c][p]);
+    EXPECT_EQ(vtk_symmetric_component(XY), 3);
+    EXPECT_EQ(vtk_symmetric_component(YZ), 4);
+    EXPECT_EQ(vtk_symmetric_component(XZ), 5);
+    EXPECT_EQ(std::string(pd->GetArray("strain")->GetComponentName(3)), "xy");
+    EXPECT_EQ(std::string(pd->GetArray("strain")->GetComponentName(5)), "xz");
     EXPECT_EQ(pd->GetArray("id")->GetTuple1(static_cast<vtkIdType>(p)), static_cast<double>(P.id[p]));
     EXPECT_DOUBLE_EQ(pd->GetArray("density")->GetTuple1(static_cast<vtkIdType>(p)), P.mass[p] / P.volume[p]);
   }

@@ -14,9 +14,18 @@ class vtkUnstructuredGrid;
 
 namespace talus {
 
+/// The component of a frame's 6-component array (stress, strain) that holds the solver's Voigt
+/// component `voigt` (xx, yy, zz, yz, xz, xy: core/voigt.hpp). Frames use VTK's order of a
+/// symmetric tensor, xx, yy, zz, xy, yz, xz (vtkMath::TensorFromSymmetricTensor), so that
+/// ParaView's tensor filters (principal values, glyphs) pair the shear components rightly.
+constexpr int vtk_symmetric_component(int voigt) {
+  constexpr int kVtkOf[6] = {0, 1, 2, 4, 5, 3};
+  return kVtkOf[voigt];
+}
+
 /// Write the particles to `path` (written to a temporary name, then renamed, so a reader never sees
-/// a half-written frame). Point arrays: id, velocity, speed, stress (6 components xx yy zz yz xz xy),
-/// strain (6), density, volume, body. A store with no particles (an empty rank of a distributed run)
+/// a half-written frame). Point arrays: id, velocity, speed, stress (6 components in VTK's order
+/// xx yy zz xy yz xz, named so), strain (6, likewise), density, volume, body. A store with no particles (an empty rank of a distributed run)
 /// gives a valid file with 0 points and the same arrays.
 void write_particles_vtu(const std::string& path, const ParticleStore& particles, bool compress);
 
