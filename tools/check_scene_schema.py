@@ -15,6 +15,7 @@ and paste `talus schema --markdown` between the markers (or run this script with
 import argparse
 import copy
 import json
+import os
 import pathlib
 import subprocess
 import sys
@@ -35,6 +36,9 @@ def main():
     parser.add_argument("--root", type=pathlib.Path, default=pathlib.Path(__file__).resolve().parent.parent)
     parser.add_argument("--write", action="store_true", help="rewrite the docs from the code instead of checking")
     args = parser.parse_args()
+    binary = pathlib.Path(args.talus)
+    if not (binary.is_file() and os.access(binary, os.X_OK)):  # was a subprocess traceback
+        sys.exit(f"check_scene_schema.py: --talus {args.talus}: no executable file there")
     docs = args.root / "docs"
     failures = []
 

@@ -52,6 +52,10 @@ def main():
     ap.add_argument("runs", nargs="+", type=pathlib.Path)
     ap.add_argument("--markdown", action="store_true", help="print a Markdown table")
     args = ap.parse_args()
+    for run in args.runs:  # checked before the table (was a traceback)
+        for needed in ("runout.json", "energy.csv"):
+            if not (run / needed).is_file():
+                sys.exit(f"compare_ranks.py: {run / needed} not found: give run folders of a scene with diagnostics.runout")
     ref = None
     rows = []
     for run in args.runs:

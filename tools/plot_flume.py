@@ -37,6 +37,10 @@ def main():
     p.add_argument("run_dir")
     p.add_argument("--out", help="folder for the PNGs (default: the run folder)")
     a = p.parse_args()
+    for needed in ("runout.csv", "runout.json", "scene.json"):  # checked before any plot (was a traceback)
+        if not os.path.isfile(os.path.join(a.run_dir, needed)):
+            sys.exit(f"plot_flume.py: {os.path.join(a.run_dir, needed)} not found: give the folder of a run of a scene "
+                     "with diagnostics.runout (talus run SCENE --out DIR)")
     out = a.out or a.run_dir
     os.makedirs(out, exist_ok=True)
     runout = read_csv_columns(os.path.join(a.run_dir, "runout.csv"))

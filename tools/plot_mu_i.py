@@ -42,7 +42,10 @@ def main():
     args = ap.parse_args()
     csv_path = args.csv or os.path.join(tempfile.mkdtemp(prefix="talus_mu_i_"), "mu_i_simple_shear.csv")
     if not args.no_run:
-        subprocess.run([args.talus, "element-test", SPEC, "--out", csv_path], check=True)
+        if not (os.path.isfile(args.talus) and os.access(args.talus, os.X_OK)):  # was a subprocess traceback
+            sys.exit(f"plot_mu_i.py: --talus {args.talus}: no executable file there (build it: bash tools/build.sh)")
+        if subprocess.run([args.talus, "element-test", SPEC, "--out", csv_path]).returncode != 0:
+            sys.exit("plot_mu_i.py: talus element-test failed (its error is above)")
     with open(SPEC) as f:
         m = json.load(f)["material"]
     with open(csv_path, newline="") as f:

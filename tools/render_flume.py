@@ -21,9 +21,13 @@ import argparse
 import os
 import sys
 
-from paraview.simple import (ColorBy, GetActiveViewOrCreate, GetAnimationScene, GetColorTransferFunction,
-                             GetScalarBar, PVDReader, Render, ResetCamera, SaveScreenshot, Show,
-                             XMLUnstructuredGridReader)
+try:  # --help works under any Python; rendering needs ParaView's
+    from paraview.simple import (ColorBy, GetActiveViewOrCreate, GetAnimationScene, GetColorTransferFunction,
+                                 GetScalarBar, PVDReader, Render, ResetCamera, SaveScreenshot, Show,
+                                 XMLUnstructuredGridReader)
+    HAVE_PARAVIEW = True
+except ImportError:
+    HAVE_PARAVIEW = False
 
 
 def main():
@@ -35,6 +39,8 @@ def main():
     p.add_argument("--size", default="1600x900", help="image size WxH")
     p.add_argument("--max-speed", type=float, default=0.0, help="top of the colour scale [m/s] (0: the frame's range)")
     a = p.parse_args()
+    if not HAVE_PARAVIEW:
+        sys.exit("render_flume.py: needs ParaView's Python: run it with pvpython or pvbatch (Debian package paraview)")
 
     pvd = os.path.join(a.run_dir, "particles.pvd")
     if not os.path.exists(pvd):

@@ -36,6 +36,8 @@ import os
 import subprocess
 import sys
 import tempfile
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from talus_plot import require_talus  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import scaling_model  # noqa: E402
@@ -112,6 +114,7 @@ def main():
     add_wait_policy_argument(ap)
     ap.add_argument("bench_args", nargs="*", help="extra arguments for talus bench (after --)")
     a = ap.parse_args()
+    require_talus(a.talus)
     wait_policy = apply_wait_policy(a.wait_policy)
     os.makedirs(a.out, exist_ok=True)
     counts = thread_counts(a.max_threads)

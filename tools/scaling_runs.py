@@ -32,6 +32,8 @@ import re
 import subprocess
 import sys
 import tempfile
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from talus_plot import require_talus  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import scaling_model  # noqa: E402
@@ -142,6 +144,7 @@ def main():
     ap.add_argument("--name", default="scaling_runs", help="file stem of the JSON and PNG")
     add_wait_policy_argument(ap)
     a = ap.parse_args()
+    require_talus(a.talus)
     wait_policy = apply_wait_policy(a.wait_policy)
     if a.max_threads < 1:
         sys.exit("--max-threads: at least 1")

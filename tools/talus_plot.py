@@ -34,10 +34,20 @@ def read_vtu(path, *arrays):
     return data
 
 
+def require_talus(path, option="--talus"):
+    """Stop with one line when `path` is no executable file (a wrong --talus gave a subprocess
+    traceback, often after other work). Returns the path."""
+    if not (os.path.isfile(path) and os.access(path, os.X_OK)):
+        hint = " (build it: bash tools/build.sh)" if path.endswith(os.path.join("build", "talus")) else ""
+        sys.exit(f"{os.path.basename(sys.argv[0])}: {option} {path}: no executable file there{hint}")
+    return path
+
+
 def run_talus(talus, *args, threads=None, quiet=True, capture=False, check=True):
     """Run the talus program (`talus run SCENE --out DIR`, `talus element-test ...`): the arguments
     as given, then --threads and --quiet for `run` when asked. Returns the CompletedProcess; with
     check, a failure raises with talus's own one-line error. capture keeps stdout and stderr."""
+    require_talus(talus)
     cmd = [talus, *map(str, args)]
     if args and args[0] == "run":
         if threads is not None:
