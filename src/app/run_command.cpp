@@ -55,8 +55,12 @@ void print_scene_summary(const Scene& s, const MemoryEstimate& memory) {
 void print_runout(const RunoutResult& r, const RunSummary& summary) {
   fmt::print("talus: runout: front at s = {:.4f} m, {:.4f} m beyond the gate ({}, s = {:.4f} m)", r.front, r.from_gate,
              r.gate_from_scene ? "diagnostics.runout.gate_x" : "the initial front", r.gate_s);
-  if (r.beyond_runout_plane)
-    fmt::print(", {:.4f} m onto the runout plane (starts at s = {:.4f} m)", *r.beyond_runout_plane, *r.runout_plane_s);
+  if (r.beyond_runout_plane) {
+    // (negative before the front reaches the plane: said as a distance short of it)
+    const double beyond = *r.beyond_runout_plane;
+    fmt::print(", {:.4f} m {} the runout plane (starts at s = {:.4f} m)", std::abs(beyond),
+               beyond < 0.0 ? "short of" : "onto", *r.runout_plane_s);
+  }
   fmt::print("; tail at s = {:.4f} m\n", r.tail);
   fmt::print("talus: runout history: {}; result: {}{}\n", summary.runout_path, summary.runout_summary_path,
              summary.deposit_path.empty() ? "" : "; deposit thickness: " + summary.deposit_path);
