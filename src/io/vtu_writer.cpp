@@ -6,6 +6,7 @@
 #include <vtkCellArray.h>
 #include <vtkCellType.h>
 #include <vtkDoubleArray.h>
+#include <vtkFieldData.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
@@ -185,11 +186,19 @@ void rename_into_place(const std::string& tmp, const std::string& path) {
 
 }  // namespace
 
-void write_particles_vtu(const std::string& path, const ParticleStore& P, bool compress) {
-  ParticleFrame(P).write(path, compress);
+void write_particles_vtu(const std::string& path, const ParticleStore& P, bool compress, std::optional<double> time) {
+  ParticleFrame(P, time).write(path, compress);
 }
 
-ParticleFrame::ParticleFrame(const ParticleStore& particles) : grid_(particle_grid(particles, true)) {}
+ParticleFrame::ParticleFrame(const ParticleStore& particles, std::optional<double> time)
+    : grid_(particle_grid(particles, true)) {
+  if (!time) return;
+  vtkNew<vtkDoubleArray> value;  // the field ParaView reads a data set's time from
+  value->SetName("TimeValue");
+  value->SetNumberOfTuples(1);
+  value->SetValue(0, *time);
+  grid_->GetFieldData()->AddArray(value);
+}
 ParticleFrame::~ParticleFrame() = default;
 
 void ParticleFrame::write(const std::string& path, bool compress) const {

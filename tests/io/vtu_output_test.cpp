@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 #include <vtkDataArray.h>
+#include <vtkFieldData.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkUnstructuredGrid.h>
@@ -16,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 namespace talus {
 namespace vtu_output_test {
@@ -82,8 +84,22 @@ TEST(VtuOutput, RunWritesSeriesIndexSceneAndHistory) {
   text << pvd.rdbuf();
   EXPECT_NE(text.str().find("type=\"Collection\""), std::string::npos);
   EXPECT_NE(text.str().find("frames/particles_000004.vtu"), std::string::npos);
-  for (int f = 0; f < 5; ++f)
-    EXPECT_TRUE(fs::exists(dir / "frames" / ("particles_00000" + std::to_string(f) + ".vtu")));
+  // each frame carries its time (TimeValue, as ParaView reads it), the time the .pvd lists for it
+  std::vector<double> listed;
+  for (std::size_t at = text.str().find("timestep=\""); at != std::string::npos; at = text.str().find("timestep=\"", at + 1))
+    listed.push_back(std::stod(text.str().substr(at + 10)));
+  ASSERT_EQ(listed.size(), 5u);
+  for (int f = 0; f < 5; ++f) {
+    const fs::path frame = dir / "frames" / ("particles_00000" + std::to_string(f) + ".vtu");
+    ASSERT_TRUE(fs::exists(frame));
+    vtkNew<vtkXMLUnstructuredGridReader> reader;
+    reader->SetFileName(frame.string().c_str());
+    reader->Update();
+    vtkDataArray* time = reader->GetOutput()->GetFieldData()->GetArray("TimeValue");
+    ASSERT_NE(time, nullptr) << frame;
+    EXPECT_EQ(time->GetTuple1(0), listed[f]) << frame;
+  }
+  EXPECT_EQ(summary.frames_in_series, 5u);
   EXPECT_TRUE(fs::exists(dir / "scene.json"));
   std::ifstream csv(dir / "energy.csv");
   std::string header;

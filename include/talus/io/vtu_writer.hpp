@@ -5,6 +5,7 @@
 #include "talus/particles/particle_store.hpp"
 #include "talus/scene/scene.hpp"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,8 +27,11 @@ constexpr int vtk_symmetric_component(int voigt) {
 /// Write the particles to `path` (written to a temporary name, then renamed, so a reader never sees
 /// a half-written frame). Point arrays: id, velocity, speed, stress (6 components in VTK's order
 /// xx yy zz xy yz xz, named so), strain (6, likewise), density, volume, body. A store with no particles (an empty rank of a distributed run)
-/// gives a valid file with 0 points and the same arrays.
-void write_particles_vtu(const std::string& path, const ParticleStore& particles, bool compress);
+/// gives a valid file with 0 points and the same arrays. With `time`, the file's field data holds
+/// it as `TimeValue` (the array ParaView reads): a frame opened on its own, without the .pvd, has
+/// its simulated time.
+void write_particles_vtu(const std::string& path, const ParticleStore& particles, bool compress,
+                         std::optional<double> time = std::nullopt);
 
 /// One frame's point arrays (those write_particles_vtu writes), copied out of the store, in
 /// parallel, when it is built: the store may change afterwards while the frame is written, on
@@ -35,7 +39,7 @@ void write_particles_vtu(const std::string& path, const ParticleStore& particles
 /// have written at construction.
 class ParticleFrame {
  public:
-  explicit ParticleFrame(const ParticleStore& particles);
+  explicit ParticleFrame(const ParticleStore& particles, std::optional<double> time = std::nullopt);
   ~ParticleFrame();
   /// As write_particles_vtu: through a temporary name and a rename.
   void write(const std::string& path, bool compress) const;
