@@ -197,6 +197,8 @@ def main():
         ref = float(lube_runout(a))
         rows.append({"model": model, "aspect": a, "cells": c, **m, "lube_runout": ref,
                      "runout_deviation": m["runout"] / ref - 1, "lube_height": float(lube_height(a))})
+    if not rows:  # (was an IndexError when the CSV was written)
+        sys.exit(f"collapse_study.py: no finished run in {args.runs}: run it without --no-run first")
     rows.sort(key=lambda r: (r["model"], r["cells"], r["aspect"]))
     os.makedirs(args.out, exist_ok=True)
     write_csv_rows(os.path.join(args.out, "collapse_study.csv"),

@@ -22,7 +22,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from talus_plot import read_vtu, write_csv_rows  # noqa: E402
+from talus_plot import read_vtu, require_folders, write_csv_rows  # noqa: E402
 
 
 def frame_near(run, time):
@@ -59,6 +59,7 @@ def main():
     ap.add_argument("--csv", help="write the table here")
     ap.add_argument("--png", help="plan views of the runs, coloured by density")
     a = ap.parse_args()
+    require_folders(csv=a.csv, png=a.png)
 
     rows, views = [], []
     for run in a.runs:

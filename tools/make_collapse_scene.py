@@ -109,7 +109,13 @@ def parser():
 
 
 def main():
-    o = parser().parse_args()
+    p = parser()
+    o = p.parse_args()
+    for option in ("aspect", "length", "density", "young_ratio", "end_factor"):  # (negative ones wrote refused scenes)
+        if not getattr(o, option) > 0:
+            p.error(f"--{option.replace('_', '-')} = {getattr(o, option)} must be positive")
+    if o.cells < 1 or o.particles_per_cell < 1:
+        p.error("--cells and --particles-per-cell must be at least 1")
     o.command_line = " ".join(sys.argv[1:])
     scene = build(o)
     lines = [f'  {json.dumps(k)}: {json.dumps(v)}' for k, v in scene.items()]

@@ -151,6 +151,12 @@ def main():
                    help="no terrain: the slope alone in bed-aligned coordinates with gravity tilted (runs without "
                         "the terrain grid; for timing and checks)")
     a = p.parse_args()
+    # (--cell 0 divided by zero; negative sizes wrote scenes that talus refused)
+    for option in ("wedge_width", "height", "cell", "end", "frame_interval"):
+        if not getattr(a, option) > 0:
+            p.error(f"--{option.replace('_', '-')} = {getattr(a, option)} must be positive")
+    if a.particles_per_cell < 1:
+        p.error(f"--particles-per-cell = {a.particles_per_cell} must be at least 1")
     scene = flat_slope(a) if a.flat_slope else build(a)
     # One line per key below the top level keeps the file short and diffable.
     lines = [f'  {json.dumps(k)}: {json.dumps(v)}' for k, v in scene.items()]

@@ -29,7 +29,7 @@ import sys
 import tempfile
 import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from talus_plot import require_talus  # noqa: E402
+from talus_plot import require_folders, require_talus  # noqa: E402
 
 MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1"}
 PINNED = {"OMP_PROC_BIND": "close", "OMP_PLACES": "cores"}
@@ -81,6 +81,7 @@ def main():
     ap.add_argument("--json")
     a = ap.parse_args()
     require_talus(a.talus)
+    require_folders(json=a.json)
     all_layouts = layouts(a.talus)
     names = a.layouts.split(",")
     results = {"started": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()), "bench_args": a.bench_args,

@@ -28,6 +28,7 @@ writes mpi_weak_scaling.json and mpi_weak_scaling.png and prints the table.
 import argparse
 import json
 import math
+import os
 import sys
 
 TILE_BYTES = 64 * 8  # one field of one 4x4x4-node tile
@@ -88,6 +89,8 @@ def main():
                     help="particle-updates/s of a 64-core node (default: 64 x 4.8 M/s x the OpenMP model's efficiency)")
     ap.add_argument("--out", help="prefix of the .json and .png written")
     a = ap.parse_args()
+    if a.out and not os.path.isdir(os.path.dirname(os.path.abspath(a.out))):  # found before the model, not after
+        sys.exit(f"mpi_weak_scaling_model.py: --out {a.out}: the folder {os.path.dirname(os.path.abspath(a.out))} does not exist")
     bench = json.load(open(a.bench))
     s = bench["summary"]
     # S: tiles a rank sends its neighbour a step, from the 2-rank bench

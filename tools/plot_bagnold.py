@@ -25,7 +25,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from talus_plot import ROOT, read_vtu, run_talus, write_csv_rows  # noqa: E402
+from talus_plot import ROOT, read_vtu, require_folders, run_talus, write_csv_rows  # noqa: E402
 
 import matplotlib  # noqa: E402
 
@@ -100,6 +100,7 @@ def main():
     ap.add_argument("--out", default=os.path.join(ROOT, "docs", "verification", "bagnold_profile.png"))
     ap.add_argument("--csv", default=os.path.join(ROOT, "docs", "verification", "bagnold_profile.csv"))
     args = ap.parse_args()
+    require_folders(out=args.out, csv=args.csv)
     with open(SCENE) as f:
         base = json.load(f)
     setup = Setup(base)
@@ -114,6 +115,8 @@ def main():
                 json.dump(scene_at(base, n), f, indent=2)
             run_talus(args.talus, "run", path, "--out", out, threads=args.threads)
         frames = sorted(glob.glob(os.path.join(out, "frames", "*.vtu")))
+        if len(frames) < 2:  # (was an IndexError)
+            sys.exit(f"plot_bagnold.py: {out} holds {len(frames)} frames: run it without --no-run first")
         times = [base["output"]["frame_interval"] * k for k in range(len(frames))]
         times[-1] = base["time"]["end"]
         history = []

@@ -24,7 +24,7 @@ import sys
 import tempfile
 import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from talus_plot import require_talus  # noqa: E402
+from talus_plot import require_folders, require_talus  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import scaling_model  # noqa: E402
@@ -121,6 +121,7 @@ def main():
     ap.add_argument("--out", default="")
     a = ap.parse_args()
     require_talus(a.talus)
+    require_folders(out=a.out)
     os.makedirs(a.workdir, exist_ok=True)
     results = []
     for case in a.case or ["block", "shear", "flume"]:

@@ -43,6 +43,17 @@ def require_talus(path, option="--talus"):
     return path
 
 
+def require_folders(**outputs):
+    """Stop with one line when the folder of an output file does not exist (`option=path`; an empty
+    path is no output). Checked right after parsing: the write at the end came after all the work."""
+    for option, path in outputs.items():
+        if not path:
+            continue
+        folder = os.path.dirname(os.path.abspath(path))
+        if not os.path.isdir(folder):
+            sys.exit(f"{os.path.basename(sys.argv[0])}: --{option.replace('_', '-')} {path}: the folder {folder} does not exist")
+
+
 def run_talus(talus, *args, threads=None, quiet=True, capture=False, check=True):
     """Run the talus program (`talus run SCENE --out DIR`, `talus element-test ...`): the arguments
     as given, then --threads and --quiet for `run` when asked. Returns the CompletedProcess; with
