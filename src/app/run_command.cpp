@@ -110,13 +110,19 @@ void require_outputs_spare_inputs(const std::filesystem::path& dir, const std::s
                                   record_path));
 }
 
+/// The folder a checkpoint lies in ("." for a bare file name): where a resumed run writes unless
+/// --out says otherwise, and where the outputs before the checkpoint are.
+std::string checkpoint_folder(const std::string& restart_path) {
+  const std::string folder = std::filesystem::path(restart_path).parent_path().string();
+  return folder.empty() ? "." : folder;
+}
+
 /// A run resumed into another folder than its checkpoint's (--restart with --out) starts that
 /// folder's files afresh from the checkpoint's step. Into a folder holding another run's output it
 /// kept that run's frames and energy rows below the step and stitched the two runs together.
 void require_fresh_folder_for_restart(const std::filesystem::path& dir, const std::string& restart_path) {
   std::error_code ec;
-  const std::filesystem::path own = std::filesystem::path(restart_path).parent_path();
-  if (std::filesystem::equivalent(dir, own.empty() ? "." : own, ec)) return;  // its own folder: the restart continues the files there
+  if (std::filesystem::equivalent(dir, checkpoint_folder(restart_path), ec)) return;  // its own folder: the restart continues the files there
   for (const std::filesystem::path& output : run_output_files(dir))
     if (std::filesystem::exists(output, ec))
       throw input_error(fmt::format("--out {}: it holds another run's {}; resume into the checkpoint's own folder, or "
@@ -179,8 +185,7 @@ void add_run_command(CLI::App& app) {
     if (!restart->empty()) {  // checked against the scene before anything is written
       checkpoint = std::make_unique<Checkpoint>(read_checkpoint(*restart));
       restore_checkpoint(solver, *checkpoint, *restart);
-      if (out_dir->empty()) dir = std::filesystem::path(*restart).parent_path().string();
-      if (dir.empty()) dir = ".";
+      if (out_dir->empty()) dir = checkpoint_folder(*restart);
     }
     require_outputs_spare_inputs(dir, *scene_path, *restart, *record_path);
     if (checkpoint && !out_dir->empty()) require_fresh_folder_for_restart(dir, *restart);
@@ -203,8 +208,7 @@ void add_run_command(CLI::App& app) {
     options.frames_in_background = !*foreground_frames;
     if (checkpoint) {
       options.resume = &checkpoint->run;
-      options.resume_dir = std::filesystem::path(*restart).parent_path().string();
-      if (options.resume_dir.empty()) options.resume_dir = ".";
+      options.resume_dir = checkpoint_folder(*restart);
     }
     std::unique_ptr<WorkRecorder> recorder;
     if (!record_path->empty()) {

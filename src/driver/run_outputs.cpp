@@ -207,7 +207,7 @@ RunoutFiles::RunoutFiles(const Scene& scene, const fs::path& dir, std::optional<
       std::getline(before, line);  // its header
       while (std::getline(before, line) && up_to_checkpoint(line)) {
       }
-      cut_csv(history_path_, runout_csv_header(), [](const std::string&) { return false; });
+      write_file_atomically(history_path_, runout_csv_header() + "\n");
     }
     if (first) monitor_->resume(*first, *last);
   }

@@ -128,9 +128,9 @@ Table<SceneDraft> make_grid_table() {
           },
           [](const SceneDraft& d, Json& j) {
             const GridGeometry& g = d.scene.grid;
-            // cells x h to 12 digits: 0.6 and not 0.6000000000000001 (the reader rounds to whole cells)
-            const auto extent = [&](int a) { return std::stod(fmt::format("{:.12g}", g.cells[a] * g.h)); };
-            j["size"] = Json::array({extent(0), extent(1), extent(2)});
+            // cells x h as computed (0.6000000000000001 for 48 x 0.0125): the scene's hash, which a
+            // checkpoint carries, is of this text, so rounding it would refuse earlier checkpoints
+            j["size"] = Json::array({g.cells[0] * g.h, g.cells[1] * g.h, g.cells[2] * g.h});
           },
           {.required = true}),
       object<SceneDraft>(

@@ -26,8 +26,9 @@ constexpr int vtk_symmetric_component(int voigt) {
 
 /// Write the particles to `path` (written to a temporary name, then renamed, so a reader never sees
 /// a half-written frame). Point arrays: id, velocity, speed, stress (6 components in VTK's order
-/// xx yy zz xy yz xz, named so), strain (6, likewise), density, volume, body. A store with no particles (an empty rank of a distributed run)
-/// gives a valid file with 0 points and the same arrays. With `time`, the file's field data holds
+/// xx yy zz xy yz xz, named so), strain (6, likewise), density, volume, body. A store with no
+/// particles (an empty rank of a distributed run) gives a valid file with 0 points and the same
+/// arrays. With `time`, the file's field data holds
 /// it as `TimeValue` (the array ParaView reads): a frame opened on its own, without the .pvd, has
 /// its simulated time.
 void write_particles_vtu(const std::string& path, const ParticleStore& particles, bool compress,
