@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 
@@ -25,7 +26,12 @@ RunoutSample measure_runout(const ParticleStore& P, const FlumeCoordinates& c, d
                             double tail_quantile) {
   RunoutSample r;
   const std::size_t n = P.size();
-  if (n == 0) return r;
+  if (n == 0) {  // nothing left to measure: no position is a number (not 0, a place on the flume)
+    const double none = std::numeric_limits<double>::quiet_NaN();
+    r.front = r.tail = r.s_min = r.s_max = r.centre_s = r.centre_velocity_s = none;
+    r.centre = Vec3::Constant(none);
+    return r;
+  }
   std::vector<Entry> order(n);
 #pragma omp parallel for schedule(static)
   for (std::size_t p = 0; p < n; ++p) order[p] = Entry{c.s(P.x[0][p]), P.id[p], p};
@@ -118,19 +124,25 @@ RunoutSample RunoutMonitor::sample(const ParticleStore& particles, double time, 
   if (last_ && time > last_->time) s.front_velocity = (s.front - last_->front) / (time - last_->time);
   if (!first_) first_ = s;
   last_ = s;
+  if (s.mass > 0.0) last_with_particles_ = s;
   return s;
 }
 
 void RunoutMonitor::resume(const RunoutSample& first, const RunoutSample& last) {
   first_ = first;
   last_ = last;
+  if (last.mass > 0.0) last_with_particles_ = last;
 }
 
 RunoutResult RunoutMonitor::result() const {
   RunoutResult r;
   if (!last_) return r;
-  r.front = last_->front;
-  r.tail = last_->tail;
+  const bool all_left = !(last_->mass > 0.0) && last_with_particles_;
+  const RunoutSample& measured = all_left ? *last_with_particles_ : *last_;
+  if (all_left) r.all_left_time = last_->time;
+  r.time = measured.time;
+  r.front = measured.front;
+  r.tail = measured.tail;
   r.gate_from_scene = spec_.has_gate;
   r.gate_s = spec_.has_gate ? coordinates_.s(spec_.gate_x) : first_->front;
   r.from_gate = r.front - r.gate_s;

@@ -264,6 +264,7 @@ class RunLoop {
   SignalCatcher signals_;
   LoopRecording recording_;
   RunSummary summary_;
+  double local_updates_ = 0.0;  // this rank's particles summed over the steps taken
 };
 
 RunSummary RunLoop::run() {
@@ -340,6 +341,7 @@ void RunLoop::write_terrain() {
 }
 
 bool RunLoop::step_and_write() {
+  local_updates_ += static_cast<double>(solver_.particles().size());
   solver_.step();
   recording_.step_done();
   const double t = solver_.time();
@@ -427,6 +429,8 @@ void RunLoop::finish() {
   summary_.deposit_path = runout.deposit_path;
   summary_.steps = solver_.step_count();
   summary_.time = solver_.time();
+  summary_.particle_updates = comm_.sum_in_rank_order(local_updates_);
+  summary_.emptied = solver_.emptied();
   summary_.wall_seconds = progress_line_.elapsed();
   recording_.finish(summary_.wall_seconds, frames_.background_seconds());
   summary_.final = solver_.energies();

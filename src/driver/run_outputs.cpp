@@ -234,7 +234,7 @@ RunoutFiles::Outcome RunoutFiles::finish(Solver& solver) const {
   if (!comm_.root() || !monitor_->has_samples()) return out;
   out.result = monitor_->result();
   out.summary_path = (dir_ / "runout.json").string();
-  write_file_atomically(out.summary_path, runout_result_json(*out.result, solver.time()) + "\n");
+  write_file_atomically(out.summary_path, runout_result_json(*out.result) + "\n");
   if (!completed) return out;  // the deposit of a completed run (not of one stopped by a signal)
   ScopedPhase timer(solver.phase_times(), Phase::Output);
   const FlumeCoordinates& c = monitor_->coordinates();

@@ -58,14 +58,15 @@ std::optional<RunoutSample> parse_runout_csv_row(const std::string& row) {
   return r;
 }
 
-std::string runout_result_json(const RunoutResult& r, double time) {
-  auto number = [](double v) { return fmt::format("{:.10g}", v); };
+std::string runout_result_json(const RunoutResult& r) {
+  // (17 digits, as runout.csv: the value read back is the one computed)
+  auto number = [](double v) { return fmt::format("{:.17g}", v); };
   auto optional = [&](const std::optional<double>& v) { return v ? number(*v) : std::string("null"); };
   return fmt::format(
       "{{\"time\": {}, \"front\": {}, \"tail\": {}, \"gate_s\": {}, \"gate_from_scene\": {}, \"from_gate\": {}, "
-      "\"runout_plane_s\": {}, \"beyond_runout_plane\": {}}}",
-      number(time), number(r.front), number(r.tail), number(r.gate_s), r.gate_from_scene ? "true" : "false",
-      number(r.from_gate), optional(r.runout_plane_s), optional(r.beyond_runout_plane));
+      "\"runout_plane_s\": {}, \"beyond_runout_plane\": {}, \"all_left_time\": {}}}",
+      number(r.time), number(r.front), number(r.tail), number(r.gate_s), r.gate_from_scene ? "true" : "false",
+      number(r.from_gate), optional(r.runout_plane_s), optional(r.beyond_runout_plane), optional(r.all_left_time));
 }
 
 void write_deposit_csv(const std::string& path, const DepositRaster& raster, const FlumeCoordinates& c) {

@@ -150,9 +150,6 @@ void Solver::remove_outflow(std::size_t leaving) {
   ParticleStore& P = particles_;
   const std::size_t n = P.size();
   wave_rate_from_stress_pass_.reset();  // the maximum included the particles that leave
-  if (leaving == n && !comm_.distributed())  // a distributed run checks the total at the next step
-    throw instability_error(fmt::format("step {}, t = {:.6g} s: every particle has left the grid through its open faces",
-                                        step_, time_));
   std::vector<std::uint32_t> kept;
   kept.reserve(n - leaving);
   for (std::size_t p = 0; p < n; ++p) {
@@ -297,7 +294,7 @@ double Solver::outflow_mass() const { return comm_.sum_in_rank_order(outflow_mas
 bool Solver::finished() const {
   const bool time_done = time_ >= scene_.end_time * (1.0 - 1e-12);
   const bool steps_done = scene_.max_steps > 0 && step_ >= scene_.max_steps;
-  return time_done || steps_done;
+  return time_done || steps_done || emptied_;
 }
 
 std::optional<WaveRateRule> Solver::lanes_wave_rate_rule() const {
@@ -395,6 +392,12 @@ void Solver::step() {
       sort_particles_recorded();
     }
   }
+  // Nothing is left to move once every particle has left through the open faces: the run ends with
+  // this step. A distributed run asks every rank (one collective a step, only with open faces).
+  if (!comm_.distributed())
+    emptied_ = particles_.size() == 0;
+  else if (gather_limits_.has_open_face())
+    emptied_ = !comm_.any(particles_.size() > 0);
   if ((step_ + 1) % kFieldCheckInterval == 0) {
     // one parallel region scans every particle array in use and the volume
     recorded(recording(), RegionSchedule::Static, "field check", particles_.size(), 1,
@@ -822,6 +825,7 @@ void Solver::restore(ParticleStore particles, const SolverState& s, RestoreSort 
     for (const auto& c : s.sort_cell)
       if (c.size() != n) throw io_error("restart: the saved sort state does not match the particles");
   particles_ = std::move(particles);
+  emptied_ = counts[0] == 0;
   wave_rate_from_stress_pass_.reset();
   size_scratch();
   if (mode == RestoreSort::Fresh) {

@@ -44,6 +44,38 @@ ParticleStore uniform_strip(int n, double length, double mass = 1.0, unsigned se
   return P;
 }
 
+// Once every particle has left through the open faces there is nothing to measure: the sample has
+// no mass and no position, and the result is the last front measured, with the time all had left.
+TEST(Runout, AfterEveryParticleHasLeftTheResultIsTheLastFrontMeasured) {
+  RunoutSpec spec;
+  spec.has_gate = true;
+  spec.gate_x = 0.1;
+  RunoutMonitor monitor(spec, FlumeCoordinates());
+  monitor.sample(uniform_strip(1000, 2.0), 0.0, 0);
+  const RunoutSample before = monitor.sample(uniform_strip(1000, 3.0), 0.5, 100);
+  const RunoutSample none = monitor.sample(ParticleStore(), 0.6, 120);
+  EXPECT_EQ(none.mass, 0.0);
+  for (double v : {none.front, none.tail, none.s_min, none.s_max, none.centre_s, none.centre[0], none.centre_velocity_s,
+                   none.front_velocity})
+    EXPECT_TRUE(std::isnan(v)) << v;
+  const RunoutResult r = monitor.result();
+  ASSERT_TRUE(r.all_left_time.has_value());
+  EXPECT_EQ(*r.all_left_time, 0.6);
+  EXPECT_EQ(r.time, 0.5);
+  EXPECT_EQ(r.front, before.front);
+  EXPECT_EQ(r.tail, before.tail);
+  EXPECT_EQ(r.from_gate, before.front - 0.1);
+  const nlohmann::json j = nlohmann::json::parse(runout_result_json(r));
+  EXPECT_EQ(j.at("time").get<double>(), 0.5);
+  EXPECT_EQ(j.at("front").get<double>(), before.front);
+  EXPECT_EQ(j.at("all_left_time").get<double>(), 0.6);
+  // a history row of the empty sample reads back as one
+  const std::optional<RunoutSample> row = parse_runout_csv_row(runout_csv_row(none));
+  ASSERT_TRUE(row.has_value());
+  EXPECT_TRUE(std::isnan(row->front));
+  EXPECT_EQ(row->step, 120);
+}
+
 TEST(Runout, QuantileFrontAndTailOfAUniformStrip) {
   const ParticleStore P = uniform_strip(1000, 2.0);
   const RunoutSample r = measure_runout(P, FlumeCoordinates(), 0.995, 0.005);
@@ -272,10 +304,14 @@ TEST(RunoutOutput, RunWritesRunoutHistoryAndDeposit) {
   {
     std::ifstream in(dir / "runout.json");
     const nlohmann::json j = nlohmann::json::parse(in);
-    EXPECT_NEAR(j.at("front").get<double>(), last->front, 1e-8);
+    // (17 digits, as runout.csv: the numbers read back are the same doubles)
+    EXPECT_EQ(j.at("time").get<double>(), last->time);
+    EXPECT_EQ(j.at("front").get<double>(), last->front);
+    EXPECT_EQ(j.at("tail").get<double>(), last->tail);
     EXPECT_NEAR(j.at("gate_s").get<double>(), 0.14, 1e-12);
     EXPECT_TRUE(j.at("gate_from_scene").get<bool>());
-    EXPECT_NEAR(j.at("beyond_runout_plane").get<double>(), last->front - 0.3, 1e-8);
+    EXPECT_EQ(j.at("beyond_runout_plane").get<double>(), *summary.runout->beyond_runout_plane);
+    EXPECT_TRUE(j.at("all_left_time").is_null());
   }
   // deposit.csv: one row per raster cell (20 x 1 cells of 0.02 m); the volume matches the particles'.
   std::ifstream dep(dir / "deposit.csv");

@@ -285,23 +285,43 @@ TEST(Crash, UnwritableOutputsAreRefusedBeforeAnyWork) {
 
 TEST(Crash, InstabilityExitsThreeWithOneLineAndTheLastGoodState) {
   const fs::path dir = test::temp_dir("unstable");
-  // The block slides off the grid through an open x+ face (an outflow boundary) until no particle
-  // is left: the run cannot go on.
+  // A strong pull along x speeds the block up until it moves more than the guard allows in a step
+  // (0.3 v / (c + v) of a cell, c = 36.7 m/s: past 0.08 near 13 m/s, after some 190 steps): a CFL breach.
+  std::ofstream(dir / "s.json") << test::small_slide_json(
+      0.5, 0.0, R"(, "gravity": [200.0, 0.0, -9.81], "guards": {"max_step_displacement": 0.08})");
+  const auto [code, out] = run_captured("run " + (dir / "s.json").string() + " --quiet --threads 1 --out " + (dir / "out").string());
+  EXPECT_EQ(code, 3) << out;
+  const auto line = out.find("talus: error: step ");
+  ASSERT_NE(line, std::string::npos) << out;
+  const std::string error = out.substr(line, out.find('\n', line) - line);  // one line holds it all
+  EXPECT_NE(error.find("field displacement"), std::string::npos) << error;
+  EXPECT_NE(error.find("last good state"), std::string::npos) << error;
+  test::expect_readable_run_folder(dir / "out");
+  EXPECT_NO_THROW(read_checkpoint((dir / "out" / "checkpoint.h5").string()));
+  fs::remove_all(dir);
+}
+
+// Every particle leaves through the open faces: nothing is left to move, so the run ends there, as a
+// run that reached its end (exit 0, the last frame empty, the energy budget closed by the outflow).
+TEST(Crash, ARunWhoseParticlesAllLeaveEndsWhenTheLastOneLeaves) {
+  const fs::path dir = test::temp_dir("all_left");
   std::string text = test::small_slide_json(0.5, 0.0);
   const std::string top = "\"z+\": \"open\"";
   text.replace(text.find(top), top.size(), top + ", \"x+\": \"open\"");
   const std::string velocity = "\"velocity\": [2.0";
   text.replace(text.find(velocity), velocity.size(), "\"velocity\": [8.0");
   std::ofstream(dir / "s.json") << text;
-  const auto [code, out] = run_captured("run " + (dir / "s.json").string() + " --quiet --threads 1 --out " + (dir / "out").string());
-  EXPECT_EQ(code, 3) << out;
-  const auto line = out.find("talus: error: step ");
-  ASSERT_NE(line, std::string::npos) << out;
-  const std::string error = out.substr(line, out.find('\n', line) - line);  // one line holds it all
-  EXPECT_NE(error.find("every particle has left the grid"), std::string::npos) << error;
-  EXPECT_NE(error.find("last good state"), std::string::npos) << error;
-  test::expect_readable_run_folder(dir / "out");
-  EXPECT_NO_THROW(read_checkpoint((dir / "out" / "checkpoint.h5").string()));
+  const auto [code, out] = run_captured("run " + (dir / "s.json").string() + " --threads 1 --out " + (dir / "out").string());
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("every particle had left through the open faces at t = "), std::string::npos) << out;
+  EXPECT_NE(out.find("before its end time 0.5 s"), std::string::npos) << out;
+  EXPECT_NE(out.find("1000 particles (8 kg, 100.00% of the mass) left through open faces"), std::string::npos) << out;
+  const std::vector<fs::path> frames = test::pvd_frames(dir / "out" / "particles.pvd");
+  ASSERT_GE(frames.size(), 2u);
+  std::string problem;
+  EXPECT_GT(test::read_frame_checked(frames.front(), &problem), 0) << problem;
+  EXPECT_EQ(test::read_frame_checked(frames.back(), &problem), 0) << problem;
+  EXPECT_FALSE(fs::exists(dir / "out" / "checkpoint.h5"));  // a finished run, as one that reached its end time
   fs::remove_all(dir);
 }
 

@@ -30,7 +30,8 @@ struct RunoutSample {
   double front_velocity = 0.0;     // (front - previous front) / (time - previous time) [m/s]; 0 for the first
 };
 
-/// One sample of the particle set (front_velocity left 0; RunoutMonitor fills it in).
+/// One sample of the particle set (front_velocity left 0; RunoutMonitor fills it in). With no particle
+/// left (all went through the open faces) the mass is 0 and every position and velocity is NaN.
 RunoutSample measure_runout(const ParticleStore& particles, const FlumeCoordinates& coordinates,
                             double front_quantile, double tail_quantile);
 /// The parallel regions measure_runout opens for n particles on `threads` threads: its two loops and
@@ -59,12 +60,16 @@ DepositRaster measure_deposit(const ParticleStore& particles, const FlumeCoordin
 /// The final runout: the front at the end of the run, measured from the gate and from the start of
 /// the runout plane (where known).
 struct RunoutResult {
+  double time = 0.0;                      // of the sample the front and tail are from
   double front = 0.0, tail = 0.0;
   double gate_s = 0.0;                    // s of the gate (scene gate_x, else the initial front)
   bool gate_from_scene = false;
   double from_gate = 0.0;                 // front - gate_s
   std::optional<double> runout_plane_s;   // s where the runout plane starts
   std::optional<double> beyond_runout_plane;  // front - runout_plane_s
+  /// Every particle had left through the open faces by this time: the front and tail above are those
+  /// of the last sample that still had particles.
+  std::optional<double> all_left_time;
 };
 
 /// Samples the run on the history schedule and keeps the first and the previous sample (the
@@ -80,13 +85,14 @@ class RunoutMonitor {
   bool has_samples() const { return first_.has_value(); }
   const RunoutSample& first() const { return *first_; }
   const RunoutSample& last() const { return *last_; }
-  /// The runout after the last sample.
+  /// The runout after the last sample (after the last one with particles, once every particle has left).
   RunoutResult result() const;
 
  private:
   RunoutSpec spec_;
   FlumeCoordinates coordinates_;
   std::optional<RunoutSample> first_, last_;
+  std::optional<RunoutSample> last_with_particles_;
 };
 
 }  // namespace talus

@@ -15,9 +15,10 @@ std::string runout_csv_row(const RunoutSample& sample);
 /// The inverse of runout_csv_row (a restart reads its history back); empty for a malformed row.
 std::optional<RunoutSample> parse_runout_csv_row(const std::string& row);
 
-/// The runout result as a JSON object (runout.json): time, front, tail, gate_s, gate_from_scene,
-/// from_gate, and runout_plane_s, beyond_runout_plane where known (null otherwise).
-std::string runout_result_json(const RunoutResult& result, double time);
+/// The runout result as a JSON object (runout.json): time (of the front), front, tail, gate_s,
+/// gate_from_scene, from_gate, and runout_plane_s, beyond_runout_plane where known, all_left_time
+/// once every particle has left through the open faces (null otherwise).
+std::string runout_result_json(const RunoutResult& result);
 
 /// s,y,x,thickness: one row per raster cell (cell centres), s fastest-varying last (rows of constant s).
 void write_deposit_csv(const std::string& path, const DepositRaster& raster, const FlumeCoordinates& coordinates);

@@ -68,7 +68,10 @@ class Solver {
   /// Advance one step with the stable time step, clipped so that the run ends at end_time.
   /// Throws an instability Error (step, time, particle, quantity) if the state goes bad.
   void step();
+  /// The end time or max_steps is reached, or every particle has left through the open faces.
   bool finished() const;
+  /// Every particle has left through the open faces (the run ends early, finished()).
+  bool emptied() const { return emptied_; }
   /// Steps between the scans of every particle field (stability_guards.hpp); a non-finite
   /// velocity or displacement is caught in the step it appears.
   static constexpr int kFieldCheckInterval = 8;
@@ -252,6 +255,7 @@ class Solver {
   GatherOptions gather_limits_;            // the CFL limit and the open faces, for G2P's flags
   bool large_displacement_ = false;        // G2P of this step: some displacement beyond the limit
   bool crosses_open_face_ = false;         // G2P of this step: some particle leaves through an open face
+  bool emptied_ = false;                   // every particle (on every rank) has left through the open faces
   PhaseTimes times_;
   // The work recorder (null unless attached) and its per-block timing buffers.
   WorkRecorder* recorder_ = nullptr;

@@ -64,6 +64,11 @@ struct GatherOptions {
   /// Faces where particles leave (open walls): lo/hi bounds per axis, in (x, y, w).
   std::array<std::array<bool, 2>, 3> open{};
   std::array<double, 3> lo{}, hi{};
+  bool has_open_face() const {
+    for (const auto& axis : open)
+      if (axis[0] || axis[1]) return true;
+    return false;
+  }
   /// Whether a point (x, y, w) lies beyond an open face: G2P's flag and the outflow removal.
   bool beyond_open_face(const double point[3]) const {
     for (int d = 0; d < 3; ++d)
