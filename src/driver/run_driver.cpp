@@ -312,6 +312,11 @@ void RunLoop::start() {
   const AllParticles everyone(comm_, solver_.particles());
   const ParticleStore& all = everyone.get();
   if (resuming_) {
+    if (comm_.root() && frames_.kept_frames_in_older_order())
+      fmt::print(stderr, "talus: warning: the frames before the checkpoint hold stress and strain in the order of an "
+                 "earlier build (xx yy zz yz xz xy, unnamed); the frames this run writes use VTK's (xx yy zz xy yz xz, "
+                 "named): the shear components of the two do not match, so run the scene from the start for a uniform "
+                 "series\n");
     summary_.initial = progress_.initial;
     energy_guard_ = EnergyGuard(scene_, all, progress_.initial);
     energy_guard_.set_max_released(progress_.energy_max_released);

@@ -266,7 +266,10 @@ FrameSeries::FrameSeries(const fs::path& dir, bool compress, RunProgress& progre
     std::error_code ec;
     if (fs::exists(dir / name, ec)) entries.emplace_back(progress.frame_times[i], std::move(name));
   }
-  if (!entries.empty()) pvd_.assign(std::move(entries));
+  if (!entries.empty()) {
+    kept_frames_in_older_order_ = frame_stress_in_vtk_order((dir / entries.back().second).string()) == false;
+    pvd_.assign(std::move(entries));
+  }
 }
 
 std::string FrameSeries::write(Solver& solver) {

@@ -281,4 +281,18 @@ void PvdIndex::write() const {
   write_file_atomically(path_, xml);
 }
 
+std::optional<bool> frame_stress_in_vtk_order(const std::string& path) {
+  // The XML header comes before the appended data: its first kilobytes hold every array's tag.
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  std::string head(16384, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  const std::size_t tag = head.find("Name=\"stress\"");
+  if (tag == std::string::npos) return std::nullopt;
+  const std::size_t end = head.find('>', tag);
+  if (end == std::string::npos) return std::nullopt;
+  return head.substr(tag, end - tag).find("ComponentName5=\"xz\"") != std::string::npos;
+}
+
 }  // namespace talus

@@ -143,6 +143,9 @@ class FrameSeries {
   const std::string& pvd_path() const { return pvd_path_; }
   /// The frames the .pvd lists.
   std::size_t listed() const { return pvd_.size(); }
+  /// A resumed series whose kept frames hold their stress and strain in the solver's Voigt order
+  /// (written by a build before 2026-12-04): the new frames use VTK's order, so the series mixes them.
+  bool kept_frames_in_older_order() const { return kept_frames_in_older_order_; }
   /// The seconds the writer's thread spent on the frames completed so far, in the background (0
   /// without background writes: the run loop waited for them). The work recorder's run total.
   double background_seconds() const { return background_seconds_; }
@@ -152,6 +155,7 @@ class FrameSeries {
   void finish_pending();
 
   std::filesystem::path dir_;
+  bool kept_frames_in_older_order_ = false;
   bool compress_;
   bool background_;
   RunProgress& progress_;

@@ -24,6 +24,11 @@ constexpr int vtk_symmetric_component(int voigt) {
   return kVtkOf[voigt];
 }
 
+/// Whether a frame on disk (.vtu or .pvtu) holds its stress in VTK's order: its header names the
+/// components (xx ... xz). Frames of builds before 2026-12-04 held the solver's Voigt order, unnamed:
+/// false. nullopt when the file cannot be read or has no stress array.
+std::optional<bool> frame_stress_in_vtk_order(const std::string& path);
+
 /// Write the particles to `path` (written to a temporary name, then renamed, so a reader never sees
 /// a half-written frame). Point arrays: id, velocity, speed, stress (6 components in VTK's order
 /// xx yy zz xy yz xz, named so), strain (6, likewise), density, volume, body. A store with no
