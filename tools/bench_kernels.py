@@ -19,6 +19,9 @@ import subprocess
 import sys
 import time
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_checks import require_talus  # noqa: E402
+
 CASES = [  # name, talus bench arguments
     ("shear, B-spline, DP, MUSL", ["--scene", "shear", "--material", "dp", "--shape", "bspline2"]),
     ("shear, cpGIMP, DP, MUSL", ["--scene", "shear", "--material", "dp", "--shape", "cpgimp"]),
@@ -64,9 +67,10 @@ def main():
     if not skipped <= set(range(1, len(CASES) + 1)):
         sys.exit(f"bench_kernels.py: --skip {a.skip}: the cases are 1..{len(CASES)}: " +
                  "; ".join(f"{i} {name}" for i, (name, _) in enumerate(CASES, start=1)))
-    for binary in [a.talus] + [b for b in (a.mpm_limit, a.stream) if b]:
-        if not (os.path.isfile(binary) and os.access(binary, os.X_OK)):
-            sys.exit(f"bench_kernels.py: {binary} is not an executable file")
+    require_talus(a.talus)
+    for option, binary in (("--mpm-limit", a.mpm_limit), ("--stream", a.stream)):
+        if binary:
+            require_talus(binary, option)
     if a.json and not os.path.isdir(os.path.dirname(os.path.abspath(a.json))):
         sys.exit(f"bench_kernels.py: --json {a.json}: its folder does not exist")  # found before the runs, not after
     print(time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()), os.getloadavg(), flush=True)

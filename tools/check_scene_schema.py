@@ -20,6 +20,9 @@ import pathlib
 import subprocess
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_checks import require_talus  # noqa: E402
+
 import jsonschema
 
 BEGIN = "<!-- begin: talus schema --markdown -->\n"
@@ -36,9 +39,7 @@ def main():
     parser.add_argument("--root", type=pathlib.Path, default=pathlib.Path(__file__).resolve().parent.parent)
     parser.add_argument("--write", action="store_true", help="rewrite the docs from the code instead of checking")
     args = parser.parse_args()
-    binary = pathlib.Path(args.talus)
-    if not (binary.is_file() and os.access(binary, os.X_OK)):  # was a subprocess traceback
-        sys.exit(f"check_scene_schema.py: --talus {args.talus}: no executable file there")
+    require_talus(args.talus)  # was a subprocess traceback
     docs = args.root / "docs"
     failures = []
 

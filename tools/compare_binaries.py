@@ -21,6 +21,9 @@ import shutil
 import subprocess
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_checks import require_talus  # noqa: E402
+
 DEFAULT_SCENES = [
     "inputs/denlinger_flume.json",
     "inputs/denlinger_flume_block_buffers.json",
@@ -99,9 +102,8 @@ def main():
     ap.add_argument("--scene", action="append", help="a scene file (repeatable; default: the set above)")
     ap.add_argument("--variants", action="store_true", help="every scheme with each scatter, on two scenes")
     a = ap.parse_args()
-    for binary in (a.old, a.new):
-        if not (os.path.isfile(binary) and os.access(binary, os.X_OK)):
-            sys.exit(f"compare_binaries.py: {binary} is not an executable file")
+    require_talus(a.old, "OLD")
+    require_talus(a.new, "NEW")
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the defaults are the repo's inputs
     in_repo = lambda path: os.path.join(root, path)
     cases = [(p, None, None, None) for p in (a.scene or [in_repo(p) for p in DEFAULT_SCENES])]

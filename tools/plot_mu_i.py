@@ -19,6 +19,9 @@ import subprocess
 import sys
 import tempfile
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_checks import require_talus  # noqa: E402
+
 import matplotlib
 
 matplotlib.use("Agg")
@@ -42,8 +45,7 @@ def main():
     args = ap.parse_args()
     csv_path = args.csv or os.path.join(tempfile.mkdtemp(prefix="talus_mu_i_"), "mu_i_simple_shear.csv")
     if not args.no_run:
-        if not (os.path.isfile(args.talus) and os.access(args.talus, os.X_OK)):  # was a subprocess traceback
-            sys.exit(f"plot_mu_i.py: --talus {args.talus}: no executable file there (build it: bash tools/build.sh)")
+        require_talus(args.talus)  # was a subprocess traceback
         if subprocess.run([args.talus, "element-test", SPEC, "--out", csv_path]).returncode != 0:
             sys.exit("plot_mu_i.py: talus element-test failed (its error is above)")
     with open(SPEC) as f:

@@ -12,6 +12,8 @@ import time
 
 import numpy as np
 
+from cli_checks import require_folders, require_talus  # noqa: F401 (the scripts import them from here too)
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
@@ -32,26 +34,6 @@ def read_vtu(path, *arrays):
             raise KeyError(f"{path} has no point array '{name}'")
         data[name] = vtk_to_numpy(array)
     return data
-
-
-def require_talus(path, option="--talus"):
-    """Stop with one line when `path` is no executable file (a wrong --talus gave a subprocess
-    traceback, often after other work). Returns the path."""
-    if not (os.path.isfile(path) and os.access(path, os.X_OK)):
-        hint = " (build it: bash tools/build.sh)" if path.endswith(os.path.join("build", "talus")) else ""
-        sys.exit(f"{os.path.basename(sys.argv[0])}: {option} {path}: no executable file there{hint}")
-    return path
-
-
-def require_folders(**outputs):
-    """Stop with one line when the folder of an output file does not exist (`option=path`; an empty
-    path is no output). Checked right after parsing: the write at the end came after all the work."""
-    for option, path in outputs.items():
-        if not path:
-            continue
-        folder = os.path.dirname(os.path.abspath(path))
-        if not os.path.isdir(folder):
-            sys.exit(f"{os.path.basename(sys.argv[0])}: --{option.replace('_', '-')} {path}: the folder {folder} does not exist")
 
 
 def run_talus(talus, *args, threads=None, quiet=True, capture=False, check=True):
