@@ -301,7 +301,7 @@ RunSummary RunLoop::run() {
 
 void RunLoop::start() {
   summary_.first_step = solver_.step_count();
-  if (comm_.root()) write_file_atomically((dir_ / "scene.json").string(), scene_to_json(scene_).dump(2) + "\n");
+  if (comm_.root()) write_file_atomically((dir_ / "scene.json").string(), scene_file_json(scene_).dump(2) + "\n");
   summary_.pvd_path = frames_.pvd_path();
   summary_.checkpoint_path = checkpoint_.path();
   summary_.runout_path = runout_.history_path();

@@ -130,6 +130,7 @@ Table<SceneDraft> make_grid_table() {
             const GridGeometry& g = d.scene.grid;
             // cells x h as computed (0.6000000000000001 for 48 x 0.0125): the scene's hash, which a
             // checkpoint carries, is of this text, so rounding it would refuse earlier checkpoints
+            // (scene.json shows it rounded: scene_file_json)
             j["size"] = Json::array({g.cells[0] * g.h, g.cells[1] * g.h, g.cells[2] * g.h});
           },
           {.required = true}),

@@ -90,4 +90,10 @@ nlohmann::json scene_to_json(const Scene& s) {
   return write_fields(draft, scene_detail::scene_table());
 }
 
+nlohmann::json scene_file_json(const Scene& s) {
+  nlohmann::json j = scene_to_json(s);
+  for (auto& extent : j.at("grid").at("size")) extent = std::stod(fmt::format("{:.12g}", extent.get<double>()));
+  return j;
+}
+
 }  // namespace talus

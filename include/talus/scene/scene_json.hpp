@@ -21,4 +21,10 @@ double particle_count_bound(const Scene& scene);
 /// The fully resolved scene; parse_scene(scene_to_json(s).dump()) reproduces s.
 nlohmann::json scene_to_json(const Scene& scene);
 
+/// The resolved scene as a run writes it to scene.json, for people and other tools: scene_to_json
+/// with grid.size at 12 significant digits (48 cells of 0.0125 give 0.6, not 0.6000000000000001).
+/// It parses to the same scene (the cell counts are rounded from size / cell_size), so its hash, of
+/// scene_to_json's exact text, is the same: checkpoints of earlier builds still restart from it.
+nlohmann::json scene_file_json(const Scene& scene);
+
 }  // namespace talus
