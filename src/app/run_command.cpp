@@ -309,13 +309,17 @@ void add_check_command(CLI::App& app) {
   auto scene_path = std::make_shared<std::string>();
   cmd->add_option("scene", *scene_path, "Scene file (JSON)")->required();
   cmd->callback([=]() {
+    // Under mpirun every rank checks (an error is printed once, main.cpp); rank 0 alone prints.
+    const Comm world = Comm::world();
     const Scene scene = read_scene_file(*scene_path);
     available_memory();  // a bad TALUS_MEMORY_LIMIT stops here, not halfway through the summary
+    Solver::check_ranks(scene, world.size());  // what `mpirun -np N talus run` would refuse
+    if (!world.root()) return;
     print_warnings(scene);
     const MemoryEstimate memory = estimate_memory(scene);
     print_scene_summary(scene, memory);
     require_memory_fits(scene, memory);
-    fmt::print("ok\n");
+    fmt::print("ok{}\n", world.distributed() ? fmt::format(" (for {} ranks)", world.size()) : "");
   });
 }
 

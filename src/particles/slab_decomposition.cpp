@@ -13,9 +13,10 @@ SlabDecomposition::SlabDecomposition(int ranks, int block_cells, const std::vect
     : block_cells_(block_cells),
       columns_(static_cast<int>((work_per_cell.size() + static_cast<std::size_t>(block_cells) - 1) / block_cells)) {
   if (ranks > columns_)
-    throw input_error(fmt::format("{} ranks need at least {} colour-block columns along x; the grid has {} (blocks of {} "
-                                  "cells): use fewer ranks or more cells along x",
-                                  ranks, ranks, columns_, block_cells));
+    throw input_error(fmt::format("{} ranks need at least {} colour-block columns along x, one a rank; the grid's {} cells "
+                                  "along x, ghost cells included, make {} columns of {} cells: use at most {} rank{} or "
+                                  "more cells along x",
+                                  ranks, ranks, work_per_cell.size(), columns_, block_cells, columns_, columns_ == 1 ? "" : "s"));
   first_column_ = balanced_first_columns(work_per_column(work_per_cell), ranks);
 }
 

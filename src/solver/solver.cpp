@@ -62,7 +62,25 @@ void run_stages(WorkRecorder* recorder, const char* name, std::size_t tiles, con
   recorded(recorder, RegionSchedule::Static, name, tiles, 1, [&] { stages.run(); }, stages.loops() - 1);
 }
 
+// What a distributed run cannot do yet (Solver::check_ranks and the constructor).
+void refuse_undistributable(const Scene& scene) {
+  if (scene.smoothing.enabled)
+    throw input_error("smoothing.enabled: MLS smoothing is not available in a distributed run yet (its neighbour "
+                      "search would need the particles of the next slab); run it on one rank");
+  if (scene.grid.periodic[0])
+    throw input_error("walls: a periodic x axis is not available in a distributed run yet (the slabs cut x); run it "
+                      "on one rank");
+}
+
 }  // namespace
+
+void Solver::check_ranks(const Scene& scene, int ranks) {
+  if (ranks <= 1) return;
+  refuse_undistributable(scene);
+  const Grid grid(scene.grid);  // (its node arrays are reserved, not touched)
+  (void)SlabDecomposition(ranks, make_cell_sort(grid, scene.shape, scene.block_cells).block_cells(),
+                          particles_per_x_cell(scene));
+}
 
 Solver::Solver(Scene scene, Comm comm) : scene_(std::move(scene)), comm_(comm) {
   grid_ = Grid(scene_.grid);
@@ -70,12 +88,7 @@ Solver::Solver(Scene scene, Comm comm) : scene_(std::move(scene)), comm_(comm) {
   if (comm_.distributed()) {
     // Slabs balanced over the seed points, then each rank seeds its own slab only (the ids are those
     // of a serial run: every point is counted, only the slab's are kept).
-    if (scene_.smoothing.enabled)
-      throw input_error("smoothing.enabled: MLS smoothing is not available in a distributed run yet (its neighbour "
-                        "search would need the particles of the next slab); run it on one rank");
-    if (scene_.grid.periodic[0])
-      throw input_error("walls: a periodic x axis is not available in a distributed run yet (the slabs cut x); run it "
-                        "on one rank");
+    refuse_undistributable(scene_);
     const std::vector<std::int64_t> per_cell = particles_per_x_cell(scene_);
     decomposition_ = SlabDecomposition(comm_.size(), sort_.block_cells(), per_cell);
     imbalance_ = max_imbalance_ = decomposition_.imbalance(decomposition_.work_per_column(per_cell));

@@ -119,7 +119,7 @@ void check_step_displacement(const ParticleStore& P, const std::array<std::span<
     if (d2 > limit2) {
       const double d = std::sqrt(d2);
       throw instability_error(fmt::format(
-            "step {}, t = {:.6g} s: {} field displacement = {:.6g} m in one step, {:.3g} cells > "
+            "step {}, t = {:.6g} s: {} field displacement = {:.6g} m in one step, {:.6g} cells > "
             "guards.max_step_displacement = {} (CFL breach); {}",
             step, time, particle_label(P, scene, p), d, d / h, scene.guards.max_step_displacement, where(P, p)));
     }

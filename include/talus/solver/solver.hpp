@@ -64,6 +64,9 @@ class Solver {
   /// A solver over `comm`'s ranks: each holds the particles of its slab (docs/architecture.md,
   /// "Distributed runs"). The default, one rank, is a serial run.
   explicit Solver(Scene scene, Comm comm = Comm());
+  /// Refuses (an input Error, as the constructor would) a scene that cannot run on `ranks` ranks:
+  /// MLS smoothing, a periodic x axis, fewer colour-block columns along x than ranks. For `talus check`.
+  static void check_ranks(const Scene& scene, int ranks);
 
   /// Advance one step with the stable time step, clipped so that the run ends at end_time.
   /// Throws an instability Error (step, time, particle, quantity) if the state goes bad.
