@@ -198,6 +198,9 @@ void add_run_command(CLI::App& app) {
     // Every rank sees the same folder and stops alike (rank 0 reports); --record-work is refused under mpirun.
     check_writable_folder(dir, "output folder");
     if (!record_path->empty()) check_writable_file(*record_path, "--record-work");
+    // Made (or cleared) here, before the run starts: a folder that cannot be used is an error every
+    // rank meets alike (rank 0 prepares it and tells the others), said once, with nothing started.
+    prepare_output_folder(dir, checkpoint ? &checkpoint->run : nullptr, world);
     if (checkpoint && world.root())
       fmt::print("talus: restart from {} at step {}, t = {:.6g} s\n", *restart, solver.step_count(), solver.time());
     const int threads = omp_get_max_threads();
@@ -212,6 +215,7 @@ void add_run_command(CLI::App& app) {
     options.out_dir = dir;
     options.progress = !*quiet;
     options.frames_in_background = !*foreground_frames;
+    options.folder_prepared = true;
     if (checkpoint) {
       options.resume = &checkpoint->run;
       options.resume_dir = checkpoint_folder(*restart);

@@ -446,7 +446,7 @@ void RunLoop::finish() {
 
 RunSummary run_scene(Solver& solver, const RunOptions& options) {
   // (in a distributed run rank 0 clears the folder while the others wait)
-  prepare_output_folder(options.out_dir, options.resume, solver.comm());
+  if (!options.folder_prepared) prepare_output_folder(options.out_dir, options.resume, solver.comm());
   RunLoop loop(solver, options);
   return loop.run();
 }

@@ -43,7 +43,7 @@ std::optional<unsigned long> frame_index(const std::string& file_name) {
 void clear_output_folder(const fs::path& dir, const RunProgress* resume) {
   std::error_code ec;
   fs::create_directories(dir / "frames", ec);
-  if (ec) throw io_error(fmt::format("cannot create output folder {}: {}", dir.string(), ec.message()));
+  if (ec) throw io_error(fmt::format("cannot create output folder {}: {}", (dir / "frames").string(), ec.message()));
   remove_temporaries(dir);
   for (const auto& entry : fs::directory_iterator(dir / "frames")) {
     const fs::path ext = entry.path().extension();

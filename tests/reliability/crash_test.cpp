@@ -240,6 +240,20 @@ TEST(Crash, ResumingASeriesOfFramesInTheOlderTensorOrderWarns) {
   EXPECT_EQ(text.find("warning"), text.rfind("warning")) << text;  // said once
 }
 
+// An output folder whose frames/ is a file: one line naming frames/, exit 2, nothing else written
+// (the folder is prepared before the run starts, so under mpirun every rank stops alike, said once).
+TEST(Crash, AnOutputFolderWhoseFramesIsAFileExitsTwoWithOneLine) {
+  const fs::path dir = test::temp_dir("frames_file");
+  std::ofstream(dir / "s.json") << test::small_slide_json(0.05, 0.0);
+  fs::create_directories(dir / "out");
+  std::ofstream(dir / "out" / "frames") << "not a folder";
+  const auto [code, out] = run_captured("run " + (dir / "s.json").string() + " --threads 1 --out " + (dir / "out").string());
+  EXPECT_EQ(code, 2) << out;
+  EXPECT_EQ(out, "talus: error: cannot create output folder " + (dir / "out" / "frames").string() + ": Not a directory\n");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir / "out"), fs::directory_iterator()), 1);  // the file alone
+  fs::remove_all(dir);
+}
+
 TEST(Crash, BadSceneExitsTwoWithOneLineAndWritesNothing) {
   const fs::path dir = test::temp_dir("badscene");
   std::string text = test::small_slide_json();

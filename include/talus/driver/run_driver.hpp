@@ -42,6 +42,9 @@ struct RunOptions {
   /// Write each frame's file on a thread of its own while the steps go on (FrameSeries); false:
   /// every frame is on disk before the next step (talus run --foreground-frames).
   bool frames_in_background = true;
+  /// The caller has already called prepare_output_folder (talus run does, before it starts the run,
+  /// so that an unusable folder is an error every rank meets alike, said once).
+  bool folder_prepared = false;
 };
 
 struct RunSummary {
