@@ -280,6 +280,7 @@ RunSummary RunLoop::run() {
       if (e.kind() != Error::Kind::Instability || comm_.distributed()) throw;
       fail(e);
     }
+    if (comm_.distributed()) frames_.list_finished_frame(solver_);
     // The snapshot never predates a frame or checkpoint, so the failure path writes in order.
     // ParticleStore::copy_from and Solver::state: two parallel loops
     if (keep) recording_.parallel_part(LoopRecording::Part::Snapshot, [&] { return take_snapshot(); }, 2);
@@ -327,6 +328,9 @@ void RunLoop::start() {
     history_.write(solver_, summary_.initial);
     runout_.write(solver_);
     write_frame();
+    // A distributed run lists its first frame now: an instability in the first steps ends the job
+    // (MPI_Abort) and would leave a series with nothing to open.
+    if (comm_.distributed()) frames_.complete(solver_);
     // Each schedule's first time is one interval after the start.
     progress_.next_frame = scene_.output.frame_interval;
     progress_.next_history = scene_.output.history_interval;

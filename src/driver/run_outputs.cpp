@@ -302,6 +302,13 @@ void FrameSeries::complete(Solver& solver) {
   finish_pending();
 }
 
+void FrameSeries::list_finished_frame(Solver& solver) {
+  if (!pending_summary_) return;  // (the same on every rank: frames are written at the same steps)
+  if (comm_.any(!writer_.idle())) return;
+  ScopedPhase timer(solver.phase_times(), Phase::Output);
+  finish_pending();
+}
+
 void FrameSeries::finish_pending() {
   std::optional<PendingSummary> summary = std::exchange(pending_summary_, std::nullopt);
   writer_.wait();

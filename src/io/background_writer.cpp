@@ -38,6 +38,7 @@ BackgroundWriter::~BackgroundWriter() {
 
 void BackgroundWriter::start(std::function<void()> job) {
   wait();
+  done_.store(false, std::memory_order_relaxed);
   thread_ = std::thread([this, job = std::move(job)] {
     // Signals go to the run loop's thread: SIGINT and SIGTERM set its flag for a checkpoint, and
     // a file write here is never interrupted by one.
@@ -50,6 +51,7 @@ void BackgroundWriter::start(std::function<void()> job) {
     } catch (...) {
       error_ = std::current_exception();  // handed to the run loop's thread by wait()
     }
+    done_.store(true, std::memory_order_release);
   });
 }
 

@@ -138,6 +138,10 @@ class FrameSeries {
   /// error. Collective in a distributed run. Call it before anything that relies on the frames
   /// being on disk: a checkpoint (a resumed run keeps the frames it lists) and the end of the run.
   void complete(Solver& solver);
+  /// A distributed run, after each step: once every rank's piece of the frame in flight is on disk,
+  /// write its .pvtu and list it (a small collective a step, only while a frame is in flight). So a
+  /// run that one rank's instability ends (MPI_Abort) keeps its finished frames in the series.
+  void list_finished_frame(Solver& solver);
   /// Whether the last frame is of this step already.
   bool has_frame_of_step(std::int64_t step) const;
   const std::string& pvd_path() const { return pvd_path_; }

@@ -4,6 +4,7 @@
 // background"). The particle frames use it: the run loop copies a frame's arrays out of the
 // particle store (in parallel), then VTK's compression and the file write run here while the
 // solver steps on.
+#include <atomic>
 #include <exception>
 #include <functional>
 #include <thread>
@@ -26,9 +27,12 @@ class BackgroundWriter {
   void wait();
   /// Whether a write was started and not yet waited for.
   bool pending() const { return thread_.joinable(); }
+  /// Whether wait() would return at once: no write in flight, or its job has ended.
+  bool idle() const { return !thread_.joinable() || done_.load(std::memory_order_acquire); }
 
  private:
   std::thread thread_;
+  std::atomic<bool> done_{false};
   std::exception_ptr error_;  // set by the job's thread, read after the join
 };
 
