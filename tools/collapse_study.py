@@ -170,11 +170,13 @@ def main():
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--scene-args", default="", help="more options for make_collapse_scene.py, e.g. '--shape linear'")
-    ap.add_argument("--lock", help="run each talus under `flock -s LOCK` (e.g. /work/quiet.lock on a shared machine)")
+    ap.add_argument("--lock", help="run each talus under `flock -s LOCK` (a lock file, e.g. /tmp/talus.lock, that timed jobs on a shared machine hold exclusively)")
     ap.add_argument("--overlay", nargs=2, action="append", default=[], metavar=("CSV", "LABEL"),
                     help="also plot the runs of another study's collapse_study.csv (e.g. a control), in grey")
     ap.add_argument("--no-run", action="store_true", help="only measure the runs that are there")
     args = ap.parse_args()
+    if args.lock and not os.path.isdir(os.path.dirname(os.path.abspath(args.lock))):  # was a traceback after the first run
+        sys.exit(f"collapse_study.py: --lock {args.lock}: the folder {os.path.dirname(os.path.abspath(args.lock))} does not exist")
     extra = args.scene_args.split()
     cases = []
     for model in args.models:

@@ -96,6 +96,11 @@ def build(a):
     return scene
 
 
+def sentence(text):
+    """text with its first letter in upper case (str.capitalize would lower the rest)."""
+    return text[:1].upper() + text[1:]
+
+
 def flat_slope(a):
     """The same wedge on an endless inclined plane, in coordinates along (x) and normal to (z) the bed."""
     t = math.radians(a.slope)
@@ -109,6 +114,9 @@ def flat_slope(a):
     g["origin"][0] = round(x0, 6)
     g["size"][0] = round(nx * h, 6)
     scene["name"] += "_flat_slope"
+    scene["description"] = (f"The wedge of the Denlinger-style flume (docs/flume.md) on an endless plane inclined at "
+                            f"{a.slope} deg, in coordinates along (x) and normal to (z) the bed: no transition, no runout "
+                            f"plane. " + sentence(scene["description"].split("; ", 1)[1]))
     scene["gravity"] = [9.81 * math.sin(t), 0.0, -9.81 * math.cos(t)]
     scene["bodies"][0]["prism"]["points"] = [[0.0, 0.0], [0.0, round(d, 6)], [round(-a.wedge_length, 6), 0.0]]
     scene["diagnostics"]["runout"] = {"gate_x": 0.0, "deposit_cell": 2 * h}

@@ -69,6 +69,9 @@ def scene_at(base, cells):
     s["grid"]["cell_size"] = cell
     s["grid"]["size"] = [4 * cell, 4 * cell, h + 4 * cell]
     s["bodies"][0]["box"]["max"] = [4 * cell, 4 * cell, h]
+    if cells != 16:  # the input's description says 16 cells over the depth
+        s["description"] = s["description"].replace("16 cells over the depth (cell h/16)",
+                                                    f"{cells} cells over the depth (cell h/{cells}; tools/plot_bagnold.py --cells)")
     return s
 
 

@@ -41,7 +41,8 @@ def main():
     ap.add_argument("--talus", default=os.path.join(ROOT, "build", "talus"))
     ap.add_argument("--no-run", action="store_true")
     ap.add_argument("--csv", help="CSV to write (or read with --no-run)")
-    ap.add_argument("--out", default=os.path.join(ROOT, "docs", "verification", "mu_i_simple_shear.png"))
+    ap.add_argument("--out", default=os.path.join(ROOT, "docs", "verification", "mu_i_simple_shear.png"),
+                    help="the plot (.png; added when the name has no extension; default: %(default)s)")
     args = ap.parse_args()
     csv_path = args.csv or os.path.join(tempfile.mkdtemp(prefix="talus_mu_i_"), "mu_i_simple_shear.csv")
     if not args.no_run:
@@ -79,9 +80,10 @@ def main():
                 color="0.4")
     ax_err.legend(loc="upper left")
     fig.tight_layout()
-    os.makedirs(os.path.dirname(args.out), exist_ok=True)
-    fig.savefig(args.out, dpi=110)
-    print(f"wrote {args.out}; largest relative error {max(err):.2e}")
+    out = args.out if os.path.splitext(args.out)[1] else args.out + ".png"  # what matplotlib writes
+    os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
+    fig.savefig(out, dpi=110)
+    print(f"wrote {out}; largest relative error {max(err):.2e}")
     return 0
 
 

@@ -49,7 +49,7 @@ def benchmark_parser(doc):
     ap.add_argument("--talus")
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--out", help=f"folder of the CSV files and plots (default: {os.path.relpath(OUT, ROOT)}, the ones the "
-                                  "docs show: a partial sweep there replaces them)")
+                                  "docs show: a partial sweep there replaces them; with --quick: build/verification_scratch)")
     return ap
 
 

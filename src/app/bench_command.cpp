@@ -611,7 +611,7 @@ void add_bench_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--scheme", o->scheme, "musl | usl | usf | usavg")
       ->capture_default_str();
-  cmd->add_option("--material", o->material, "elastic | dp (Drucker-Prager sand, Abe, Johansson & Konagai 2005, Table 2) | mu_i (glass beads, Jop et al. 2006)")->capture_default_str();
+  cmd->add_option("--material", o->material, "elastic | dp (Drucker-Prager sand, Abe, Johansson & Konagai 2005, Table 2) | mu_i (glass beads, Jop et al. 2006); --scene shear and update need dp or mu_i")->capture_default_str();
   cmd->add_option("--mls", o->mls, "off | linear | quadratic | cubic")->capture_default_str();
   check_range(cmd->add_option("--mls-radius", o->mls_radius, "MLS radius in cells (solver.smoothing.radius_factor)"),
               0.5, 8.0)

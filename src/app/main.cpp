@@ -80,7 +80,7 @@ int& exit_code() {
 
 void add_isa_option(CLI::App* command, const std::shared_ptr<std::string>& value) {
   command->add_option("--isa", *value,
-                      "Vector path of the kernels: auto (the best this CPU has) or one of " + [] {
+                      "Vector path of the kernels: auto (the default: the best this CPU has) or one of " + [] {
                         std::string names;
                         for (const std::string& n : available_isas()) names += (names.empty() ? "" : ", ") + n;
                         return names;

@@ -222,16 +222,17 @@ std::optional<std::size_t> available_memory() {
 void require_memory_fits(const Scene& scene, const MemoryEstimate& e) {
   const std::optional<std::size_t> available = available_memory();
   if (!available || e.total() <= *available) return;
-  // What to change: the particle count goes with (1/h)^3 and n^3, so this factor on h (or on n
-  // the other way) brings the particles down to what fits.
-  const double fit = std::max(0.0, double(*available) - double(e.grid_bytes)) / double(std::max<std::size_t>(e.particle_bytes, 1));
-  const double h_factor = fit > 0.0 ? std::cbrt(1.0 / fit) : INFINITY;
+  // What to change: the particles and the grid both go with (1/h)^3, so a cell this many times
+  // larger brings the whole down to what fits (rounded up, so that it does fit). Fewer particles per
+  // cell help only when the grid alone fits.
+  const double h_factor = std::ceil(100.0 * std::cbrt(double(e.total()) / double(std::max<std::size_t>(*available, 1)))) / 100.0;
+  const bool grid_fits = e.grid_bytes < *available;
   throw input_error(fmt::format(
-      "scene \"{}\" needs about {} ({} particles x {} B + {} of grid) but {} is available{}; make grid.cell_size {:.2g}x "
-      "larger or use fewer particles_per_cell, or run it on a machine with more memory",
+      "scene \"{}\" needs about {} ({} particles x {} B + {} of grid) but {} is available{}; make grid.cell_size {:.2f}x "
+      "larger{}, or run it on a machine with more memory",
       scene.name, format_bytes(double(e.total())), e.particles, e.bytes_per_particle, format_bytes(double(e.grid_bytes)),
       format_bytes(double(*available)), std::getenv("TALUS_MEMORY_LIMIT") ? " (TALUS_MEMORY_LIMIT)" : "",
-      std::max(h_factor, 1.01)));
+      std::max(h_factor, 1.01), grid_fits ? " or use fewer particles_per_cell" : " (the grid alone does not fit)"));
 }
 
 std::string format_bytes(double bytes) {

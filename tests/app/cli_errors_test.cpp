@@ -131,6 +131,19 @@ TEST_F(CliErrors, EnvironmentVariablesAreCheckedAndTheOptionsOverrideThem) {
   EXPECT_NE(big.err.find("but 100.0 MB is available (TALUS_MEMORY_LIMIT); use --particles "), std::string::npos) << big.err;
   const ProgramResult fits = run_with_env("TALUS_MEMORY_LIMIT", "100M", "bench --particles 100000 --steps 1 --threads 1");
   EXPECT_EQ(fits.exit_code, 0) << fits.err;
+  // The advice: a cell size factor that makes the scene fit (particles and grid both scale with
+  // 1/h^3), rounded up; fewer particles per cell only while the grid alone fits.
+  for (const auto& [limit, advice] : std::vector<std::pair<const char*, std::string>>{
+           {"2M", "or use fewer particles_per_cell, or run it"}, {"100K", "larger (the grid alone does not fit), or run it"}}) {
+    const ProgramResult small = run_with_env("TALUS_MEMORY_LIMIT", limit, "check " + kScene);
+    EXPECT_EQ(small.exit_code, 2) << small.err;
+    EXPECT_NE(small.err.find(advice), std::string::npos) << small.err;
+    const auto at = small.err.find("make grid.cell_size ");
+    ASSERT_NE(at, std::string::npos) << small.err;
+    const double factor = std::stod(small.err.substr(at + 20));
+    EXPECT_GT(factor, 1.0) << small.err;
+    EXPECT_LT(factor, 20.0) << small.err;  // finite and sane (it was "infx" when the grid alone did not fit)
+  }
   for (const char* limit : {"1e30", "0.5", "-3G"})
     expect_error_line(run_with_env("TALUS_MEMORY_LIMIT", limit, "check " + kScene),
                       std::string("TALUS_MEMORY_LIMIT = \"") + limit +
