@@ -265,7 +265,9 @@ void add_run_command(CLI::App& app) {
     if (summary.interrupted_signal) {
       fmt::print("talus: stopped by signal {} at step {}, t = {:.6g} s; checkpoint {}\n", summary.interrupted_signal,
                  summary.steps, summary.time, summary.checkpoint_path);
-      fmt::print("talus: resume with: talus run {} --restart {}\n", *scene_path, summary.checkpoint_path);
+      // (any rank count resumes it; the same one continues bit for bit)
+      fmt::print("talus: resume with: {}talus run {} --restart {}\n",
+                 world.distributed() ? fmt::format("mpirun -np {} ", world.size()) : "", *scene_path, summary.checkpoint_path);
       return;
     }
     const double e0 = summary.initial.total();
