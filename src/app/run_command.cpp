@@ -53,14 +53,12 @@ void print_scene_summary(const Scene& s, const MemoryEstimate& memory) {
 
 // The end-of-run lines of a scene with runout diagnostics (docs/flume.md).
 void print_runout(const RunoutResult& r, const RunSummary& summary) {
-  if (r.all_left_time)
-    fmt::print("talus: runout: every particle had left the grid by t = {:.6g} s; the last front measured (t = {:.6g} s) "
-               "was at s = {:.4f} m, {:.4f} m beyond the gate ({}, s = {:.4f} m)",
-               *r.all_left_time, r.time, r.front, r.from_gate, r.gate_from_scene ? "diagnostics.runout.gate_x" : "the initial front",
-               r.gate_s);
-  else
-    fmt::print("talus: runout: front at s = {:.4f} m, {:.4f} m beyond the gate ({}, s = {:.4f} m)", r.front, r.from_gate,
-               r.gate_from_scene ? "diagnostics.runout.gate_x" : "the initial front", r.gate_s);
+  const std::string front =
+      r.all_left_time ? fmt::format("every particle had left the grid by t = {:.6g} s; the last front measured (t = {:.6g} s) was",
+                                    *r.all_left_time, r.time)
+                      : std::string("front");
+  fmt::print("talus: runout: {} at s = {:.4f} m, {:.4f} m beyond the gate ({}, s = {:.4f} m)", front, r.front, r.from_gate,
+             r.gate_from_scene ? "diagnostics.runout.gate_x" : "the initial front", r.gate_s);
   if (r.beyond_runout_plane) {
     // (negative before the front reaches the plane: said as a distance short of it)
     const double beyond = *r.beyond_runout_plane;
@@ -277,7 +275,7 @@ void add_run_command(CLI::App& app) {
     fmt::print("talus: done: {} steps to t = {:.6g} s{} in {:.2f} s ({:.2f} M particle-updates/s)\n", summary.steps,
                summary.time, taken == summary.steps ? "" : fmt::format(" ({} in this run)", taken), summary.wall_seconds,
                summary.particle_updates / summary.wall_seconds / 1e6);
-    if (summary.emptied)
+    if (solver.emptied())
       fmt::print("talus: every particle had left through the open faces at t = {:.6g} s: the run ended there, before "
                  "its end time {:.6g} s\n", summary.time, solver.scene().end_time);
     if (world.distributed())

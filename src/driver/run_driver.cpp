@@ -439,7 +439,6 @@ void RunLoop::finish() {
   summary_.steps = solver_.step_count();
   summary_.time = solver_.time();
   summary_.particle_updates = comm_.sum_in_rank_order(local_updates_);
-  summary_.emptied = solver_.emptied();
   summary_.wall_seconds = progress_line_.elapsed();
   recording_.finish(summary_.wall_seconds, frames_.background_seconds());
   summary_.final = solver_.energies();

@@ -53,7 +53,6 @@ struct RunSummary {
   double time = 0.0;
   double wall_seconds = 0.0;
   double particle_updates = 0.0;     // steps taken by this call times the particles each moved (all ranks)
-  bool emptied = false;              // every particle left through the open faces before the end time
   std::size_t frames = 0;            // frames written by this call
   std::size_t frames_in_series = 0;  // frames the .pvd lists (a run resumed in its folder: the earlier ones too)
   EnergyBudget initial, final;
