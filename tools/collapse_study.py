@@ -4,6 +4,8 @@ Drucker-Prager and mu(I), two resolutions, against the laws of Lube et al. 2005.
 
     /usr/bin/python3 tools/collapse_study.py --talus build/talus            # every run (about an hour on 2 cores)
     /usr/bin/python3 tools/collapse_study.py --talus build/talus --cells 10 --aspects 0.5 2   # a quick look
+    /usr/bin/python3 tools/collapse_study.py --talus build/talus --cells 40 --aspects 0.5 1 \
+        --out docs/verification --name collapse_refine_h40                  # the refinement in the docs
 
 Scenes come from tools/make_collapse_scene.py (its defaults are the study's parameters,
 docs/verification.md "Planar column collapse"). Each run goes to RUNS/<model>_a<a>_n<cells>; a run
@@ -22,7 +24,9 @@ Measured per run (L0 = the column's length, the gate at x = L0):
   rest        kinetic energy at the end / its peak, and how far the front moved over the last 10% of
               the run (relative to the runout): the deposit must have stopped;
   budget      energy budget gap at the end / potential energy released; outflow (mass that ran off).
-Writes docs/verification/collapse_study.csv and collapse_study.png, and prints a Markdown table.
+Writes OUT/NAME.csv and OUT/NAME.png (NAME = collapse_study) and prints a Markdown table. OUT is
+docs/verification for the whole study (the default aspects, cells, models and no --scene-args) and
+the --runs folder for any other sweep, so that a quick look does not overwrite the shipped table.
 """
 import argparse
 import json
@@ -159,11 +163,18 @@ def plot(rows, out_png, overlays=()):
     save_figure(fig, out_png, 120)
 
 
+def whole_study(ap, args):
+    """True when the sweep is the study docs/verification.md shows: only then is it written there."""
+    return all(getattr(args, k) == ap.get_default(k) for k in ("aspects", "cells", "models", "scene_args"))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--talus", default=os.path.join(ROOT, "build", "talus"))
     ap.add_argument("--runs", default=os.path.join(ROOT, "runs", "collapse_study"))
-    ap.add_argument("--out", default=os.path.join(ROOT, "docs", "verification"))
+    ap.add_argument("--out", help="folder for NAME.csv and NAME.png (default: docs/verification for the whole "
+                    "study, the --runs folder for a partial sweep)")
+    ap.add_argument("--name", default="collapse_study", help="base name of the CSV and the plot (default %(default)s)")
     ap.add_argument("--aspects", type=float, nargs="+", default=[0.5, 1, 2, 3, 5, 8])
     ap.add_argument("--cells", type=int, nargs="+", default=[10, 20], help="cells per L0")
     ap.add_argument("--models", nargs="+", default=["dp", "mu_i"], choices=list(MODELS))
@@ -202,10 +213,12 @@ def main():
     if not rows:  # (was an IndexError when the CSV was written)
         sys.exit(f"collapse_study.py: no finished run in {args.runs}: run it without --no-run first")
     rows.sort(key=lambda r: (r["model"], r["cells"], r["aspect"]))
-    os.makedirs(args.out, exist_ok=True)
-    write_csv_rows(os.path.join(args.out, "collapse_study.csv"),
-                   [{k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows])
-    plot(rows, os.path.join(args.out, "collapse_study.png"), args.overlay)
+    out = args.out or (os.path.join(ROOT, "docs", "verification") if whole_study(ap, args) else args.runs)
+    os.makedirs(out, exist_ok=True)
+    csv_path, png_path = (os.path.join(out, args.name + ext) for ext in (".csv", ".png"))
+    write_csv_rows(csv_path, [{k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows])
+    plot(rows, png_path, args.overlay)
+    print(f"wrote {csv_path} and {png_path}")
     print("| model | h | a | dL/L0 (0.995 quantile) | Lube | deviation | dL/L0 connected | H/L0 | Lube H/L0 | "
           "H/L0 at the wall | E_kin end/peak | front drift last 10% | budget gap |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")

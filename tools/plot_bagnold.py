@@ -9,9 +9,10 @@ particles and compares it with
   u(z) = (2/3) (I_theta / d) sqrt(phi g cos theta) (h^1.5 - (h - z)^1.5),
   I_theta = I0 (tan theta - mu_s) / (mu_2 - tan theta)          (GDR MiDi 2004; Jop et al. 2005)
 
-Writes docs/verification/bagnold_profile.png (the profiles, and the surface row's error against
-time: the approach to the steady state) and docs/verification/bagnold_profile.csv (per resolution:
-the surface row's error and the relative L2 error of the profile at the end).
+Writes bagnold_profile.png (the profiles, and the surface row's error against time: the approach to
+the steady state) and bagnold_profile.csv (per resolution: the surface row's error and the relative L2
+error of the profile at the end). They go to docs/verification for the study the docs show (--cells
+8 16 32) and to the --work folder for any other set, so that a quick look does not overwrite them.
 
 Usage (from the repository root):
   /usr/bin/python3 tools/plot_bagnold.py --talus build/talus --cells 8 16 32 --threads 1
@@ -34,6 +35,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 SCENE = os.path.join(ROOT, "inputs", "inclined_flow_bagnold.json")
+STUDY_CELLS = [8, 16, 32]  # the resolutions of the shipped plot and table (docs/mu-i.md sec. 8)
 # the mu(I) defaults (MuIParameters, docs/mu-i.md sec. 2): the scene's material sets none of them
 DEFAULTS = {"mu_s": math.tan(math.radians(20.9)), "mu_2": math.tan(math.radians(32.76)), "i0": 0.279,
             "grain_diameter": 0.53e-3, "grain_density": 2450.0}
@@ -100,14 +102,18 @@ def main():
     ap.add_argument("--threads", type=int, default=None)
     ap.add_argument("--work", default=os.path.join(ROOT, "runs", "bagnold"), help="folder for the runs")
     ap.add_argument("--no-run", action="store_true", help="plot the runs already in --work")
-    ap.add_argument("--out", default=os.path.join(ROOT, "docs", "verification", "bagnold_profile.png"))
-    ap.add_argument("--csv", default=os.path.join(ROOT, "docs", "verification", "bagnold_profile.csv"))
+    ap.add_argument("--out", help="the plot (default: bagnold_profile.png in docs/verification for --cells "
+                    f"{' '.join(map(str, STUDY_CELLS))}, in --work otherwise)")
+    ap.add_argument("--csv", help="the table (default: bagnold_profile.csv beside the default plot)")
     args = ap.parse_args()
+    folder = os.path.join(ROOT, "docs", "verification") if args.cells == STUDY_CELLS else args.work
+    args.out = args.out or os.path.join(folder, "bagnold_profile.png")
+    args.csv = args.csv or os.path.join(folder, "bagnold_profile.csv")
+    os.makedirs(args.work, exist_ok=True)  # before the check: the default outputs of a partial set go there
     require_folders(out=args.out, csv=args.csv)
     with open(SCENE) as f:
         base = json.load(f)
     setup = Setup(base)
-    os.makedirs(args.work, exist_ok=True)
 
     results = []
     for n in args.cells:
