@@ -27,7 +27,7 @@ BASES = ["linear", "quadratic", "cubic"]
 
 
 def main():
-    ap = benchmark_parser(__doc__)
+    ap = benchmark_parser(__doc__, scratch_when="with other --radii or --shapes")
     ap.add_argument("--radii", default="1.5,2,2.5,3,4,6", help="radius factors (h / cell size), comma-separated")
     ap.add_argument("--shapes", default="linear,ugimp,cpgimp")
     a = ap.parse_args()

@@ -62,7 +62,8 @@ def shape_runs(talus, base, axes, modes, a, what):
 
 
 def main():
-    ap = benchmark_parser(__doc__)
+    ap = benchmark_parser(__doc__, scratch_when="with other --basis, --radius, --axes, --variants or --skip-walls "
+                          "and no --tag")
     ap.add_argument("--basis", default="cubic", help="MLS basis for the 'with MLS' runs (the paper: cubic)")
     ap.add_argument("--radius", type=float, default=2.0, help="radius factor (h / cell size)")
     ap.add_argument("--axes", default="x", help="basis axes; the bars are 2 particles across, so 1D: x")
@@ -70,7 +71,8 @@ def main():
     ap.add_argument("--variants", default="particle", help="the MLS fits to run: particle, cell or particle,cell")
     ap.add_argument("--tag", default="", help="appended to the names of the plots and the CSV")
     a, talus = parse_benchmark_args(ap)
-    folder = out_folder(a)
+    changed = any(getattr(a, k) != ap.get_default(k) for k in ("basis", "radius", "axes", "variants", "skip_walls"))
+    folder = out_folder(a, scratch=changed and not a.tag)  # a tagged run writes its own names beside the docs' files
     print(f"writing into {folder}", flush=True)
     rows = []
     fits = a.variants.split(",")

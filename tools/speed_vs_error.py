@@ -43,13 +43,15 @@ def find_talus(given):
     sys.exit("talus not found: build it (cmake --build build) or pass --talus")
 
 
-def benchmark_parser(doc):
-    """The command line shared by the benchmark drivers: the script's docstring as help, --talus, --threads."""
+def benchmark_parser(doc, scratch_when=None):
+    """The command line shared by the benchmark drivers: the script's docstring as help, --talus, --threads,
+    --out. `scratch_when` names the partial sweeps that the driver writes to build/ (see out_folder)."""
     ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--talus")
     ap.add_argument("--threads", type=int, default=1)
+    scratch = f"; {scratch_when}: build/verification_scratch" if scratch_when else ""
     ap.add_argument("--out", help=f"folder of the CSV files and plots (default: {os.path.relpath(OUT, ROOT)}, the ones the "
-                                  "docs show: a partial sweep there replaces them; with --quick: build/verification_scratch)")
+                                  f"docs show{scratch})")
     return ap
 
 
@@ -153,7 +155,7 @@ def energy_drift(res):
 
 
 def main():
-    ap = benchmark_parser(__doc__)
+    ap = benchmark_parser(__doc__, scratch_when="with --quick")
     ap.add_argument("--quick", action="store_true", help="fewer variants (a smoke test of the driver)")
     ap.add_argument("--mls", default="off", help="comma-separated MLS bases for the column and bar runs: off,linear,quadratic,cubic")
     ap.add_argument("--wall", action="store_true",
