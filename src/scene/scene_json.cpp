@@ -93,6 +93,11 @@ nlohmann::json scene_to_json(const Scene& s) {
 nlohmann::json scene_file_json(const Scene& s) {
   nlohmann::json j = scene_to_json(s);
   for (auto& extent : j.at("grid").at("size")) extent = std::stod(fmt::format("{:.12g}", extent.get<double>()));
+  // scene_to_json leaves the default tension cutoff out (the checkpoint's scene hash predates the key);
+  // the file a user reads names it, as it names every other default
+  for (auto& material : j.at("materials"))
+    if (material.value("model", "") == "drucker_prager" && !material.contains("tension_cutoff"))
+      material["tension_cutoff"] = "apex";
   return j;
 }
 

@@ -212,6 +212,16 @@ TEST(Checkpoint, TheSceneFileShowsRoundedSizesWithTheSameHash) {
   EXPECT_EQ(scene_to_json(back).dump(), scene_to_json(scene).dump());
 }
 
+TEST(Checkpoint, TheSceneFileNamesTheDefaultTensionCutoffWithTheSameHash) {
+  const Scene scene = read_scene_file(std::string(TALUS_SOURCE_DIR) + "/inputs/denlinger_flume.json");
+  const nlohmann::json shown = scene_file_json(scene);
+  EXPECT_EQ(shown.at("materials").at("sand").at("tension_cutoff"), "apex");
+  EXPECT_FALSE(scene_to_json(scene).at("materials").at("sand").contains("tension_cutoff"));  // the hashed text
+  const Scene back = parse_scene(shown.dump(2), "scene.json");
+  EXPECT_EQ(scene_hash(back), scene_hash(scene));
+  EXPECT_EQ(scene_to_json(back).dump(), scene_to_json(scene).dump());
+}
+
 TEST(Checkpoint, DefaultSceneSizeAndWriteTime) {
   const auto dir = test::temp_dir("size");
   Solver solver(read_scene_file(std::string(TALUS_SOURCE_DIR) + "/inputs/elastic_block_slide.json"));
