@@ -91,10 +91,15 @@ std::vector<ElementTestPoint> run_element_test(const ElementTestSpec& spec) {
   const int m = control.held_count;
   SmallVector unknown = SmallVector::Zero(m);  // held-component strain increments (Newton guess)
   int step = 0;
+  double walked = 0.0;  // path length before this leg
   for (std::size_t leg = 1; leg < targets.size(); ++leg) {
     const double length = targets[leg] - targets[leg - 1];
     if (length == 0.0) continue;
-    const int n = std::max(1, static_cast<int>(std::lround(spec.increments * std::abs(length) / total_length)));
+    // Round the cumulative share, not each leg's: the legs then add up to exactly `increments`
+    // (rounding each leg gave one extra for two legs of 1.5 increments each). A leg gets at least one.
+    const auto share = [&](double l) { return std::lround(spec.increments * l / total_length); };
+    const int n = std::max(1, static_cast<int>(share(walked + std::abs(length)) - share(walked)));
+    walked += std::abs(length);
     const double d_control = length / n;
     for (int i = 0; i < n; ++i) {
       ++step;
