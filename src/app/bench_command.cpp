@@ -626,8 +626,10 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("--record-work", o->record_path,
                   "Also record the work of every block and parallel region for --record-steps more steps, as JSON "
                   "(tools/scaling_model.py)");
-  check_range(cmd->add_option("--block-cells", o->block_cells, "solver.block_cells: colour-block edge in cells (0: automatic)"),
-              0, 64)
+  check_range(cmd->add_option("--block-cells", o->block_cells,
+                              "solver.block_cells: colour-block edge in cells (0: automatic, 4 for linear, 8 for the "
+                              "other shapes)"),
+              0, 64, "0, or 3..64 (linear), 5..64 (other shapes)")
       ->capture_default_str();
   cmd->add_option("--scatter", o->scatter,
                   "solver.scatter: colour_passes (8 passes over the colour blocks) or block_buffers (one pass into "

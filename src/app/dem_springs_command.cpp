@@ -103,7 +103,8 @@ void add_dem_springs_command(CLI::App& app) {
       "  random2d    isotropic random disc packing, eq. 21 with psi = Z/(2 pi)\n"
       "              (defaults: --density-ratio 0.84, --coordination 4)\n"
       "  random3d    isotropic random sphere packing, uniform-strain (Voigt) estimate\n"
-      "              nu = (1 - kT/kN)/(4 + kT/kN); needs --radius (defaults: 0.64, Z = 6)\n"
+      "              nu = (1 - kT/kN)/(4 + kT/kN); needs --radius\n"
+      "              (defaults: --density-ratio 0.64, --coordination 6)\n"
       "Poisson's ratios above the packing's limit need kT < 0 (unstable in dynamic DEM) and are refused\n"
       "with exit code 2. Details, derivations and verification: docs/dem.md.");
   command->add_option("--E", options->young, "Young's modulus E in Pa (give this or --G)");

@@ -16,8 +16,10 @@ namespace talus::app {
 /// with NaN is false) and calls text that is no number "not in range". The message reads as the
 /// scene's do: "--mls-radius = nan is outside [0.5, 8]", "--threads = abc is not an integer". It is
 /// thrown rather than returned because CLI11 would prefix "--threads: " to a returned one.
+/// `shown`, when given, replaces "[lo, hi]" in --help (for an option whose allowed values a later
+/// check narrows, as --block-cells's do with the shape).
 template <typename T>
-CLI::Option* check_range(CLI::Option* option, T lo, T hi) {
+CLI::Option* check_range(CLI::Option* option, T lo, T hi, const std::string& shown = {}) {
   static_assert(std::is_arithmetic_v<T>);
   const std::string name = option->get_name(), range = fmt::format("[{}, {}]", lo, hi);
   return option->check(CLI::Validator(
@@ -29,7 +31,7 @@ CLI::Option* check_range(CLI::Option* option, T lo, T hi) {
         if (!(value >= lo && value <= hi)) throw input_error(fmt::format("{} = {} is outside {}", name, text, range));
         return std::string();
       },
-      range));
+      shown.empty() ? range : shown));
 }
 
 /// Refuses, before any work, an output file that cannot be written: its folder missing or not
