@@ -1,6 +1,10 @@
 #include "talus/scene/scene.hpp"
 
+#include "talus/particles/cell_sort.hpp"
 #include "talus/particles/seeding.hpp"
+#include "talus/shape/bspline.hpp"
+#include "talus/shape/gimp.hpp"
+#include "talus/shape/linear.hpp"
 
 #include <fmt/core.h>
 
@@ -8,6 +12,21 @@
 #include <cmath>
 
 namespace talus {
+
+ShapeReach shape_reach(ShapeKind shape) {
+  switch (shape) {
+    case ShapeKind::Linear: return {LinearShape::kReachLow, LinearShape::kReachHigh};
+    case ShapeKind::UGimp: return {UGimpShape::kReachLow, UGimpShape::kReachHigh};
+    case ShapeKind::CpGimp: return {CpGimpShape::kReachLow, CpGimpShape::kReachHigh};
+    case ShapeKind::BSpline2: return {QuadraticBSplineShape::kReachLow, QuadraticBSplineShape::kReachHigh};
+  }
+  return {LinearShape::kReachLow, LinearShape::kReachHigh};
+}
+
+int colour_block_edge(const Scene& scene) {
+  const ShapeReach reach = shape_reach(scene.shape);
+  return CellSort::block_edge(reach.low, reach.high, scene.block_cells);
+}
 
 double MaterialSpec::bulk_modulus() const {
   return elastic.young / (3.0 * (1.0 - 2.0 * elastic.poisson));

@@ -7,8 +7,6 @@
 #include "talus/core/polygon.hpp"
 #include "talus/grid/terrain_profile.hpp"
 #include "talus/particles/cell_sort.hpp"
-#include "talus/shape/bspline.hpp"
-#include "talus/shape/linear.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -257,7 +255,8 @@ Table<SceneDraft> make_solver_table() {
       // the others 1 and 2). The shape is read above, so the message can name it.
       check<SceneDraft>([](ObjectReader& r, SceneDraft& d) {
         const Scene& s = d.scene;
-        const int smallest_block = s.shape == ShapeKind::Linear ? 3 : 5;
+        const ShapeReach reach = shape_reach(s.shape);
+        const int smallest_block = 2 + reach.low + reach.high;
         if (s.block_cells != 0 && s.block_cells < smallest_block)
           throw input_error(
               fmt::format("{} = {}: must be 0 (automatic) or {}..64 for the {} shape (two cells of slack + its reach)",
@@ -632,10 +631,7 @@ void check_periodic_faces(ObjectReader& r, SceneDraft& d) {
           "{} = \"periodic\" cannot run with solver.smoothing (the MLS neighbour search does not wrap): remove it or set "
           "solver.smoothing.enabled = false",
           at));
-    const bool linear = s.shape == ShapeKind::Linear;
-    const int edge = CellSort::block_edge(linear ? LinearShape::kReachLow : QuadraticBSplineShape::kReachLow,
-                                          linear ? LinearShape::kReachHigh : QuadraticBSplineShape::kReachHigh,
-                                          s.block_cells);
+    const int edge = colour_block_edge(s);
     const int cells = s.grid.cells[a];
     if (!CellSort::periodic_blocks_fit(cells, edge)) {
       int suggestion = 2 * edge;

@@ -6,8 +6,6 @@
 #include "talus/particles/cell_sort.hpp"
 #include "talus/particles/particle_scratch.hpp"
 #include "talus/particles/seeding.hpp"
-#include "talus/shape/bspline.hpp"
-#include "talus/shape/linear.hpp"
 #include "talus/transfer/block_buffers.hpp"
 
 #include <fmt/core.h>
@@ -76,10 +74,8 @@ std::size_t tiles_in(const std::array<int, 3>& lo, const std::array<int, 3>& hi,
 /// boxes of the blocks those boxes meet (BlockBuffers). Overlapping bodies count twice: an upper estimate.
 std::size_t start_grid_bytes(const Scene& scene) {
   const GridGeometry& g = scene.grid;
-  const bool linear = scene.shape == ShapeKind::Linear;
-  const int reach_low = linear ? LinearShape::kReachLow : QuadraticBSplineShape::kReachLow;
-  const int reach_high = linear ? LinearShape::kReachHigh : QuadraticBSplineShape::kReachHigh;
-  const int block = CellSort::block_edge(reach_low, reach_high, scene.block_cells);
+  const auto [reach_low, reach_high] = shape_reach(scene.shape);
+  const int block = colour_block_edge(scene);
   const int box_edge = block + 2 * ((block - reach_low - reach_high) / 2) + reach_low + reach_high;
   std::size_t box_bytes = 0;
   const ProfileTerrain bed = grid_bed(g);

@@ -27,14 +27,8 @@ namespace {
 
 // The colour blocks must hold the widest support of the scene's shape function (cell_sort.hpp).
 CellSort make_cell_sort(const Grid& grid, ShapeKind shape, int block_cells) {
-  switch (shape) {
-    case ShapeKind::Linear: return CellSort(grid, LinearShape::kReachLow, LinearShape::kReachHigh, block_cells);
-    case ShapeKind::UGimp: return CellSort(grid, UGimpShape::kReachLow, UGimpShape::kReachHigh, block_cells);
-    case ShapeKind::CpGimp: return CellSort(grid, CpGimpShape::kReachLow, CpGimpShape::kReachHigh, block_cells);
-    case ShapeKind::BSpline2:
-      return CellSort(grid, QuadraticBSplineShape::kReachLow, QuadraticBSplineShape::kReachHigh, block_cells);
-  }
-  return CellSort(grid, LinearShape::kReachLow, LinearShape::kReachHigh, block_cells);
+  const ShapeReach reach = shape_reach(shape);
+  return CellSort(grid, reach.low, reach.high, block_cells);
 }
 
 // Runs f(); when `recorder` is recording this step, adds it as a region of the given schedule
@@ -77,9 +71,7 @@ void refuse_undistributable(const Scene& scene) {
 void Solver::check_ranks(const Scene& scene, int ranks) {
   if (ranks <= 1) return;
   refuse_undistributable(scene);
-  const Grid grid(scene.grid);  // (its node arrays are reserved, not touched)
-  (void)SlabDecomposition(ranks, make_cell_sort(grid, scene.shape, scene.block_cells).block_cells(),
-                          particles_per_x_cell(scene));
+  (void)SlabDecomposition(ranks, colour_block_edge(scene), particles_per_x_cell(scene));
 }
 
 Solver::Solver(Scene scene, Comm comm) : scene_(std::move(scene)), comm_(comm) {

@@ -199,6 +199,20 @@ TEST(Solver, BitIdenticalForOneAndThreeThreadsWithSmallerBlocks) {
   }
 }
 
+// The scene's colour-block edge (what `talus check` and the memory estimate use without building a
+// grid) is the one the solver's cell sort takes, for every shape, automatic or requested.
+TEST(Solver, TheScenesColourBlockEdgeIsTheCellSorts) {
+  for (ShapeKind shape : {ShapeKind::Linear, ShapeKind::UGimp, ShapeKind::CpGimp, ShapeKind::BSpline2})
+    for (int requested : {0, 5}) {
+      Scene scene = test::tumbling_block_scene();
+      scene.shape = shape;
+      scene.block_cells = requested;
+      const Solver solver(scene);
+      EXPECT_EQ(colour_block_edge(scene), solver.cell_sort().block_cells()) << to_string(shape) << " " << requested;
+      EXPECT_EQ(colour_block_edge(scene), requested > 0 ? requested : shape == ShapeKind::Linear ? 4 : 8);
+    }
+}
+
 // The scatter without colour passes (solver.scatter = "block_buffers", transfer/block_buffers.hpp):
 // every node adds its blocks' boxes in ascending block order, so the results do not depend on the
 // thread count; against the colour passes only the order of the additions differs (round-off).

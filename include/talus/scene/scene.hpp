@@ -155,6 +155,14 @@ const char* to_string(ShapeKind shape);
 const char* to_string(MaterialModel model);
 const char* to_string(ConeFit cone);
 
+/// How far a shape function's support reaches from a particle's cell, in nodes below and above.
+struct ShapeReach {
+  int low, high;
+};
+ShapeReach shape_reach(ShapeKind shape);
+/// The colour blocks' edge in cells for the scene's shape and solver.block_cells (CellSort::block_edge).
+int colour_block_edge(const Scene& scene);
+
 /// Seed every body of the scene (particles/seeding.hpp with the scene's grid and densities).
 /// Throws input_error for a body that holds no particle.
 ParticleStore seed_particles(const Scene& scene, const SeedFilter& keep = {});
