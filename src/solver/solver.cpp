@@ -66,6 +66,30 @@ void refuse_undistributable(const Scene& scene) {
                       "on one rank");
 }
 
+// A restart's particles must be ones a step could have left (a damaged or edited checkpoint is
+// refused here, before anything is written: a position beyond the padded grid crashed the sort).
+// The same support test as G2P's "left the grid"; mass and volume positive; every id once.
+void check_restored_particles(const ParticleStore& P, const Grid& grid, ShapeReach reach) {
+  const GridGeometry& g = grid.geometry();
+  const auto nodes = g.nodes();
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    const double coords[3] = {P.x[0][p], P.x[1][p], grid.w_of(P.x[0][p], P.x[2][p])};
+    for (int d = 0; d < 3; ++d) {
+      const double t = std::floor(g.to_grid(d, coords[d]));  // compared as a double: no overflow
+      if (!(t - reach.low >= 0.0 && t + reach.high < nodes[d]))
+        throw io_error(fmt::format("restart: particle {} lies at ({:.6g}, {:.6g}, {:.6g}) m, outside the grid", P.id[p],
+                                   P.x[0][p], P.x[1][p], P.x[2][p]));
+    }
+    if (!(P.mass[p] > 0.0 && std::isfinite(P.mass[p])) || !(P.volume[p] > 0.0 && std::isfinite(P.volume[p])))
+      throw io_error(fmt::format("restart: particle {} has mass {:.6g} kg and volume {:.6g} m3; both must be positive and finite",
+                                 P.id[p], P.mass[p], P.volume[p]));
+  }
+  std::vector<std::int64_t> ids(P.id.begin(), P.id.end());
+  std::sort(ids.begin(), ids.end());
+  if (const auto twice = std::adjacent_find(ids.begin(), ids.end()); twice != ids.end())
+    throw io_error(fmt::format("restart: particle id {} is saved twice", *twice));
+}
+
 }  // namespace
 
 void Solver::check_ranks(const Scene& scene, int ranks) {
@@ -829,6 +853,7 @@ void Solver::restore(ParticleStore particles, const SolverState& s, RestoreSort 
   if (mode == RestoreSort::Exact)
     for (const auto& c : s.sort_cell)
       if (c.size() != n) throw io_error("restart: the saved sort state does not match the particles");
+  check_restored_particles(particles, grid_, shape_reach(scene_.shape));
   particles_ = std::move(particles);
   emptied_ = counts[0] == 0;
   wave_rate_from_stress_pass_.reset();
@@ -841,6 +866,13 @@ void Solver::restore(ParticleStore particles, const SolverState& s, RestoreSort 
   // Rebuild the cell sort exactly as the saved solver had it: sort with every particle placed at
   // the centre of its saved cell. The particles are already in that key order, so the (stable)
   // sort keeps their order and rebuilds the same blocks, colours and active tiles.
+  const ShapeReach reach = shape_reach(scene_.shape);
+  const auto nodes = scene_.grid.nodes();
+  for (std::size_t p = 0; p < n; ++p)
+    for (int d = 0; d < 3; ++d)
+      if (s.sort_cell[d][p] - reach.low < 0 || s.sort_cell[d][p] + reach.high >= nodes[d])
+        throw io_error(fmt::format("restart: particle {}'s saved sort cell ({}, {}, {}) lies outside the grid", particles_.id[p],
+                                   s.sort_cell[0][p], s.sort_cell[1][p], s.sort_cell[2][p]));
   std::array<ParticleArray<double>, 3> x;
   for (int d = 0; d < 3; ++d) {
     x[d] = particles_.x[d];

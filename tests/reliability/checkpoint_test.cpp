@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <functional>
 
 #include <chrono>
 #include <cstring>
@@ -285,6 +286,36 @@ TEST(Checkpoint, RefusesAnotherSceneAnotherVersionAndBadFiles) {
   }
   EXPECT_EQ(restore_error(scene, path, &msg), Error::Kind::Input);
   EXPECT_NE(msg.find("written by talus 0.0.0"), std::string::npos) << msg;
+  test::fs::remove_all(dir);
+}
+
+// An edited or damaged checkpoint whose particles no step could have left is refused in one line
+// (a position beyond the grid crashed the sort), before the run writes anything.
+TEST(Checkpoint, RefusesParticlesNoStepCouldHaveLeft) {
+  const auto dir = test::temp_dir("damaged");
+  const Scene scene = test::tumbling_block_scene(0.05);
+  Solver solver(scene);
+  solver.step();
+  const std::string path = (dir / "c.h5").string();
+  write_checkpoint(path, solver, RunProgress{});
+  auto refusal = [&](const std::function<void(Checkpoint&)>& damage) {
+    Checkpoint c = read_checkpoint(path);
+    damage(c);
+    Solver s(scene);
+    try {
+      restore_checkpoint(s, c, path);
+    } catch (const Error& e) {
+      EXPECT_EQ(e.exit_code(), 2) << e.what();
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  for (double x : {5.0, -0.5, std::nan("")})
+    EXPECT_NE(refusal([x](Checkpoint& c) { c.double_arrays.at("x0")[3] = x; }).find("lies at"), std::string::npos);
+  EXPECT_NE(refusal([](Checkpoint& c) { c.double_arrays.at("mass")[3] = -1.0; }).find("mass -1 kg"), std::string::npos);
+  EXPECT_NE(refusal([](Checkpoint& c) { c.id[3] = c.id[4]; }).find("is saved twice"), std::string::npos);
+  EXPECT_NE(refusal([](Checkpoint& c) { c.solver.sort_cell[0][3] = 100000; }).find("saved sort cell"), std::string::npos);
+  EXPECT_EQ(refusal([](Checkpoint&) {}), "no error");
   test::fs::remove_all(dir);
 }
 
