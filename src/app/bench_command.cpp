@@ -622,10 +622,12 @@ void add_bench_command(CLI::App& app) {
   check_range(cmd->add_option("--threads", o->threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)"), 1, 4096);
   check_range(cmd->add_option("--steps", o->steps, "Timed steps (after one untimed step)"), 1, 1000000)
       ->capture_default_str();
-  cmd->add_option("--json", o->json_path, "Also write the results as JSON to this file");
-  cmd->add_option("--record-work", o->record_path,
-                  "Also record the work of every block and parallel region for --record-steps more steps, as JSON "
-                  "(tools/scaling_model.py)");
+  refuse_empty(cmd->add_option("--json", o->json_path, "Also write the results as JSON to this file"),
+               "give a file, or leave --json out");
+  refuse_empty(cmd->add_option("--record-work", o->record_path,
+                               "Also record the work of every block and parallel region for --record-steps more steps, "
+                               "as JSON (tools/scaling_model.py)"),
+               "give a file, or leave --record-work out");
   check_range(cmd->add_option("--block-cells", o->block_cells,
                               "solver.block_cells: colour-block edge in cells (0: automatic, 4 for linear, 8 for the "
                               "other shapes)"),

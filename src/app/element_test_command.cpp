@@ -74,7 +74,7 @@ void add_element_test_command(CLI::App& app) {
   auto out_file = std::make_shared<std::string>();
   cmd->add_option("spec", *spec_file, "JSON spec (material + path), e.g. inputs/element_tests/*.json")
       ->required();
-  cmd->add_option("--out,-o", *out_file, "CSV file to write")->required();
+  refuse_empty(cmd->add_option("--out,-o", *out_file, "CSV file to write")->required(), "give the CSV file to write");
   cmd->callback([spec_file, out_file] { run_element_test_command(*spec_file, *out_file); });
 }
 

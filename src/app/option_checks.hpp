@@ -34,6 +34,19 @@ CLI::Option* check_range(CLI::Option* option, T lo, T hi, const std::string& sho
       shown.empty() ? range : shown));
 }
 
+/// Refuses an empty value (an unset shell variable, `--restart "$CKPT"`), which would otherwise mean
+/// "not given" or "the current folder" without a word. `instead` says what to do, e.g. "leave --out
+/// out for runs/<scene name>".
+inline CLI::Option* refuse_empty(CLI::Option* option, const std::string& instead) {
+  const std::string name = option->get_name();
+  return option->check(CLI::Validator(
+      [name, instead](std::string& value) {
+        if (value.empty()) throw input_error(fmt::format("{} is empty: {}", name, instead));
+        return std::string();
+      },
+      ""));
+}
+
 /// Refuses, before any work, an output file that cannot be written: its folder missing or not
 /// writable, or the path itself a folder. `option` names the option in the message ("--json").
 /// A command that learns this only when it writes has done all its work for nothing.

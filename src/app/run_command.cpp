@@ -145,26 +145,23 @@ void add_run_command(CLI::App& app) {
   auto isa = std::make_shared<std::string>();
   cmd->add_option("scene", *scene_path, "Scene file (JSON); see docs/scene-reference.md")->required();
   add_isa_option(cmd, isa);
-  cmd->add_option("--out", *out_dir, "Output folder (default: runs/<scene name>)")
-      ->check(CLI::Validator(
-          [](std::string& dir) {
-            // An empty --out (an unset shell variable) fell back to runs/<name> without a word.
-            if (dir.empty()) throw input_error("--out is empty: give a folder, or leave --out out for runs/<scene name>");
-            return std::string();
-          },
-          ""));
+  refuse_empty(cmd->add_option("--out", *out_dir, "Output folder (default: runs/<scene name>)"),
+               "give a folder, or leave --out out for runs/<scene name>");
   check_range(cmd->add_option("--threads", *threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)"), 1, 4096);
   cmd->add_flag("--quiet", *quiet, "No progress line");
   auto restart = std::make_shared<std::string>();
-  cmd->add_option("--restart", *restart,
-                  "Continue from a checkpoint (e.g. runs/<name>/checkpoint.h5) of this same scene; output goes to the "
-                  "checkpoint's folder unless --out is given");
+  refuse_empty(cmd->add_option("--restart", *restart,
+                               "Continue from a checkpoint (e.g. runs/<name>/checkpoint.h5) of this same scene; output "
+                               "goes to the checkpoint's folder unless --out is given"),
+               "give a checkpoint file, or leave --restart out for a fresh run");
   auto record_path = std::make_shared<std::string>();
   auto record_interval = std::make_shared<int>(37);  // prime: does not alias with sort_interval (20) or output cadences
-  cmd->add_option("--record-work", *record_path,
-                  "Record the work of every block and parallel region of every --record-interval-th step, as JSON "
-                  "(tools/scaling_model.py, docs/performance.md \"Scaling\"); a record keeps at most 1000 steps: "
-                  "past that it keeps every third one and triples the interval, so that it spans the whole run");
+  refuse_empty(cmd->add_option("--record-work", *record_path,
+                               "Record the work of every block and parallel region of every --record-interval-th step, "
+                               "as JSON (tools/scaling_model.py, docs/performance.md \"Scaling\"); a record keeps at "
+                               "most 1000 steps: past that it keeps every third one and triples the interval, so that "
+                               "it spans the whole run"),
+               "give a file, or leave --record-work out");
   check_range(cmd->add_option("--record-interval", *record_interval, "Steps between the steps --record-work records"), 1,
               1000000)
       ->capture_default_str();

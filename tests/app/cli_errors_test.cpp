@@ -35,6 +35,15 @@ void expect_error_line(const ProgramResult& r, const std::string& line) {
   EXPECT_EQ(r.err, "talus: error: " + line + "\n");
 }
 
+// An empty value (an unset shell variable) meant "not given": --restart "" ran a fresh simulation.
+TEST_F(CliErrors, AnEmptyFileOrFolderOptionIsRefusedNamingIt) {
+  expect_error_line(run("run scene.json --restart ''"),
+                    "--restart is empty: give a checkpoint file, or leave --restart out for a fresh run");
+  expect_error_line(run("run scene.json --record-work ''"), "--record-work is empty: give a file, or leave --record-work out");
+  expect_error_line(run("bench --json ''"), "--json is empty: give a file, or leave --json out");
+  expect_error_line(run("element-test spec.json --out ''"), "--out is empty: give the CSV file to write");
+}
+
 // CLI::Range lets NaN through (NaN compares false), and bench wrote it into its scene JSON, whose
 // parser then failed with an internal message; text that is no number was "not in range".
 TEST_F(CliErrors, BenchNumberOptionsRefuseNonFiniteValuesAndNonNumbersNamingTheRange) {
