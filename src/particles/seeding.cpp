@@ -62,7 +62,8 @@ class BodyCandidates {
 
   /// The points of a physical body on a terrain grid that lie outside the grid's w column, in the
   /// plane of the first y (the test does not depend on y): below its bottom (the bed clips them)
-  /// and above its top. Zero for other bodies.
+  /// and whether any lies above its top. Zero for other bodies. Only the body's own w range at each
+  /// x is walked (walking from the body to the grid took minutes for a body 1e4 m off the bed).
   struct OutsideColumn {
     std::size_t below = 0, above = 0;
   };
@@ -70,17 +71,27 @@ class BodyCandidates {
     OutsideColumn out;
     if (!terrain_ || body_.frame == BoxFrame::Terrain || ys_.empty()) return out;
     const GridGeometry& g = grid_;
-    const int n = body_.particles_per_cell;
     for (double px : xs_) {
       const double zb = bed_.height(px);
       const double w_lo = body_.box_min[2] - zb, w_hi = body_.box_max[2] - zb;
-      if (w_lo < g.origin[2])
-        for (double w : axis_points(g.origin[2], g.h, n, w_lo, g.origin[2]))
-          out.below += inside(px, ys_.front(), w, zb);
-      if (w_hi > w_top_)
-        for (double w : axis_points(g.origin[2], g.h, n, w_top_, w_hi)) out.above += inside(px, ys_.front(), w, zb);
+      out.below += points_inside(px, zb, w_lo, std::min(w_hi, g.origin[2]), false);
+      if (out.above == 0) out.above = points_inside(px, zb, std::max(w_lo, w_top_), w_hi, true);
     }
     return out;
+  }
+
+  /// The body's seed points at x = px (first y) with w in [lo, hi); with `any`, 1 as soon as one is
+  /// found. A range of more than kMaxWalked points (a body reaching absurdly far outside the grid)
+  /// is not walked: its lattice count is returned, exact for a box, an upper bound for a prism.
+  std::size_t points_inside(double px, double zb, double lo, double hi, bool any) const {
+    if (!(hi > lo)) return 0;
+    constexpr double kMaxWalked = 1e6;
+    const double lattice = (hi - lo) / (grid_.h / body_.particles_per_cell);
+    if (lattice > kMaxWalked) return any ? 1 : static_cast<std::size_t>(lattice);
+    std::size_t count = 0;
+    for (double w : axis_points(grid_.origin[2], grid_.h, body_.particles_per_cell, lo, hi))
+      if (inside(px, ys_.front(), w, zb) && (++count, any)) break;
+    return count;
   }
 
   /// Visit every kept point in seeding order (x, then y, then the third axis): f(Vec3 position).
@@ -103,7 +114,7 @@ class BodyCandidates {
     const OutsideColumn outside = outside_column();
     if (outside.above > 0)
       throw input_error(fmt::format(
-          "{} (\"{}\") reaches above the grid's top (w = {} above the bed: grid.origin[2] + grid.size[2] with "
+          "{} (\"{}\") reaches above the grid's top (w = {:.6g} above the bed: grid.origin[2] + grid.size[2] with "
           "grid.terrain) over {} its x range",
           label_, body_.name, w_top_, in_xz == 0 && outside.below == 0 ? "all of" : "part of"));
     if (terrain_ && in_xz == 0)

@@ -250,6 +250,12 @@ TEST(TerrainGrid, BadTerrainInputNamesTheKey) {
   const std::string tall = R"({ "name": "tall", "material": "m", "box": { "min": [2.5, 0, 0], "max": [3.5, 0.5, 2.5] } })";
   EXPECT_NE(message(tall, R"("terrain": { "points": [[0, 1.1547005383792515], [2, 0], [4, 0]] })").find("tall"),
             std::string::npos);
+  // a bed 1e5 m above the body, or 1e5 m below it: refused at once (the explanation walked every seed
+  // point between the body and the grid, minutes for these)
+  const std::string far_below = message(box, R"("terrain": { "points": [[0, 100000], [2, 100000], [4, 100000]] })");
+  EXPECT_NE(far_below.find("below the bed"), std::string::npos) << far_below;
+  const std::string far_above = message(box, R"("terrain": { "points": [[0, -100000], [2, -100000], [4, -100000]] })");
+  EXPECT_NE(far_above.find("reaches above the grid's top (w = "), std::string::npos) << far_above;
 }
 
 // The run echoes the resolved scene (scene.json); read back, it must describe the same terrain.
