@@ -140,6 +140,22 @@ Table<SceneDraft> make_grid_table() {
            },
            .present = [](const SceneDraft& d) { return d.scene.grid.has_terrain(); }},
           {}, false),
+      // Positions are absolute coordinates: far from 0 a double cannot resolve a step's displacement
+      // (at x = 1e15 m the doubles are 0.125 m apart, and a block of 0.02 m cells seeded as one plane).
+      check<SceneDraft>([](ObjectReader& r, SceneDraft& d) {
+        const GridGeometry& g = d.scene.grid;
+        double largest = 0.0;
+        for (int a = 0; a < 3; ++a)
+          largest = std::max({largest, std::abs(g.origin[a]), std::abs(g.origin[a] + g.cells[a] * g.h)});
+        for (const auto& point : g.terrain.points)  // on a terrain grid z = w + z_b(x)
+          largest = std::max(largest, std::abs(point[1]) + std::abs(g.origin[2]) + g.cells[2] * g.h);
+        const double resolution = std::nextafter(largest, kHuge) - largest;  // the doubles' spacing there
+        if (resolution > 1e-6 * g.h)
+          throw input_error(fmt::format(
+              "{}: coordinates reach {:.6g} m, where doubles are {:.3g} m apart, more than 1e-6 of {} = {}: move "
+              "grid.origin (and the bodies) nearer 0",
+              r.key_path("origin"), largest, resolution, r.key_path("cell_size"), g.h));
+      }),
   }};
 }
 constexpr auto grid_table = &table_of<SceneDraft, make_grid_table>;

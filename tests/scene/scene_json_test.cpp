@@ -76,6 +76,18 @@ TEST(SceneJson, BadInputNamesTheKeyAndTheRange) {
   test::expect_variant_error(ok, "\"time\"", "\"solver\": { \"scheme\": \"rk4\" }, \"time\"", "solver.scheme = \"rk4\" is not one of: musl, usl");
 }
 
+// Positions are absolute: a grid far from 0 cannot resolve its cells (at 1e15 m a block of 0.02 m
+// cells was seeded as one plane) and is refused; map coordinates (UTM, 5e6 m) are still fine.
+TEST(SceneJson, AGridTooFarFromTheOriginToResolveItsCellsIsRefused) {
+  test::expect_variant_error(kMinimal, "\"grid\": { \"size\"", "\"grid\": { \"origin\": [1e12, 0, 0], \"size\"",
+                             "grid.origin: coordinates reach 1e+12 m, where doubles are 0.000122 m apart, more than "
+                             "1e-6 of grid.cell_size = 0.1");
+  std::string utm = replace_once(kMinimal, "\"grid\": { \"size\"", "\"grid\": { \"origin\": [5e5, 5e6, 0], \"size\"");
+  utm = replace_once(utm, "\"min\": [0.2, 0.2, 0.2], \"max\": [0.5, 0.5, 0.5]",
+                     "\"min\": [500000.2, 5000000.2, 0.2], \"max\": [500000.5, 5000000.5, 0.5]");
+  EXPECT_NO_THROW((void)parse_scene(utm, "utm.json"));
+}
+
 // The element test reads its material with the scene's Drucker-Prager fields (issue 22): the
 // same keys, the same ranges, the same messages, and "apex" for the default tension cut-off in both.
 TEST(SceneJson, DruckerPragerKeysFollowOneRuleInScenesAndElementTests) {
