@@ -85,7 +85,11 @@ def main():
         band = np.abs(y_values) == np.abs(y_values).min()
     fig, ax = plt.subplots(figsize=(7, 3.2))
     ax.plot(s_values, thickness[:, band].mean(axis=1) * 1000, drawstyle="steps-mid",
-            label=f"mean over |y| <= {dy_cell:.3g} m ({band.sum()} rows)")
+            label=f"current volume: mean over |y| <= {dy_cell:.3g} m ({band.sum()} rows)")
+    if "thickness_seeded" in d:  # the same mass at its seeded density (docs/flume.md "The sand loosens")
+        seeded = d["thickness_seeded"].reshape(len(s_values), len(y_values))
+        ax.plot(s_values, seeded[:, band].mean(axis=1) * 1000, drawstyle="steps-mid", color="C2",
+                label="seeded volume (the same mass at its seeded density)")
     ax.axvline(gate, color="k", lw=0.6, ls="--", label="gate")
     if plane is not None:
         ax.axvline(plane, color="brown", lw=0.6, ls="--", label="start of runout plane")

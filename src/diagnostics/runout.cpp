@@ -98,6 +98,7 @@ DepositRaster measure_deposit(const ParticleStore& P, const FlumeCoordinates& c,
   r.ns = std::max(1, static_cast<int>(std::ceil((s1 - s0) / cell - 1e-9)));
   r.ny = std::max(1, static_cast<int>(std::ceil((y1 - y0) / cell - 1e-9)));
   r.thickness.assign(static_cast<std::size_t>(r.ns) * r.ny, 0.0);
+  r.seeded_thickness.assign(r.thickness.size(), 0.0);
   std::vector<std::size_t> by_id(P.size());
   std::iota(by_id.begin(), by_id.end(), std::size_t{0});
   parallel_sort(by_id, [&](std::size_t a, std::size_t b) { return P.id[a] < P.id[b]; });  // ids are unique
@@ -109,7 +110,9 @@ DepositRaster measure_deposit(const ParticleStore& P, const FlumeCoordinates& c,
       r.volume_outside += P.volume[p];
       continue;
     }
-    r.thickness[static_cast<std::size_t>(fi) * r.ny + static_cast<std::size_t>(fj)] += P.volume[p] / area;
+    const std::size_t cell = static_cast<std::size_t>(fi) * r.ny + static_cast<std::size_t>(fj);
+    r.thickness[cell] += P.volume[p] / area;
+    r.seeded_thickness[cell] += P.volume0[p] / area;
   }
   return r;
 }

@@ -70,13 +70,14 @@ std::string runout_result_json(const RunoutResult& r) {
 }
 
 void write_deposit_csv(const std::string& path, const DepositRaster& raster, const FlumeCoordinates& c) {
-  std::string text = "s,y,x,thickness\n";
-  text.reserve(text.size() + static_cast<std::size_t>(raster.ns) * raster.ny * 56);
+  std::string text = "s,y,x,thickness,thickness_seeded\n";
+  text.reserve(text.size() + static_cast<std::size_t>(raster.ns) * raster.ny * 72);
   for (int i = 0; i < raster.ns; ++i) {
     const double s = raster.s_centre(i);
     const double x = c.x_at(s);
     for (int j = 0; j < raster.ny; ++j)
-      text += fmt::format("{:.8e},{:.8e},{:.8e},{:.8e}\n", s, raster.y_centre(j), x, raster.at(i, j));
+      text += fmt::format("{:.8e},{:.8e},{:.8e},{:.8e},{:.8e}\n", s, raster.y_centre(j), x, raster.at(i, j),
+                          raster.seeded_thickness[static_cast<std::size_t>(i) * raster.ny + j]);
   }
   write_file_atomically(path, text);
 }

@@ -206,6 +206,25 @@ TEST(Deposit, UniformLayerHasItsThicknessAndVolumeIsConserved) {
   EXPECT_DOUBLE_EQ(d.volume_outside, 1e-6);
 }
 
+TEST(Deposit, TheSeededThicknessIsTheSameMassAtItsSeededVolume) {
+  // The same layer loosened by a quarter (every volume 1.25 V0): thickness 0.05 m, seeded 0.04 m.
+  ParticleStore P;
+  std::int64_t id = 0;
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 20; ++j)
+      for (int k = 0; k < 4; ++k)
+        P.add(id++, Vec3(0.2 + (i + 0.5) * 0.01, (j + 0.5) * 0.01, (k + 0.5) * 0.0125), Vec3::Zero(), 1.6e-3, 1e-6, 0);
+  for (std::size_t p = 0; p < P.size(); ++p) P.volume[p] = 1.25 * P.volume0[p];
+  const DepositRaster d = measure_deposit(P, FlumeCoordinates(), 0.0, 1.0, 0.0, 0.2, 0.05);
+  for (int i = 0; i < d.ns; ++i)
+    for (int j = 0; j < d.ny; ++j) {
+      const double s = d.s_centre(i);
+      const std::size_t cell = static_cast<std::size_t>(i) * d.ny + j;
+      EXPECT_NEAR(d.at(i, j), s > 0.2 && s < 0.6 ? 0.05 : 0.0, 1e-12);
+      EXPECT_NEAR(d.seeded_thickness[cell], s > 0.2 && s < 0.6 ? 0.04 : 0.0, 1e-12);
+    }
+}
+
 TEST(RunoutOutput, CsvRowRoundTrips) {
   RunoutSample r;
   r.time = 0.125;
@@ -316,7 +335,7 @@ TEST(RunoutOutput, RunWritesRunoutHistoryAndDeposit) {
   // deposit.csv: one row per raster cell (20 x 1 cells of 0.02 m); the volume matches the particles'.
   std::ifstream dep(dir / "deposit.csv");
   std::getline(dep, line);
-  EXPECT_EQ(line, "s,y,x,thickness");
+  EXPECT_EQ(line, "s,y,x,thickness,thickness_seeded");
   double volume = 0.0;
   rows = 0;
   while (std::getline(dep, line)) {

@@ -40,12 +40,16 @@ int measure_runout_regions(std::size_t n, int threads);
 
 /// The deposit thickness on the bed: a raster of cells ds x dy in (s, y); thickness = the particle
 /// volume (current volume V_p) whose s and y fall in the cell, divided by the cell's bed area ds dy.
-/// For a uniform layer that is its bed-normal thickness. Cell (i, j) covers
+/// For a uniform layer that is its bed-normal thickness. `seeded_thickness` sums the particles' seeded
+/// volumes V_p0 = m_p / rho_0 instead: the thickness the same mass makes at the density it was seeded
+/// with. (A flowing sand loosens in MPM: the flume's deposit ends 27% above its seeded volume,
+/// docs/flume.md "The sand loosens as it flows".) Cell (i, j) covers
 /// [s0 + i ds, s0 + (i + 1) ds) x [y0 + j dy, y0 + (j + 1) dy).
 struct DepositRaster {
   double s0 = 0.0, ds = 0.0, y0 = 0.0, dy = 0.0;
   int ns = 0, ny = 0;
-  std::vector<double> thickness;  // ns * ny, index i * ny + j
+  std::vector<double> thickness;         // ns * ny, index i * ny + j
+  std::vector<double> seeded_thickness;  // the same with the seeded volumes
   double volume_outside = 0.0;    // particle volume outside the raster [m^3]
   double at(int i, int j) const { return thickness[static_cast<std::size_t>(i) * ny + j]; }
   double s_centre(int i) const { return s0 + (i + 0.5) * ds; }
