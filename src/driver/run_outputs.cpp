@@ -13,6 +13,8 @@
 #include <regex>
 #include <utility>
 
+#include <unistd.h>
+
 namespace talus {
 
 namespace fs = std::filesystem;
@@ -44,6 +46,10 @@ void clear_output_folder(const fs::path& dir, const RunProgress* resume) {
   std::error_code ec;
   fs::create_directories(dir / "frames", ec);
   if (ec) throw io_error(fmt::format("cannot create output folder {}: {}", (dir / "frames").string(), ec.message()));
+  // A frames folder that exists but cannot be written: said here, once, instead of VTK's twenty lines
+  // at the first frame after the run's other files were started
+  if (::access((dir / "frames").c_str(), W_OK | X_OK) != 0)
+    throw io_error(fmt::format("cannot write output folder {}: no write permission", (dir / "frames").string()));
   remove_temporaries(dir);
   for (const auto& entry : fs::directory_iterator(dir / "frames")) {
     const fs::path ext = entry.path().extension();

@@ -254,6 +254,33 @@ TEST(Crash, AnOutputFolderWhoseFramesIsAFileExitsTwoWithOneLine) {
   fs::remove_all(dir);
 }
 
+// A frames folder without write permission: VTK printed twenty lines at the first frame, after
+// scene.json and energy.csv were started. Root writes there all the same, so as root the run goes
+// through setpriv as the user nobody.
+TEST(Crash, AnUnwritableFramesFolderExitsTwoWithOneLineBeforeAnyOutput) {
+  const fs::path dir = test::temp_dir("frames_locked");
+  std::ofstream(dir / "s.json") << test::small_slide_json(0.05, 0.0);
+  fs::create_directories(dir / "out" / "frames");
+  const auto all = fs::perms::owner_all | fs::perms::group_all | fs::perms::others_all;
+  fs::permissions(dir, all);
+  fs::permissions(dir / "s.json", fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  fs::permissions(dir / "out", all);
+  fs::permissions(dir / "out" / "frames", fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
+                                              fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
+  const std::string as_user = ::geteuid() == 0 ? "setpriv --reuid=65534 --regid=65534 --clear-groups " : "";
+  FILE* pipe = popen((as_user + TALUS_BINARY + " run " + (dir / "s.json").string() + " --threads 1 --out " +
+                      (dir / "out").string() + " 2>&1").c_str(), "r");
+  std::string out;
+  char buffer[4096];
+  while (fgets(buffer, sizeof buffer, pipe)) out += buffer;
+  const int status = pclose(pipe);
+  EXPECT_EQ(WEXITSTATUS(status), 2) << out;
+  EXPECT_EQ(out, "talus: error: cannot write output folder " + (dir / "out" / "frames").string() + ": no write permission\n");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir / "out"), fs::directory_iterator()), 1);  // frames alone
+  fs::permissions(dir / "out" / "frames", fs::perms::owner_all);
+  fs::remove_all(dir);
+}
+
 TEST(Crash, BadSceneExitsTwoWithOneLineAndWritesNothing) {
   const fs::path dir = test::temp_dir("badscene");
   std::string text = test::small_slide_json();
