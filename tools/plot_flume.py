@@ -100,7 +100,8 @@ def main():
     ax.set_xlabel("s along the flume [m]")
     ax.set_ylabel("deposit thickness [mm]")
     ax.set_title(f"{name}: deposit along the centre line (volume per bed area)")
-    ax.legend(fontsize=8)
+    ax.set_ylim(top=ax.get_ylim()[1] * 1.4)  # room for the legend above the deposit
+    ax.legend(fontsize=7, loc="upper left")
     fig.tight_layout()
     fig.savefig(os.path.join(out, "deposit_profile.png"), dpi=130)
     plt.close(fig)

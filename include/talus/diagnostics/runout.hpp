@@ -42,7 +42,7 @@ int measure_runout_regions(std::size_t n, int threads);
 /// volume (current volume V_p) whose s and y fall in the cell, divided by the cell's bed area ds dy.
 /// For a uniform layer that is its bed-normal thickness. `seeded_thickness` sums the particles' seeded
 /// volumes V_p0 = m_p / rho_0 instead: the thickness the same mass makes at the density it was seeded
-/// with. (A flowing sand loosens in MPM: the flume's deposit ends 27% above its seeded volume,
+/// with. (A flowing sand loosens in MPM: the flume's deposit ends 31% above its seeded volume,
 /// docs/flume.md "The sand loosens as it flows".) Cell (i, j) covers
 /// [s0 + i ds, s0 + (i + 1) ds) x [y0 + j dy, y0 + (j + 1) dy).
 struct DepositRaster {
