@@ -54,6 +54,9 @@ TEST(PeriodicScene, BadUseNamesTheKey) {
   test::expect_variant_error(test::replace_once(ok, "\"x-\": \"periodic\", \"x+\": \"periodic\", ", ""), "\"time\"",
                              "\"diagnostics\": { \"runout\": { \"gate_x\": 1e20 } }, \"time\"",
                              "diagnostics.runout.gate_x = 1e+20 is outside the grid along x, [0, 0.8]");
+  test::expect_variant_error(test::replace_once(ok, "\"x-\": \"periodic\", \"x+\": \"periodic\", ", ""), "\"time\"",
+                             "\"diagnostics\": { \"runout\": { \"runout_plane_x\": -0.8 } }, \"time\"",
+                             "diagnostics.runout.runout_plane_x = -0.8 is outside the grid along x, [0, 0.8]");
   test::expect_variant_error(ok, "\"time\"", "\"solver\": { \"scatter\": \"block_buffers\" }, \"time\"",
                              "boundaries.x- = \"periodic\" cannot run with solver.scatter = \"block_buffers\"");
   test::expect_variant_error(ok, "\"time\"", "\"solver\": { \"scatter\": \"blocks\" }, \"time\"",
