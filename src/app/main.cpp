@@ -106,6 +106,9 @@ void set_threads(int threads) {
       const std::string digits = first == std::string::npos ? "" : item.substr(first, last - first + 1);
       readable = !digits.empty() && digits.find_first_not_of("0123456789") == std::string::npos &&
                  digits.find_first_not_of('0') != std::string::npos;
+      // a number past libgomp's unsigned long it also ignores, and uses every core
+      if (readable && (digits.size() > 9 || std::stoul(digits) > 4096))
+        throw input_error(fmt::format("OMP_NUM_THREADS = {} is outside [1, 4096] (or give --threads)", value));
       at = end + 1;
     }
     if (!readable)

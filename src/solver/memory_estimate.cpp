@@ -127,6 +127,8 @@ std::optional<std::size_t> parse_size(std::string text) {
     default: break;
   }
   if (scale != 1.0) text.pop_back();
+  // decimal only: strtod also reads hexadecimal ("0x10" was 16 bytes), "inf" and "nan"
+  if (text.empty() || text.find_first_not_of("0123456789.eE+-") != std::string::npos) return std::nullopt;
   char* end = nullptr;
   const double value = std::strtod(text.c_str(), &end);
   if (end == text.c_str() || *end != '\0' || !std::isfinite(value)) return std::nullopt;

@@ -119,6 +119,12 @@ TEST_F(CliErrors, EnvironmentVariablesAreCheckedAndTheOptionsOverrideThem) {
   EXPECT_EQ(overridden.exit_code, 0) << overridden.err;
   expect_error_line(run_with_env("OMP_NUM_THREADS", "70000", "run " + kScene + " --out " + (dir_ / "b").string()),
                     "OMP_NUM_THREADS = 70000 is outside [1, 4096] (or give --threads)");
+  // past an unsigned long libgomp warned and used every core: the run went on
+  const ProgramResult huge = run_with_env("OMP_NUM_THREADS", "99999999999999999999", "run " + kScene + " --out " + (dir_ / "b").string());
+  EXPECT_EQ(huge.exit_code, 2) << huge.err;
+  EXPECT_NE(huge.err.find("talus: error: OMP_NUM_THREADS = 99999999999999999999 is outside [1, 4096] (or give --threads)\n"),
+            std::string::npos) << huge.err;
+  EXPECT_FALSE(fs::exists(dir_ / "b"));
   // libgomp warns of a value it cannot read and then uses every core; talus refuses it (after
   // libgomp's own line, which it prints as the program loads)
   for (const char* threads : {"0", "abc", "2.5", "4,"}) {
@@ -153,7 +159,7 @@ TEST_F(CliErrors, EnvironmentVariablesAreCheckedAndTheOptionsOverrideThem) {
     EXPECT_GT(factor, 1.0) << small.err;
     EXPECT_LT(factor, 20.0) << small.err;  // finite and sane (it was "infx" when the grid alone did not fit)
   }
-  for (const char* limit : {"1e30", "0.5", "-3G"})
+  for (const char* limit : {"1e30", "0.5", "-3G", "0x10", "inf"})  // (strtod read 0x10 as 16 bytes)
     expect_error_line(run_with_env("TALUS_MEMORY_LIMIT", limit, "check " + kScene),
                       std::string("TALUS_MEMORY_LIMIT = \"") + limit +
                           "\" is not a memory size (1 byte to 9.2e18 bytes, optionally with K, M, G or T: 8G)");
