@@ -9,7 +9,10 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <string>
 
@@ -52,6 +55,10 @@ int main(int argc, char** argv) {
 
   try {
     app.parse(argc, argv);  // the commands that run kernels choose their path (select_isa_option)
+    // What a command printed may still sit in stdout's buffer: a full disk or a closed pipe must
+    // not end as a success (`talus check scene > /dev/full` exited 0 with its report lost)
+    if (std::fflush(stdout) != 0 || std::ferror(stdout))
+      throw talus::io_error(fmt::format("cannot write to standard output: {}", std::strerror(errno)));
     return talus::app::exit_code();
   } catch (const CLI::Success& e) {
     return app.exit(e);

@@ -165,5 +165,15 @@ TEST_F(CliErrors, EnvironmentVariablesAreCheckedAndTheOptionsOverrideThem) {
                           "\" is not a memory size (1 byte to 9.2e18 bytes, optionally with K, M, G or T: 8G)");
 }
 
+// A report lost to a full disk or a closed stdout ended as a success: `talus check scene > /dev/full`
+// exited 0.
+TEST_F(CliErrors, AReportThatCannotBeWrittenIsAnError) {
+  const fs::path err = dir_ / "stderr.txt";
+  const int status = std::system((std::string("\"") + TALUS_BINARY + "\" check " + kScene + " > /dev/full 2> \"" +
+                                  err.string() + "\"").c_str());
+  EXPECT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 2);
+  EXPECT_EQ(talus::test::slurp(err), "talus: error: cannot write to standard output: No space left on device\n");
+}
+
 }  // namespace
 }  // namespace cli_errors_test
