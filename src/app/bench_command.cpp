@@ -8,6 +8,7 @@
 #include "talus/core/simd_dispatch.hpp"
 #include "talus/core/error.hpp"
 #include "talus/core/version.hpp"
+#include "talus/driver/run_outputs.hpp"
 #include "talus/scene/scene_json.hpp"
 #include "talus/material/drucker_prager.hpp"
 #include "talus/material/mu_i.hpp"
@@ -367,6 +368,9 @@ void refuse_unwritable_outputs(const BenchOptions& o, const Comm& world) {
     try {
       if (!o.json_path.empty()) check_writable_file(o.json_path, "--json");
       if (!o.record_path.empty()) check_writable_file(o.record_path, "--record-work");
+      if (!o.json_path.empty() && !o.record_path.empty() && same_file(o.json_path, o.record_path))
+        throw input_error(fmt::format("--json and --record-work name the same file, {}: the one would overwrite the "
+                                      "other", o.json_path));
     } catch (const Error& e) {
       refusal = e.what();
     }

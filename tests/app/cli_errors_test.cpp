@@ -68,6 +68,9 @@ TEST_F(CliErrors, BenchRefusesAnUnwritableOutputBeforeAnyWork) {
                     "--record-work " + missing + ": cannot write there: the folder " +
                         (dir_ / "no_such_folder").string() + " does not exist");
   expect_error_line(run(bench + "--json " + dir_.string()), "--json " + dir_.string() + ": is a folder, not a file");
+  const std::string same = (dir_ / "b.json").string();
+  expect_error_line(run(bench + "--json " + same + " --record-work " + same),
+                    "--json and --record-work name the same file, " + same + ": the one would overwrite the other");
   if (::geteuid() != 0) {  // root writes into a read-only folder all the same
     const fs::path locked = dir_ / "locked";
     fs::create_directories(locked);
