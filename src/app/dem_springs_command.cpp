@@ -28,10 +28,13 @@ struct DemSpringsOptions {
 };
 
 /// The inputs are finite, but a double may not hold what follows from them (--E 1e300 with --radius
-/// 1e10 gives kN = inf): refuse, naming the inputs, rather than print null.
+/// 1e10 gives kN = inf; --E 1e-320 a subnormal kN that has lost its digits, kT/kN 0.19975 for 0.2):
+/// refuse, naming the inputs, rather than print null or a wrong ratio.
 void refuse_non_finite(const nlohmann::ordered_json& out, const DemSpringsOptions& options) {
   for (const auto& [key, value] : out.items()) {
-    if (!value.is_number_float() || std::isfinite(value.get<double>())) continue;
+    if (!value.is_number_float()) continue;
+    const int kind = std::fpclassify(value.get<double>());
+    if (kind == FP_NORMAL || kind == FP_ZERO) continue;
     std::string inputs;
     auto add = [&inputs](const char* option, const std::optional<double>& v) {
       if (v) inputs += fmt::format("{}{} = {}", inputs.empty() ? "" : " and ", option, dem::number_text(*v));

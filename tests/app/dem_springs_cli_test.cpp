@@ -99,6 +99,9 @@ TEST_F(DemSpringsCli, SpringsBeyondTheRangeOfADoubleAreRefusedNamingTheInputs) {
                  "kT_over_kN = nan: the springs of --E = 1e-320 and --radius = 1e-10 are beyond the range of a double");
   expect_refused(run("dem-springs --G 1e308 --nu 0.2 --packing hex"),
                  "kN = inf: the springs of --G = 1e+308 are beyond the range of a double");
+  // a subnormal spring has lost its digits (kT/kN printed 0.19975 for 0.2)
+  expect_refused(run("dem-springs --E 1e-320 --nu 0.2 --packing hex"),
+                 "kN = 8.014e-321: the springs of --E = 1e-320 are beyond the range of a double");
 }
 
 }  // namespace

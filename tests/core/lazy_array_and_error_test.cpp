@@ -31,6 +31,11 @@ TEST(Error, OneLineMessagesAndExitCodes) {
   EXPECT_EQ(e.exit_code(), 2);
   EXPECT_EQ(instability_error("x").exit_code(), 3);
   EXPECT_EQ(io_error("x").exit_code(), 2);
+  // UTF-8 passes whole (μ, φ, a 4-byte sequence); bytes that are not UTF-8 are escaped (a Latin-1
+  // scene's bytes reached the terminal raw)
+  EXPECT_STREQ(input_error("μ(I) φ = 30° \xf0\x9f\x98\x80").what(), "μ(I) φ = 30° \xf0\x9f\x98\x80");
+  EXPECT_STREQ(input_error("last read: '\"elastic\xff\xe9'").what(), "last read: '\"elastic\\xff\\xe9'");
+  EXPECT_STREQ(input_error("cut \xce").what(), "cut \\xce");  // a sequence cut short
 }
 
 }  // namespace

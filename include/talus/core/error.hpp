@@ -15,15 +15,31 @@ class Error : public std::runtime_error {
   Kind kind() const { return kind_; }
   int exit_code() const { return kind_ == Kind::Instability ? 3 : 2; }
 
-  /// Control characters (from keys or names in a scene) escaped, so a message is always one line.
+  /// Control characters (from keys or names in a scene) escaped, so a message is always one line,
+  /// and bytes that are not UTF-8 (a scene saved in Latin-1) escaped, so a terminal shows them.
   static std::string one_line(const std::string& text) {
     std::string out;
     out.reserve(text.size());
-    for (const char c : text) {
+    auto escape = [&out](unsigned char u) {
+      out += "\\x" + std::string(1, "0123456789abcdef"[u >> 4]) + "0123456789abcdef"[u & 15];
+    };
+    for (std::size_t i = 0; i < text.size(); ++i) {
+      const char c = text[i];
       const auto u = static_cast<unsigned char>(c);
       if (c == '\n') out += "\\n";
-      else if (u < 0x20 || u == 0x7f) out += "\\x" + std::string(1, "0123456789abcdef"[u >> 4]) + "0123456789abcdef"[u & 15];
-      else out += c;
+      else if (u < 0x20 || u == 0x7f) escape(u);
+      else if (u < 0x80) out += c;
+      else {  // a UTF-8 sequence: a lead byte and 1-3 continuation bytes 10xxxxxx, kept whole
+        const std::size_t length = u >= 0xc2 && u <= 0xdf ? 2 : u >= 0xe0 && u <= 0xef ? 3 : u >= 0xf0 && u <= 0xf4 ? 4 : 0;
+        bool whole = length > 0 && i + length <= text.size();
+        for (std::size_t k = 1; whole && k < length; ++k) whole = (static_cast<unsigned char>(text[i + k]) & 0xc0) == 0x80;
+        if (!whole) {
+          escape(u);
+          continue;
+        }
+        out.append(text, i, length);
+        i += length - 1;
+      }
     }
     return out;
   }
