@@ -318,6 +318,15 @@ void RunLoop::start() {
                  "earlier build (xx yy zz yz xz xy, unnamed); the frames this run writes use VTK's (xx yy zz xy yz xz, "
                  "named): the shear components of the two do not match, so run the scene from the start for a uniform "
                  "series\n");
+    // The run's own folder (it holds frames of the checkpoint's) with some of them deleted, or its
+    // energy.csv lost: the restart goes on, but says what its outputs lack.
+    if (comm_.root() && frames_.kept_frames() > 0 && frames_.missing_kept_frames() > 0)
+      fmt::print(stderr, "talus: warning: {} of the {} frames the checkpoint lists are missing from {}: the series has "
+                 "gaps there\n", frames_.missing_kept_frames(), frames_.kept_frames() + frames_.missing_kept_frames(),
+                 (dir_ / "frames").string());
+    if (comm_.root() && frames_.kept_frames() > 0 && history_.kept_rows() == 0)
+      fmt::print(stderr, "talus: warning: {} held no row up to the checkpoint's step {}: the energy history starts at "
+                 "the restart\n", (dir_ / "energy.csv").string(), solver_.step_count());
     summary_.initial = progress_.initial;
     energy_guard_ = EnergyGuard(scene_, all, progress_.initial);
     energy_guard_.set_max_released(progress_.energy_max_released);

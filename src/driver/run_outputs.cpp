@@ -158,7 +158,7 @@ EnergyHistory::EnergyHistory(const fs::path& dir, std::optional<std::int64_t> re
   if (resume_step) {
     // Keep the complete rows (time,step,...) up to the checkpoint's step.
     const auto commas = std::count(header.begin(), header.end(), ',');
-    cut_csv(path, header, [&](const std::string& line) {
+    kept_rows_ = cut_csv(path, header, [&](const std::string& line) {
       const auto c1 = line.find(',');
       const auto c2 = c1 == std::string::npos ? std::string::npos : line.find(',', c1 + 1);
       if (c2 == std::string::npos || std::count(line.begin(), line.end(), ',') != commas) return false;
@@ -271,7 +271,9 @@ FrameSeries::FrameSeries(const fs::path& dir, bool compress, RunProgress& progre
     std::string name = kept_frame_name(dir, i, comm.distributed());
     std::error_code ec;
     if (fs::exists(dir / name, ec)) entries.emplace_back(progress.frame_times[i], std::move(name));
+    else ++missing_kept_frames_;
   }
+  kept_frames_ = entries.size();
   if (!entries.empty()) {
     kept_frames_in_older_order_ = frame_stress_in_vtk_order((dir / entries.back().second).string()) == false;
     pvd_.assign(std::move(entries));

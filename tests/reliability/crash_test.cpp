@@ -240,6 +240,27 @@ TEST(Crash, ResumingASeriesOfFramesInTheOlderTensorOrderWarns) {
   EXPECT_EQ(text.find("warning"), text.rfind("warning")) << text;  // said once
 }
 
+// A restart into its own folder whose frames were partly deleted, or whose energy.csv was lost, went
+// on without a word: the series had a gap, the history started at the restart. It still goes on, and
+// says so; the intact folder (above) gives no warning.
+TEST(Crash, ResumingADamagedOwnFolderSaysWhatItsOutputsLack) {
+  const Reference& ref = reference();
+  const fs::path damaged = ref.root / "damaged_own";
+  fs::remove_all(damaged);
+  fs::copy(ref.out, damaged, fs::copy_options::recursive);
+  const std::vector<fs::path> frames = test::pvd_frames(damaged / "particles.pvd");
+  ASSERT_GE(frames.size(), 3u);
+  fs::remove(frames[1]);
+  fs::remove(damaged / "energy.csv");
+  const auto [code, text] = run_captured("run " + (damaged / "scene.json").string() + " --restart " +
+                                         (damaged / "checkpoint.h5").string() + " --quiet --threads 1");
+  EXPECT_EQ(code, 0) << text;
+  EXPECT_NE(text.find(" frames the checkpoint lists are missing from " + (damaged / "frames").string() +
+                      ": the series has gaps there"), std::string::npos) << text;
+  EXPECT_NE(text.find((damaged / "energy.csv").string() + " held no row up to the checkpoint's step "), std::string::npos)
+      << text;
+}
+
 // An output folder whose frames/ is a file: one line naming frames/, exit 2, nothing else written
 // (the folder is prepared before the run starts, so under mpirun every rank stops alike, said once).
 TEST(Crash, AnOutputFolderWhoseFramesIsAFileExitsTwoWithOneLine) {

@@ -74,9 +74,13 @@ class EnergyHistory {
   void flush() {
     if (writer_) file_.flush();
   }
+  /// A resumed history: the rows kept up to the checkpoint's step (0: energy.csv was missing or
+  /// unreadable, so the history starts at the restart).
+  std::size_t kept_rows() const { return kept_rows_; }
 
  private:
   bool writer_;
+  std::size_t kept_rows_ = 0;
   std::ofstream file_;
 };
 
@@ -150,6 +154,10 @@ class FrameSeries {
   /// A resumed series whose kept frames hold their stress and strain in the solver's Voigt order
   /// (written by a build before 2026-12-04): the new frames use VTK's order, so the series mixes them.
   bool kept_frames_in_older_order() const { return kept_frames_in_older_order_; }
+  /// A resumed series: the checkpoint's earlier frames found in the folder, and those it lists that
+  /// are not there (a folder of the run's own with frames deleted: the series has gaps).
+  std::size_t kept_frames() const { return kept_frames_; }
+  std::size_t missing_kept_frames() const { return missing_kept_frames_; }
   /// The seconds the writer's thread spent on the frames completed so far, in the background (0
   /// without background writes: the run loop waited for them). The work recorder's run total.
   double background_seconds() const { return background_seconds_; }
@@ -160,6 +168,7 @@ class FrameSeries {
 
   std::filesystem::path dir_;
   bool kept_frames_in_older_order_ = false;
+  std::size_t kept_frames_ = 0, missing_kept_frames_ = 0;
   bool compress_;
   bool background_;
   RunProgress& progress_;
