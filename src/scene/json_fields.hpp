@@ -151,7 +151,7 @@ class ObjectReader {
     const bool beyond = std::isfinite(v) && ((v > hi && hi >= kUnbounded) || (v < lo && lo <= -kUnbounded));
     if (!ok)
       throw input_error(fmt::format("{} = {} is outside the allowed range {}{}", path, v, range,
-                                    beyond ? " (magnitudes of 1e30 and more are refused)" : ""));
+                                    beyond ? " (magnitudes above 1e30 are refused)" : ""));
     return v;
   }
 
@@ -258,8 +258,19 @@ inline Json parse_json(const std::string& text, const std::string& source) {
     // overflows a double (1e999) is an out_of_range error.
     std::string what = e.what();
     const auto bracket = what.find(']');
-    throw input_error(
-        fmt::format("{}: malformed JSON: {}", source, bracket == std::string::npos ? what : what.substr(bracket + 2)));
+    if (bracket != std::string::npos) what = what.substr(bracket + 2);
+    // The overflow names its number but not where it is: the first place the text holds it.
+    const std::string overflow = "number overflow parsing '";
+    if (const auto at = what.find(overflow); at != std::string::npos) {
+      const std::string number = what.substr(at + overflow.size(), what.find('\'', at + overflow.size()) - at - overflow.size());
+      if (const auto where = text.find(number); !number.empty() && where != std::string::npos) {
+        const auto line_start = text.rfind('\n', where);
+        const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(where), '\n');
+        const auto column = where - (line_start == std::string::npos ? 0 : line_start + 1) + 1;
+        what += fmt::format(" at line {}, column {} (beyond the largest double, 1.8e308)", line, column);
+      }
+    }
+    throw input_error(fmt::format("{}: malformed JSON: {}", source, what));
   }
 }
 

@@ -37,7 +37,7 @@ TEST(BadInput, EveryMistakeNamesTheKeyPathInOneLine) {
   const std::vector<Case> cases = {
       {"malformed JSON", "\"time\": {", "\"time\": {,", "malformed JSON"},
       {"truncated", "\"guards\"", "\"gua", "malformed JSON"},
-      {"number overflowing to Inf", "\"end\": 0.1", "\"end\": 1e999", "malformed JSON"},
+      {"number overflowing to Inf", "\"end\": 0.1", "\"end\": 1e999", "malformed JSON: number overflow parsing '1e999' at line 4, column 20"},
       {"unknown key", "\"courant\": 0.3", "\"courant\": 0.3, \"courrant\": 0.3", "unknown key time.courrant"},
       {"wrong type", "\"young\": 1.0e6", "\"young\": \"1e6\"", "materials.rubber.young must be a number in (0, inf)"},
       {"negative", "\"density\": 1000.0", "\"density\": -1000.0", "materials.rubber.density = -1000 is outside the allowed range (0"},
@@ -68,9 +68,9 @@ TEST(BadInput, EveryMistakeNamesTheKeyPathInOneLine) {
        "bodies[0].velocity[0] = 1e+300 is outside the allowed range"},
       // the message says which limit a number broke, and shows it as written
       {"beyond 1e30", "\"young\": 1.0e6", "\"young\": 1e308",
-       "materials.rubber.young = 1e+308 is outside the allowed range (0, inf) (magnitudes of 1e30 and more are refused)"},
+       "materials.rubber.young = 1e+308 is outside the allowed range (0, inf) (magnitudes above 1e30 are refused)"},
       {"vector beyond 1e30", "\"material\": \"rubber\",", "\"material\": \"rubber\", \"velocity\": [0, 0, -1e308],",
-       "bodies[0].velocity[2] = -1e+308 is outside the allowed range (-inf, inf) (magnitudes of 1e30 and more are refused)"},
+       "bodies[0].velocity[2] = -1e+308 is outside the allowed range (-inf, inf) (magnitudes above 1e30 are refused)"},
       {"integer past 2^64", "\"courant\": 0.3", "\"courant\": 0.3, \"max_steps\": 18446744073709551615",
        "time.max_steps = 18446744073709551615 is outside the allowed range"},
       // the name is a folder under runs/ whose files a run replaces and clears
