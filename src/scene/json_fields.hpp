@@ -16,6 +16,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace talus::scene_detail {
@@ -181,11 +182,21 @@ void with_key_path(const std::string& prefix, Check&& check) {
 inline std::optional<std::string> read_text_file(const std::string& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) return std::nullopt;
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   if (!in) return std::nullopt;
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
+  // Read in pieces, stopping at a NUL byte (parse_json refuses it) or past 256 MB: `talus check
+  // /dev/zero` read without end.
+  constexpr std::size_t kMaxBytes = std::size_t{256} << 20;
+  std::string text;
+  char piece[1 << 16];
+  while (in.read(piece, sizeof piece) || in.gcount() > 0) {
+    const std::string_view got(piece, static_cast<std::size_t>(in.gcount()));
+    text.append(got);
+    if (got.find('\0') != std::string_view::npos) break;
+    if (text.size() > kMaxBytes)
+      throw input_error(fmt::format("{}: more than 256 MB: not a scene file (a scene is a few kB of JSON)", path));
+  }
+  return text;
 }
 
 /// Refuses a key that an object holds twice. nlohmann's parser keeps the last value, so `"end": 0.1,

@@ -36,6 +36,11 @@ void expect_error_line(const ProgramResult& r, const std::string& line) {
 }
 
 // An empty value (an unset shell variable) meant "not given": --restart "" ran a fresh simulation.
+// A scene read from an endless stream read without end (`talus check /dev/zero`).
+TEST_F(CliErrors, AnEndlessSceneStreamIsRefused) {
+  expect_error_line(run("check /dev/zero"), "/dev/zero: malformed JSON: a NUL byte at offset 0 (not a text file?)");
+}
+
 TEST_F(CliErrors, AnEmptyFileOrFolderOptionIsRefusedNamingIt) {
   expect_error_line(run("run scene.json --restart ''"),
                     "--restart is empty: give a checkpoint file, or leave --restart out for a fresh run");
