@@ -182,16 +182,21 @@ TEST(Runout, MonitorDifferencesTheFrontAndMeasuresFromTheGate) {
   EXPECT_NEAR(*r.beyond_runout_plane, s.front - 1.0, 1e-12);
 }
 
-TEST(Deposit, UniformLayerHasItsThicknessAndVolumeIsConserved) {
-  // A layer 0.04 m thick on [0.2, 0.6) x [0, 0.2): particles of volume 1e-6 m^3 on a 0.01 m lattice
-  // in s and y, 4 per column (0.04 m thick as volume per area: 4e-6 / 1e-4).
+// A layer on [0.2, 0.6) x [0, 0.2): particles of volume 1e-6 m^3 on a 0.01 m lattice in s and y, 4
+// per column `dz` apart (0.04 m thick as volume per area: 4e-6 / 1e-4).
+ParticleStore uniform_layer(double dz) {
   ParticleStore P;
   std::int64_t id = 0;
   for (int i = 0; i < 40; ++i)
     for (int j = 0; j < 20; ++j)
       for (int k = 0; k < 4; ++k)
-        P.add(id++, Vec3(0.2 + (i + 0.5) * 0.01, (j + 0.5) * 0.01, (k + 0.5) * 0.01), Vec3::Zero(), 1.6e-3, 1e-6, 0);
-  P.add(id++, Vec3(5.0, 0.1, 0.0), Vec3::Zero(), 1.6e-3, 1e-6, 0);  // a stray beyond the raster
+        P.add(id++, Vec3(0.2 + (i + 0.5) * 0.01, (j + 0.5) * 0.01, (k + 0.5) * dz), Vec3::Zero(), 1.6e-3, 1e-6, 0);
+  return P;
+}
+
+TEST(Deposit, UniformLayerHasItsThicknessAndVolumeIsConserved) {
+  ParticleStore P = uniform_layer(0.01);
+  P.add(static_cast<std::int64_t>(P.size()), Vec3(5.0, 0.1, 0.0), Vec3::Zero(), 1.6e-3, 1e-6, 0);  // a stray beyond the raster
   const DepositRaster d = measure_deposit(P, FlumeCoordinates(), 0.0, 1.0, 0.0, 0.2, 0.05);
   ASSERT_EQ(d.ns, 20);
   ASSERT_EQ(d.ny, 4);
@@ -208,12 +213,7 @@ TEST(Deposit, UniformLayerHasItsThicknessAndVolumeIsConserved) {
 
 TEST(Deposit, TheSeededThicknessIsTheSameMassAtItsSeededVolume) {
   // The same layer loosened by a quarter (every volume 1.25 V0): thickness 0.05 m, seeded 0.04 m.
-  ParticleStore P;
-  std::int64_t id = 0;
-  for (int i = 0; i < 40; ++i)
-    for (int j = 0; j < 20; ++j)
-      for (int k = 0; k < 4; ++k)
-        P.add(id++, Vec3(0.2 + (i + 0.5) * 0.01, (j + 0.5) * 0.01, (k + 0.5) * 0.0125), Vec3::Zero(), 1.6e-3, 1e-6, 0);
+  ParticleStore P = uniform_layer(0.0125);
   for (std::size_t p = 0; p < P.size(); ++p) P.volume[p] = 1.25 * P.volume0[p];
   const DepositRaster d = measure_deposit(P, FlumeCoordinates(), 0.0, 1.0, 0.0, 0.2, 0.05);
   for (int i = 0; i < d.ns; ++i)
