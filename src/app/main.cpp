@@ -15,6 +15,7 @@
 #include <cstring>
 #include <exception>
 #include <string>
+#include <system_error>
 
 namespace {
 
@@ -23,7 +24,16 @@ namespace {
 /// says only that a subcommand is required.
 std::string parse_error_line(CLI::App& app, const CLI::ParseError& e) {
   const std::vector<CLI::App*> given = app.get_subcommands();  // require_subcommand(1): at most one
-  if (!given.empty()) return fmt::format("{} (see talus {} --help)", e.what(), given.front()->get_name());
+  if (!given.empty()) {
+    const std::string name = given.front()->get_name();
+    // CLI11 lists every word it could not place ("not expected: scene.json --threads"), the scene
+    // file among them when an unknown option swallowed its place: name the unknown option first.
+    if (dynamic_cast<const CLI::ExtrasError*>(&e))
+      for (const std::string& word : given.front()->remaining())
+        if (word.rfind('-', 0) == 0 && word.size() > 1)
+          return fmt::format("talus {} has no option {} (see talus {} --help)", name, word, name);
+    return fmt::format("{} (see talus {} --help)", e.what(), name);
+  }
   std::string commands;
   for (const CLI::App* command : app.get_subcommands([](const CLI::App*) { return true; }))
     commands += (commands.empty() ? "" : ", ") + command->get_name();
@@ -71,6 +81,16 @@ int main(int argc, char** argv) {
     // run ends the job itself (run_command.cpp).
     if (world.root()) fmt::print(stderr, "talus: error: {}\n", e.what());
     return e.exit_code();
+  } catch (const std::system_error& e) {
+    // fmt's print to stdout on a full disk or a closed pipe (`talus schema > /dev/full`; talus writes
+    // its files through io_error-throwing writers): the output failed, not talus
+    const int code = e.code().value();
+    if (code == ENOSPC || code == EPIPE || code == EIO || code == EDQUOT || code == EFBIG) {
+      fmt::print(stderr, "talus: error: cannot write to standard output: {}\n", std::strerror(code));
+      return 2;
+    }
+    fmt::print(stderr, "talus: internal error: {}\n", e.what());
+    return 4;
   } catch (const std::exception& e) {
     fmt::print(stderr, "talus: internal error: {}\n", e.what());
     return 4;

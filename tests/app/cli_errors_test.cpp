@@ -94,7 +94,9 @@ TEST_F(CliErrors, ParseErrorsAreOneLineWithWhereToReadMore) {
   expect_error_line(run(""), "a command is required: one of " + commands + " (see talus --help)");
   expect_error_line(run("--bogus"), "unknown option --bogus (see talus --help)");
   expect_error_line(run("run"), "scene is required (see talus run --help)");
-  expect_error_line(run("bench --bogus"), "The following argument was not expected: --bogus (see talus bench --help)");
+  expect_error_line(run("bench --bogus"), "talus bench has no option --bogus (see talus bench --help)");
+  // an unknown option before the scene: CLI11 listed the scene as unexpected too
+  expect_error_line(run("check --threads 1 scene.json"), "talus check has no option --threads (see talus check --help)");
   expect_error_line(run("dem-springs --E 1 --G 1 --nu 0 --packing hex"),
                     "--E excludes --G (see talus dem-springs --help)");
   // element-test specs have no Markdown table: the flag was ignored and the scene table printed
@@ -180,6 +182,10 @@ TEST_F(CliErrors, AReportThatCannotBeWrittenIsAnError) {
   const int status = std::system((std::string("\"") + TALUS_BINARY + "\" check " + kScene + " > /dev/full 2> \"" +
                                   err.string() + "\"").c_str());
   EXPECT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 2);
+  EXPECT_EQ(talus::test::slurp(err), "talus: error: cannot write to standard output: No space left on device\n");
+  // the schema is printed as it is made: the print itself fails (it read "internal error", exit 4)
+  const int schema = std::system((std::string("\"") + TALUS_BINARY + "\" schema > /dev/full 2> \"" + err.string() + "\"").c_str());
+  EXPECT_EQ(WIFEXITED(schema) ? WEXITSTATUS(schema) : -1, 2);
   EXPECT_EQ(talus::test::slurp(err), "talus: error: cannot write to standard output: No space left on device\n");
 }
 
