@@ -810,8 +810,9 @@ void resolve_smoothing_bodies(SceneDraft& d) {
     if (found < 0)
       throw input_error(
           fmt::format("solver.smoothing.bodies[{}] = \"{}\" names no body (defined: {})", i, names[i], known));
-    if (std::find(s.smoothing.bodies.begin(), s.smoothing.bodies.end(), found) == s.smoothing.bodies.end())
-      s.smoothing.bodies.push_back(found);
+    if (std::find(s.smoothing.bodies.begin(), s.smoothing.bodies.end(), found) != s.smoothing.bodies.end())
+      throw input_error(fmt::format("solver.smoothing.bodies[{}] = \"{}\" is named twice", i, names[i]));
+    s.smoothing.bodies.push_back(found);
   }
 }
 

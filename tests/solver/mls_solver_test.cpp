@@ -58,6 +58,7 @@ TEST(MlsScene, BadOptionsNameTheKeyAndTheRange) {
   test::expect_variant_error(ok, "2.5", "0.2", "solver.smoothing.radius_factor = 0.2 is outside the allowed range [0.5, 8]", std::nullopt);
   test::expect_variant_error(ok, "\"xz\"", "\"w\"", "solver.smoothing.axes = \"w\" is not one of: xyz", std::nullopt);
   test::expect_variant_error(ok, "[\"b\"]", "[\"c\"]", "solver.smoothing.bodies[0] = \"c\" names no body (defined: a, b)", std::nullopt);
+  test::expect_variant_error(ok, "[\"b\"]", "[\"b\", \"b\"]", "solver.smoothing.bodies[1] = \"b\" is named twice", std::nullopt);
   test::expect_variant_error(ok, "[\"b\"]", "[]", "solver.smoothing.bodies must be a non-empty array", std::nullopt);
   test::expect_variant_error(ok, "\"basis\"", "\"enabled\": 1, \"basis\"", "solver.smoothing.enabled must be true or false", std::nullopt);
   test::expect_variant_error(ok, "\"basis\"", "\"radius\": 1, \"basis\"", "unknown key solver.smoothing.radius", std::nullopt);
