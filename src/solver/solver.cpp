@@ -853,7 +853,16 @@ void Solver::restore(ParticleStore particles, const SolverState& s, RestoreSort 
   if (mode == RestoreSort::Exact)
     for (const auto& c : s.sort_cell)
       if (c.size() != n) throw io_error("restart: the saved sort state does not match the particles");
-  check_restored_particles(particles, grid_, shape_reach(scene_.shape));
+  const ShapeReach reach = shape_reach(scene_.shape);
+  check_restored_particles(particles, grid_, reach);
+  if (mode == RestoreSort::Exact) {
+    const auto nodes = scene_.grid.nodes();
+    for (std::size_t p = 0; p < n; ++p)
+      for (int d = 0; d < 3; ++d)
+        if (s.sort_cell[d][p] - reach.low < 0 || s.sort_cell[d][p] + reach.high >= nodes[d])
+          throw io_error(fmt::format("restart: particle {}'s saved sort cell ({}, {}, {}) lies outside the grid",
+                                     particles.id[p], s.sort_cell[0][p], s.sort_cell[1][p], s.sort_cell[2][p]));
+  }
   particles_ = std::move(particles);
   emptied_ = counts[0] == 0;
   wave_rate_from_stress_pass_.reset();
@@ -866,13 +875,6 @@ void Solver::restore(ParticleStore particles, const SolverState& s, RestoreSort 
   // Rebuild the cell sort exactly as the saved solver had it: sort with every particle placed at
   // the centre of its saved cell. The particles are already in that key order, so the (stable)
   // sort keeps their order and rebuilds the same blocks, colours and active tiles.
-  const ShapeReach reach = shape_reach(scene_.shape);
-  const auto nodes = scene_.grid.nodes();
-  for (std::size_t p = 0; p < n; ++p)
-    for (int d = 0; d < 3; ++d)
-      if (s.sort_cell[d][p] - reach.low < 0 || s.sort_cell[d][p] + reach.high >= nodes[d])
-        throw io_error(fmt::format("restart: particle {}'s saved sort cell ({}, {}, {}) lies outside the grid", particles_.id[p],
-                                   s.sort_cell[0][p], s.sort_cell[1][p], s.sort_cell[2][p]));
   std::array<ParticleArray<double>, 3> x;
   for (int d = 0; d < 3; ++d) {
     x[d] = particles_.x[d];
