@@ -30,7 +30,7 @@ struct DemSpringsOptions {
 /// The inputs are finite, but a double may not hold what follows from them (--E 1e300 with --radius
 /// 1e10 gives kN = inf; --E 1e-320 a subnormal kN that has lost its digits, kT/kN 0.19975 for 0.2):
 /// refuse, naming the inputs, rather than print null or a wrong ratio.
-void refuse_non_finite(const nlohmann::ordered_json& out, const DemSpringsOptions& options) {
+void refuse_unrepresentable(const nlohmann::ordered_json& out, const DemSpringsOptions& options) {
   for (const auto& [key, value] : out.items()) {
     if (!value.is_number_float()) continue;
     const int kind = std::fpclassify(value.get<double>());
@@ -85,7 +85,7 @@ nlohmann::ordered_json compute_dem_springs(const DemSpringsOptions& options) {
   out["density_ratio"] = geometry.density_ratio;
   out["coordination"] = geometry.coordination;
   if (dem::is_three_dimensional(packing)) out["radius"] = geometry.radius;
-  refuse_non_finite(out, options);
+  refuse_unrepresentable(out, options);
   return out;
 }
 

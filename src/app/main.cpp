@@ -45,6 +45,12 @@ std::string parse_error_line(CLI::App& app, const CLI::ParseError& e) {
   return what + " (see talus --help)";
 }
 
+/// A report that could not reach stdout (a full disk, a closed pipe): one line, exit 2.
+int stdout_failed(int error) {
+  fmt::print(stderr, "talus: error: cannot write to standard output: {}\n", std::strerror(error));
+  return 2;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -67,8 +73,7 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);  // the commands that run kernels choose their path (select_isa_option)
     // What a command printed may still sit in stdout's buffer: a full disk or a closed pipe must
     // not end as a success (`talus check scene > /dev/full` exited 0 with its report lost)
-    if (std::fflush(stdout) != 0 || std::ferror(stdout))
-      throw talus::io_error(fmt::format("cannot write to standard output: {}", std::strerror(errno)));
+    if (std::fflush(stdout) != 0 || std::ferror(stdout)) return stdout_failed(errno);
     return talus::app::exit_code();
   } catch (const CLI::Success& e) {
     return app.exit(e);
@@ -85,10 +90,7 @@ int main(int argc, char** argv) {
     // fmt's print to stdout on a full disk or a closed pipe (`talus schema > /dev/full`; talus writes
     // its files through io_error-throwing writers): the output failed, not talus
     const int code = e.code().value();
-    if (code == ENOSPC || code == EPIPE || code == EIO || code == EDQUOT || code == EFBIG) {
-      fmt::print(stderr, "talus: error: cannot write to standard output: {}\n", std::strerror(code));
-      return 2;
-    }
+    if (code == ENOSPC || code == EPIPE || code == EIO || code == EDQUOT || code == EFBIG) return stdout_failed(code);
     fmt::print(stderr, "talus: internal error: {}\n", e.what());
     return 4;
   } catch (const std::exception& e) {

@@ -77,7 +77,7 @@ void write_deposit_csv(const std::string& path, const DepositRaster& raster, con
     const double x = c.x_at(s);
     for (int j = 0; j < raster.ny; ++j)
       text += fmt::format("{:.8e},{:.8e},{:.8e},{:.8e},{:.8e}\n", s, raster.y_centre(j), x, raster.at(i, j),
-                          raster.seeded_thickness[static_cast<std::size_t>(i) * raster.ny + j]);
+                          raster.seeded_at(i, j));
   }
   write_file_atomically(path, text);
 }

@@ -219,9 +219,8 @@ TEST(Deposit, TheSeededThicknessIsTheSameMassAtItsSeededVolume) {
   for (int i = 0; i < d.ns; ++i)
     for (int j = 0; j < d.ny; ++j) {
       const double s = d.s_centre(i);
-      const std::size_t cell = static_cast<std::size_t>(i) * d.ny + j;
       EXPECT_NEAR(d.at(i, j), s > 0.2 && s < 0.6 ? 0.05 : 0.0, 1e-12);
-      EXPECT_NEAR(d.seeded_thickness[cell], s > 0.2 && s < 0.6 ? 0.04 : 0.0, 1e-12);
+      EXPECT_NEAR(d.seeded_at(i, j), s > 0.2 && s < 0.6 ? 0.04 : 0.0, 1e-12);
     }
 }
 

@@ -52,6 +52,7 @@ struct DepositRaster {
   std::vector<double> seeded_thickness;  // the same with the seeded volumes
   double volume_outside = 0.0;    // particle volume outside the raster [m^3]
   double at(int i, int j) const { return thickness[static_cast<std::size_t>(i) * ny + j]; }
+  double seeded_at(int i, int j) const { return seeded_thickness[static_cast<std::size_t>(i) * ny + j]; }
   double s_centre(int i) const { return s0 + (i + 0.5) * ds; }
   double y_centre(int j) const { return y0 + (j + 0.5) * dy; }
 };
