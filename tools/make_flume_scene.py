@@ -6,6 +6,7 @@ and a horizontal runout plane, with a sand wedge at rest behind a bed-normal gat
     python3 tools/make_flume_scene.py --slope 30 --bed-friction 27 --name denlinger_flume_abe2005 \
         > inputs/denlinger_flume_abe2005.json                                       # Abe, Johansson & Konagai's (2005) set
     python3 tools/make_flume_scene.py --cell 0.01 --name flume_h010 > /tmp/flume_h010.json  # resolution study
+    python3 tools/make_flume_scene.py --separation-volume-ratio 1.05 --name denlinger_flume_recompacting > inputs/denlinger_flume_recompacting.json
 
 Geometry (x down-flume, z up, y across; the runout plane is z = 0, the gate foot is x = 0):
   gate foot A on the bed; the gate is the bed normal through A;
@@ -30,10 +31,14 @@ def material(a):
         mu_s = round(math.tan(math.radians(a.friction)), 6)
         return {"model": "mu_i", "density": a.density, "young": 2.0e6, "poisson": 0.3,
                 "mu_s": mu_s, "mu_2": round(mu_s + a.mu_rise, 6), "i0": a.i0,
-                "grain_diameter": a.grain_diameter, "grain_density": a.grain_density, "separation_volume_ratio": 1.5}
-    return {"model": "drucker_prager", "density": a.density, "young": 2.0e6, "poisson": 0.3,
+                "grain_diameter": a.grain_diameter, "grain_density": a.grain_density,
+                "separation_volume_ratio": a.separation_volume_ratio}
+    sand = {"model": "drucker_prager", "density": a.density, "young": 2.0e6, "poisson": 0.3,
             "friction_angle": a.friction, "dilatancy_angle": 0.0, "cohesion": 10.0,
             "hardening_modulus": 0.0, "kinematic_fraction": 0.2, "cone": "plane_strain"}
+    if a.separation_volume_ratio != 1.5:  # the default scenes leave talus's default unnamed, as they always did
+        sand["separation_volume_ratio"] = a.separation_volume_ratio
+    return sand
 
 
 def build(a):
@@ -65,7 +70,9 @@ def build(a):
                         f"transition, transition radius {a.radius} m, {a.runout_length} m runout plane, {a.width} m wide "
                         f"with open sides; a {a.wedge_length} m x {a.wedge_width} m sand wedge ({mass:.2f} kg) behind a "
                         f"bed-normal gate removed at t = 0; internal friction {a.friction} deg, bed friction {a.bed_friction} deg"
-                        + ("; mu(I) sand, mu_s = tan(internal friction)" if a.model == "mu_i" else "")),
+                        + ("; mu(I) sand, mu_s = tan(internal friction)" if a.model == "mu_i" else "")
+                        + (f"; separation_volume_ratio {a.separation_volume_ratio:g} (loosened sand re-compacts)"
+                           if a.separation_volume_ratio != 1.5 else "")),
         "comment": "written by tools/make_flume_scene.py " + " ".join(sys.argv[1:]),
         "grid": {
             "origin": [r6(x0), r6(-ny * h / 2), 0.0],
@@ -136,6 +143,9 @@ def main():
     p.add_argument("--grain-diameter", type=float, default=0.5e-3, help="mu(I): grain diameter [m]")
     p.add_argument("--grain-density", type=float, default=2650.0, help="mu(I): grain density [kg/m^3] (quartz)")
     p.add_argument("--density", type=float, default=1600.0)
+    p.add_argument("--separation-volume-ratio", type=float, default=1.5,
+                   help="V/V0 beyond which a particle is stress-free (materials.<name>.separation_volume_ratio; "
+                        "1.05 re-compacts the deposit: docs/flume.md, 'The sand loosens as it flows')")
     p.add_argument("--slope-length", type=float, default=1.2, help="gate to the start of the transition [m]")
     p.add_argument("--radius", type=float, default=0.2, help="transition radius [m]")
     p.add_argument("--runout-length", type=float, default=1.2, help="runout plane length [m]")
@@ -163,6 +173,8 @@ def main():
     for option in ("wedge_width", "height", "cell", "end", "frame_interval"):
         if not getattr(a, option) > 0:
             p.error(f"--{option.replace('_', '-')} = {getattr(a, option)} must be positive")
+    if not (a.separation_volume_ratio > 1 or a.separation_volume_ratio == 0):
+        p.error(f"--separation-volume-ratio = {a.separation_volume_ratio} must be above 1, or 0 (off)")
     if a.particles_per_cell < 1:
         p.error(f"--particles-per-cell = {a.particles_per_cell} must be at least 1")
     scene = flat_slope(a) if a.flat_slope else build(a)

@@ -421,7 +421,8 @@ Table<MaterialSpec> make_material_table() {
            {.when = dp}),
        custom<M>(
            "separation_volume_ratio", "number", "1.5", "> 1, or 0 (off)",
-           "V/V0 beyond which a particle is separated: stress-free, plastic state reset",
+           "V/V0 beyond which a particle is separated: stress-free, plastic state reset; below ratio V0 it "
+           "carries stress again, so 1.05 lets a loosened deposit re-compact (docs/flume.md)",
            {{"type", "number"},
             {"anyOf", Json::array({{{"const", 0}}, {{"exclusiveMinimum", 1}}})},
             {"default", GranularOptions{}.separation_volume_ratio}},
