@@ -52,11 +52,13 @@ def build(o):
         material = {"model": "drucker_prager", "density": o.density, "young": r6(young), "poisson": o.poisson,
                     "friction_angle": o.friction_angle, "dilatancy_angle": 0.0, "cohesion": o.cohesion,
                     "hardening_modulus": 0.0, "kinematic_fraction": 0.2, "cone": "plane_strain"}
+        if o.separation_volume_ratio != 1.5:  # the study's scenes leave talus's default unnamed
+            material["separation_volume_ratio"] = o.separation_volume_ratio
         what = f"Drucker-Prager phi = {o.friction_angle} deg (plane-strain cone), cohesion {o.cohesion} Pa"
     else:
         material = {"model": "mu_i", "density": o.density, "young": r6(young), "poisson": o.poisson,
                     "mu_s": o.mu_s, "mu_2": o.mu_2, "i0": o.i0, "grain_diameter": o.grain_diameter,
-                    "grain_density": o.grain_density, "separation_volume_ratio": 1.5}
+                    "grain_density": o.grain_density, "separation_volume_ratio": o.separation_volume_ratio}
         what = f"mu(I) mu_s = {o.mu_s}, mu_2 = {o.mu_2}, I0 = {o.i0}, d = {o.grain_diameter} m"
     name = o.name or f"collapse_{o.model}_a{o.aspect:g}_n{o.cells}"
     return {
@@ -96,6 +98,9 @@ def parser():
     p.add_argument("--density", type=float, default=1600.0, help="bulk density of the packing [kg/m^3]")
     p.add_argument("--floor-friction", type=float, default=0.6, help="Coulomb friction of the floor")
     p.add_argument("--front-quantile", type=float, default=0.995, help="diagnostics.runout.front_quantile")
+    p.add_argument("--separation-volume-ratio", type=float, default=1.5,
+                   help="V/V0 beyond which a particle is stress-free (1.05 re-compacts the deposit: docs/flume.md, "
+                        "'The sand loosens as it flows')")
     # Drucker-Prager: the measurement
     p.add_argument("--friction-angle", type=float, default=32.0)
     p.add_argument("--cohesion", type=float, default=10.0)
@@ -114,6 +119,8 @@ def main():
     for option in ("aspect", "length", "density", "young_ratio", "end_factor"):  # (negative ones wrote refused scenes)
         if not getattr(o, option) > 0:
             p.error(f"--{option.replace('_', '-')} = {getattr(o, option)} must be positive")
+    if not (o.separation_volume_ratio > 1 or o.separation_volume_ratio == 0):
+        p.error(f"--separation-volume-ratio = {o.separation_volume_ratio} must be above 1, or 0 (off)")
     if o.cells < 1 or o.particles_per_cell < 1:
         p.error("--cells and --particles-per-cell must be at least 1")
     o.command_line = " ".join(sys.argv[1:])
