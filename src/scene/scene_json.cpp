@@ -1,7 +1,10 @@
 #include "talus/scene/scene_json.hpp"
 
+#include "talus/grid/terrain_profile.hpp"
+
 #include "scene_fields.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fmt/core.h>
 
@@ -72,10 +75,29 @@ Scene parse_scene(const std::string& text, const std::string& source) {
 }
 
 double particle_count_bound(const Scene& s) {
+  // Only the part of a body inside the grid can seed particles (the seeding refuses the rest, naming
+  // the body): clip its box to the grid's extent first, so that a prism far above a terrain grid is
+  // reported as outside it, not as too many particles. With a terrain, z spans the grid's w range
+  // over the bed's lowest and highest points (the ends and the vertices within the grid: a fillet
+  // only cuts a corner).
+  const GridGeometry& g = s.grid;
+  Vec3 lower = g.origin, upper;
+  for (int d = 0; d < 3; ++d) upper[d] = g.origin[d] + g.cells[d] * g.h;
+  if (g.has_terrain()) {
+    const TerrainProfile bed(g.terrain);
+    double low = std::min(bed.height(lower[0]), bed.height(upper[0])), high = std::max(bed.height(lower[0]), bed.height(upper[0]));
+    for (const auto& [x, z] : g.terrain.points)
+      if (x > lower[0] && x < upper[0]) low = std::min(low, z), high = std::max(high, z);
+    lower[2] += low;
+    upper[2] += high;
+  }
   double total = 0.0;
   for (const BodySpec& b : s.bodies) {
     double count = 1.0;
-    for (int d = 0; d < 3; ++d) count *= std::floor((b.box_max[d] - b.box_min[d]) * b.particles_per_cell / s.grid.h) + 1.0;
+    for (int d = 0; d < 3; ++d) {
+      const double lo = std::max(b.box_min[d], lower[d]), hi = std::min(b.box_max[d], upper[d]);
+      count *= hi < lo ? 0.0 : std::floor((hi - lo) * b.particles_per_cell / g.h) + 1.0;
+    }
     total += count;
   }
   return total;

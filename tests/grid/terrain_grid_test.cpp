@@ -246,6 +246,11 @@ TEST(TerrainGrid, BadTerrainInputNamesTheKey) {
   const std::string h = message(high, R"("terrain": { "points": [[0, 1.1547005383792515], [2, 0], [4, 0]] })");
   EXPECT_NE(h.find("\"high\") reaches above the grid's top"), std::string::npos) << h;
   EXPECT_NE(h.find("all of its x range"), std::string::npos) << h;
+  // a body far above the grid whose box alone would hold about 1e11 particles: named as above the
+  // grid, not refused as too many particles (the bound counts only what lies within the grid's extent)
+  const std::string huge = R"({ "name": "huge", "material": "m", "box": { "min": [0.5, 0, 1.0e6], "max": [1.5, 0.5, 1.0e9] } })";
+  const std::string far = message(huge, R"("terrain": { "points": [[0, 1.1547005383792515], [2, 0], [4, 0]] })");
+  EXPECT_NE(far.find("\"huge\") reaches above the grid's top"), std::string::npos) << far;
   // a body reaching above the grid's top (w = 2 above the bed)
   const std::string tall = R"({ "name": "tall", "material": "m", "box": { "min": [2.5, 0, 0], "max": [3.5, 0.5, 2.5] } })";
   EXPECT_NE(message(tall, R"("terrain": { "points": [[0, 1.1547005383792515], [2, 0], [4, 0]] })").find("tall"),

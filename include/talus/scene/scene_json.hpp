@@ -14,7 +14,8 @@ namespace talus {
 Scene parse_scene(const std::string& text, const std::string& source);
 Scene read_scene_file(const std::string& path);
 
-/// An upper bound of the particles the bodies seed (per axis: extent / spacing + 1), summed.
+/// An upper bound of the particles the bodies seed (per axis: the body's extent within the grid's
+/// extent, over the spacing, + 1), summed.
 /// parse_scene refuses scenes above 2^31 particles or 1e9 grid cells (they cannot be allocated).
 double particle_count_bound(const Scene& scene);
 
