@@ -256,6 +256,26 @@ class DuplicateKeyCheck {
   std::vector<Frame> frames_;
 };
 
+/// Where `number` first stands as a number in the JSON `text` (outside strings, not part of a longer
+/// number); npos if nowhere.
+inline std::size_t find_number_token(const std::string& text, const std::string& number) {
+  const auto numeric = [](char c) { return (c >= '0' && c <= '9') || c == '.' || c == 'e' || c == 'E' || c == '+' || c == '-'; };
+  bool in_string = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\') ++i;  // an escaped character, the quote too
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (text.compare(i, number.size(), number) == 0 && (i == 0 || !numeric(text[i - 1])) &&
+               (i + number.size() == text.size() || !numeric(text[i + number.size()]))) {
+      return i;
+    }
+  }
+  return std::string::npos;
+}
+
 /// Parse a whole input file; a syntax error is an input error naming `source`, the line and column.
 inline Json parse_json(const std::string& text, const std::string& source) {
   // nlohmann's parser stops at a NUL byte as if the text ended there, so whatever followed passed unread.
@@ -269,11 +289,13 @@ inline Json parse_json(const std::string& text, const std::string& source) {
     std::string what = e.what();
     const auto bracket = what.find(']');
     if (bracket != std::string::npos) what = what.substr(bracket + 2);
-    // The overflow names its number but not where it is: the first place the text holds it.
+    // The overflow names its number but not where it is: the first number token that spells it
+    // (the parser stops at the first overflow; the same text inside a string, a description that
+    // quotes "1e999", is not a number).
     const std::string overflow = "number overflow parsing '";
     if (const auto at = what.find(overflow); at != std::string::npos) {
       const std::string number = what.substr(at + overflow.size(), what.find('\'', at + overflow.size()) - at - overflow.size());
-      if (const auto where = text.find(number); !number.empty() && where != std::string::npos) {
+      if (const auto where = find_number_token(text, number); !number.empty() && where != std::string::npos) {
         const auto line_start = text.rfind('\n', where);
         const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(where), '\n');
         const auto column = where - (line_start == std::string::npos ? 0 : line_start + 1) + 1;

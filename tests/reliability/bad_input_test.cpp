@@ -38,6 +38,12 @@ TEST(BadInput, EveryMistakeNamesTheKeyPathInOneLine) {
       {"malformed JSON", "\"time\": {", "\"time\": {,", "malformed JSON"},
       {"truncated", "\"guards\"", "\"gua", "malformed JSON"},
       {"number overflowing to Inf", "\"end\": 0.1", "\"end\": 1e999", "malformed JSON: number overflow parsing '1e999' at line 4, column 20"},
+      // the same text earlier inside a string is not the number that overflowed
+      {"overflow placed past a string that quotes it",
+       "\"valid\",\n  \"grid\": { \"origin\": [0, 0, 0], \"size\": [1.0, 0.4, 0.4], \"cell_size\": 0.05 },\n  \"time\": { \"end\": 0.1",
+       "\"valid\", \"description\": \"end at 1e999\",\n  \"grid\": { \"origin\": [0, 0, 0], \"size\": [1.0, 0.4, 0.4], \"cell_size\": 0.05 },\n  \"time\": { \"end\": 1e999",
+       "malformed JSON: number overflow parsing '1e999' at line 4, column 20"},
+      {"negative overflow", "\"end\": 0.1", "\"end\": -1e999", "at line 4, column 20"},
       {"unknown key", "\"courant\": 0.3", "\"courant\": 0.3, \"courrant\": 0.3", "unknown key time.courrant"},
       {"wrong type", "\"young\": 1.0e6", "\"young\": \"1e6\"", "materials.rubber.young must be a number in (0, inf)"},
       {"negative", "\"density\": 1000.0", "\"density\": -1000.0", "materials.rubber.density = -1000 is outside the allowed range (0"},
