@@ -75,6 +75,25 @@ int main(int argc, char** argv) {
     // not end as a success (`talus check scene > /dev/full` exited 0 with its report lost)
     if (std::fflush(stdout) != 0 || std::ferror(stdout)) return stdout_failed(errno);
     return talus::app::exit_code();
+  } catch (const CLI::CallForVersion& e) {
+    // CLI11 answers --version as soon as it meets it: `talus --version extra` printed the version and
+    // exited 0 with "extra" unread
+    if (argc > 2) {
+      std::string rest;  // every argument but the --version answered
+      bool skipped = false;
+      for (int i = 1; i < argc; ++i) {
+        if (!skipped && std::string(argv[i]) == "--version") {
+          skipped = true;
+          continue;
+        }
+        rest += (rest.empty() ? "" : " ") + std::string(argv[i]);
+      }
+      if (world.root())
+        fmt::print(stderr, "talus: error: {}\n",
+                   talus::Error::one_line(fmt::format("--version takes nothing else; got '{}' (see talus --help)", rest)));
+      return 2;
+    }
+    return app.exit(e);
   } catch (const CLI::Success& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {

@@ -48,6 +48,10 @@ TEST(Cli, HelpAndVersion) {
   const Result version = run("--version");
   EXPECT_EQ(version.exit_code, 0);
   EXPECT_EQ(version.output.rfind("talus ", 0), 0u) << version.output;
+  // CLI11 answers --version before it reads on: an extra argument went unread with exit 0
+  const Result extra = run("--version extra");
+  EXPECT_EQ(extra.exit_code, 2);
+  EXPECT_EQ(extra.output, "talus: error: --version takes nothing else; got 'extra' (see talus --help)\n");
 }
 
 TEST(Cli, CheckValidatesEveryShippedScene) {
