@@ -39,6 +39,12 @@ phase() { # name, seconds it needs
   if [ $left -lt "$2" ]; then echo "[$(el) s] SKIP $1 (needs $2 s, $left left)"; return 1; fi
   echo "[$(el) s] PHASE $1"; return 0
 }
+# The drivers need numpy and matplotlib: the first python3 on PATH may lack them (a pyenv shim on the
+# development VM failed every scaling phase); Debian's own has them once tools/setup.sh has run.
+PY=python3
+if ! "$PY" -c "import numpy, matplotlib" 2>/dev/null && /usr/bin/python3 -c "import numpy, matplotlib" 2>/dev/null; then
+  PY=/usr/bin/python3
+fi
 export PYTHONUNBUFFERED=1 OMP_PROC_BIND=close OMP_PLACES=cores
 unset OMP_WAIT_POLICY
 N=$(nproc)
@@ -59,14 +65,14 @@ phase references 30 && [ -n "$ST" ] && {
   pack; }
 
 H005=$W/flume_h005.json; H005BB=$W/flume_h005_block_buffers.json
-python3 tools/make_flume_scene.py --cell 0.005 --name flume_h005 > "$H005"
-python3 tools/make_flume_scene.py --cell 0.005 --scatter block_buffers --name flume_h005_block_buffers > "$H005BB"
+"$PY" tools/make_flume_scene.py --cell 0.005 --name flume_h005 > "$H005"
+"$PY" tools/make_flume_scene.py --cell 0.005 --scatter block_buffers --name flume_h005_block_buffers > "$H005BB"
 
 phase determinism 45 && {
   # the outputs (frames, energy, runout, deposit) of 1, 7 and N threads must be the same bits
   for sc in inputs/denlinger_flume.json@0.03 inputs/denlinger_flume_block_buffers.json@0.03 "$H005BB@0.0015"; do
     f=${sc%@*}; e=${sc#*@}; b=$(basename "$f" .json); d=$S/det_$b
-    python3 -c "import json; s=json.load(open('$f')); s['time']['end']=$e; s['output']['frame_interval']=$e/3; json.dump(s,open('$d.json','w'))"
+    "$PY" -c "import json; s=json.load(open('$f')); s['time']['end']=$e; s['output']['frame_interval']=$e/3; json.dump(s,open('$d.json','w'))"
     for t in 1 7 "$N"; do "$TALUS" run "$d.json" --threads $t --quiet --out "${d}_$t" > /dev/null || echo "run failed: $b, $t threads"; done
     for t in 7 "$N"; do
       if diff -rq "${d}_1" "${d}_$t" > /dev/null; then echo "determinism $b: 1 vs $t threads identical ($(find "${d}_1" -type f | wc -l) files)"
@@ -78,19 +84,19 @@ phase determinism 45 && {
 # (on the 2026-12-04 node: about 290 s for these four scenes with 2 repeats and c(16) alone; the
 # h = 0.005 m flumes dominate, hence 0.0025 s here, with c(T) at every count)
 phase scaling_runs 240 && {
-  python3 tools/scaling_runs.py inputs/denlinger_flume.json@0.1 inputs/denlinger_flume_block_buffers.json@0.1 \
+  "$PY" tools/scaling_runs.py inputs/denlinger_flume.json@0.1 inputs/denlinger_flume_block_buffers.json@0.1 \
     "$H005BB@0.0025" "$H005@0.0025" --talus "$TALUS" --max-threads "$N" --repeat 2 --out "$W" --name scaling_runs_node
   pack; }
 
 phase scaling_block 100 && {
-  python3 tools/scaling.py --talus "$TALUS" --particles 1000000 --steps 10 --repeat 2 --max-threads "$N" --out "$W" \
+  "$PY" tools/scaling.py --talus "$TALUS" --particles 1000000 --steps 10 --repeat 2 --max-threads "$N" --out "$W" \
     --name scaling_node_block
   pack; }
 
 phase kernels_1thread 80 && {
   # avx2 beside auto: on the 2026-12-04 node (AVX-512) the vector path gained 1.39x over the reference
   # on the block where the AVX-512 EPYC VM gained 1.94x; is AVX2 faster there?
-  python3 tools/bench_kernels.py --talus "$TALUS" --paths reference,avx2,auto --rounds 1 ${ML:+--mpm-limit "$ML"} \
+  "$PY" tools/bench_kernels.py --talus "$TALUS" --paths reference,avx2,auto --rounds 1 ${ML:+--mpm-limit "$ML"} \
     ${ST:+--stream "$ST"} --json "$W/kernels_node.json"
   pack; }
 phase mls_1thread 70 && {
@@ -102,7 +108,7 @@ phase mls_1thread 70 && {
   done; done | tee "$W/mls_1thread.txt"
   pack; }
 phase scaling_shear 60 && {
-  python3 tools/scaling.py --talus "$TALUS" --particles 1000000 --steps 10 --repeat 1 --max-threads "$N" --out "$W" \
+  "$PY" tools/scaling.py --talus "$TALUS" --particles 1000000 --steps 10 --repeat 1 --max-threads "$N" --out "$W" \
     --name scaling_node_shear -- --scene shear --material dp
   pack; }
 echo "[$(el) s] done"
