@@ -79,10 +79,11 @@ double particle_count_bound(const Scene& s) {
   // the body): clip its box to the grid's extent first, so that a prism far above a terrain grid is
   // reported as outside it, not as too many particles. With a terrain, z spans the grid's w range
   // over the bed's lowest and highest points (the ends and the vertices within the grid: a fillet
-  // only cuts a corner).
+  // only cuts a corner); a box given in the terrain's frame is in w already.
   const GridGeometry& g = s.grid;
   Vec3 lower = g.origin, upper;
   for (int d = 0; d < 3; ++d) upper[d] = g.origin[d] + g.cells[d] * g.h;
+  const double w_lower = lower[2], w_upper = upper[2];
   if (g.has_terrain()) {
     const TerrainProfile bed(g.terrain);
     double low = std::min(bed.height(lower[0]), bed.height(upper[0])), high = std::max(bed.height(lower[0]), bed.height(upper[0]));
@@ -93,9 +94,11 @@ double particle_count_bound(const Scene& s) {
   }
   double total = 0.0;
   for (const BodySpec& b : s.bodies) {
+    const bool in_w = b.frame == BoxFrame::Terrain;
     double count = 1.0;
     for (int d = 0; d < 3; ++d) {
-      const double lo = std::max(b.box_min[d], lower[d]), hi = std::min(b.box_max[d], upper[d]);
+      const double from = d == 2 && in_w ? w_lower : lower[d], to = d == 2 && in_w ? w_upper : upper[d];
+      const double lo = std::max(b.box_min[d], from), hi = std::min(b.box_max[d], to);
       count *= hi < lo ? 0.0 : std::floor((hi - lo) * b.particles_per_cell / g.h) + 1.0;
     }
     total += count;

@@ -213,6 +213,29 @@ TEST(TerrainGrid, SeedingFillsTheBoxAboveTheBedWithEqualVolumes) {
   EXPECT_EQ(seed_particles(layer).size(), 4u * 2 * 2 * 8);  // 4 x 2 x 2 cells, 2^3 particles each
 }
 
+// The bound that refuses scenes of more than 2^31 particles must stay a bound on a terrain grid:
+// clipped to the grid's extent in z (physical boxes) or in w (boxes in the terrain's frame).
+TEST(TerrainGrid, TheParticleCountBoundHoldsForBothBoxFrames) {
+  auto scene_with = [](const char* body, bool raised_bed) {
+    std::string text = kSlopeScene;
+    text.replace(text.find("BODY"), 4, body);
+    if (raised_bed) {  // the bed 10 m higher: a box in the terrain's frame lies in w, far below the bed's z
+      const std::string bed = "[[0, 1.1547005383792515], [2, 0], [4, 0]]";
+      text.replace(text.find(bed), bed.size(), "[[0, 11.1547005383792515], [2, 10], [4, 10]]");
+    }
+    return parse_scene(text, "bound");
+  };
+  const char* pile = R"({ "name": "pile", "material": "m", "particles_per_cell": 2,
+                          "box": { "min": [0.5, 0, 0], "max": [1.5, 0.5, 1.2] } })";
+  const char* layer = R"({ "name": "layer", "material": "m", "particles_per_cell": 2,
+                           "box": { "min": [0.5, 0, 0], "max": [3.5, 0.5, 0.5], "frame": "terrain" } })";
+  for (const Scene& scene : {scene_with(pile, false), scene_with(layer, false), scene_with(layer, true)}) {
+    const std::size_t seeded = seed_particles(scene).size();
+    ASSERT_GT(seeded, 0u);
+    EXPECT_GE(particle_count_bound(scene), double(seeded)) << scene.bodies[0].name;
+  }
+}
+
 TEST(TerrainGrid, BadTerrainInputNamesTheKey) {
   auto message = [](const std::string& body, const std::string& terrain) {
     std::string text = kSlopeScene;
