@@ -116,10 +116,6 @@ def measure(scene, run_dir, plane_strain):
             runout = json.load(f)["from_gate"]
     else:
         runout = float(np.quantile(x[:, 0], 0.995))
-    history = []
-    for path in frames:
-        f = read_vtu(path, "volume", "density")
-        history.append((f["volume"].sum() / (f["density"] * f["volume"]).sum() * rho0))
     return {
         "packing": float(np.median(packing) / rho0),
         "interior_nodes": int(packing.size),
@@ -128,7 +124,7 @@ def measure(scene, run_dir, plane_strain):
         "runout": float(runout),
         "budget_gap": float((energy["total"][-1] - energy["total"][0]) / released),
         "steps": int(energy["step"][-1]),
-    }, history
+    }
 
 
 def main():
@@ -149,7 +145,7 @@ def main():
     out = a.out or (os.path.join(ROOT, "docs", "flume") if whole else a.runs)
     os.makedirs(a.runs, exist_ok=True)
     os.makedirs(out, exist_ok=True)
-    rows, histories = [], {}
+    rows = []
     for name in a.scenes:
         path, plane_strain, frames = SCENES[name]
         for ratio in a.ratios:
@@ -161,10 +157,9 @@ def main():
                     json.dump(scene, f, indent=1)
                 print(f"separation_study: {name}, ratio {ratio:g} ...", flush=True)
                 run_talus(a.talus, "run", scene_path, "--out", run_dir, threads=a.threads)
-            row, history = measure(scene, run_dir, plane_strain)
+            row = measure(scene, run_dir, plane_strain)
             rows.append({"scene": name, "ratio": ratio, **{k: (f"{v:.4g}" if isinstance(v, float) else v)
                                                               for k, v in row.items()}})
-            histories[(name, ratio)] = (scene["time"]["end"], history)
             print(", ".join(f"{k} {v}" for k, v in rows[-1].items()), flush=True)
     write_csv_rows(os.path.join(out, "separation_study.csv"), rows)
 
