@@ -23,8 +23,8 @@ void GhostMap::list_active_tiles(const Walls& walls, const Grid& grid) {
     for (int s = 0; s < kTileNodes; ++s) {
       const std::array<int, 3> node = Grid::node_in_tile(first, s);
       const std::size_t n = base + static_cast<std::size_t>(s);
-      std::array<std::array<int, 3>, 7> ghosts;
-      std::array<std::array<double, 3>, 7> signs;
+      Walls::GhostNodes ghosts;
+      Walls::GhostSigns signs;
       const int count = walls.ghosts_of(node, ghosts, signs);
       for (int g = 0; g < count; ++g) {
         // The ghost phase (grid_update.cpp) mirrors a ghost from its image's fold pair: the fold's

@@ -116,7 +116,8 @@ void add_node_phase(TileStages& stages, Grid& grid, const GhostMap& ghosts, Scat
   });
   if (!ghosts.mirrors_after_barrier()) return;
   // An unfolded ghost whose image is on another active tile: its node work ran on its own tile, the
-  // image's on the image's, so the mirror waits for both.
+  // image's on the image's, so the mirror waits for both. (Unfolded ghosts lie only in the tiles'
+  // slack beyond the padded grid, which no particle reaches: they hold no mass.)
   stages.add(TileReach::AnyTile, [&grid, &ghosts, copy](std::size_t t) {
     const std::uint32_t tile = grid.active_tiles()[t];
     for (const GhostMap::Pair& pair : ghosts.mirrors(tile)) {

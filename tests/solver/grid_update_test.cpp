@@ -131,8 +131,8 @@ void fold_separately(WalledGrid& w, ScatteredFields f, const Vec3& g) {
     for (int s = 0; s < kTileNodes; ++s) {
       const std::array<int, 3> node = Grid::node_in_tile(grid.node_of(tile), s);
       const std::size_t image = static_cast<std::size_t>(tile) * kTileNodes + s;
-      std::array<std::array<int, 3>, 7> ghosts;
-      std::array<std::array<double, 3>, 7> signs;
+      Walls::GhostNodes ghosts;
+      Walls::GhostSigns signs;
       for (int k = 0, count = w.walls.ghosts_of(node, ghosts, signs); k < count; ++k) {
         const std::size_t ghost = grid.node(ghosts[k][0], ghosts[k][1], ghosts[k][2]);
         if (!grid.tile_active(ghost / kTileNodes)) continue;  // no particle reached it: it holds no sums

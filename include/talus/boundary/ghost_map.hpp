@@ -30,8 +30,8 @@ class GhostMap {
     std::size_t node;   // fold: the image (the tile's node); mirror: the ghost (the tile's node)
     std::size_t other;  // fold: the ghost whose fields move to the image; mirror: the image it copies
     std::array<double, 3> sign;
-    // mirror: whether the image folds this ghost (it lies inside the domain; an image in the padding
-    // beyond an open or frictional face, next to a corner, is mirrored but folds nothing); fold: true
+    // mirror: whether the image folds this ghost (every ghost a particle can reach; not those in the
+    // tiles' slack beyond the padded grid, Walls::ghosts_of); fold: true
     bool folded;
   };
 
@@ -43,7 +43,9 @@ class GhostMap {
   /// (serial; after each sort).
   void list_active_tiles(const Walls& walls, const Grid& grid);
   /// Whether an active tile holds a ghost that is not folded and whose image lies on another active
-  /// tile: the node phase mirrors those after a barrier (solver/grid_update.hpp).
+  /// tile: the node phase mirrors those after a barrier (solver/grid_update.hpp). Every ghost that
+  /// a particle's support reaches is folded (Walls::ghosts_of); the unfolded ones lie in the tiles'
+  /// slack beyond the padded grid, so this is true only where such a tile is active.
   bool mirrors_after_barrier() const { return mirrors_after_barrier_; }
 
   bool empty() const { return tiles_.empty(); }

@@ -75,17 +75,24 @@ class Walls {
     }
     return ghost;
   }
-  /// The inverse of mirror(): the ghost nodes whose image is `node` (up to 7: one per combination
-  /// of the axes along which a mirrored wall lies within reach), with their factors. Returns the
-  /// count written to `ghosts` / `signs`.
-  int ghosts_of(const std::array<int, 3>& node, std::array<std::array<int, 3>, 7>& ghosts,
-                std::array<std::array<double, 3>, 7>& signs) const {
+  /// Ghosts one image can have: a node within reach of both faces along each axis (a domain
+  /// narrower than 2 kPad cells) has up to 3 choices per axis, 3^3 - 1 combinations.
+  static constexpr int kMaxGhosts = 26;
+  using GhostNodes = std::array<std::array<int, 3>, kMaxGhosts>;
+  using GhostSigns = std::array<std::array<double, 3>, kMaxGhosts>;
+  /// The inverse of mirror(): the ghost nodes whose image is `node` (one per combination of the
+  /// mirrored faces within reach along the axes: 7 at a box's corner, more in a domain narrower
+  /// than 2 kPad cells), with their factors. Returns the count written to `ghosts` / `signs`.
+  int ghosts_of(const std::array<int, 3>& node, GhostNodes& ghosts, GhostSigns& signs) const {
     // per axis: the ghost coordinate across each mirrored face (or none) and its factors
     int options[3] = {0, 0, 0};
     int coordinate[3][2];
     std::array<double, 3> factor[3][2];
     for (int d = 0; d < 3; ++d) {
-      if (node[d] < lower_[d] || node[d] > upper_[d]) return 0;  // a ghost itself
+      // a ghost itself: beyond a mirrored face. A node beyond a face that is not mirrored (under a
+      // frictional floor, past an open face) is a node like any other, which the B-spline's support
+      // reaches: a mirrored wall's ghost of it is folded into it like any ghost (mirror() pairs them).
+      if ((node[d] < lower_[d] && mirrored_face(d, 0)) || (node[d] > upper_[d] && mirrored_face(d, 1))) return 0;
       for (int side = 0; side < 2; ++side) {
         if (!mirrored_face(d, side)) continue;
         const WallType type = specs_[d][side].type;
@@ -116,7 +123,7 @@ class Walls {
           }
           std::array<int, 3> image;
           std::array<double, 3> unused;
-          if (count < 7 && mirror(g, image, unused) && image == node) {
+          if (count < kMaxGhosts && mirror(g, image, unused) && image == node) {
             ghosts[count] = g;
             signs[count] = f;
             ++count;
