@@ -281,6 +281,18 @@ void add_run_command(CLI::App& app) {
                  end.ranks, end.max_imbalance, end.rebalances, end.migrated, end.exchange_bytes / 1e6,
                  taken > 0 ? end.exchange_bytes / 1e3 / taken : 0.0);
     fmt::print("talus: energy budget closes to {:.3e} of the initial energy\n", (summary.final.total() - e0) / scale);
+    if (solver.scene().output.energy_gap_terms) {
+      // the parts of that gap (docs/theory.md, "Where the budget's gap comes from"), on the same scale
+      const EnergyBudget& a = summary.initial;
+      const EnergyBudget& b = summary.final;
+      const EnergyGapTerms& g = summary.final_gap;
+      fmt::print("talus: made of: stress work booked beyond the grid's {:+.3e}, walls {:+.3e}, gravity {:+.3e}, "
+                 "carried out {:+.3e}, transfer loss {:+.3e} (docs/theory.md, \"Where the budget's gap comes from\")\n",
+                 (b.strain - a.strain + b.plastic_work - a.plastic_work - g.grid_stress_work) / scale,
+                 (b.friction_work - a.friction_work - g.grid_wall_work) / scale,
+                 (b.gravity - a.gravity + g.grid_gravity_work) / scale,
+                 (b.outflow - a.outflow - g.outflow_kinetic) / scale, -g.transfer_loss / scale);
+    }
     if (solver.smoother() && solver.smoothing_passes() > 0) {
       const double passes = static_cast<double>(solver.smoothing_passes());
       fmt::print("talus: MLS smoothing: {} passes; the guard left {} particle-passes unsmoothed ({:.3g}%); the fit "

@@ -214,7 +214,7 @@ class RunLoop {
   RunLoop(Solver& solver, const RunOptions& options)
       : solver_(solver), scene_(solver.scene()), comm_(solver.comm()), dir_(options.out_dir),
         resuming_(options.resume != nullptr), progress_(resuming_ ? *options.resume : RunProgress{}),
-        history_(dir_, resume_step(), comm_.root()), runout_(scene_, dir_, resume_step(), comm_, options.resume_dir),
+        history_(dir_, resume_step(), comm_.root(), scene_.output.energy_gap_terms), runout_(scene_, dir_, resume_step(), comm_, options.resume_dir),
         frames_(dir_, scene_.output.compress, progress_, comm_, options.frames_in_background), checkpoint_(dir_),
         history_schedule_{scene_.output.history_interval, progress_.next_history},
         frame_schedule_{scene_.output.frame_interval, progress_.next_frame},
@@ -451,6 +451,7 @@ void RunLoop::finish() {
   summary_.wall_seconds = progress_line_.elapsed();
   recording_.finish(summary_.wall_seconds, frames_.background_seconds());
   summary_.final = solver_.energies();
+  if (scene_.output.energy_gap_terms) summary_.final_gap = solver_.energy_gap_terms();
   summary_.frames_in_series = frames_.listed();
 }
 

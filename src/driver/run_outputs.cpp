@@ -92,12 +92,16 @@ std::string kept_frame_name(const fs::path& dir, std::size_t index, bool distrib
   return !fs::exists(dir / own, ec) && fs::exists(dir / other, ec) ? other : own;
 }
 
-/// The columns of energy.csv: time, step, dt, one per term of the energy ledger, then the total.
-std::string energy_header() {
+/// The columns of energy.csv: time, step, dt, one per term of the energy ledger, then the total, then
+/// (output.energy_gap_terms) what the budget's gap is made of.
+std::string energy_header(bool gap_terms) {
   std::string header = "time,step,dt";
   const EnergyBudget names;
   EnergyBudget::for_each_term(names, [&](const char* name, double, bool) { header += std::string(",") + name; });
-  return header + ",total";
+  header += ",total";
+  const EnergyGapTerms gap_names;
+  if (gap_terms) EnergyGapTerms::for_each_term(gap_names, [&](const char* name, double) { header += std::string(",") + name; });
+  return header;
 }
 
 /// Rewrite a CSV file (atomically) with its header and the rows `keep` accepts, up to the first it
@@ -150,11 +154,11 @@ void prepare_output_folder(const fs::path& dir, const RunProgress* resume, const
 
 // ---- energy.csv ---------------------------------------------------------------------------------
 
-EnergyHistory::EnergyHistory(const fs::path& dir, std::optional<std::int64_t> resume_step, bool writer)
-    : writer_(writer) {
+EnergyHistory::EnergyHistory(const fs::path& dir, std::optional<std::int64_t> resume_step, bool writer, bool gap_terms)
+    : writer_(writer), gap_terms_(gap_terms) {
   if (!writer_) return;
   const fs::path path = dir / "energy.csv";
-  const std::string header = energy_header();
+  const std::string header = energy_header(gap_terms);
   if (resume_step) {
     // Keep the complete rows (time,step,...) up to the checkpoint's step.
     const auto commas = std::count(header.begin(), header.end(), ',');
@@ -175,10 +179,13 @@ EnergyHistory::EnergyHistory(const fs::path& dir, std::optional<std::int64_t> re
 }
 
 void EnergyHistory::write(const Solver& solver, const EnergyBudget& e) {
+  const EnergyGapTerms gap = gap_terms_ ? solver.energy_gap_terms() : EnergyGapTerms{};  // collective
   if (!writer_) return;
   std::string row = fmt::format("{:.10e},{},{:.6e}", solver.time(), solver.step_count(), solver.last_dt());
   EnergyBudget::for_each_term(e, [&](const char*, double value, bool) { row += fmt::format(",{:.10e}", value); });
-  file_ << row << fmt::format(",{:.10e}\n", e.total());
+  row += fmt::format(",{:.10e}", e.total());
+  if (gap_terms_) EnergyGapTerms::for_each_term(gap, [&](const char*, double value) { row += fmt::format(",{:.10e}", value); });
+  file_ << row << "\n";
   file_.flush();
 }
 

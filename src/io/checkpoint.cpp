@@ -107,6 +107,7 @@ void for_each_rank_scalar(State& s, F&& f) {
   });
   f("outflow_mass", s.outflow_mass);
   f("periodic_gravity_shift", s.periodic_gravity_shift);
+  EnergyGapTerms::for_each_term(s.gap, f);
 }
 template <class State, class F>
 void for_each_rank_integer(State& s, F&& f) {
@@ -171,6 +172,7 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
       write_attribute(s, "sorts", state.sorts);
       write_attribute(s, "needs_sort", static_cast<std::int32_t>(state.needs_sort));
       write_attribute(s, "periodic_gravity_shift", state.periodic_gravity_shift);
+      EnergyGapTerms::for_each_term(state.gap, [&](const char* name, double value) { write_attribute(s, name, value); });
       write_attribute(s, "sort_drift", state.sort_drift);
       for (int d = 0; d < 3; ++d) write_array(s, fmt::format("sort_cell{}", d), state.sort_cell[d]);
       if (comm.distributed()) {
@@ -245,6 +247,10 @@ Checkpoint read_checkpoint(const std::string& path) {
     // absent in checkpoints of runs before periodic faces existed: no wraps
     if (s.attrExists("periodic_gravity_shift"))
       c.solver.periodic_gravity_shift = read_attribute<double>(s, "periodic_gravity_shift");
+    // absent in checkpoints written before output.energy_gap_terms existed: counted from the restart
+    EnergyGapTerms::for_each_term(c.solver.gap, [&](const char* name, double& value) {
+      if (s.attrExists(name)) value = read_attribute<double>(s, name);
+    });
     // absent in checkpoints of runs that sorted every step with MLS: the next step sorts
     c.solver.sort_drift = s.attrExists("sort_drift") ? read_attribute<double>(s, "sort_drift")
                                                      : std::numeric_limits<double>::infinity();
@@ -257,7 +263,7 @@ Checkpoint read_checkpoint(const std::string& path) {
       c.rank_states.assign(c.rank_particles.size(), c.solver);
       for (std::size_t r = 0; r < c.rank_states.size(); ++r) {
         for_each_rank_scalar(c.rank_states[r], [&](const char* name, double& value) {
-          value = read_array<double>(ranks, name).at(r);
+          if (ranks.nameExists(name)) value = read_array<double>(ranks, name).at(r);  // see the gap terms above
         });
         for_each_rank_integer(c.rank_states[r], [&](const char* name, auto& value) {
           value = static_cast<std::remove_reference_t<decltype(value)>>(read_array<std::int64_t>(ranks, name).at(r));
@@ -355,6 +361,7 @@ void restore_checkpoint(Solver& solver, const Checkpoint& c, const std::string& 
       if (accumulated) value = 0.0;
     });
     state.outflow_mass = state.periodic_gravity_shift = 0.0;
+    state.gap = EnergyGapTerms{};
     state.outflow_particles = 0;
   }
   for (auto& cells : state.sort_cell) cells.clear();

@@ -713,6 +713,10 @@ Table<SceneDraft> make_output_table() {
       number<SceneDraft>("checkpoint_interval", TALUS_AT(scene.output.checkpoint_interval), {0.0, kHuge},
                          "seconds between checkpoints (`checkpoint.h5`, 0: none; SIGINT/SIGTERM and instabilities still "
                          "write one); resume with `talus run SCENE --restart FILE` (docs/reliability.md)"),
+      boolean<SceneDraft>("energy_gap_terms", TALUS_AT(scene.output.energy_gap_terms),
+                          "also write, in energy.csv, the work done on the grid's motion by its stresses, walls and "
+                          "gravity and the kinetic energy lost between grid and particles: what the budget's gap is "
+                          "made of (docs/theory.md, \"Where the budget's gap comes from\")"),
   }};
 }
 constexpr auto output_table = &table_of<SceneDraft, make_output_table>;

@@ -131,11 +131,14 @@ void add_node_phase(TileStages& stages, Grid& grid, const GhostMap& ghosts, Scat
 
 void add_grid_update(TileStages& stages, Grid& grid, const Walls& walls, const GhostMap& ghosts, ScatteredFields fold,
                      const Vec3& gravity, double dt, double mass_floor, bool zero_momentum,
-                     std::vector<double>& tile_work) {
+                     std::vector<double>& tile_work, std::vector<TileGapTerms>* tile_gap) {
   tile_work.assign(grid.active_tiles().size(), 0.0);
+  if (tile_gap) tile_gap->assign(grid.active_tiles().size(), TileGapTerms{});
   const GhostFields mirror = zero_momentum ? GhostFields::AfterGridUpdateForRemap : GhostFields::AfterGridUpdate;
   add_node_phase(stages, grid, ghosts, fold, gravity, mirror,
-                 [&grid, &walls, &tile_work, gravity, dt, mass_floor, zero_momentum](std::size_t t, std::uint64_t skip) {
+                 [&grid, &walls, &tile_work, tile_gap, gravity, dt, mass_floor, zero_momentum](std::size_t t,
+                                                                                               std::uint64_t skip) {
+    TileGapTerms gap;
     tile_work[t] = for_tile_nodes(grid, t, skip, [&](std::size_t n, const std::array<int, 3>& node) {
       // the node's record and its v^L record, read and written in place (NodeField's run-time
       // stride made this loop 1.8x slower)
@@ -153,6 +156,19 @@ void add_grid_update(TileStages& stages, Grid& grid, const Walls& walls, const G
       }
       double removed = 0.0;
       if (walls.touches(node)) removed = walls.apply(node, vl, Walls::Stage::GridUpdate, m, v);
+      if (tile_gap) [[unlikely]] {
+        // The grid's kinetic energy change 1/2 m (|v^L|^2 - |v|^2) = m (v^L - v) . v_mean, split
+        // into the forces' work at v_mean and the walls' share (the rest); read before the force
+        // slot is overwritten below.
+        for (int d = 0; d < 3; ++d) {
+          const double mean = 0.5 * (v[d] + vl[d]), dv = vl[d] - v[d];
+          const double force_work = dt * record[kForceSlot + d] * mean, gravity_work = dt * m * gravity[d] * mean;
+          gap.stress_work -= force_work;
+          gap.gravity_work += gravity_work;
+          gap.wall_work -= m * dv * mean - force_work - gravity_work;
+          gap.increment_kinetic += 0.5 * m * dv * dv;
+        }
+      }
       for (int d = 0; d < 3; ++d) {
         record[kMomentumSlot + d] = zero_momentum ? 0.0 : v[d];
         record[kForceSlot + d] = vl[d] - v[d];
@@ -160,6 +176,7 @@ void add_grid_update(TileStages& stages, Grid& grid, const Walls& walls, const G
       }
       return removed;
     });
+    if (tile_gap) (*tile_gap)[t] = gap;
   });
 }
 

@@ -188,6 +188,7 @@ void Solver::remove_outflow(std::size_t leaving) {
     }
     const ParticleEnergy e = particle_energy(p);
     work_.outflow += e.kinetic + e.strain + e.gravity;
+    if (scene_.output.energy_gap_terms) gap_.outflow_kinetic += e.kinetic;
     outflow_mass_ += P.mass[p];
     ++outflow_particles_;
   }
@@ -537,9 +538,12 @@ void Solver::step_with(double dt) {
   const bool remap = scheme.remap;
   {
     ScopedPhase timer(times_, Phase::Grid);
-    add_grid_update(grid_stages, grid_, walls_, ghosts_, folded, gravity, dt, mass_floor_, remap, tile_work_);
+    const bool gap_terms = scene_.output.energy_gap_terms;
+    add_grid_update(grid_stages, grid_, walls_, ghosts_, folded, gravity, dt, mass_floor_, remap, tile_work_,
+                    gap_terms ? &tile_gap_ : nullptr);
     run_stages(rec, "grid update", tiles, grid_stages);
     work_.friction_work += counted_work(tile_work_, exchange_.counted());
+    if (gap_terms) add_tile_gap_terms();
   }
   // 4. G2P: particle velocities and this step's displacement. MUSL and USAVG scatter the new
   //    momentum for the remap in the same pass (the weights are those of x_p^k in both).
@@ -551,6 +555,10 @@ void Solver::step_with(double dt) {
     options.pic_fraction = scene_.pic_fraction;
     options.remap = remap;
     if (options.pic_fraction > 0.0) block_damping_.assign(sort_.block_count(), 0.0);
+    if (scene_.output.energy_gap_terms) {
+      block_increment_kinetic_.assign(sort_.block_count(), 0.0);
+      options.block_increment_kinetic = &block_increment_kinetic_;
+    }
     const GatherResult r =
         gather_from_grid<Shape, Terrain>(particles_, sort_, grid_, displacement(), block_damping_, options, timing,
                                          remap ? buffers : nullptr);
@@ -560,6 +568,8 @@ void Solver::step_with(double dt) {
       rec->add_colour_passes("g2p", pass_timing_, sort_, true);
     if (options.pic_fraction > 0.0)
       for (double d : block_damping_) work_.damping += d;  // in block order: thread-independent
+    if (options.block_increment_kinetic)
+      for (double k : block_increment_kinetic_) gap_.transfer_loss -= k;  // in block order
     if (r.nonfinite >= 0) report_bad_particle(r.nonfinite, "velocity is not finite");
     if (r.outside >= 0) report_bad_particle(r.outside, "left the grid");
     needs_sort_ = r.needs_sort;
@@ -783,6 +793,31 @@ EnergyBudget Solver::energies() const {
   return e;
 }
 
+// The grid update's per-tile energy gap terms, added in tile order (thread-independent); in a
+// distributed run only the tiles this rank counts (a shared tile once, as the wall work).
+void Solver::add_tile_gap_terms() {
+  const std::vector<std::uint8_t>& counted = exchange_.counted();
+  for (std::size_t t = 0; t < tile_gap_.size(); ++t) {
+    if (!counted.empty() && !counted[t]) continue;
+    const TileGapTerms& g = tile_gap_[t];
+    gap_.grid_stress_work += g.stress_work;
+    gap_.grid_wall_work += g.wall_work;
+    gap_.grid_gravity_work += g.gravity_work;
+    gap_.transfer_loss += g.increment_kinetic;
+  }
+}
+
+EnergyGapTerms Solver::energy_gap_terms() const {
+  if (!comm_.distributed()) return gap_;
+  std::vector<double> terms;
+  EnergyGapTerms::for_each_term(gap_, [&](const char*, double value) { terms.push_back(value); });
+  const std::vector<double> total = comm_.sum_in_rank_order(terms);
+  EnergyGapTerms sum;
+  std::size_t i = 0;
+  EnergyGapTerms::for_each_term(sum, [&](const char*, double& value) { value = total[i++]; });
+  return sum;
+}
+
 void Solver::report_bad_particle(long long index, const char* what) const {
   const auto p = static_cast<std::size_t>(index);
   const ParticleStore& P = particles_;
@@ -801,6 +836,7 @@ SolverState Solver::state() const {
   s.step = step_;
   s.last_dt = last_dt_;
   s.work = work_;
+  s.gap = gap_;
   s.outflow_mass = outflow_mass_;
   s.outflow_particles = outflow_particles_;
   s.steps_since_sort = steps_since_sort_;
@@ -897,6 +933,7 @@ void Solver::restore_counters(const SolverState& s) {
   step_ = s.step;
   last_dt_ = s.last_dt;
   work_ = s.work;
+  gap_ = s.gap;
   outflow_mass_ = s.outflow_mass;
   outflow_particles_ = s.outflow_particles;
   steps_since_sort_ = s.steps_since_sort;

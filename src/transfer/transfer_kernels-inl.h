@@ -400,6 +400,7 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std
                    const std::vector<std::uint32_t>& blocks, GatherResult& flags, std::vector<double>* block_seconds,
                    BlockBuffers* buffers) {
   const double dt = options.dt, pic_fraction = options.pic_fraction;
+  std::vector<double>* const increment_kinetic = options.block_increment_kinetic;
   const double max_d2 = options.max_displacement * options.max_displacement;
   const Terrain& terrain = grid.template terrain<Terrain>();
   const GridGeometry& g = grid.geometry();
@@ -428,7 +429,8 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std
       remap_records = buffers->open_box(b);
       box = {buffers->first_node(b), buffers->edge()};
     }
-    double damped = 0.0;  // kinetic energy the PIC share removed in this block
+    double damped = 0.0;       // kinetic energy the PIC share removed in this block
+    double incremented = 0.0;  // the block's kinetic energy of the FLIP increments (increment_kinetic)
     for (std::size_t p = sort.block_begin(b); p < sort.block_end(b); ++p) {
       double hw[3];
       half_widths(P, p, hw);
@@ -455,6 +457,8 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std
           }
         dv_gather.value(dvp);
         vl_gather.value(vlp);
+        if (increment_kinetic) [[unlikely]]
+          incremented += 0.5 * P.mass[p] * (dvp[0] * dvp[0] + dvp[1] * dvp[1] + dvp[2] * dvp[2]);
         if (pic_fraction > 0.0) {
           // v_p = (1 - beta) (v_p + sum N dv) + beta sum N v^L: the PIC share beta damps the particle
           // velocity's part that the grid cannot represent; the kinetic energy it removes is counted
@@ -517,6 +521,7 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std
     }
     if constexpr (into_boxes) buffers->close_box(b, box.lo, box.hi);
     if (pic_fraction > 0.0) block_damping[b] = damped;
+    if (increment_kinetic) (*increment_kinetic)[b] = incremented;
     if (block_seconds) (*block_seconds)[bi] = omp_get_wtime() - block_start;
   }
   flags = {needs_sort, nonfinite, outside, large, crossing, largest_d2};

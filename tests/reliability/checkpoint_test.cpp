@@ -41,6 +41,8 @@ void expect_identical(const Solver& a, const Solver& b) {
   EXPECT_GE(compared, 20u);
   const EnergyBudget ea = a.energies(), eb = b.energies();
   EXPECT_EQ(std::memcmp(&ea, &eb, sizeof(EnergyBudget)), 0);
+  const EnergyGapTerms ga = a.energy_gap_terms(), gb = b.energy_gap_terms();
+  EXPECT_EQ(std::memcmp(&ga, &gb, sizeof(EnergyGapTerms)), 0) << "energy gap terms";
 }
 
 Scene drucker_prager_scene() {
@@ -53,7 +55,8 @@ Scene drucker_prager_scene() {
                              "kinematic_fraction": 0.2 } },
     "bodies": [ { "name": "heap", "material": "sand", "box": { "min": [0.1, 0.05, 0.0], "max": [0.3, 0.25, 0.25] },
                   "particles_per_cell": 2, "velocity": [1.5, 0.0, 0.0] } ],
-    "boundaries": { "z-": { "type": "friction", "friction_coefficient": 0.5 }, "z+": "open" }
+    "boundaries": { "z-": { "type": "friction", "friction_coefficient": 0.5 }, "z+": "open" },
+    "output": { "energy_gap_terms": true }
   })", "dp_drop");
 }
 

@@ -60,6 +60,10 @@ inline void expect_same_particles_and_energies(const Solver& one, const Solver& 
   for (int c = 0; c < 6; ++c) EXPECT_TRUE(same_bits(a.stress[c], b.stress[c])) << label << " stress " << c;
   const EnergyBudget ea = one.energies(), eb = two.energies();
   EXPECT_EQ(std::memcmp(&ea, &eb, sizeof(EnergyBudget)), 0) << label;
+  const EnergyGapTerms ga = one.energy_gap_terms(), gb = two.energy_gap_terms();
+  if (one.scene().output.energy_gap_terms == two.scene().output.energy_gap_terms) {
+    EXPECT_EQ(std::memcmp(&ga, &gb, sizeof(EnergyGapTerms)), 0) << label << " gap terms";
+  }
 }
 
 }  // namespace talus::test

@@ -56,6 +56,7 @@ struct RunSummary {
   std::size_t frames = 0;            // frames written by this call
   std::size_t frames_in_series = 0;  // frames the .pvd lists (a run resumed in its folder: the earlier ones too)
   EnergyBudget initial, final;
+  EnergyGapTerms final_gap;  // output.energy_gap_terms: at the end (zero when off)
   std::string pvd_path;
   std::string checkpoint_path;  // <out_dir>/checkpoint.h5
   std::size_t checkpoints = 0;  // checkpoints written by this call

@@ -62,14 +62,17 @@ std::vector<std::filesystem::path> run_output_files(const std::filesystem::path&
 /// absolute path (a file the run is yet to create).
 bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
 
-/// energy.csv: time, step, dt, every term of the energy ledger, total.
+/// energy.csv: time, step, dt, every term of the energy ledger, total; with `gap_terms`
+/// (output.energy_gap_terms) then the EnergyGapTerms.
 class EnergyHistory {
  public:
   /// A fresh run (no resume_step) starts the file with its header; a resumed one keeps the rows up
   /// to resume_step (the file rewritten atomically) and appends.
   /// In a distributed run only rank 0 writes (`writer`); the others keep no file.
-  EnergyHistory(const std::filesystem::path& dir, std::optional<std::int64_t> resume_step, bool writer = true);
-  /// One row, flushed: a killed run leaves only whole rows behind.
+  EnergyHistory(const std::filesystem::path& dir, std::optional<std::int64_t> resume_step, bool writer = true,
+                bool gap_terms = false);
+  /// One row, flushed: a killed run leaves only whole rows behind. Collective with gap terms (every
+  /// rank calls it).
   void write(const Solver& solver, const EnergyBudget& energies);
   void flush() {
     if (writer_) file_.flush();
@@ -80,6 +83,7 @@ class EnergyHistory {
 
  private:
   bool writer_;
+  bool gap_terms_;
   std::size_t kept_rows_ = 0;
   std::ofstream file_;
 };

@@ -69,6 +69,7 @@ struct OutputSpec {
   double history_interval = 0.0;       // [s] between energy-history rows; 0 = every step
   bool compress = true;                // LZ4 inside the .vtu files
   double checkpoint_interval = 0.0;    // [s] between checkpoints (checkpoint.h5); 0 = none (still on signals)
+  bool energy_gap_terms = false;       // energy.csv also gets the EnergyGapTerms columns (energy_budget.hpp)
 };
 
 /// Instability guards (docs/reliability.md): a run that trips one stops with a one-line diagnosis,

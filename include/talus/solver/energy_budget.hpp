@@ -43,4 +43,39 @@ struct EnergyBudget {
   }
 };
 
+/// What the budget's gap is made of (`output.energy_gap_terms`; docs/theory.md "Where the budget's
+/// gap comes from"). Not terms of the ledger: each is a work done on the grid's motion, to be
+/// compared with the ledger's own count of it, plus the kinetic energy lost between grid and
+/// particles. Per step and node, with v the node's velocity at the start and v^L at the end (walls
+/// applied) and v_mean = (v + v^L) / 2, the grid's kinetic energy changes by
+/// 1/2 m (|v^L|^2 - |v|^2) = dt f . v_mean + dt m g . v_mean + (the walls' share, the rest).
+/// The particles' kinetic energy changes by the same minus `transfer_loss` (and the PIC damping, and
+/// what the particles removed at open faces carry out), so
+///   total - initial total = (strain change + plastic_work - grid_stress_work)
+///                         + (friction_work - grid_wall_work)
+///                         + (gravity change + grid_gravity_work)
+///                         + (outflow - outflow_kinetic) - transfer_loss
+/// to round-off (outflow - outflow_kinetic: the stored and potential energy the removed particles
+/// took with them, which the strain and gravity changes miss).
+struct EnergyGapTerms {
+  double grid_stress_work = 0.0;   // -sum dt f_int . v_mean: the internal forces' work against the grid's motion
+  double grid_wall_work = 0.0;     // kinetic energy the walls' impulses take from the grid's motion
+  double grid_gravity_work = 0.0;  // sum dt m g . v_mean: gravity's work on the grid's motion
+  /// sum_I 1/2 m_I |dv_I|^2 - sum_p 1/2 m_p |sum_I N_Ip dv_I|^2 >= 0 (Jensen's inequality), dv_I =
+  /// v^L - v: the kinetic energy of the nodes' velocity increments that the particles' FLIP update
+  /// does not take up (Edo & Matsubara 2015, eq. 50).
+  double transfer_loss = 0.0;
+  double outflow_kinetic = 0.0;  // the kinetic part of the ledger's `outflow`
+
+  /// Visit every term (const or not) in column order: f(const char* name, double& value).
+  template <class Terms, class F>
+  static void for_each_term(Terms& t, F&& f) {
+    f("grid_stress_work", t.grid_stress_work);
+    f("grid_wall_work", t.grid_wall_work);
+    f("grid_gravity_work", t.grid_gravity_work);
+    f("transfer_loss", t.transfer_loss);
+    f("outflow_kinetic", t.outflow_kinetic);
+  }
+};
+
 }  // namespace talus

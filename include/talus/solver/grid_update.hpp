@@ -38,6 +38,15 @@ enum class GhostFields { AfterGridUpdate, AfterGridUpdateForRemap, Remapped, Sta
 // `ghosts`: the walls' ghost nodes, listed per tile (boundary/ghost_map.hpp); without mirrored
 // walls the phase is the node work alone, an OwnTile stage.
 
+/// A tile's share of the energy gap's grid terms (EnergyGapTerms, output.energy_gap_terms), per step:
+/// with v_mean = (v + v^L) / 2 at each node heavier than the mass floor,
+struct TileGapTerms {
+  double stress_work = 0.0;         // -dt f . v_mean (f: the scattered force, internal and tractions)
+  double wall_work = 0.0;           // -(1/2 m (|v^L|^2 - |v|^2) - dt (f + m g) . v_mean): the walls' share
+  double gravity_work = 0.0;        // dt m g . v_mean
+  double increment_kinetic = 0.0;   // 1/2 m |v^L - v|^2
+};
+
 /// v_i = p_i / m_i, a_i = f_i / m_i + g, v_i^L = v_i + a_i dt (Edo & Matsubara 2015, eq. 48-49), then the walls.
 /// Leaves momentum = v_i, force = v_i^L - v_i (the particle velocity increment), velocity_l = v_i^L.
 /// Nodes lighter than `mass_floor` are treated as empty (the small-nodal-mass problem, Abe, Johansson & Konagai 2005, §3).
@@ -46,9 +55,10 @@ enum class GhostFields { AfterGridUpdate, AfterGridUpdateForRemap, Remapped, Sta
 /// `zero_momentum`: leave momentum = 0 instead of v_i, ready for the remap's scatter (MUSL, USAVG),
 /// in the same pass instead of a second one over the active tiles.
 /// The ghosts' fold moves `fold`, the mirror reflects v, v^L - v and v^L (not v with zero_momentum).
+/// `tile_gap` (null: not counted): per active tile, its TileGapTerms (sized here).
 void add_grid_update(TileStages& stages, Grid& grid, const Walls& walls, const GhostMap& ghosts, ScatteredFields fold,
                      const Vec3& gravity, double dt, double mass_floor, bool zero_momentum,
-                     std::vector<double>& tile_work);
+                     std::vector<double>& tile_work, std::vector<TileGapTerms>* tile_gap = nullptr);
 
 /// The wall work of add_grid_update's tiles, added in tile order (the same for any thread count).
 /// `counted` (per active tile, TileExchange::counted; empty: all): the tiles whose wall work this

@@ -8,6 +8,7 @@
 #include "talus/grid/tile_exchange.hpp"
 #include "talus/solver/body_materials.hpp"
 #include "talus/solver/energy_budget.hpp"
+#include "talus/solver/grid_update.hpp"
 #include "talus/transfer/transfers.hpp"
 #include "talus/particles/cell_sort.hpp"
 #include "talus/particles/particle_scratch.hpp"
@@ -33,6 +34,7 @@ struct SolverState {
   std::int64_t step = 0;
   double last_dt = 0.0;
   EnergyBudget work;                    // the accumulated terms (kinetic, strain, gravity stay 0)
+  EnergyGapTerms gap;                   // output.energy_gap_terms: accumulated (zero when off)
   double outflow_mass = 0.0;            // [kg] of the particles removed at open faces
   std::int64_t outflow_particles = 0;
   int steps_since_sort = 0;
@@ -90,6 +92,9 @@ class Solver {
   std::int64_t step_count() const { return step_; }
   double last_dt() const { return last_dt_; }
   EnergyBudget energies() const;
+  /// What the budget's gap is made of (output.energy_gap_terms; zero when off). Collective in a
+  /// distributed run: each rank's terms added in rank order.
+  EnergyGapTerms energy_gap_terms() const;
 
   const Scene& scene() const { return scene_; }
   const Comm& comm() const { return comm_; }
@@ -251,6 +256,11 @@ class Solver {
   EnergyBudget work_;                  // the accumulated terms of the ledger (energy_budget.hpp)
   std::vector<double> block_damping_;  // per sort block, this step's PIC damping
   std::vector<double> tile_work_;      // per active tile, this step's wall friction work (add_grid_update)
+  // output.energy_gap_terms: the accumulated terms, and this step's per tile and per block parts
+  EnergyGapTerms gap_;
+  std::vector<TileGapTerms> tile_gap_;
+  std::vector<double> block_increment_kinetic_;
+  void add_tile_gap_terms();
   double outflow_mass_ = 0.0;
   double periodic_gravity_shift_ = 0.0;  // SolverState::periodic_gravity_shift
   std::int64_t outflow_particles_ = 0;

@@ -60,6 +60,10 @@ struct GatherOptions {
   /// caller), the remap of Edo & Matsubara 2015, eq. 52, in the same pass with the same weights; the nodal sums
   /// are those of scatter_to_grid(..., ScatterFields::Momentum), in the same order.
   bool remap = false;
+  /// Non-null (output.energy_gap_terms): per sort block (sized to the block count), this step's
+  /// sum_p 1/2 m_p |sum_I N_Ip (v^L - v)_I|^2, the kinetic energy of the FLIP increments (before any
+  /// PIC share), for EnergyGapTerms::transfer_loss.
+  std::vector<double>* block_increment_kinetic = nullptr;
   double max_displacement = std::numeric_limits<double>::infinity();  // [m], flags |dx_p| above it
   /// Faces where particles leave (open walls): lo/hi bounds per axis, in (x, y, w).
   std::array<std::array<bool, 2>, 3> open{};
