@@ -11,8 +11,8 @@ and USL. Each run's gap (total - initial total) splits, to round-off, into
   gravity   gravity change + grid_gravity_work
   transfer  -transfer_loss: the kinetic energy of the nodes' velocity increments that the FLIP
             update does not give the particles
-(the column loses no particle, so the outflow bracket is 0), each over the potential energy
-released. A run is skipped when RUNS/<name>/energy.csv exists, unless --rerun.
+(with the stored and potential energy of any particle removed at an open face counted in the
+stress and gravity parts), each over the potential energy released. A run is skipped when RUNS/<name>/energy.csv exists, unless --rerun.
 Writes OUT/energy_gap.csv and OUT/energy_gap.png (OUT: docs/verification by default).
 
 Usage: /usr/bin/python3 tools/energy_gap_study.py [--talus build/talus] [--threads 2]
@@ -65,15 +65,16 @@ def parts(run_dir):
     last = {k: float(v[-1]) for k, v in e.items()}
     released = first["gravity"] - last["gravity"]
     p = {
-        "stress": last["strain"] - first["strain"] + last["plastic_work"] - last["grid_stress_work"],
+        "stress": (last["strain"] - first["strain"] + last["outflow_strain"] + last["plastic_work"]
+                   - last["grid_stress_work"]),
         "walls": last["friction_work"] - last["grid_wall_work"],
-        "gravity": last["gravity"] - first["gravity"] + last["grid_gravity_work"],
+        "gravity": last["gravity"] - first["gravity"] + last["outflow_gravity"] + last["grid_gravity_work"],
         "transfer": -last["transfer_loss"],
     }
     gap = last["total"] - first["total"]
     out = {"released_J": released, "gap": gap / released}
     out.update({k: v / released for k, v in p.items()})
-    out["residual"] = (gap - sum(p.values()) - (last["outflow"] - last["outflow_kinetic"])) / released
+    out["residual"] = (gap - sum(p.values())) / released
     out["steps"] = int(last["step"])
     return out
 

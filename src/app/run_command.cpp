@@ -287,11 +287,10 @@ void add_run_command(CLI::App& app) {
       const EnergyBudget& b = summary.final;
       const EnergyGapTerms& g = summary.final_gap;
       fmt::print("talus: made of: stress work booked beyond the grid's {:+.3e}, walls {:+.3e}, gravity {:+.3e}, "
-                 "carried out {:+.3e}, transfer loss {:+.3e} (docs/theory.md, \"Where the budget's gap comes from\")\n",
-                 (b.strain - a.strain + b.plastic_work - a.plastic_work - g.grid_stress_work) / scale,
+                 "transfer loss {:+.3e} (docs/theory.md, \"Where the budget's gap comes from\")\n",
+                 (b.strain - a.strain + g.outflow_strain + b.plastic_work - a.plastic_work - g.grid_stress_work) / scale,
                  (b.friction_work - a.friction_work - g.grid_wall_work) / scale,
-                 (b.gravity - a.gravity + g.grid_gravity_work) / scale,
-                 (b.outflow - a.outflow - g.outflow_kinetic) / scale, -g.transfer_loss / scale);
+                 (b.gravity - a.gravity + g.outflow_gravity + g.grid_gravity_work) / scale, -g.transfer_loss / scale);
     }
     if (solver.smoother() && solver.smoothing_passes() > 0) {
       const double passes = static_cast<double>(solver.smoothing_passes());

@@ -188,7 +188,10 @@ void Solver::remove_outflow(std::size_t leaving) {
     }
     const ParticleEnergy e = particle_energy(p);
     work_.outflow += e.kinetic + e.strain + e.gravity;
-    if (scene_.output.energy_gap_terms) gap_.outflow_kinetic += e.kinetic;
+    if (scene_.output.energy_gap_terms) {
+      gap_.outflow_strain += e.strain;
+      gap_.outflow_gravity += e.gravity;
+    }
     outflow_mass_ += P.mass[p];
     ++outflow_particles_;
   }

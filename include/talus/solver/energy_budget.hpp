@@ -50,13 +50,13 @@ struct EnergyBudget {
 /// applied) and v_mean = (v + v^L) / 2, the grid's kinetic energy changes by
 /// 1/2 m (|v^L|^2 - |v|^2) = dt f . v_mean + dt m g . v_mean + (the walls' share, the rest).
 /// The particles' kinetic energy changes by the same minus `transfer_loss` (and the PIC damping, and
-/// what the particles removed at open faces carry out), so
-///   total - initial total = (strain change + plastic_work - grid_stress_work)
+/// the kinetic energy of the particles removed at open faces), so
+///   total - initial total = (strain change + outflow_strain + plastic_work - grid_stress_work)
 ///                         + (friction_work - grid_wall_work)
-///                         + (gravity change + grid_gravity_work)
-///                         + (outflow - outflow_kinetic) - transfer_loss
-/// to round-off (outflow - outflow_kinetic: the stored and potential energy the removed particles
-/// took with them, which the strain and gravity changes miss).
+///                         + (gravity change + outflow_gravity + grid_gravity_work) - transfer_loss
+/// to round-off (outflow_strain, outflow_gravity: the stored and potential energy the removed
+/// particles took with them, parts of the ledger's `outflow`, which the strain and gravity changes
+/// miss).
 struct EnergyGapTerms {
   double grid_stress_work = 0.0;   // -sum dt f_int . v_mean: the internal forces' work against the grid's motion
   double grid_wall_work = 0.0;     // kinetic energy the walls' impulses take from the grid's motion
@@ -65,7 +65,8 @@ struct EnergyGapTerms {
   /// v^L - v: the kinetic energy of the nodes' velocity increments that the particles' FLIP update
   /// does not take up (Edo & Matsubara 2015, eq. 50).
   double transfer_loss = 0.0;
-  double outflow_kinetic = 0.0;  // the kinetic part of the ledger's `outflow`
+  double outflow_strain = 0.0;   // the stored (strain) part of the ledger's `outflow`
+  double outflow_gravity = 0.0;  // the potential part of the ledger's `outflow`
 
   /// Visit every term (const or not) in column order: f(const char* name, double& value).
   template <class Terms, class F>
@@ -74,7 +75,8 @@ struct EnergyGapTerms {
     f("grid_wall_work", t.grid_wall_work);
     f("grid_gravity_work", t.grid_gravity_work);
     f("transfer_loss", t.transfer_loss);
-    f("outflow_kinetic", t.outflow_kinetic);
+    f("outflow_strain", t.outflow_strain);
+    f("outflow_gravity", t.outflow_gravity);
   }
 };
 
