@@ -2,7 +2,8 @@
 """Plane-strain sand column collapse (issue 5): energy budget and deposit profile.
 
 Runs inputs/column_collapse_2d.json with talus (or reads an existing run folder) and writes
-  docs/verification/column_collapse_energy.png   energy terms / released potential energy vs time
+  docs/verification/column_collapse_energy.png   energy terms / released potential energy vs time, and
+                                                 the budget error's parts (output.energy_gap_terms)
   docs/verification/column_collapse_deposit.png  initial column and final deposit (x, z)
 Usage: /usr/bin/python3 tools/plot_column_collapse.py --talus build/talus [--run-dir DIR]
 """
@@ -37,17 +38,25 @@ def main():
     released = d["gravity"][0] - d["gravity"][-1]
     t = d["time"]
     e0 = d["total"][0]
-    fig, ax = plt.subplots(figsize=(7, 4.2))
+    fig, ax = plt.subplots(figsize=(10, 4.2))
     ax.plot(t, (d["gravity"][0] - d["gravity"]) / released, label="potential energy released")
     ax.plot(t, d["kinetic"] / released, label="kinetic")
     ax.plot(t, d["plastic_work"] / released, label="plastic dissipation")
     ax.plot(t, d["friction_work"] / released, label="floor friction work")
     ax.plot(t, d["strain"] / released, label="stored elastic")
     ax.plot(t, (d["total"] - e0) / released * 100, "k--", label="budget error x 100")
+    names = d.dtype.names
+    if "transfer_loss" in names:  # output.energy_gap_terms: what the error is made of (docs/theory.md)
+        removed = d["outflow_strain"] if "outflow_strain" in names else 0.0
+        stress = d["strain"] - d["strain"][0] + removed + d["plastic_work"] - d["grid_stress_work"]
+        ax.plot(t, stress / released * 100, ":", color="tab:olive", label="  of it: stress work booked beyond the grid's x 100")
+        ax.plot(t, -d["transfer_loss"] / released * 100, ":", color="tab:cyan", label="  of it: transfer loss x 100")
+        ax.plot(t, (d["friction_work"] - d["grid_wall_work"]) / released * 100, ":", color="tab:gray",
+                label="  of it: walls x 100")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("energy / released potential energy")
     ax.set_title("Column collapse, Drucker-Prager phi = 30 deg: energy budget")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.grid(alpha=0.3)
     os.makedirs(args.out, exist_ok=True)
     fig.tight_layout()
