@@ -283,14 +283,10 @@ void add_run_command(CLI::App& app) {
     fmt::print("talus: energy budget closes to {:.3e} of the initial energy\n", (summary.final.total() - e0) / scale);
     if (solver.scene().output.energy_gap_terms) {
       // the parts of that gap (docs/theory.md, "Where the budget's gap comes from"), on the same scale
-      const EnergyBudget& a = summary.initial;
-      const EnergyBudget& b = summary.final;
-      const EnergyGapTerms& g = summary.final_gap;
+      const EnergyGapParts p = energy_gap_parts(summary.initial, summary.final, summary.final_gap);
       fmt::print("talus: made of: stress work booked beyond the grid's {:+.3e}, walls {:+.3e}, gravity {:+.3e}, "
                  "transfer loss {:+.3e} (docs/theory.md, \"Where the budget's gap comes from\")\n",
-                 (b.strain - a.strain + g.outflow_strain + b.plastic_work - a.plastic_work - g.grid_stress_work) / scale,
-                 (b.friction_work - a.friction_work - g.grid_wall_work) / scale,
-                 (b.gravity - a.gravity + g.outflow_gravity + g.grid_gravity_work) / scale, -g.transfer_loss / scale);
+                 p.stress / scale, p.walls / scale, p.gravity / scale, p.transfer / scale);
     }
     if (solver.smoother() && solver.smoothing_passes() > 0) {
       const double passes = static_cast<double>(solver.smoothing_passes());

@@ -99,15 +99,16 @@ std::string scene_hash(const Scene& scene) {
 
 namespace {
 
-/// The scalars of a rank's SolverState kept per rank, by name, in one order.
+/// The scalars of a rank's SolverState kept per rank, by name, in one order: f(name, value,
+/// required). Not required: the energy gap terms, absent in checkpoints written before them.
 template <class State, class F>
 void for_each_rank_scalar(State& s, F&& f) {
   EnergyBudget::for_each_term(s.work, [&](const char* name, auto& value, bool accumulated) {
-    if (accumulated) f(name, value);
+    if (accumulated) f(name, value, true);
   });
-  f("outflow_mass", s.outflow_mass);
-  f("periodic_gravity_shift", s.periodic_gravity_shift);
-  EnergyGapTerms::for_each_term(s.gap, f);
+  f("outflow_mass", s.outflow_mass, true);
+  f("periodic_gravity_shift", s.periodic_gravity_shift, true);
+  EnergyGapTerms::for_each_term(s.gap, [&](const char* name, auto& value) { f(name, value, false); });
 }
 template <class State, class F>
 void for_each_rank_integer(State& s, F&& f) {
@@ -134,7 +135,7 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
   if (comm.distributed()) {
     for (auto& c : state.sort_cell) c = comm.gather(c);
     rank_particles = comm.gather(std::vector<std::int64_t>{static_cast<std::int64_t>(solver.particles().size())});
-    for_each_rank_scalar(state, [&](const char* name, double& value) {
+    for_each_rank_scalar(state, [&](const char* name, double& value, bool) {
       rank_scalars[name] = comm.gather(std::vector<double>{value});
       value = comm.sum_in_rank_order(value);
     });
@@ -262,8 +263,8 @@ Checkpoint read_checkpoint(const std::string& path) {
       c.slab_first_columns = read_array<std::int32_t>(ranks, "slab_first_columns");
       c.rank_states.assign(c.rank_particles.size(), c.solver);
       for (std::size_t r = 0; r < c.rank_states.size(); ++r) {
-        for_each_rank_scalar(c.rank_states[r], [&](const char* name, double& value) {
-          if (ranks.nameExists(name)) value = read_array<double>(ranks, name).at(r);  // see the gap terms above
+        for_each_rank_scalar(c.rank_states[r], [&](const char* name, double& value, bool required) {
+          if (required || ranks.nameExists(name)) value = read_array<double>(ranks, name).at(r);
         });
         for_each_rank_integer(c.rank_states[r], [&](const char* name, auto& value) {
           value = static_cast<std::remove_reference_t<decltype(value)>>(read_array<std::int64_t>(ranks, name).at(r));

@@ -78,17 +78,14 @@ double particle_count_bound(const Scene& s) {
   // Only the part of a body inside the grid can seed particles (the seeding refuses the rest, naming
   // the body): clip its box to the grid's extent first, so that a prism far above a terrain grid is
   // reported as outside it, not as too many particles. With a terrain, z spans the grid's w range
-  // over the bed's lowest and highest points (the ends and the vertices within the grid: a fillet
-  // only cuts a corner); a box given in the terrain's frame is in w already.
+  // over the bed's lowest and highest points within the grid; a box given in the terrain's frame is
+  // in w already.
   const GridGeometry& g = s.grid;
   Vec3 lower = g.origin, upper;
   for (int d = 0; d < 3; ++d) upper[d] = g.origin[d] + g.cells[d] * g.h;
   const double w_lower = lower[2], w_upper = upper[2];
   if (g.has_terrain()) {
-    const TerrainProfile bed(g.terrain);
-    double low = std::min(bed.height(lower[0]), bed.height(upper[0])), high = std::max(bed.height(lower[0]), bed.height(upper[0]));
-    for (const auto& [x, z] : g.terrain.points)
-      if (x > lower[0] && x < upper[0]) low = std::min(low, z), high = std::max(high, z);
+    const auto [low, high] = TerrainProfile(g.terrain).height_range(lower[0], upper[0]);
     lower[2] += low;
     upper[2] += high;
   }

@@ -80,4 +80,22 @@ struct EnergyGapTerms {
   }
 };
 
+/// The gap's parts by the identity above, whose sum is total - initial total to round-off:
+/// `initial` the ledger at the start, `now` and `terms` at the same later time.
+struct EnergyGapParts {
+  double stress = 0.0;    // strain change + outflow_strain + plastic_work - grid_stress_work
+  double walls = 0.0;     // friction_work - grid_wall_work
+  double gravity = 0.0;   // gravity change + outflow_gravity + grid_gravity_work
+  double transfer = 0.0;  // -transfer_loss
+  double sum() const { return stress + walls + gravity + transfer; }
+};
+
+inline EnergyGapParts energy_gap_parts(const EnergyBudget& initial, const EnergyBudget& now, const EnergyGapTerms& t) {
+  return {.stress = now.strain - initial.strain + t.outflow_strain + now.plastic_work - initial.plastic_work -
+                    t.grid_stress_work,
+          .walls = now.friction_work - initial.friction_work - t.grid_wall_work,
+          .gravity = now.gravity - initial.gravity + t.outflow_gravity + t.grid_gravity_work,
+          .transfer = -t.transfer_loss};
+}
+
 }  // namespace talus
