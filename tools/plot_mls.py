@@ -30,8 +30,9 @@ from talus_plot import finish_axes, save_figure, write_csv_rows  # noqa: E402
 SHAPES = ["linear", "ugimp", "cpgimp"]
 
 
-def with_mls(scene, mode, radius, axes):
-    """mode: "off", a basis (the per-particle fit) or "<basis>-cell" (one fit per cell)."""
+def with_mls(scene, mode, radius, axes, reuse_strain=None):
+    """mode: "off", a basis (the per-particle fit), "<basis>-cell" (one fit per cell) or "<basis>-reused"
+    (the particle fit's weights reused until the strain since the fit passes reuse_strain)."""
     s = json.loads(json.dumps(scene))
     # The wall-contact energy gain (docs/verification.md) would trip the run's energy guard; these
     # runs are here to show it, so the guard is opened wide.
@@ -40,11 +41,13 @@ def with_mls(scene, mode, radius, axes):
         basis, _, fit = mode.partition("-")
         s["solver"]["smoothing"] = {"basis": basis, "radius_factor": radius, "axes": axes,
                                     "variant": fit or "particle"}
+        if fit == "reused" and reuse_strain is not None:
+            s["solver"]["smoothing"]["reuse_strain"] = reuse_strain
     return s
 
 
 def marker(mode):
-    return "o-" if mode == "off" else "^-" if mode.endswith("-cell") else "s-"
+    return "o-" if mode == "off" else "^-" if mode.endswith("-cell") else "x-" if mode.endswith("-reused") else "s-"
 
 
 def shape_runs(talus, base, axes, modes, a, what):
@@ -53,7 +56,7 @@ def shape_runs(talus, base, axes, modes, a, what):
     for ax, shape in zip(axes, SHAPES):
         results = []
         for mode in modes:
-            res = run(talus, with_mls(variant(base, shape, "musl"), mode, a.radius, a.axes), a.threads)
+            res = run(talus, with_mls(variant(base, shape, "musl"), mode, a.radius, a.axes, a.reuse_strain), a.threads)
             if res is None:
                 print(f"{what} {shape} {mode}: run failed", flush=True)
                 continue
@@ -68,7 +71,10 @@ def main():
     ap.add_argument("--radius", type=float, default=2.0, help="radius factor (h / cell size)")
     ap.add_argument("--axes", default="x", help="basis axes; the bars are 2 particles across, so 1D: x")
     ap.add_argument("--skip-walls", action="store_true", help="leave out the block between walls (the longest runs)")
-    ap.add_argument("--variants", default="particle", help="the MLS fits to run: particle, cell or particle,cell")
+    ap.add_argument("--variants", default="particle",
+                    help="the MLS fits to run, comma-separated: particle, cell, reused (e.g. particle,reused)")
+    ap.add_argument("--reuse-strain", type=float, default=None,
+                    help="with the reused variant: solver.smoothing.reuse_strain (default: talus's)")
     ap.add_argument("--tag", default="", help="appended to the names of the plots and the CSV")
     a, talus = parse_benchmark_args(ap)
     changed = any(getattr(a, k) != ap.get_default(k) for k in ("basis", "radius", "axes", "variants", "skip_walls"))
@@ -78,7 +84,8 @@ def main():
     fits = a.variants.split(",")
     modes = ["off"] + [a.basis if fit == "particle" else f"{a.basis}-{fit}" for fit in fits]
     label = {"off": "without MLS", a.basis: f"MLS {a.basis} ({a.axes}), h = {a.radius:g} cells",
-             f"{a.basis}-cell": f"MLS {a.basis} ({a.axes}), one fit per cell"}
+             f"{a.basis}-cell": f"MLS {a.basis} ({a.axes}), one fit per cell",
+             f"{a.basis}-reused": f"MLS {a.basis} ({a.axes}), weights reused"}
 
     def out(name, ext):
         return os.path.join(folder, f"{name}{a.tag}.{ext}")

@@ -45,6 +45,7 @@ struct BenchOptions {
   std::string mls = "off";
   double mls_radius = 2.0;
   std::string mls_variant = "particle";
+  double mls_reuse_strain = MlsSettings{}.reuse_strain;
   int threads = 0;
   int steps = 20;
   bool stream = false;  // also measure the STREAM triad bandwidth at the same thread count
@@ -183,8 +184,8 @@ void refuse_unavailable(const BenchOptions& o) {
     throw input_error(fmt::format("--material {}: unknown; available: elastic, dp, mu_i", o.material));
   if (!one_of(o.mls, {"off", "linear", "quadratic", "cubic"}))
     throw input_error(fmt::format("--mls {}: unknown; available: off, linear, quadratic, cubic", o.mls));
-  if (!one_of(o.mls_variant, {"particle", "cell"}))
-    throw input_error(fmt::format("--mls-variant {}: unknown; available: particle, cell", o.mls_variant));
+  if (!one_of(o.mls_variant, {"particle", "cell", "reused"}))
+    throw input_error(fmt::format("--mls-variant {}: unknown; available: particle, cell, reused", o.mls_variant));
 }
 
 /// The shear scene: the block scene's sand put into steady simple shear at its yield stress, so that
@@ -399,8 +400,10 @@ void run_bench(const BenchOptions& o) {
   const std::size_t rss_at_start = status_bytes("VmRSS:");
   const std::string mls_json =
       o.mls == "off" ? std::string()
-                     : fmt::format(R"(, "smoothing": {{ "basis": "{}", "radius_factor": {}, "variant": "{}" }})", o.mls,
-                                   o.mls_radius, o.mls_variant);
+                     : fmt::format(R"(, "smoothing": {{ "basis": "{}", "radius_factor": {}, "variant": "{}"{} }})", o.mls,
+                                   o.mls_radius, o.mls_variant,
+                                   o.mls_variant == "reused" ? fmt::format(R"(, "reuse_strain": {})", o.mls_reuse_strain)
+                                                             : std::string());
   Scene scene = o.scene == "column" ? column_scene(o.particles, o.shape, o.scheme, o.material, mls_json)
                                     : block_scene(o.particles, o.shape, o.scheme, o.material, mls_json);
   require_bench_fits(scene, o.particles);
@@ -414,6 +417,7 @@ void run_bench(const BenchOptions& o) {
   double start = phase_clock_seconds();
   std::vector<double> plastic_before;  // eps_p before the last timed step (not timed: a copy)
   std::size_t sorts_before = 0, rss_before_copy = 0;
+  const std::int64_t fits_before = solver.smoothing_fits();
   double wall = 0.0;
   for (int s = 0; s < o.steps; ++s) {
     if (s + 1 == o.steps && solver.particles().has_plastic_state()) {
@@ -527,6 +531,8 @@ void run_bench(const BenchOptions& o) {
     j["mls_terms"] = mls->term_count();
     j["mls_unsmoothed_last_step"] = unsmoothed;
     j["mls_strain_change_last_step"] = smoothing_change;
+    j["mls_fits"] = solver.smoothing_fits() - fits_before;  // in the timed steps
+    j["mls_weight_bytes_per_particle"] = double(solver.mls_weight_bytes()) / n;
   }
   j["bytes_per_particle"] = double(rss) / n;
   j["particle_field_bytes_per_particle"] = field_bytes / n;
@@ -565,6 +571,9 @@ void run_bench(const BenchOptions& o) {
                after.shared_tiles, exchange_bytes_per_step / 1e3);
   }
   if (plastic_share >= 0.0) fmt::print("  plastic in the last step: {:.1f}% of the particles\n", 100.0 * plastic_share);
+  if (o.mls_variant == "reused" && solver.smoother())
+    fmt::print("  MLS: {} of the {} timed steps fitted, the others reused the weights ({:.0f} B/particle)\n",
+               solver.smoothing_fits() - fits_before, o.steps, double(solver.mls_weight_bytes()) / n);
   if (o.stream)
     fmt::print("  STREAM triad: {:.2f} GB/s at {}{}\n", stream / 1e9, world.distributed() ? "all ranks, " : "",
                world.distributed() ? workers : fmt::format("{} threads", threads));
@@ -621,7 +630,13 @@ void add_bench_command(CLI::App& app) {
               0.5, 8.0)
       ->capture_default_str();
   cmd->add_option("--mls-variant", o->mls_variant,
-                  "particle (one fit per particle, the reference) | cell (one fit per cell: solver.smoothing.variant)")
+                  "particle (one fit per particle, the reference) | cell (one fit per cell) | reused (the particle fit's "
+                  "weights reused: solver.smoothing.variant)")
+      ->capture_default_str();
+  check_range(cmd->add_option("--mls-reuse-strain", o->mls_reuse_strain,
+                              "with --mls-variant reused: the strain after which the fits are redone "
+                              "(solver.smoothing.reuse_strain; 0: every step that strains)"),
+              0.0, 1.0)
       ->capture_default_str();
   check_range(cmd->add_option("--threads", o->threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)"), 1, 4096);
   check_range(cmd->add_option("--steps", o->steps, "Timed steps (after one untimed step)"), 1, 1000000)

@@ -296,6 +296,11 @@ void add_run_command(CLI::App& app) {
                  solver.smoothing_passes(), solver.unsmoothed_total(),
                  100.0 * solver.unsmoothed_total() / (passes * solver.particles().size()), solver.mean_smoothing_change(),
                  solver.max_smoothing_change());
+      if (solver.scene().smoothing.mls.variant == MlsVariant::Reused)
+        fmt::print("talus: MLS weights reused: {} of the {} passes fitted (reuse_strain {}), the others reused the "
+                   "weights of the last fit ({:.0f} B/particle)\n",
+                   solver.smoothing_fits(), solver.smoothing_passes(), solver.scene().smoothing.mls.reuse_strain,
+                   double(solver.mls_weight_bytes()) / std::max<double>(1.0, double(solver.particles().size())));
     }
     if (outflow_particles > 0)
       fmt::print("talus: {} particles ({:.4g} kg, {:.2f}% of the mass) left through open faces (removed; energy column "

@@ -406,6 +406,7 @@ bool RunLoop::take_snapshot() {
   if (scene_.guards.snapshot_interval <= 0 || comm_.distributed()) return false;
   snapshot_.particles.copy_from(solver_.particles());  // in parallel: a serial copy would be a serial part of the run
   snapshot_.state = solver_.state();
+  snapshot_.state.mls_weights.reset();  // a view of the solver's, not kept: a restore from the snapshot fits anew
   snapshot_.progress = progress_;
   snapshot_.progress.energy_max_released = energy_guard_.max_released();
   snapshot_.valid = true;

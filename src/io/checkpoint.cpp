@@ -10,6 +10,7 @@
 
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <set>
 #include <type_traits>
 
@@ -30,6 +31,10 @@ template <>
 const H5::PredType& h5_type<std::int32_t>() { return H5::PredType::NATIVE_INT32; }
 template <>
 const H5::PredType& h5_type<std::uint16_t>() { return H5::PredType::NATIVE_UINT16; }
+template <>
+const H5::PredType& h5_type<std::uint32_t>() { return H5::PredType::NATIVE_UINT32; }
+template <>
+const H5::PredType& h5_type<std::uint64_t>() { return H5::PredType::NATIVE_UINT64; }
 template <>
 const H5::PredType& h5_type<char>() { return H5::PredType::NATIVE_CHAR; }
 
@@ -176,6 +181,17 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
       EnergyGapTerms::for_each_term(state.gap, [&](const char* name, double value) { write_attribute(s, name, value); });
       write_attribute(s, "sort_drift", state.sort_drift);
       for (int d = 0; d < 3; ++d) write_array(s, fmt::format("sort_cell{}", d), state.sort_cell[d]);
+      if (state.mls_weights) {  // the `reused` MLS variant: its weights, so that a restart reuses them
+        H5::Group w = file.createGroup("/solver/mls_weights");
+        write_attribute(w, "strain_since_fit", state.mls_strain_since_fit);
+        std::vector<std::uint64_t> offsets;
+        std::vector<std::uint32_t> neighbour;
+        std::vector<double> phi;
+        state.mls_weights->flatten(offsets, neighbour, phi);
+        write_array(w, "offsets", offsets);
+        write_array(w, "neighbour", neighbour);
+        write_array(w, "phi", phi);
+      }
       if (comm.distributed()) {
         H5::Group ranks = file.createGroup("/solver/ranks");
         write_array(ranks, "particles", rank_particles);
@@ -256,6 +272,22 @@ Checkpoint read_checkpoint(const std::string& path) {
     c.solver.sort_drift = s.attrExists("sort_drift") ? read_attribute<double>(s, "sort_drift")
                                                      : std::numeric_limits<double>::infinity();
     for (int d = 0; d < 3; ++d) c.solver.sort_cell[d] = read_array<std::int32_t>(s, fmt::format("sort_cell{}", d));
+    // absent where the scene is not the `reused` MLS variant, or had no weights yet: the next pass fits
+    if (s.nameExists("mls_weights")) {
+      H5::Group w = s.openGroup("mls_weights");
+      std::vector<std::uint64_t> offsets = read_array<std::uint64_t>(w, "offsets");
+      std::vector<std::uint32_t> neighbour = read_array<std::uint32_t>(w, "neighbour");
+      std::vector<double> phi = read_array<double>(w, "phi");
+      const std::size_t n = offsets.empty() ? 0 : offsets.size() - 1, entries = offsets.empty() ? 0 : offsets.back();
+      bool consistent = !offsets.empty() && offsets[0] == 0 && neighbour.size() == entries && phi.size() == entries;
+      for (std::size_t p = 1; consistent && p < offsets.size(); ++p) consistent = offsets[p] >= offsets[p - 1];
+      for (std::size_t e = 0; consistent && e < neighbour.size(); ++e) consistent = neighbour[e] < n;
+      if (!consistent) throw input_error(fmt::format("checkpoint {}: its MLS weights are inconsistent", path));
+      auto weights = std::make_shared<MlsStoredWeights>();
+      weights->assign(std::move(offsets), std::move(neighbour), std::move(phi));
+      c.solver.mls_weights = std::move(weights);
+      c.solver.mls_strain_since_fit = read_attribute<double>(w, "strain_since_fit");
+    }
 
     if (s.nameExists("ranks")) {
       H5::Group ranks = s.openGroup("ranks");

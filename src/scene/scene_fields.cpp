@@ -186,12 +186,15 @@ Table<SceneDraft> make_smoothing_table() {
                          named({MlsBasis::Linear, MlsBasis::Quadratic, MlsBasis::Cubic}),
                          "polynomial basis: 4 / 10 / 20 terms in 3D (2 / 3 / 4 along one axis)"),
       choice<SceneDraft>("variant", TALUS_AT(scene.smoothing.mls.variant),
-                         named({MlsVariant::Particle, MlsVariant::Cell}),
+                         named({MlsVariant::Particle, MlsVariant::Cell, MlsVariant::Reused}),
                          "`particle`: one fit per particle, centred on it (Edo & Matsubara 2015, the reference). "
                          "`cell`: one fit per cell, centred on the cell, evaluated at each of its particles: about "
                          "half the cost at 1 and 2 cells, a different smoothing, and not energy-stable: it fed energy into "
                          "the elastic block between walls (`run` and `check` warn; docs/verification.md, \"MLS, one fit "
-                         "per cell\")"),
+                         "per cell\"). `reused`: the particle fit, its weights kept and reused until the material has "
+                         "strained by `reuse_strain` since the fit; the same result as `particle` at each fit, costs "
+                         "memory for the weights (12 B per neighbour: about 0.4 kB a particle at 1 cell, 3 kB at 2) "
+                         "(docs/verification.md, \"MLS, the particle fit's weights reused\")"),
       number<SceneDraft>("radius_factor", TALUS_AT(scene.smoothing.mls.radius_factor), {0.5, 8.0},
                          "support radius h = factor × cell size (eq. 39). Above 2.5, `run` and `check` warn: 3 cells "
                          "and more went unstable on the benchmarks (docs/verification.md, \"MLS radius\")"),
@@ -207,6 +210,10 @@ Table<SceneDraft> make_smoothing_table() {
           "the axes the basis spans; leave out an axis along which a body has too few particle layers for the basis "
           "(a thin bar with 2 layers across cannot fit a quadratic across: use `\"x\"`, Edo & Matsubara's 1D fit). "
           "Neighbours are still taken within the 3D radius"),
+      number<SceneDraft>("reuse_strain", TALUS_AT(scene.smoothing.mls.reuse_strain), {0.0, 1.0},
+                         "`reused` only: the fits are redone once the sum, over the steps since the fit, of each step's "
+                         "largest strain increment (Frobenius norm, before smoothing) exceeds this; 0 fits again after every step "
+                         "that strains the material (the `particle` result)"),
       number<SceneDraft>("min_rcond", TALUS_AT(scene.smoothing.mls.min_rcond), {0.0, 1.0, true, true},
                          "guard: a particle whose moment matrix A has a reciprocal condition number (1-norm estimate) "
                          "below this, or fewer neighbours than basis terms, keeps its own increment and is counted "

@@ -6,6 +6,7 @@
 #include "talus/grid/grid.hpp"
 #include "talus/particles/cell_sort.hpp"
 #include "talus/particles/particle_store.hpp"
+#include "talus/smoothing/mls_stored_weights.hpp"
 #include "talus/smoothing/mls_strain_smoother.hpp"
 
 #include <Eigen/Cholesky>
@@ -48,6 +49,7 @@ struct MlsPass {
   bool cell_fit;         // MlsVariant::Cell: one fit per cell
   double search_radius;  // the cells walked: radius, plus the drift since the sort
   double* unit_seconds;  // null, or per work unit (WorkUnits order): its seconds
+  MlsStoredWeights* record = nullptr;  // the particle fit's weights, kept (the `reused` variant)
 };
 
 /// What both fits read of a pass as they walk its blocks' cells, under the names they use:

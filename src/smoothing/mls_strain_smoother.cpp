@@ -61,9 +61,11 @@ struct GroupScratch {
   std::array<std::vector<double>, 3> idx_x;
   bool idx_x_current = false;
   // Per candidate, the lanes' scaled offsets along the basis axes and eq. 39 weights (pass 1 ->
-  // pass 2): 4 x kGroup doubles, aligned for whole-vector loads.
+  // pass 2), and their Phi when the weights are kept: 5 x kGroup doubles, aligned for whole-vector
+  // loads.
   hwy::AlignedFreeUniquePtr<double[]> lanes;
   std::size_t lanes_capacity = 0;  // candidates
+  int thread = 0;                  // omp_get_thread_num(), for the weight recorder
   Lanes* lane_array(int k) { return reinterpret_cast<Lanes*>(lanes.get()) + k * lanes_capacity; }
 };
 
@@ -247,7 +249,7 @@ void smooth_group(GroupScratch& S, const std::int64_t* idx, std::size_t nc, cons
   }
   if (S.lanes_capacity < nc) {
     S.lanes_capacity = std::max(nc, S.idx.size());
-    S.lanes = hwy::AllocateAligned<double>(4 * kGroup * S.lanes_capacity);
+    S.lanes = hwy::AllocateAligned<double>(5 * kGroup * S.lanes_capacity);
   }
   const double *x0 = P.x[0].data(), *x1 = P.x[1].data(), *x2 = P.x[2].data();
   const std::uint16_t* pbody = P.body.data();
@@ -310,8 +312,10 @@ void smooth_group(GroupScratch& S, const std::int64_t* idx, std::size_t nc, cons
     for (int r = 1; r < T; ++r) phi += a[r] * F[r];
     return phi * ww[I];
   };
+  Lanes* const kept_phi = pass.record ? S.lane_array(4) : nullptr;
   for (std::size_t I = 0; I < nc; ++I) {
     const Lanes phi = phi_of(I);
+    if (kept_phi) kept_phi[I] = phi;
     for (int c = 0; c < 6; ++c) sum[c] += phi * in[c][idx[I]];
   }
   Lanes check = zero;
@@ -330,6 +334,21 @@ void smooth_group(GroupScratch& S, const std::int64_t* idx, std::size_t nc, cons
       for (int c = 0; c < 6; ++c) sum[c] += inside ? phi * in[c][q] : zero;
     }
   }
+  // The `reused` variant keeps each fitted lane's neighbours (W_I > 0: inside its ball and body)
+  // and their Phi, in the candidates' order: the terms of its sums that are not zeros.
+  // (Written without a branch: a candidate is written at the next place, which advances when W > 0.)
+  if (kept_phi)
+    for (int v = 0; v < n; ++v)
+      if (ok[v])
+        pass.record->add(S.thread, p[v], nc, [&](std::uint32_t* neighbour, double* phi) {
+          std::size_t k = 0;
+          for (std::size_t I = 0; I < nc; ++I) {
+            neighbour[k] = static_cast<std::uint32_t>(idx[I]);
+            phi[k] = kept_phi[I][v];
+            k += ww[I][v] != 0.0 ? 1 : 0;
+          }
+          return k;
+        });
   for (int v = 0; v < n; ++v) {
     const std::uint32_t q = p[v];
     for (int c = 0; c < 6; ++c) pass.out[c][q] = ok[v] ? sum[c][v] : pass.in[c][q];  // the guard: unsmoothed
@@ -343,6 +362,7 @@ MlsCounts smooth_impl(const MlsPass& pass) {
   const auto& [P, sort, grid, bc, cells_per_block, cell_start, rg] = mls_detail::PassCells(pass);
   return for_each_work_unit(pass, [&](MlsCounts& counts, auto&& for_units) {
     GroupScratch S;
+    S.thread = omp_get_thread_num();
     std::uint32_t group[kGroup];
     int n = 0;
     // The group's cells as a store range [range_begin, range_end). The candidates are gathered for
@@ -445,7 +465,14 @@ const char* to_string(MlsBasis basis) {
   return "?";
 }
 
-const char* to_string(MlsVariant variant) { return variant == MlsVariant::Cell ? "cell" : "particle"; }
+const char* to_string(MlsVariant variant) {
+  switch (variant) {
+    case MlsVariant::Particle: return "particle";
+    case MlsVariant::Cell: return "cell";
+    case MlsVariant::Reused: return "reused";
+  }
+  return "?";
+}
 
 MlsStrainSmoother::MlsStrainSmoother(const MlsSettings& settings, double cell_size)
     : settings_(settings), radius_(settings.radius_factor * cell_size) {
@@ -474,7 +501,7 @@ int MlsStrainSmoother::term_count() const { return mls_term_count(static_cast<in
 MlsCounts MlsStrainSmoother::smooth(const ParticleStore& particles, const CellSort& sort, const GridGeometry& grid,
                                     const std::array<const double*, 6>& in, const std::array<double*, 6>& out,
                                     const std::vector<std::uint8_t>& smooth_body, double drift,
-                                    std::vector<double>* unit_seconds) const {
+                                    std::vector<double>* unit_seconds, MlsStoredWeights* keep) const {
   if (!(drift >= 0.0 && std::isfinite(drift))) throw std::invalid_argument("MLS search drift must be finite and >= 0");
   // The margin covers the round-off of the moves the drift sums (an ulp of a position per step).
   const double search_radius = drift > 0.0 ? (radius_ + drift) * (1.0 + 1e-9) : radius_;
@@ -486,9 +513,19 @@ MlsCounts MlsStrainSmoother::smooth(const ParticleStore& particles, const CellSo
     unit_seconds->assign(mls_detail::WorkUnits(sort).count(), 0.0);
     pass.unit_seconds = unit_seconds->data();
   }
-  if (pass.cell_fit) return mls_detail::smooth_cell_fits(pass);
+  if (pass.cell_fit) {
+    if (keep) throw std::invalid_argument("MLS: the one-fit-per-cell variant keeps no weights");
+    return mls_detail::smooth_cell_fits(pass);
+  }
+  if (keep) {
+    keep->begin_fit(particles.size(), omp_get_max_threads());
+    pass.record = keep;
+  }
   // The `reference` path runs the baseline build of the same code.
-  return (vector_kernels_enabled() ? HWY_DYNAMIC_DISPATCH(SmoothMls) : &HWY_STATIC_DISPATCH(SmoothMls))(pass);
+  const MlsCounts counts =
+      (vector_kernels_enabled() ? HWY_DYNAMIC_DISPATCH(SmoothMls) : &HWY_STATIC_DISPATCH(SmoothMls))(pass);
+  if (keep) keep->end_fit();
+  return counts;
 }
 
 }  // namespace talus

@@ -153,6 +153,8 @@ void Solver::size_scratch() {
       smooth_strain_[c].assign(n, 0.0);
     }
     for (auto& w : raw_spin_) w.assign(n, 0.0);
+    // MlsStoredWeights::apply's rows, touched here rather than in the first step that reuses
+    if (scene_.smoothing.mls.variant == MlsVariant::Reused) mls_rows_.assign(8 * n + 8, 0.0);
   }
 }
 
@@ -197,6 +199,7 @@ void Solver::remove_outflow(std::size_t leaving) {
   }
   P.permute(kept, scratch_, 0);  // the step's displacement is spent: the scratch is free
   size_scratch();
+  mls_weights_.clear();  // the leavers were neighbours: the remaining fits no longer sum to 1
 }
 
 // A particle that left through a periodic face re-enters through the opposite one: its position
@@ -264,7 +267,10 @@ void Solver::sort_particles_recorded() {
 
 void Solver::sort_particles() {
   ScopedPhase timer(times_, Phase::Sort);
+  ParticleArray<std::int64_t> ids_before;
+  if (!mls_weights_.empty()) ids_before = particles_.id;
   sort_.sort(particles_, grid_, scratch_);
+  if (!mls_weights_.empty()) mls_weights_.remap(ids_before, particles_.id);
   prepare_after_sort();
   needs_sort_ = false;
   steps_since_sort_ = 0;
@@ -719,10 +725,21 @@ void Solver::update_stress_smoothed(const NodeVectors& node_velocity, double dt,
   WorkRecorder* const rec = recording();
   {
     ScopedPhase timer(times_, Phase::Stress);
-    for_blocks_in_chunks("mls strain", [&](std::size_t, std::size_t begin, std::size_t end, StrainIncrements& inc) {
+    const bool reused = scene_.smoothing.mls.variant == MlsVariant::Reused;
+    if (reused) block_max_strain_.assign(sort_.block_count(), 0.0);
+    for_blocks_in_chunks("mls strain", [&](std::size_t b, std::size_t begin, std::size_t end, StrainIncrements& inc) {
       strain_increments<Shape, Terrain>(P, grid_, node_velocity, dt, begin, end, inc);  // eq. 53
       for (int c = 0; c < 6; ++c) std::copy_n(inc.strain[c].data(), end - begin, raw_strain_[c].data() + begin);
       for (int c = 0; c < 3; ++c) std::copy_n(inc.spin[c].data(), end - begin, raw_spin_[c].data() + begin);
+      if (reused) {  // the largest squared Frobenius norm (tensor components: the shear ones count twice)
+        double largest = block_max_strain_[b];
+        for (std::size_t i = 0; i < end - begin; ++i) {
+          double n2 = 0.0;
+          for (int c = 0; c < 6; ++c) n2 += (c < 3 ? 1.0 : 2.0) * inc.strain[c][i] * inc.strain[c][i];
+          largest = n2 > largest || n2 != n2 ? n2 : largest;  // NaN wins: the next pass fits
+        }
+        block_max_strain_[b] = largest;
+      }
     });
   }
   {
@@ -735,11 +752,28 @@ void Solver::update_stress_smoothed(const NodeVectors& node_velocity, double dt,
     }
     // The search widens by the drift since the sort (mls_needs_sort).
     const double smooth_start = rec ? omp_get_wtime() : 0.0;
-    last_smoothing_ = smoother_->smooth(P, sort_, scene_.grid, in, out, smooth_body_, sort_drift_,
-                                        rec ? &smooth_unit_seconds_ : nullptr);
-    if (rec)
-      rec->add_unit_loop("mls smooth", smooth_unit_seconds_, MlsStrainSmoother::work_unit_particles(sort_),
-                         omp_get_wtime() - smooth_start);
+    // The `reused` variant fits when it has no weights (the first pass, or after a particle left)
+    // or the material has strained by reuse_strain since the fit; otherwise it applies the weights.
+    const bool reused = scene_.smoothing.mls.variant == MlsVariant::Reused;
+    const bool fits = !(reused && !mls_weights_.empty() && mls_strain_since_fit_ <= scene_.smoothing.mls.reuse_strain);
+    if (fits) {
+      last_smoothing_ = smoother_->smooth(P, sort_, scene_.grid, in, out, smooth_body_, sort_drift_,
+                                          rec ? &smooth_unit_seconds_ : nullptr, reused ? &mls_weights_ : nullptr);
+      mls_strain_since_fit_ = 0.0;
+      ++smoothing_fits_;
+      if (rec)
+        rec->add_unit_loop("mls smooth", smooth_unit_seconds_, MlsStrainSmoother::work_unit_particles(sort_),
+                           omp_get_wtime() - smooth_start);
+    } else {
+      last_smoothing_ = mls_weights_.apply(in, out, P.body, smooth_body_, mls_rows_);
+      if (rec) rec->add_static("mls reuse", P.size(), 1, omp_get_wtime() - smooth_start);
+    }
+    // This pass's strain moves the particles away from the positions the weights were fitted at.
+    if (reused) {
+      double largest = 0.0;
+      for (double n2 : block_max_strain_) largest = n2 > largest || n2 != n2 ? n2 : largest;
+      mls_strain_since_fit_ += std::sqrt(largest);
+    }
     unsmoothed_total_ += static_cast<std::int64_t>(last_smoothing_.unsmoothed);
     recorded(rec, RegionSchedule::Static, "mls change", P.size(), 1, [&] { measure_smoothing_change(); });
   }
@@ -847,6 +881,9 @@ SolverState Solver::state() const {
   s.needs_sort = needs_sort_;
   s.periodic_gravity_shift = periodic_gravity_shift_;
   s.sort_drift = sort_drift_;
+  if (!mls_weights_.empty())  // a view (SolverState::mls_weights)
+    s.mls_weights = std::shared_ptr<const MlsStoredWeights>(std::shared_ptr<const MlsStoredWeights>(), &mls_weights_);
+  s.mls_strain_since_fit = mls_strain_since_fit_;
   // The cell each particle was sorted into, read back from the sort's block and cell offsets.
   const std::size_t n = particles_.size();
   for (auto& c : s.sort_cell) c.resize(n);  // every particle lies in one cell: every entry is written below
@@ -944,6 +981,11 @@ void Solver::restore_counters(const SolverState& s) {
   needs_sort_ = s.needs_sort;
   periodic_gravity_shift_ = s.periodic_gravity_shift;
   sort_drift_ = s.sort_drift;
+  if (!s.mls_weights || s.mls_weights->particle_count() != particles_.size())
+    mls_weights_.clear();
+  else if (s.mls_weights.get() != &mls_weights_)
+    mls_weights_ = *s.mls_weights;
+  mls_strain_since_fit_ = s.mls_strain_since_fit;
 }
 
 }  // namespace talus

@@ -112,6 +112,29 @@ TEST(Checkpoint, RestartIsBitIdenticalWithMlsSmoothing) {
   check_restart_is_bit_identical(scene, 60, {sort_steps[1] + 1, sort_steps[2] - 1 > sort_steps[1] + 1 ? sort_steps[2] - 1 : 45});
 }
 
+// The `reused` MLS variant keeps the fits' weights between fits: they are in the checkpoint, or a
+// restart would fit at another step than the uninterrupted run. The splits fall between fits.
+TEST(Checkpoint, RestartIsBitIdenticalWithReusedMlsWeights) {
+  Scene scene = test::tumbling_block_scene(1.0);
+  scene.smoothing.enabled = true;
+  scene.smoothing.mls.variant = MlsVariant::Reused;
+  scene.smoothing.mls.reuse_strain = 0.05;
+  Solver probe(scene);
+  std::vector<int> fit_steps;
+  for (int i = 0; i < 60; ++i) {
+    const std::int64_t fits = probe.smoothing_fits();
+    probe.step();
+    if (probe.smoothing_fits() > fits) fit_steps.push_back(i);
+  }
+  ASSERT_GE(fit_steps.size(), 3u);   // it fits again as the blocks strain
+  ASSERT_LT(fit_steps.size(), 40u);  // and reuses the weights between fits
+  int between = -1;
+  for (std::size_t f = 1; f < fit_steps.size() && between < 0; ++f)
+    if (fit_steps[f] > fit_steps[f - 1] + 2) between = fit_steps[f - 1] + 2;
+  ASSERT_GT(between, 0);
+  check_restart_is_bit_identical(scene, 60, {between, 37});
+}
+
 /// A plastic scene's restart after 80 steps is bit-identical, from checkpoints at steps 13 and 50;
 /// the scene must have yielded by then, or the plastic state would not be exercised.
 void check_plastic_restart(const Scene& scene) {

@@ -69,6 +69,20 @@ inline void add_lattice(Cloud& cloud, std::array<int, 3> per_axis, double spacin
       }
 }
 
+/// Three jittered bodies (two touching) and a lone particle that the guard stops (cell size 1,
+/// 12 x 8 x 8 cells), sorted, inputs zero: the cloud the instruction-set and stored-weight tests use.
+inline Cloud three_body_cloud() {
+  Cloud c;
+  c.geometry.h = 1.0;
+  c.geometry.cells = {12, 8, 8};
+  add_lattice(c, {9, 8, 7}, 0.5, 0.45, Vec3(1.0, 1.3, 0.7), 0, 3);
+  add_lattice(c, {5, 5, 5}, 0.5, 0.45, Vec3(5.6, 1.3, 0.7), 1, 4);
+  add_lattice(c, {4, 4, 4}, 0.5, 0.45, Vec3(8.5, 4.0, 4.0), 2, 5);
+  c.particles.add(9999, Vec3(10.5, 1.5, 6.5), Vec3::Zero(), 1.0, 1.0, 0);  // alone: the guard
+  c.finish();
+  return c;
+}
+
 /// Two jittered bodies that touch (9 x 8 x 7 and 5 x 5 x 5 particles, cell size 1), sorted, with
 /// random inputs: the cloud the brute-force comparisons use.
 inline Cloud two_body_cloud() {

@@ -9,6 +9,10 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
+#include <cmath>
+#include <map>
+
 
 namespace talus {
 namespace mls_solver_test {
@@ -189,6 +193,56 @@ TEST(MlsSolver, BitIdenticalForOneAndTwoThreads) {
     EXPECT_LT(one.sort_count(), one.step_count());
     EXPECT_EQ(one.sort_count(), two.sort_count());
   }
+}
+
+// The `reused` variant with reuse_strain 0 fits at every step that strains the material: the
+// particle fit's run bit for bit (its fits keep weights, which change no result). With a larger
+// reuse_strain it fits less often, and stays the same for any thread count.
+TEST(MlsSolver, ReusedWeightsAtZeroStrainAreTheParticleFitAndDeterministic) {
+  Scene particle = test::tumbling_block_scene(0.03);
+  particle.smoothing.enabled = true;
+  particle.smoothing.mls.radius_factor = 1.2;
+  Scene every = particle;
+  every.smoothing.mls.variant = MlsVariant::Reused;
+  every.smoothing.mls.reuse_strain = 0.0;
+  Solver a(particle), b(every);
+  while (!a.finished()) a.step();
+  while (!b.finished()) b.step();
+  test::expect_same_particles_and_energies(a, b, "reuse_strain 0");
+  EXPECT_EQ(b.smoothing_fits(), b.smoothing_passes());
+  EXPECT_GT(b.mls_weight_bytes(), 0u);
+  EXPECT_EQ(a.mls_weight_bytes(), 0u);
+
+  auto run = [&](int threads) {
+    omp_set_num_threads(threads);
+    Scene scene = every;
+    scene.smoothing.mls.reuse_strain = 0.02;
+    scene.sort_interval = 3;  // the weights follow the particles through sorts
+    Solver solver(scene);
+    int carried = 0;  // steps that sorted and then reused the weights
+    while (!solver.finished()) {
+      const std::int64_t sorts = solver.sort_count(), fits = solver.smoothing_fits();
+      solver.step();
+      carried += solver.sort_count() > sorts && solver.smoothing_fits() == fits ? 1 : 0;
+    }
+    EXPECT_GT(carried, 0);
+    return solver;
+  };
+  const auto [one, two] = test::run_on_one_and_two_threads(run);
+  test::expect_same_particles_and_energies(one, two, "reused");
+  EXPECT_EQ(one.smoothing_fits(), two.smoothing_fits());
+  EXPECT_GT(one.smoothing_fits(), 1);
+  EXPECT_LT(one.smoothing_fits(), one.smoothing_passes());
+  EXPECT_FALSE(same_bits(one.particles().stress[0], a.particles().stress[0]));  // reusing changes the run
+}
+
+TEST(MlsScene, ReusedVariantAndItsStrain) {
+  const Scene s = parse_scene(replace_once(kScene, R"("axes": "xz")", R"("axes": "xz", "variant": "reused", "reuse_strain": 0.01)"), "t");
+  EXPECT_EQ(s.smoothing.mls.variant, MlsVariant::Reused);
+  EXPECT_DOUBLE_EQ(s.smoothing.mls.reuse_strain, 0.01);
+  EXPECT_EQ(scene_to_json(s)["solver"]["smoothing"]["variant"], "reused");
+  test::expect_variant_error(kScene, "\"axes\"", "\"reuse_strain\": 2, \"axes\"",
+                             "solver.smoothing.reuse_strain = 2 is outside the allowed range [0, 1]", std::nullopt);
 }
 
 }  // namespace

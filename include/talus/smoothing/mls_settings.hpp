@@ -9,8 +9,10 @@ namespace talus {
 /// Where the fit is centred. Particle: Edo & Matsubara's (2015) own fit, one per particle, the
 /// reference. Cell: one fit per cell, centred at the cell's centre and evaluated at each of its
 /// particles (a cheaper variant; its accuracy against the per-particle fit: docs/verification.md,
-/// "MLS, one fit per cell").
-enum class MlsVariant { Particle, Cell };
+/// "MLS, one fit per cell"). Reused: the particle fit, its weights kept and reused in later steps
+/// until the material has strained by `reuse_strain` since the fit (a cheaper variant; docs/verification.md,
+/// "MLS, the particle fit's weights reused").
+enum class MlsVariant { Particle, Cell, Reused };
 
 const char* to_string(MlsVariant variant);
 
@@ -23,6 +25,9 @@ struct MlsSettings {
   /// polynomial and averages across it (Edo & Matsubara's (2015) own tests are 1D).
   std::array<bool, 3> axes{true, true, true};
   double min_rcond = 1e-10;                // guard on A's reciprocal condition number (1-norm estimate)
+  /// MlsVariant::Reused: the fits are redone once the sum, over the steps since the fit, of each
+  /// step's largest strain increment (Frobenius norm, unsmoothed) exceeds this.
+  double reuse_strain = 1e-3;
 };
 
 }  // namespace talus

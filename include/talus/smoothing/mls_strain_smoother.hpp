@@ -34,6 +34,8 @@
 
 namespace talus {
 
+struct MlsStoredWeights;
+
 struct MlsCounts {
   std::size_t smoothed = 0;    // particles whose increment was replaced by the fit
   std::size_t unsmoothed = 0;  // particles of smoothed bodies left as they were by the guard
@@ -55,11 +57,12 @@ class MlsStrainSmoother {
   /// drift. The one-fit-per-cell variant fits the particles of a sorted cell about its centre, so
   /// it wants the sort of the current positions (the solver sorts every step for it). The threads take work units in turn: the (i, j) columns of cells along k of
   /// every block, the blocks heaviest first (CellSort::blocks_in_work_order()). With `unit_seconds`
-  /// (the work recorder) the seconds each unit took, in that order.
+  /// (the work recorder) the seconds each unit took, in that order. With `keep` (the particle fit
+  /// only) the fits' weights are stored there, for MlsStoredWeights::apply in later steps.
   MlsCounts smooth(const ParticleStore& particles, const CellSort& sort, const GridGeometry& grid,
                    const std::array<const double*, 6>& in, const std::array<double*, 6>& out,
                    const std::vector<std::uint8_t>& smooth_body, double drift = 0.0,
-                   std::vector<double>* unit_seconds = nullptr) const;
+                   std::vector<double>* unit_seconds = nullptr, MlsStoredWeights* keep = nullptr) const;
   /// The particles of each work unit of smooth(), in its order.
   static std::vector<std::uint32_t> work_unit_particles(const CellSort& sort);
 

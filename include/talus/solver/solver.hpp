@@ -15,12 +15,14 @@
 #include "talus/particles/particle_store.hpp"
 #include "talus/particles/slab_decomposition.hpp"
 #include "talus/scene/scene.hpp"
+#include "talus/smoothing/mls_stored_weights.hpp"
 #include "talus/smoothing/mls_strain_smoother.hpp"
 #include "talus/solver/phase_timer.hpp"
 #include "talus/solver/work_recorder.hpp"
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <vector>
@@ -47,6 +49,12 @@ struct SolverState {
   /// Per particle (in the store's order): the padded grid cell it was sorted into at the last sort.
   /// restore() rebuilds the cell sort from these, so the blocks and the summation order match.
   std::array<std::vector<std::int32_t>, 3> sort_cell;
+  /// MLS `reused` variant: the stored weights (null: none, the next pass fits) and the strain
+  /// summed since they were fitted. From Solver::state() a view of the solver's own weights, valid
+  /// until its next step (a checkpoint writes them at once; the run loop's snapshot drops them, so a
+  /// restore from it fits anew); from a checkpoint, weights of their own.
+  std::shared_ptr<const MlsStoredWeights> mls_weights;
+  double mls_strain_since_fit = 0.0;
 };
 
 /// What a distributed run exchanged and how well its slabs are balanced (Solver::distribution).
@@ -135,6 +143,10 @@ class Solver {
   double mean_smoothing_change() const { return smoothing_passes_ ? smoothing_change_sum_ / smoothing_passes_ : 0.0; }
   double max_smoothing_change() const { return max_smoothing_change_; }
   std::int64_t smoothing_passes() const { return smoothing_passes_; }
+  /// The passes that fitted (all of them, but for the `reused` variant), and the memory its stored
+  /// weights take now (0 for the other variants).
+  std::int64_t smoothing_fits() const { return smoothing_fits_; }
+  std::size_t mls_weight_bytes() const { return mls_weights_.bytes(); }
 
   /// Checkpoint/restart: the state besides the particles, and continuing from a saved one. The
   /// particles must be those of the saved solver, in its order (restore() keeps that order).
@@ -287,6 +299,14 @@ class Solver {
   std::int64_t smoothing_passes_ = 0;
   double last_smoothing_change_ = 0.0, smoothing_change_sum_ = 0.0, max_smoothing_change_ = 0.0;
   void measure_smoothing_change();
+  // MlsVariant::Reused: the weights of the last fit (empty: fit at the next pass), the strain summed
+  // since (SolverState::mls_strain_since_fit), and each block's largest strain increment of this pass.
+  MlsStoredWeights mls_weights_;
+  double mls_strain_since_fit_ = 0.0;
+  std::vector<double> block_max_strain_;
+  std::vector<double> mls_rows_;  // MlsStoredWeights::apply's scratch
+  std::int64_t smoothing_fits_ = 0;
+  MlsCounts smooth_strain_increments(const std::array<const double*, 6>& in, const std::array<double*, 6>& out);
 };
 
 }  // namespace talus

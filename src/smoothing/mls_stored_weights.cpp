@@ -1,0 +1,244 @@
+// The stored weights of the `reused` MLS variant: applied (eq. 46 with the kept Phi) and carried
+// over a sort. The apply is compiled once per instruction set by Highway's foreach_target and
+// dispatched at run time (core/simd_dispatch.hpp): a particle's six increments are one row of 8
+// doubles (a vector of 8 on every path: one AVX-512 register, two AVX2 or four SSE2 registers), so
+// each neighbour is one row load, one product and one sum. Lane c of the row is component c's sum,
+// with the same multiplications and additions in the same order as the particle fit's pass 2 (no
+// fused multiply-add: the build sets -ffp-contract=off): the same bits on every path.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "smoothing/mls_stored_weights.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+
+#include <hwy/highway.h>
+
+#include "talus/core/simd_dispatch.hpp"
+#include "talus/smoothing/mls_stored_weights.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+
+// Lane vectors live only inside this file's inlined functions: no call passes one by value.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+HWY_BEFORE_NAMESPACE();
+namespace talus {
+namespace HWY_NAMESPACE {
+namespace {
+typedef double Row __attribute__((vector_size(8 * sizeof(double)), aligned(64), may_alias));
+}  // namespace
+
+/// MlsStoredWeights::apply on this target: the increments copied into rows, then each
+/// particle's sum over its entries. `chunks` holds each chunk's neighbour and phi arrays.
+MlsCounts ApplyStoredWeights(std::size_t particles, const std::uint32_t* const* chunk_neighbour,
+                             const double* const* chunk_phi, const std::uint16_t* chunk, const std::uint64_t* start,
+                             const std::uint32_t* count, const std::array<const double*, 6>& in,
+                             const std::array<double*, 6>& out, const std::uint16_t* body,
+                             const std::vector<std::uint8_t>& smooth_body, double* rows_memory) {
+  const std::int64_t n = static_cast<std::int64_t>(particles);
+  Row* rows = reinterpret_cast<Row*>(rows_memory);
+  std::size_t smoothed = 0, unsmoothed = 0;
+#pragma omp parallel reduction(+ : smoothed, unsmoothed)
+  {
+#pragma omp for schedule(static)
+    for (std::int64_t p = 0; p < n; ++p) {
+      Row r = {};
+      for (int c = 0; c < 6; ++c) r[c] = in[c][p];
+      rows[p] = r;
+    }
+#pragma omp for schedule(static)
+    for (std::int64_t p = 0; p < n; ++p) {
+      const std::uint32_t m = count[p];
+      if (m == 0) {  // kept its own increment when the weights were fitted
+        for (int c = 0; c < 6; ++c) out[c][p] = in[c][p];
+        unsmoothed += smooth_body[body[p]] ? 1 : 0;
+        continue;
+      }
+      const std::uint32_t* nb = chunk_neighbour[chunk[p]] + start[p];
+      const double* phi = chunk_phi[chunk[p]] + start[p];
+      // the particle fit's pass 2 (smoothing/mls_strain_smoother.cpp): sum += phi * in, in order
+      Row sum = {};
+      for (std::uint32_t e = 0; e < m; ++e) sum += phi[e] * rows[nb[e]];
+      for (int c = 0; c < 6; ++c) out[c][p] = sum[c];
+      ++smoothed;
+    }
+  }
+  return {smoothed, unsmoothed};
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace talus
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace talus {
+
+HWY_EXPORT(ApplyStoredWeights);
+
+
+std::size_t MlsStoredWeights::entry_count() const {
+  std::size_t n = 0;
+  for (const Chunk& c : chunks_) n += c.used;
+  return n;
+}
+
+std::size_t MlsStoredWeights::bytes() const {
+  std::size_t b = chunk_.capacity() * sizeof(std::uint16_t) + start_.capacity() * sizeof(std::uint64_t) +
+                  count_.capacity() * sizeof(std::uint32_t);
+  for (const Chunk& c : chunks_) b += c.neighbour.capacity() * sizeof(std::uint32_t) + c.phi.capacity() * sizeof(double);
+  return b;
+}
+
+void MlsStoredWeights::begin_fit(std::size_t particles, int threads) {
+  if (chunks_.size() < static_cast<std::size_t>(std::max(threads, 1))) chunks_.resize(static_cast<std::size_t>(std::max(threads, 1)));
+  for (Chunk& c : chunks_) c.used = 0;  // keep their memory
+  count_.assign(particles, 0);
+  chunk_.assign(particles, 0);
+  start_.assign(particles, 0);
+}
+
+void MlsStoredWeights::end_fit() {
+  for (Chunk& c : chunks_) {
+    if (4 * c.neighbour.size() <= 5 * c.used) continue;
+    const std::size_t room = c.used + c.used / 10;
+    Chunk fitted{std::vector<std::uint32_t>(room), std::vector<double>(room), c.used};
+    std::copy_n(c.neighbour.data(), c.used, fitted.neighbour.data());
+    std::copy_n(c.phi.data(), c.used, fitted.phi.data());
+    c = std::move(fitted);
+  }
+}
+
+MlsCounts MlsStoredWeights::apply(const std::array<const double*, 6>& in, const std::array<double*, 6>& out,
+                                  std::span<const std::uint16_t> body, const std::vector<std::uint8_t>& smooth_body,
+                                  std::vector<double>& rows_memory) const {
+  // The increments as rows of 8 doubles, 64-byte aligned: one row a particle.
+  const std::size_t n = particle_count();
+  if (rows_memory.size() < 8 * n + 8) rows_memory.assign(8 * n + 8, 0.0);
+  const std::size_t misalign = reinterpret_cast<std::uintptr_t>(rows_memory.data()) % 64;
+  double* rows = rows_memory.data() + (misalign ? (64 - misalign) / sizeof(double) : 0);
+  std::vector<const std::uint32_t*> chunk_neighbour;
+  std::vector<const double*> chunk_phi;
+  for (const Chunk& c : chunks_) {
+    chunk_neighbour.push_back(c.neighbour.data());
+    chunk_phi.push_back(c.phi.data());
+  }
+  // The `reference` path runs the baseline build of the same code.
+  return (vector_kernels_enabled() ? HWY_DYNAMIC_DISPATCH(ApplyStoredWeights) : &HWY_STATIC_DISPATCH(ApplyStoredWeights))(
+      n, chunk_neighbour.data(), chunk_phi.data(), chunk_.data(), start_.data(), count_.data(), in, out, body.data(),
+      smooth_body, rows);
+}
+
+namespace {
+
+/// Match two orders of the same particles by id: old_of_new[p] is the old index of new particle p,
+/// moved[o] the new index of old particle o. False where an id repeats or is in one order only.
+/// Ids are dense in a run (0 .. seeded - 1, less the particles that left): indexed directly; others
+/// are matched by sorting.
+bool match_ids(std::span<const std::int64_t> old_ids, std::span<const std::int64_t> new_ids,
+               std::vector<std::uint32_t>& old_of_new, std::vector<std::uint32_t>& moved) {
+  const std::size_t n = new_ids.size();
+  std::int64_t lo = 0, hi = -1;
+  for (std::int64_t id : old_ids) {
+    lo = std::min(lo, id);
+    hi = std::max(hi, id);
+  }
+  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  if (lo >= 0 && hi < static_cast<std::int64_t>(4 * n + 1024)) {
+    std::vector<std::uint32_t> old_index(static_cast<std::size_t>(hi) + 1, kNone);
+    for (std::size_t p = 0; p < n; ++p) {
+      if (old_index[old_ids[p]] != kNone) return false;
+      old_index[old_ids[p]] = static_cast<std::uint32_t>(p);
+    }
+    std::fill(moved.begin(), moved.end(), kNone);
+    for (std::size_t p = 0; p < n; ++p) {
+      const std::int64_t id = new_ids[p];
+      if (id < 0 || id > hi || old_index[id] == kNone || moved[old_index[id]] != kNone) return false;
+      old_of_new[p] = old_index[id];
+      moved[old_index[id]] = static_cast<std::uint32_t>(p);
+    }
+    return true;
+  }
+  std::vector<std::pair<std::int64_t, std::uint32_t>> a(n), b(n);
+  for (std::size_t p = 0; p < n; ++p) {
+    a[p] = {old_ids[p], static_cast<std::uint32_t>(p)};
+    b[p] = {new_ids[p], static_cast<std::uint32_t>(p)};
+  }
+  std::sort(a.begin(), a.end());
+  std::sort(b.begin(), b.end());
+  for (std::size_t i = 0; i < n; ++i) {
+    if (a[i].first != b[i].first || (i > 0 && a[i].first == a[i - 1].first)) return false;
+    old_of_new[b[i].second] = a[i].second;
+    moved[a[i].second] = b[i].second;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool MlsStoredWeights::remap(std::span<const std::int64_t> old_ids, std::span<const std::int64_t> new_ids) {
+  const bool ok = remap_or_refuse(old_ids, new_ids);
+  if (!ok) clear();
+  return ok;
+}
+
+bool MlsStoredWeights::remap_or_refuse(std::span<const std::int64_t> old_ids, std::span<const std::int64_t> new_ids) {
+  const std::size_t n = new_ids.size();
+  if (empty() || old_ids.size() != particle_count() || n != old_ids.size() ||
+      n >= std::numeric_limits<std::uint32_t>::max())
+    return false;
+  // old_of_new[p]: where particle p of the new order was; moved[o]: where particle o went.
+  std::vector<std::uint32_t> old_of_new(n), moved(n);
+  if (!match_ids(old_ids, new_ids, old_of_new, moved)) return false;
+  // The neighbours' new indices, in place; the entries stay where they are.
+  for (Chunk& c : chunks_) {
+    const std::int64_t m = static_cast<std::int64_t>(c.used);
+    std::uint32_t* nb = c.neighbour.data();
+#pragma omp parallel for schedule(static)
+    for (std::int64_t e = 0; e < m; ++e) nb[e] = moved[nb[e]];
+  }
+  // Each particle's (chunk, start, count) moves with it.
+  std::vector<std::uint16_t> chunk(n);
+  std::vector<std::uint64_t> start(n);
+  std::vector<std::uint32_t> count(n);
+  for (std::size_t p = 0; p < n; ++p) {
+    const std::uint32_t o = old_of_new[p];
+    chunk[p] = chunk_[o];
+    start[p] = start_[o];
+    count[p] = count_[o];
+  }
+  chunk_ = std::move(chunk);
+  start_ = std::move(start);
+  count_ = std::move(count);
+  return true;
+}
+
+void MlsStoredWeights::flatten(std::vector<std::uint64_t>& offsets, std::vector<std::uint32_t>& neighbour,
+                               std::vector<double>& phi) const {
+  const std::size_t n = particle_count();
+  offsets.assign(n + 1, 0);
+  for (std::size_t p = 0; p < n; ++p) offsets[p + 1] = offsets[p] + count_[p];
+  neighbour.resize(offsets[n]);
+  phi.resize(offsets[n]);
+  for (std::size_t p = 0; p < n; ++p) {
+    const Chunk& c = chunks_[chunk_[p]];
+    std::copy_n(c.neighbour.data() + start_[p], count_[p], neighbour.data() + offsets[p]);
+    std::copy_n(c.phi.data() + start_[p], count_[p], phi.data() + offsets[p]);
+  }
+}
+
+void MlsStoredWeights::assign(std::vector<std::uint64_t> offsets, std::vector<std::uint32_t> neighbour,
+                              std::vector<double> phi) {
+  const std::size_t n = offsets.empty() ? 0 : offsets.size() - 1;
+  const std::size_t used = neighbour.size();
+  chunks_.assign(1, Chunk{std::move(neighbour), std::move(phi), used});
+  chunk_.assign(n, 0);
+  start_.resize(n);
+  count_.resize(n);
+  for (std::size_t p = 0; p < n; ++p) {
+    start_[p] = offsets[p];
+    count_[p] = static_cast<std::uint32_t>(offsets[p + 1] - offsets[p]);
+  }
+}
+
+}  // namespace talus
+#endif
