@@ -284,7 +284,7 @@ Checkpoint read_checkpoint(const std::string& path) {
       for (std::size_t e = 0; consistent && e < neighbour.size(); ++e) consistent = neighbour[e] < n;
       if (!consistent) throw input_error(fmt::format("checkpoint {}: its MLS weights are inconsistent", path));
       auto weights = std::make_shared<MlsStoredWeights>();
-      weights->assign(std::move(offsets), std::move(neighbour), std::move(phi));
+      weights->assign(offsets, neighbour, phi);
       c.solver.mls_weights = std::move(weights);
       c.solver.mls_strain_since_fit = read_attribute<double>(w, "strain_since_fit");
     }

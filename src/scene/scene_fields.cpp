@@ -213,7 +213,8 @@ Table<SceneDraft> make_smoothing_table() {
       number<SceneDraft>("reuse_strain", TALUS_AT(scene.smoothing.mls.reuse_strain), {0.0, 1.0},
                          "`reused` only: the fits are redone once the sum, over the steps since the fit, of each step's "
                          "largest strain increment (Frobenius norm, before smoothing) exceeds this; 0 fits again after every step "
-                         "that strains the material (the `particle` result)"),
+                         "that strains the material (the `particle` result). At 1e-2 a tenth of a DP collapse's steps fit "
+                         "and its front moved by 0.1 cell; at 1e-3 most steps fit, which is no faster than `particle`"),
       number<SceneDraft>("min_rcond", TALUS_AT(scene.smoothing.mls.min_rcond), {0.0, 1.0, true, true},
                          "guard: a particle whose moment matrix A has a reciprocal condition number (1-norm estimate) "
                          "below this, or fewer neighbours than basis terms, keeps its own increment and is counted "
@@ -307,8 +308,10 @@ Table<SceneDraft> make_solver_table() {
           "MLS smoothing of the strain increments between the strain pass and the material update (Edo & Matsubara "
           "2015, eq. 38–46, 54; docs/theory.md \"MLS strain smoothing\"). Present = on unless `enabled` is false. Not "
           "on a terrain grid or with periodic faces (the neighbour search works in the sort's cells). Costly: on one "
-          "core the per-particle fit took 60% of the step at `radius_factor` 1 and 86% at 2 (1 M-particle "
-          "B-spline column; docs/performance.md \"Why the particle fit stays above its target\")",
+          "core the per-particle fit took 56-60% of the step at `radius_factor` 1 and 82-86% at 2 (1 M-particle "
+          "B-spline column; docs/performance.md \"Why the particle fit stays above its target\"); `variant` "
+          "`reused` took 24% in the steps that reuse its weights (1 cell) and ran a flowing collapse 1.4-2.1x "
+          "faster (docs/performance.md \"MLS, the particle fit's weights reused\")",
           {.present = [](const SceneDraft&) { return true; }}),
   }};
 }

@@ -29,13 +29,11 @@ typedef double Row __attribute__((vector_size(8 * sizeof(double)), aligned(64), 
 }  // namespace
 
 /// MlsStoredWeights::apply on this target: the increments copied into rows, then each
-/// particle's sum over its entries. `chunks` holds each chunk's neighbour and phi arrays.
-MlsCounts ApplyStoredWeights(std::size_t particles, const std::uint32_t* const* chunk_neighbour,
-                             const double* const* chunk_phi, const std::uint16_t* chunk, const std::uint64_t* start,
-                             const std::uint32_t* count, const std::array<const double*, 6>& in,
+/// particle's sum over its entries.
+MlsCounts ApplyStoredWeights(const MlsStoredWeights& weights, const std::array<const double*, 6>& in,
                              const std::array<double*, 6>& out, const std::uint16_t* body,
                              const std::vector<std::uint8_t>& smooth_body, double* rows_memory) {
-  const std::int64_t n = static_cast<std::int64_t>(particles);
+  const std::int64_t n = static_cast<std::int64_t>(weights.particle_count());
   Row* rows = reinterpret_cast<Row*>(rows_memory);
   std::size_t smoothed = 0, unsmoothed = 0;
 #pragma omp parallel reduction(+ : smoothed, unsmoothed)
@@ -48,17 +46,15 @@ MlsCounts ApplyStoredWeights(std::size_t particles, const std::uint32_t* const* 
     }
 #pragma omp for schedule(static)
     for (std::int64_t p = 0; p < n; ++p) {
-      const std::uint32_t m = count[p];
-      if (m == 0) {  // kept its own increment when the weights were fitted
+      const MlsStoredWeights::Entries e = weights.entries(static_cast<std::size_t>(p));
+      if (e.count == 0) {  // kept its own increment when the weights were fitted
         for (int c = 0; c < 6; ++c) out[c][p] = in[c][p];
         unsmoothed += smooth_body[body[p]] ? 1 : 0;
         continue;
       }
-      const std::uint32_t* nb = chunk_neighbour[chunk[p]] + start[p];
-      const double* phi = chunk_phi[chunk[p]] + start[p];
       // the particle fit's pass 2 (smoothing/mls_strain_smoother.cpp): sum += phi * in, in order
       Row sum = {};
-      for (std::uint32_t e = 0; e < m; ++e) sum += phi[e] * rows[nb[e]];
+      for (std::uint32_t k = 0; k < e.count; ++k) sum += e.phi[k] * rows[e.neighbour[k]];
       for (int c = 0; c < 6; ++c) out[c][p] = sum[c];
       ++smoothed;
     }
@@ -78,34 +74,62 @@ HWY_EXPORT(ApplyStoredWeights);
 
 std::size_t MlsStoredWeights::entry_count() const {
   std::size_t n = 0;
-  for (const Chunk& c : chunks_) n += c.used;
+  for (std::uint32_t c : count_) n += c;
   return n;
 }
 
 std::size_t MlsStoredWeights::bytes() const {
-  std::size_t b = chunk_.capacity() * sizeof(std::uint16_t) + start_.capacity() * sizeof(std::uint64_t) +
+  std::size_t b = segment_.capacity() * sizeof(const Segment*) + start_.capacity() * sizeof(std::uint32_t) +
                   count_.capacity() * sizeof(std::uint32_t);
-  for (const Chunk& c : chunks_) b += c.neighbour.capacity() * sizeof(std::uint32_t) + c.phi.capacity() * sizeof(double);
+  for (const Chunk& c : chunks_)
+    for (const auto& s : c.segments)
+      b += s->neighbour.capacity() * sizeof(std::uint32_t) + s->phi.capacity() * sizeof(double);
   return b;
 }
 
 void MlsStoredWeights::begin_fit(std::size_t particles, int threads) {
-  if (chunks_.size() < static_cast<std::size_t>(std::max(threads, 1))) chunks_.resize(static_cast<std::size_t>(std::max(threads, 1)));
-  for (Chunk& c : chunks_) c.used = 0;  // keep their memory
-  count_.assign(particles, 0);
-  chunk_.assign(particles, 0);
+  const std::size_t t = static_cast<std::size_t>(std::max(threads, 1));
+  if (chunks_.size() < t) chunks_.resize(t);
+  for (Chunk& c : chunks_) c.current = static_cast<std::size_t>(-1);  // keep their segments
+  segment_.assign(particles, nullptr);
   start_.assign(particles, 0);
+  count_.assign(particles, 0);
+}
+
+MlsStoredWeights::Segment& MlsStoredWeights::room(std::size_t thread, std::size_t most) {
+  Chunk& c = chunks_[thread];
+  if (c.current < c.segments.size()) {
+    Segment& s = *c.segments[c.current];
+    if (s.used + most <= s.neighbour.size()) return s;
+  }
+  ++c.current;  // npos + 1 = 0: the first
+  // The next segment of an earlier fit if it is large enough, or a new one in its place.
+  if (c.current < c.segments.size() && c.segments[c.current]->neighbour.size() < most) c.segments.resize(c.current);
+  if (c.current == c.segments.size()) {
+    auto s = std::make_unique<Segment>();
+    const std::size_t size = std::max(kSegmentEntries, most);
+    s->neighbour.resize(size);
+    s->phi.resize(size);
+    c.segments.push_back(std::move(s));
+  }
+  Segment& s = *c.segments[c.current];
+  s.used = 0;
+  return s;
 }
 
 void MlsStoredWeights::end_fit() {
-  for (Chunk& c : chunks_) {
-    if (4 * c.neighbour.size() <= 5 * c.used) continue;
-    const std::size_t room = c.used + c.used / 10;
-    Chunk fitted{std::vector<std::uint32_t>(room), std::vector<double>(room), c.used};
-    std::copy_n(c.neighbour.data(), c.used, fitted.neighbour.data());
-    std::copy_n(c.phi.data(), c.used, fitted.phi.data());
-    c = std::move(fitted);
-  }
+  for (Chunk& c : chunks_) c.segments.resize(c.current == static_cast<std::size_t>(-1) ? 0 : c.current + 1);
+}
+
+MlsStoredWeights& MlsStoredWeights::operator=(const MlsStoredWeights& other) {
+  if (this == &other) return *this;
+  std::vector<std::uint64_t> offsets;
+  std::vector<std::uint32_t> neighbour;
+  std::vector<double> phi;
+  other.flatten(offsets, neighbour, phi);
+  chunks_.clear();
+  assign(offsets, neighbour, phi);
+  return *this;
 }
 
 MlsCounts MlsStoredWeights::apply(const std::array<const double*, 6>& in, const std::array<double*, 6>& out,
@@ -116,16 +140,9 @@ MlsCounts MlsStoredWeights::apply(const std::array<const double*, 6>& in, const 
   if (rows_memory.size() < 8 * n + 8) rows_memory.assign(8 * n + 8, 0.0);
   const std::size_t misalign = reinterpret_cast<std::uintptr_t>(rows_memory.data()) % 64;
   double* rows = rows_memory.data() + (misalign ? (64 - misalign) / sizeof(double) : 0);
-  std::vector<const std::uint32_t*> chunk_neighbour;
-  std::vector<const double*> chunk_phi;
-  for (const Chunk& c : chunks_) {
-    chunk_neighbour.push_back(c.neighbour.data());
-    chunk_phi.push_back(c.phi.data());
-  }
   // The `reference` path runs the baseline build of the same code.
   return (vector_kernels_enabled() ? HWY_DYNAMIC_DISPATCH(ApplyStoredWeights) : &HWY_STATIC_DISPATCH(ApplyStoredWeights))(
-      n, chunk_neighbour.data(), chunk_phi.data(), chunk_.data(), start_.data(), count_.data(), in, out, body.data(),
-      smooth_body, rows);
+      *this, in, out, body.data(), smooth_body, rows);
 }
 
 namespace {
@@ -189,24 +206,24 @@ bool MlsStoredWeights::remap_or_refuse(std::span<const std::int64_t> old_ids, st
   // old_of_new[p]: where particle p of the new order was; moved[o]: where particle o went.
   std::vector<std::uint32_t> old_of_new(n), moved(n);
   if (!match_ids(old_ids, new_ids, old_of_new, moved)) return false;
-  // The neighbours' new indices, in place; the entries stay where they are.
-  for (Chunk& c : chunks_) {
-    const std::int64_t m = static_cast<std::int64_t>(c.used);
-    std::uint32_t* nb = c.neighbour.data();
+  // The neighbours' new indices, in place: the entries stay where they are.
+  for (Chunk& c : chunks_)
+    for (const auto& seg : c.segments) {
+      const std::int64_t m = static_cast<std::int64_t>(seg->used);
+      std::uint32_t* nb = seg->neighbour.data();
 #pragma omp parallel for schedule(static)
-    for (std::int64_t e = 0; e < m; ++e) nb[e] = moved[nb[e]];
-  }
-  // Each particle's (chunk, start, count) moves with it.
-  std::vector<std::uint16_t> chunk(n);
-  std::vector<std::uint64_t> start(n);
-  std::vector<std::uint32_t> count(n);
+      for (std::int64_t e = 0; e < m; ++e) nb[e] = moved[nb[e]];
+    }
+  // Each particle's (segment, start, count) moves with it.
+  std::vector<const Segment*> segment(n);
+  std::vector<std::uint32_t> start(n), count(n);
   for (std::size_t p = 0; p < n; ++p) {
     const std::uint32_t o = old_of_new[p];
-    chunk[p] = chunk_[o];
+    segment[p] = segment_[o];
     start[p] = start_[o];
     count[p] = count_[o];
   }
-  chunk_ = std::move(chunk);
+  segment_ = std::move(segment);
   start_ = std::move(start);
   count_ = std::move(count);
   return true;
@@ -220,24 +237,26 @@ void MlsStoredWeights::flatten(std::vector<std::uint64_t>& offsets, std::vector<
   neighbour.resize(offsets[n]);
   phi.resize(offsets[n]);
   for (std::size_t p = 0; p < n; ++p) {
-    const Chunk& c = chunks_[chunk_[p]];
-    std::copy_n(c.neighbour.data() + start_[p], count_[p], neighbour.data() + offsets[p]);
-    std::copy_n(c.phi.data() + start_[p], count_[p], phi.data() + offsets[p]);
+    const Entries e = entries(p);
+    std::copy_n(e.neighbour, e.count, neighbour.data() + offsets[p]);
+    std::copy_n(e.phi, e.count, phi.data() + offsets[p]);
   }
 }
 
-void MlsStoredWeights::assign(std::vector<std::uint64_t> offsets, std::vector<std::uint32_t> neighbour,
-                              std::vector<double> phi) {
+void MlsStoredWeights::assign(const std::vector<std::uint64_t>& offsets, const std::vector<std::uint32_t>& neighbour,
+                              const std::vector<double>& phi) {
   const std::size_t n = offsets.empty() ? 0 : offsets.size() - 1;
-  const std::size_t used = neighbour.size();
-  chunks_.assign(1, Chunk{std::move(neighbour), std::move(phi), used});
-  chunk_.assign(n, 0);
-  start_.resize(n);
-  count_.resize(n);
+  begin_fit(n, 1);
   for (std::size_t p = 0; p < n; ++p) {
-    start_[p] = offsets[p];
-    count_[p] = static_cast<std::uint32_t>(offsets[p + 1] - offsets[p]);
+    const std::size_t first = offsets[p], count = offsets[p + 1] - offsets[p];
+    if (count == 0) continue;
+    add(0, static_cast<std::uint32_t>(p), count, [&](std::uint32_t* nb, double* f) {
+      std::copy_n(neighbour.data() + first, count, nb);
+      std::copy_n(phi.data() + first, count, f);
+      return count;
+    });
   }
+  end_fit();
 }
 
 }  // namespace talus

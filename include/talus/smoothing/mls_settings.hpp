@@ -27,7 +27,7 @@ struct MlsSettings {
   double min_rcond = 1e-10;                // guard on A's reciprocal condition number (1-norm estimate)
   /// MlsVariant::Reused: the fits are redone once the sum, over the steps since the fit, of each
   /// step's largest strain increment (Frobenius norm, unsmoothed) exceeds this.
-  double reuse_strain = 1e-3;
+  double reuse_strain = 1e-2;
 };
 
 }  // namespace talus

@@ -6,17 +6,19 @@
 // are its neighbours within the radius in the fit's candidate order, with the fit's Phi, and the
 // sum runs in that order with the same operations (no fused multiply-add: -ffp-contract=off).
 //
-// Layout: the threads of the fit append their particles' entries to chunks of their own; particle
-// p's entries are count[p] entries from start[p] of chunk chunk[p] (none: the particle keeps its
-// own increment, not fitted or stopped by the guard). The chunks keep their memory from one fit to
-// the next, so a fit allocates nothing once the first has run. A sort permutes the store: remap()
-// carries the weights over through the particles' ids.
+// Layout: each thread of the fit appends its particles' entries to segments of its own (fixed
+// blocks of kSegmentEntries; a particle's entries never straddle two), and each particle keeps where
+// its entries are and how many (none: the particle keeps its own increment, not fitted or stopped
+// by the guard). Segments are not moved or grown once written: the weights take what they need
+// plus the unused end of each segment, with no copy, and a later fit reuses them. A sort permutes
+// the store: remap() carries the weights over through the particles' ids.
 #include "talus/smoothing/mls_strain_smoother.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -24,39 +26,40 @@ namespace talus {
 
 class MlsStoredWeights {
  public:
-  struct Chunk {
-    std::vector<std::uint32_t> neighbour;  // store indices
-    std::vector<double> phi;               // W_I a^T F(u_I), eq. 45
-    std::size_t used = 0;                  // entries written (the vectors may be longer)
+  static constexpr std::size_t kSegmentEntries = std::size_t{1} << 16;  // 768 kB a segment
+
+  /// Particle p's entries: its neighbours (store indices) and their Phi = W_I a^T F(u_I) (eq. 45).
+  struct Entries {
+    const std::uint32_t* neighbour;
+    const double* phi;
+    std::uint32_t count;
   };
+  Entries entries(std::size_t p) const {
+    const Segment* s = segment_[p];
+    return s ? Entries{s->neighbour.data() + start_[p], s->phi.data() + start_[p], count_[p]}
+             : Entries{nullptr, nullptr, 0};
+  }
 
   bool empty() const { return count_.empty(); }
   std::size_t particle_count() const { return count_.size(); }
   std::size_t entry_count() const;
   std::size_t bytes() const;
-  void clear() { count_.clear(); }
+  void clear() { count_.clear(), segment_.clear(), start_.clear(); }
 
   /// Start a fit of `particles` particles by up to `threads` threads: every particle has no entries.
   void begin_fit(std::size_t particles, int threads);
-  /// After the fit: a chunk that holds room for more than 1.25 times its entries (the first
-  /// fit's growth) is copied into room for 1.1 times, so that the weights take about what they
-  /// need; later fits of a similar size then allocate nothing.
+  /// After the fit: the segments no thread reached this time are freed.
   void end_fit();
   /// Particle p's entries, from thread `thread`: fill(neighbour, phi) writes at most `most` of
   /// them there, in order, and returns how many it wrote.
   template <class Fill>
   void add(int thread, std::uint32_t p, std::size_t most, Fill&& fill) {
-    Chunk& c = chunks_[static_cast<std::size_t>(thread)];
-    if (c.neighbour.size() < c.used + most) {
-      const std::size_t room = std::max(2 * c.neighbour.size(), c.used + most);
-      c.neighbour.resize(room);
-      c.phi.resize(room);
-    }
-    const std::size_t written = fill(c.neighbour.data() + c.used, c.phi.data() + c.used);
+    Segment& s = room(static_cast<std::size_t>(thread), most);
+    const std::size_t written = fill(s.neighbour.data() + s.used, s.phi.data() + s.used);
+    segment_[p] = &s;
+    start_[p] = static_cast<std::uint32_t>(s.used);
     count_[p] = static_cast<std::uint32_t>(written);
-    chunk_[p] = static_cast<std::uint16_t>(thread);
-    start_[p] = c.used;
-    c.used += written;
+    s.used += written;
   }
 
   /// out[c][p] = sum over p's entries of phi * in[c][neighbour] (eq. 46), or in[c][p] where p has
@@ -77,14 +80,31 @@ class MlsStoredWeights {
   /// checkpoint's form), and back.
   void flatten(std::vector<std::uint64_t>& offsets, std::vector<std::uint32_t>& neighbour,
                std::vector<double>& phi) const;
-  void assign(std::vector<std::uint64_t> offsets, std::vector<std::uint32_t> neighbour, std::vector<double> phi);
+  void assign(const std::vector<std::uint64_t>& offsets, const std::vector<std::uint32_t>& neighbour,
+              const std::vector<double>& phi);
+
+  MlsStoredWeights() = default;
+  MlsStoredWeights(const MlsStoredWeights& other) { *this = other; }
+  MlsStoredWeights& operator=(const MlsStoredWeights& other);
+  MlsStoredWeights(MlsStoredWeights&&) = default;
+  MlsStoredWeights& operator=(MlsStoredWeights&&) = default;
 
  private:
+  struct Segment {
+    std::vector<std::uint32_t> neighbour;
+    std::vector<double> phi;
+    std::size_t used = 0;
+  };
+  struct Chunk {  // one thread's segments; `current` is the one it writes (npos: none yet in this fit)
+    std::vector<std::unique_ptr<Segment>> segments;
+    std::size_t current = static_cast<std::size_t>(-1);
+  };
+  Segment& room(std::size_t thread, std::size_t most);
   bool remap_or_refuse(std::span<const std::int64_t> old_ids, std::span<const std::int64_t> new_ids);
   std::vector<Chunk> chunks_;
-  std::vector<std::uint16_t> chunk_;  // per particle
-  std::vector<std::uint64_t> start_;  // per particle, in its chunk
-  std::vector<std::uint32_t> count_;  // per particle
+  std::vector<const Segment*> segment_;  // per particle (null: no entries)
+  std::vector<std::uint32_t> start_;     // per particle, in its segment
+  std::vector<std::uint32_t> count_;     // per particle
 };
 
 }  // namespace talus
