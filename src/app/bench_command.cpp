@@ -572,7 +572,7 @@ void run_bench(const BenchOptions& o) {
   }
   if (plastic_share >= 0.0) fmt::print("  plastic in the last step: {:.1f}% of the particles\n", 100.0 * plastic_share);
   if (o.mls_variant == "reused" && solver.smoother())
-    fmt::print("  MLS: {} of the {} timed steps fitted, the others reused the weights ({:.0f} B/particle)\n",
+    fmt::print("  MLS: {} of the {} timed steps fitted, the rest reused the weights ({:.0f} B/particle)\n",
                solver.smoothing_fits() - fits_before, o.steps, double(solver.mls_weight_bytes()) / n);
   if (o.stream)
     fmt::print("  STREAM triad: {:.2f} GB/s at {}{}\n", stream / 1e9, world.distributed() ? "all ranks, " : "",

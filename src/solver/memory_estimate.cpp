@@ -37,6 +37,20 @@ constexpr std::size_t kSortCell = 3 * 4;                  // the sort state a sn
 constexpr std::size_t kFrameArrays = 24 + 24 + 8 + 48 + 48 + 8 + 8 + 8 + 2 + 4 + 4;
 constexpr std::size_t kNodeBytes = Grid::kFieldCount * sizeof(double);
 
+/// The `reused` MLS variant's weights (smoothing/mls_stored_weights.hpp): 12 B per neighbour, 16 B
+/// per particle, and a row of 64 B per particle for applying them. The neighbours: the particles
+/// of the densest body in the ball of the radius, the ball cut to the grid along a thin axis (a
+/// ball in a box of its extents fills pi/6 of it).
+std::size_t reused_weight_bytes(const Scene& scene) {
+  double per_cell = 0.0;
+  for (const BodySpec& body : scene.bodies) per_cell = std::max(per_cell, std::pow(double(body.particles_per_cell), 3.0));
+  const double r = scene.smoothing.mls.radius_factor;
+  double box = 1.0;
+  for (int d = 0; d < 3; ++d) box *= std::min(2.0 * r, double(scene.grid.cells[d]));
+  const double neighbours = M_PI / 6.0 * box * per_cell;
+  return static_cast<std::size_t>(12.0 * neighbours) + 16 + 64;
+}
+
 std::size_t bytes_per_particle(const Scene& scene, MemoryScope scope) {
   bool plastic = false, kinematic = false;
   for (const BodySpec& body : scene.bodies) {
@@ -52,6 +66,7 @@ std::size_t bytes_per_particle(const Scene& scene, MemoryScope scope) {
   if (scene.shape == ShapeKind::CpGimp) fields += kGimpDomain;
   std::size_t bytes = fields + kParticleScratch;
   if (scene.smoothing.enabled) bytes += kSmoothing;
+  if (scene.smoothing.enabled && scene.smoothing.mls.variant == MlsVariant::Reused) bytes += reused_weight_bytes(scene);
   if (scope == MemoryScope::Solver) return bytes;
   bytes += kFrameArrays;
   if (scene.guards.snapshot_interval > 0) bytes += fields + kSortCell;  // the last good state

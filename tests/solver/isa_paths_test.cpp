@@ -259,7 +259,8 @@ TEST(IsaPaths, BlockBufferScattersAreBitIdenticalOnEveryPath) {
 
 // MLS strain smoothing (Edo & Matsubara 2015, eq. 38-46) in the run: the smoother's lanes are compiled per
 // target too. A 3D linear fit on a cpGIMP column (MUSL), a quadratic fit over x and z only
-// with a radius that is not a whole number of cells (USAVG), and one linear fit per cell (B-spline).
+// with a radius that is not a whole number of cells (USAVG), one linear fit per cell (B-spline), and
+// the particle fit's weights reused (B-spline).
 TEST(IsaPaths, MlsSmoothedRunsAreBitIdenticalOnEveryPath) {
   Scene linear = test::column_collapse_scene(0.02, 0.02);
   linear.shape = ShapeKind::CpGimp;
@@ -279,6 +280,10 @@ TEST(IsaPaths, MlsSmoothedRunsAreBitIdenticalOnEveryPath) {
   by_cell.smoothing.mls.variant = MlsVariant::Cell;
   by_cell.smoothing.mls.radius_factor = 1.5;
   expect_every_path_matches_the_reference(by_cell);
+  Scene reused = by_cell;  // the particle fit's weights reused between fits (its apply is per target too)
+  reused.smoothing.mls.variant = MlsVariant::Reused;
+  reused.smoothing.mls.reuse_strain = 1e-3;
+  expect_every_path_matches_the_reference(reused);
 }
 
 // A Drucker-Prager block crossing the periodic x seam (the wrapped stencils), B-spline.
