@@ -203,6 +203,7 @@ bool MlsStoredWeights::remap_or_refuse(std::span<const std::int64_t> old_ids, st
   if (empty() || old_ids.size() != particle_count() || n != old_ids.size() ||
       n >= std::numeric_limits<std::uint32_t>::max())
     return false;
+  if (std::equal(old_ids.begin(), old_ids.end(), new_ids.begin())) return true;  // the sort kept the order
   // old_of_new[p]: where particle p of the new order was; moved[o]: where particle o went.
   std::vector<std::uint32_t> old_of_new(n), moved(n);
   if (!match_ids(old_ids, new_ids, old_of_new, moved)) return false;

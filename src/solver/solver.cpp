@@ -723,9 +723,9 @@ template <class Shape, class Terrain>
 void Solver::update_stress_smoothed(const NodeVectors& node_velocity, double dt, bool move) {
   ParticleStore& P = particles_;
   WorkRecorder* const rec = recording();
+  const bool reused = scene_.smoothing.mls.variant == MlsVariant::Reused;
   {
     ScopedPhase timer(times_, Phase::Stress);
-    const bool reused = scene_.smoothing.mls.variant == MlsVariant::Reused;
     if (reused) block_max_strain_.assign(sort_.block_count(), 0.0);
     for_blocks_in_chunks("mls strain", [&](std::size_t b, std::size_t begin, std::size_t end, StrainIncrements& inc) {
       strain_increments<Shape, Terrain>(P, grid_, node_velocity, dt, begin, end, inc);  // eq. 53
@@ -754,7 +754,6 @@ void Solver::update_stress_smoothed(const NodeVectors& node_velocity, double dt,
     const double smooth_start = rec ? omp_get_wtime() : 0.0;
     // The `reused` variant fits when it has no weights (the first pass, or after a particle left)
     // or the material has strained by reuse_strain since the fit; otherwise it applies the weights.
-    const bool reused = scene_.smoothing.mls.variant == MlsVariant::Reused;
     const bool fits = !(reused && !mls_weights_.empty() && mls_strain_since_fit_ <= scene_.smoothing.mls.reuse_strain);
     if (fits) {
       last_smoothing_ = smoother_->smooth(P, sort_, scene_.grid, in, out, smooth_body_, sort_drift_,
