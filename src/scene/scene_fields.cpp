@@ -192,7 +192,8 @@ Table<SceneDraft> make_smoothing_table() {
                          "half the cost at 1 and 2 cells, a different smoothing, and not energy-stable: it fed energy into "
                          "the elastic block between walls (`run` and `check` warn; docs/verification.md, \"MLS, one fit "
                          "per cell\"). `reused`: the particle fit, its weights kept and reused until the material has "
-                         "strained by `reuse_strain` since the fit; the same result as `particle` at each fit, costs "
+                         "strained by `reuse_strain` since the fit: a step that fits smooths as `particle` would, the steps "
+                         "between smooth with the weights of the positions of the last fit; costs "
                          "memory for the weights (12 B per neighbour: about 0.4 kB a particle at 1 cell, 3 kB at 2) "
                          "(docs/verification.md, \"MLS, the particle fit's weights reused\")"),
       number<SceneDraft>("radius_factor", TALUS_AT(scene.smoothing.mls.radius_factor), {0.5, 8.0},
