@@ -278,13 +278,9 @@ Checkpoint read_checkpoint(const std::string& path) {
       std::vector<std::uint64_t> offsets = read_array<std::uint64_t>(w, "offsets");
       std::vector<std::uint32_t> neighbour = read_array<std::uint32_t>(w, "neighbour");
       std::vector<double> phi = read_array<double>(w, "phi");
-      const std::size_t n = offsets.empty() ? 0 : offsets.size() - 1, entries = offsets.empty() ? 0 : offsets.back();
-      bool consistent = !offsets.empty() && offsets[0] == 0 && neighbour.size() == entries && phi.size() == entries;
-      for (std::size_t p = 1; consistent && p < offsets.size(); ++p) consistent = offsets[p] >= offsets[p - 1];
-      for (std::size_t e = 0; consistent && e < neighbour.size(); ++e) consistent = neighbour[e] < n;
-      if (!consistent) throw input_error(fmt::format("checkpoint {}: its MLS weights are inconsistent", path));
       auto weights = std::make_shared<MlsStoredWeights>();
-      weights->assign(offsets, neighbour, phi);
+      if (!weights->assign(offsets, neighbour, phi))
+        throw input_error(fmt::format("checkpoint {}: its MLS weights are inconsistent", path));
       c.solver.mls_weights = std::move(weights);
       c.solver.mls_strain_since_fit = read_attribute<double>(w, "strain_since_fit");
     }

@@ -128,7 +128,7 @@ MlsStoredWeights& MlsStoredWeights::operator=(const MlsStoredWeights& other) {
   std::vector<double> phi;
   other.flatten(offsets, neighbour, phi);
   chunks_.clear();
-  assign(offsets, neighbour, phi);
+  assign(offsets, neighbour, phi);  // a flattened store is always consistent
   return *this;
 }
 
@@ -244,9 +244,16 @@ void MlsStoredWeights::flatten(std::vector<std::uint64_t>& offsets, std::vector<
   }
 }
 
-void MlsStoredWeights::assign(const std::vector<std::uint64_t>& offsets, const std::vector<std::uint32_t>& neighbour,
+bool MlsStoredWeights::assign(const std::vector<std::uint64_t>& offsets, const std::vector<std::uint32_t>& neighbour,
                               const std::vector<double>& phi) {
   const std::size_t n = offsets.empty() ? 0 : offsets.size() - 1;
+  bool consistent = !offsets.empty() && offsets[0] == 0 && neighbour.size() == offsets.back() && phi.size() == offsets.back();
+  for (std::size_t p = 1; consistent && p < offsets.size(); ++p) consistent = offsets[p] >= offsets[p - 1];
+  for (std::size_t e = 0; consistent && e < neighbour.size(); ++e) consistent = neighbour[e] < n;
+  if (!consistent) {
+    clear();
+    return false;
+  }
   begin_fit(n, 1);
   for (std::size_t p = 0; p < n; ++p) {
     const std::size_t first = offsets[p], count = offsets[p + 1] - offsets[p];
@@ -258,6 +265,7 @@ void MlsStoredWeights::assign(const std::vector<std::uint64_t>& offsets, const s
     });
   }
   end_fit();
+  return true;
 }
 
 }  // namespace talus

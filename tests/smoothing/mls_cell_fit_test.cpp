@@ -163,14 +163,7 @@ TEST(MlsCellFit, GuardAndBodyMaskAsForTheParticleFit) {
 // bodies sharing cells, a body that is not smoothed, a lone particle (the guard), a 2D basis, and a
 // NaN and an infinite input (a non-finite increment poisons the cells whose centre it is near).
 TEST(MlsCellFit, SameBitsForAnyThreadCountAndOnEveryInstructionSetPath) {
-  Cloud c;
-  c.geometry.h = 1.0;
-  c.geometry.cells = {12, 8, 8};
-  add_lattice(c, {9, 8, 7}, 0.5, 0.45, Vec3(1.0, 1.3, 0.7), 0, 3);
-  add_lattice(c, {5, 5, 5}, 0.5, 0.45, Vec3(5.3, 1.3, 0.7), 1, 4);
-  add_lattice(c, {4, 4, 4}, 0.5, 0.45, Vec3(8.5, 4.0, 4.0), 2, 5);
-  c.particles.add(9999, Vec3(10.5, 1.5, 6.5), Vec3::Zero(), 1.0, 1.0, 0);  // alone: the guard
-  c.finish();
+  Cloud c = three_body_cloud(5.3);  // the first two bodies share cells
   c.set_random_inputs(13);
   c.in[2][17] = std::nan("");
   c.in[4][300] = HUGE_VAL;

@@ -69,14 +69,15 @@ inline void add_lattice(Cloud& cloud, std::array<int, 3> per_axis, double spacin
       }
 }
 
-/// Three jittered bodies (two touching) and a lone particle that the guard stops (cell size 1,
-/// 12 x 8 x 8 cells), sorted, inputs zero: the cloud the instruction-set and stored-weight tests use.
-inline Cloud three_body_cloud() {
+/// Three jittered bodies and a lone particle that the guard stops (cell size 1, 12 x 8 x 8 cells),
+/// sorted, inputs zero: the cloud the instruction-set, stored-weight and cell-fit tests use. The
+/// second body starts at x = second_x: at 5.6 it touches the first, at 5.3 the two share cells.
+inline Cloud three_body_cloud(double second_x = 5.6) {
   Cloud c;
   c.geometry.h = 1.0;
   c.geometry.cells = {12, 8, 8};
   add_lattice(c, {9, 8, 7}, 0.5, 0.45, Vec3(1.0, 1.3, 0.7), 0, 3);
-  add_lattice(c, {5, 5, 5}, 0.5, 0.45, Vec3(5.6, 1.3, 0.7), 1, 4);
+  add_lattice(c, {5, 5, 5}, 0.5, 0.45, Vec3(second_x, 1.3, 0.7), 1, 4);
   add_lattice(c, {4, 4, 4}, 0.5, 0.45, Vec3(8.5, 4.0, 4.0), 2, 5);
   c.particles.add(9999, Vec3(10.5, 1.5, 6.5), Vec3::Zero(), 1.0, 1.0, 0);  // alone: the guard
   c.finish();

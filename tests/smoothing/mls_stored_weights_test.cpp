@@ -125,7 +125,7 @@ TEST(MlsStoredWeights, RemapFollowsTheParticlesAndRefusesAMissingOne) {
   EXPECT_TRUE(repeated.empty());
 }
 
-TEST(MlsStoredWeights, FlattenedAndAssignedBackTheyApplyAlike) {
+TEST(MlsStoredWeights, FlattenedAndAssignedBackTheyApplyAlikeAndADamagedListIsRefused) {
   Cloud c = three_body_cloud();
   const std::vector<std::uint8_t> smoothed_bodies{1, 1, 1};
   MlsStoredWeights weights;
@@ -136,10 +136,18 @@ TEST(MlsStoredWeights, FlattenedAndAssignedBackTheyApplyAlike) {
   weights.flatten(offsets, neighbour, phi);
   EXPECT_EQ(offsets.back(), weights.entry_count());
   MlsStoredWeights back;
-  back.assign(offsets, neighbour, phi);
+  EXPECT_TRUE(back.assign(offsets, neighbour, phi));
   std::vector<double> rows;
   back.apply(c.inputs(), c.outputs(), c.particles.body, smoothed_bodies, rows);
   for (int k = 0; k < 6; ++k) EXPECT_TRUE(same_bits(c.out[k], expected[k])) << k;
+  // Lists that are not such a form are refused (a damaged checkpoint): a neighbour beyond the
+  // particles, lengths that disagree.
+  std::vector<std::uint32_t> beyond = neighbour;
+  beyond[3] = static_cast<std::uint32_t>(c.particles.size());
+  MlsStoredWeights refused;
+  EXPECT_FALSE(refused.assign(offsets, beyond, phi));
+  EXPECT_TRUE(refused.empty());
+  EXPECT_FALSE(refused.assign(offsets, neighbour, std::vector<double>(phi.begin(), phi.end() - 1)));
 }
 
 }  // namespace

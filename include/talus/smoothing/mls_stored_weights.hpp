@@ -14,7 +14,6 @@
 // the store: remap() carries the weights over through the particles' ids.
 #include "talus/smoothing/mls_strain_smoother.hpp"
 
-#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -77,10 +76,12 @@ class MlsStoredWeights {
   bool remap(std::span<const std::int64_t> old_ids, std::span<const std::int64_t> new_ids);
 
   /// The entries in store order, as one list: particle p's are [offsets[p], offsets[p + 1]) (the
-  /// checkpoint's form), and back.
+  /// checkpoint's form), and back. assign() refuses (returns false, and clears the weights) lists
+  /// that are not such a form: offsets not starting at 0 or decreasing, lengths that disagree, or
+  /// a neighbour beyond the particles.
   void flatten(std::vector<std::uint64_t>& offsets, std::vector<std::uint32_t>& neighbour,
                std::vector<double>& phi) const;
-  void assign(const std::vector<std::uint64_t>& offsets, const std::vector<std::uint32_t>& neighbour,
+  bool assign(const std::vector<std::uint64_t>& offsets, const std::vector<std::uint32_t>& neighbour,
               const std::vector<double>& phi);
 
   MlsStoredWeights() = default;
