@@ -26,6 +26,8 @@ namespace talus {
 namespace HWY_NAMESPACE {
 namespace {
 typedef double Row __attribute__((vector_size(8 * sizeof(double)), aligned(64), may_alias));
+// How far ahead the entries are prefetched: 1 kB of each list (measured at a 2-cell radius).
+constexpr std::uint32_t kPhiAhead = 128, kNeighbourAhead = 256;
 }  // namespace
 
 /// MlsStoredWeights::apply on this target: the increments copied into rows, then each
@@ -52,9 +54,18 @@ MlsCounts ApplyStoredWeights(const MlsStoredWeights& weights, const std::array<c
         unsmoothed += smooth_body[body[p]] ? 1 : 0;
         continue;
       }
-      // the particle fit's pass 2 (smoothing/mls_strain_smoother.cpp): sum += phi * in, in order
+      // the particle fit's pass 2 (smoothing/mls_strain_smoother.cpp): sum += phi * in, in order.
+      // The entries ahead (this particle's and the next ones', which follow in the segment) are
+      // asked for without keeping them in the outer caches: read once a step, they would push out
+      // the rows, which the neighbouring particles read again.
       Row sum = {};
-      for (std::uint32_t k = 0; k < e.count; ++k) sum += e.phi[k] * rows[e.neighbour[k]];
+      for (std::uint32_t k = 0; k < e.count; ++k) {
+        if (k % 8 == 0) {
+          __builtin_prefetch(e.phi + k + kPhiAhead, 0, 0);
+          if (k % 16 == 0) __builtin_prefetch(e.neighbour + k + kNeighbourAhead, 0, 0);
+        }
+        sum += e.phi[k] * rows[e.neighbour[k]];
+      }
       for (int c = 0; c < 6; ++c) out[c][p] = sum[c];
       ++smoothed;
     }
