@@ -11,7 +11,7 @@
 # sources); determinism (the outputs of 1, 7 and N threads, same bits, three flumes); tools/scaling_runs.py
 # (the default flume with both scatters to 0.1 s, the h = 0.005 m flume with both to 0.0025 s);
 # tools/scaling.py (bench block, strong and weak); issue 18's 1-thread table (tools/bench_kernels.py);
-# issue 18's MLS shares on the AVX2 and the automatic path; the shear bench (tools/scaling.py). Each model's c(T) is measured at every thread count. OMP_PROC_BIND=close, OMP_PLACES=cores; OMP_WAIT_POLICY is left unset
+# issue 18's MLS shares on the AVX2 and the automatic path, and the reused variant's; the shear bench (tools/scaling.py). Each model's c(T) is measured at every thread count. OMP_PROC_BIND=close, OMP_PLACES=cores; OMP_WAIT_POLICY is left unset
 # (libgomp's own: spin, then sleep), as users run: the 2026-12-04 node ran under PASSIVE by mistake,
 # which measured the waking of sleeping threads (about 100 us per region at 16 threads).
 set -u
@@ -99,13 +99,20 @@ phase kernels_1thread 80 && {
   "$PY" tools/bench_kernels.py --talus "$TALUS" --paths reference,avx2,auto --rounds 1 ${ML:+--mpm-limit "$ML"} \
     ${ST:+--stream "$ST"} --json "$W/kernels_node.json"
   pack; }
-phase mls_1thread 70 && {
+phase mls_1thread 100 && {
   # issue 18's MLS shares (targets <= 35% at 1 cell, <= 50% at 2), never measured on Intel: the AVX-512
-  # fit was only 1.2x faster than the AVX2 one on the Zen 4 VMs, which run a 512-bit operation as two halves
-  for isa in avx2 auto; do for r in 1 2; do
+  # fit was only 1.2x faster than the AVX2 one on the Zen 4 VMs, which run a 512-bit operation as two halves.
+  # Then the `reused` variant's reusing steps (reuse_strain 1: the bench's steps from rest never refit),
+  # bound by memory traffic on those VMs (docs/performance.md, "The 2-cell reusing step").
+  { for isa in avx2 auto; do for r in 1 2; do
     "$TALUS" bench --scene column --material dp --shape bspline2 --particles 1000000 --threads 1 --steps 2 \
       --mls linear --mls-radius $r --cpu-time --isa $isa --json "$W/mls_${isa}_r$r.json" | grep -E "talus bench|M particle|smooth"
-  done; done | tee "$W/mls_1thread.txt"
+  done; done
+  for r in 1 2; do
+    "$TALUS" bench --scene column --material dp --shape bspline2 --particles 1000000 --threads 1 --steps 4 \
+      --mls linear --mls-radius $r --mls-variant reused --mls-reuse-strain 1 --cpu-time \
+      --json "$W/mls_reused_r$r.json" | grep -E "talus bench|M particle|smooth|MLS:"
+  done; } | tee "$W/mls_1thread.txt"
   pack; }
 phase scaling_shear 60 && {
   "$PY" tools/scaling.py --talus "$TALUS" --particles 1000000 --steps 10 --repeat 1 --max-threads "$N" --out "$W" \
