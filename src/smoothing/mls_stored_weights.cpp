@@ -94,7 +94,7 @@ std::size_t MlsStoredWeights::bytes() const {
                   count_.capacity() * sizeof(std::uint32_t);
   for (const Chunk& c : chunks_)
     for (const auto& s : c.segments)
-      b += s->neighbour.capacity() * sizeof(std::uint32_t) + s->phi.capacity() * sizeof(double);
+      b += s->size * (sizeof(std::uint32_t) + sizeof(double));
   return b;
 }
 
@@ -111,16 +111,17 @@ MlsStoredWeights::Segment& MlsStoredWeights::room(std::size_t thread, std::size_
   Chunk& c = chunks_[thread];
   if (c.current < c.segments.size()) {
     Segment& s = *c.segments[c.current];
-    if (s.used + most <= s.neighbour.size()) return s;
+    if (s.used + most <= s.size) return s;
   }
   ++c.current;  // npos + 1 = 0: the first
   // The next segment of an earlier fit if it is large enough, or a new one in its place.
-  if (c.current < c.segments.size() && c.segments[c.current]->neighbour.size() < most) c.segments.resize(c.current);
+  if (c.current < c.segments.size() && c.segments[c.current]->size < most) c.segments.resize(c.current);
   if (c.current == c.segments.size()) {
     auto s = std::make_unique<Segment>();
     const std::size_t size = std::max(kSegmentEntries, most);
-    s->neighbour.resize(size);
-    s->phi.resize(size);
+    s->neighbour = std::make_unique_for_overwrite<std::uint32_t[]>(size);
+    s->phi = std::make_unique_for_overwrite<double[]>(size);
+    s->size = size;
     c.segments.push_back(std::move(s));
   }
   Segment& s = *c.segments[c.current];
@@ -222,7 +223,7 @@ bool MlsStoredWeights::remap_or_refuse(std::span<const std::int64_t> old_ids, st
   for (Chunk& c : chunks_)
     for (const auto& seg : c.segments) {
       const std::int64_t m = static_cast<std::int64_t>(seg->used);
-      std::uint32_t* nb = seg->neighbour.data();
+      std::uint32_t* nb = seg->neighbour.get();
 #pragma omp parallel for schedule(static)
       for (std::int64_t e = 0; e < m; ++e) nb[e] = moved[nb[e]];
     }

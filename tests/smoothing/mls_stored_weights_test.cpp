@@ -75,7 +75,9 @@ TEST(MlsStoredWeights, ApplyGivesTheFitsBitsForAnyInputsPathAndThreadCount) {
     const double mean = double(weights.entry_count()) / double(fitted.smoothed), ball = 4.0 / 3.0 * M_PI * radius * radius * radius * 8.0;
     EXPECT_GT(mean, 0.3 * ball);
     EXPECT_LT(mean, ball);
-    if (radius > 2.0) EXPECT_GT(weights.entry_count(), 2 * MlsStoredWeights::kSegmentEntries);  // 2 threads: one had 2
+    if (radius > 2.0) {
+      EXPECT_GT(weights.entry_count(), 2 * MlsStoredWeights::kSegmentEntries);  // 2 threads: one had 2
+    }
   }
 }
 

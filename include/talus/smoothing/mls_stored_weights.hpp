@@ -35,7 +35,7 @@ class MlsStoredWeights {
   };
   Entries entries(std::size_t p) const {
     const Segment* s = segment_[p];
-    return s ? Entries{s->neighbour.data() + start_[p], s->phi.data() + start_[p], count_[p]}
+    return s ? Entries{s->neighbour.get() + start_[p], s->phi.get() + start_[p], count_[p]}
              : Entries{nullptr, nullptr, 0};
   }
 
@@ -54,7 +54,7 @@ class MlsStoredWeights {
   template <class Fill>
   void add(int thread, std::uint32_t p, std::size_t most, Fill&& fill) {
     Segment& s = room(static_cast<std::size_t>(thread), most);
-    const std::size_t written = fill(s.neighbour.data() + s.used, s.phi.data() + s.used);
+    const std::size_t written = fill(s.neighbour.get() + s.used, s.phi.get() + s.used);
     segment_[p] = &s;
     start_[p] = static_cast<std::uint32_t>(s.used);
     count_[p] = static_cast<std::uint32_t>(written);
@@ -91,9 +91,10 @@ class MlsStoredWeights {
   MlsStoredWeights& operator=(MlsStoredWeights&&) = default;
 
  private:
-  struct Segment {
-    std::vector<std::uint32_t> neighbour;
-    std::vector<double> phi;
+  struct Segment {  // allocated, not initialised (a fit writes what it uses): no zero-fill of its pages
+    std::unique_ptr<std::uint32_t[]> neighbour;
+    std::unique_ptr<double[]> phi;
+    std::size_t size = 0;  // entries
     std::size_t used = 0;
   };
   struct Chunk {  // one thread's segments; `current` is the one it writes (npos: none yet in this fit)
