@@ -724,6 +724,8 @@ void Solver::update_stress_smoothed(const NodeVectors& node_velocity, double dt,
   ParticleStore& P = particles_;
   WorkRecorder* const rec = recording();
   const bool reused = scene_.smoothing.mls.variant == MlsVariant::Reused;
+  // The reused variant's largest strain increment: a NaN wins, so that the next pass fits.
+  auto larger_or_nan = [](double a, double b) { return b > a || b != b ? b : a; };
   {
     ScopedPhase timer(times_, Phase::Stress);
     if (reused) block_max_strain_.assign(sort_.block_count(), 0.0);
@@ -736,7 +738,7 @@ void Solver::update_stress_smoothed(const NodeVectors& node_velocity, double dt,
         for (std::size_t i = 0; i < end - begin; ++i) {
           double n2 = 0.0;
           for (int c = 0; c < 6; ++c) n2 += (c < 3 ? 1.0 : 2.0) * inc.strain[c][i] * inc.strain[c][i];
-          largest = n2 > largest || n2 != n2 ? n2 : largest;  // NaN wins: the next pass fits
+          largest = larger_or_nan(largest, n2);
         }
         block_max_strain_[b] = largest;
       }
@@ -770,7 +772,7 @@ void Solver::update_stress_smoothed(const NodeVectors& node_velocity, double dt,
     // This pass's strain moves the particles away from the positions the weights were fitted at.
     if (reused) {
       double largest = 0.0;
-      for (double n2 : block_max_strain_) largest = n2 > largest || n2 != n2 ? n2 : largest;
+      for (double n2 : block_max_strain_) largest = larger_or_nan(largest, n2);
       mls_strain_since_fit_ += std::sqrt(largest);
     }
     unsmoothed_total_ += static_cast<std::int64_t>(last_smoothing_.unsmoothed);

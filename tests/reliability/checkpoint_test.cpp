@@ -82,6 +82,19 @@ void check_restart_is_bit_identical(const Scene& scene, int total, const std::ve
   test::fs::remove_all(dir);
 }
 
+/// The steps (counted from 0) of a `steps`-step run of the scene after which count(solver) grew.
+template <class Count>
+std::vector<int> steps_where_it_grew(const Scene& scene, int steps, Count count) {
+  Solver probe(scene);
+  std::vector<int> grew;
+  for (int i = 0; i < steps; ++i) {
+    const std::int64_t before = count(probe);
+    probe.step();
+    if (count(probe) > before) grew.push_back(i);
+  }
+  return grew;
+}
+
 // Two bodies tumbling onto a frictional floor: particles cross cells and blocks, so the runs sort
 // both on drift and on the interval; the splits fall just after, between and just before sorts.
 TEST(Checkpoint, RestartIsBitIdenticalToAnUninterruptedRun) {
@@ -100,13 +113,7 @@ TEST(Checkpoint, RestartIsBitIdenticalWithMlsSmoothing) {
   Scene scene = test::tumbling_block_scene(1.0);
   scene.smoothing.enabled = true;
   scene.sort_interval = 1000;  // only the drift and the slack sort
-  Solver probe(scene);
-  std::vector<int> sort_steps;
-  for (int i = 0; i < 60; ++i) {
-    const std::int64_t sorts = probe.sort_count();
-    probe.step();
-    if (probe.sort_count() > sorts) sort_steps.push_back(i);
-  }
+  const std::vector<int> sort_steps = steps_where_it_grew(scene, 60, [](const Solver& s) { return s.sort_count(); });
   ASSERT_GE(sort_steps.size(), 3u);  // the splits fall between sorts
   EXPECT_LT(sort_steps.size(), 30u);  // and the sort is reused between them
   check_restart_is_bit_identical(scene, 60, {sort_steps[1] + 1, sort_steps[2] - 1 > sort_steps[1] + 1 ? sort_steps[2] - 1 : 45});
@@ -119,13 +126,7 @@ TEST(Checkpoint, RestartIsBitIdenticalWithReusedMlsWeights) {
   scene.smoothing.enabled = true;
   scene.smoothing.mls.variant = MlsVariant::Reused;
   scene.smoothing.mls.reuse_strain = 0.05;
-  Solver probe(scene);
-  std::vector<int> fit_steps;
-  for (int i = 0; i < 60; ++i) {
-    const std::int64_t fits = probe.smoothing_fits();
-    probe.step();
-    if (probe.smoothing_fits() > fits) fit_steps.push_back(i);
-  }
+  const std::vector<int> fit_steps = steps_where_it_grew(scene, 60, [](const Solver& s) { return s.smoothing_fits(); });
   ASSERT_GE(fit_steps.size(), 3u);   // it fits again as the blocks strain
   ASSERT_LT(fit_steps.size(), 40u);  // and reuses the weights between fits
   int between = -1;

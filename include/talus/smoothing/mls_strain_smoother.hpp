@@ -34,7 +34,7 @@
 
 namespace talus {
 
-struct MlsStoredWeights;
+class MlsStoredWeights;
 
 struct MlsCounts {
   std::size_t smoothed = 0;    // particles whose increment was replaced by the fit

@@ -306,7 +306,6 @@ class Solver {
   std::vector<double> block_max_strain_;
   std::vector<double> mls_rows_;  // MlsStoredWeights::apply's scratch
   std::int64_t smoothing_fits_ = 0;
-  MlsCounts smooth_strain_increments(const std::array<const double*, 6>& in, const std::array<double*, 6>& out);
 };
 
 }  // namespace talus
