@@ -57,7 +57,8 @@ MlsCounts ApplyStoredWeights(const MlsStoredWeights& weights, const std::array<c
       // the particle fit's pass 2 (smoothing/mls_strain_smoother.cpp): sum += phi * in, in order.
       // The entries ahead (this particle's and the next ones', which follow in the segment) are
       // asked for without keeping them in the outer caches: read once a step, they would push out
-      // the rows, which the neighbouring particles read again.
+      // the rows, which the neighbouring particles read again. Near a segment's end the hint points
+      // past it: a prefetch never faults and reads nothing into the sums.
       Row sum = {};
       for (std::uint32_t k = 0; k < e.count; ++k) {
         if (k % 8 == 0) {
