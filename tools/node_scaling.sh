@@ -6,7 +6,7 @@
 #
 #   TALUS=build/talus BUDGET=510 tools/node_scaling.sh OUT
 #
-# Phases, most needed first: the machine (lscpu, NUMA nodes); STREAM at 1, 2, 4, 8, N threads and mpm_limit at 1 and N
+# Phases, most needed first: the machine (lscpu, NUMA nodes); STREAM at 1, 2, 4, 8, N threads, mpm_limit at 1 and N, and the core-to-core time (tools/core_latency.cpp)
 # (../shared/bench, built with -march=native when g++ is there; MPM_LIMIT_SRC / STREAM_SRC point at the
 # sources); determinism (the outputs of 1, 7 and N threads, same bits, three flumes); tools/scaling_runs.py
 # (the default flume with both scatters to 0.1 s, the h = 0.005 m flume with both to 0.0025 s);
@@ -62,6 +62,10 @@ fi
 phase references 30 && [ -n "$ST" ] && {
   for t in 1 2 4 8 "$N"; do echo "STREAM $t threads: $(OMP_NUM_THREADS=$t "$ST") GB/s"; done | tee "$W/stream.txt"
   for t in 1 "$N"; do echo "mpm_limit 2 colour 20 50 10, $t threads: $(OMP_NUM_THREADS=$t "$ML" 2 colour 20 50 10 | grep -o 'particle-updates/s: [0-9.e+]*')"; done | tee "$W/mpm_limit.txt"
+  # the time a cache line takes from CPU 0 to a neighbour, the middle and the last CPU: a small scene's
+  # c(T) follows it (docs/performance.md, "2 threads when the host puts the vCPUs far apart")
+  g++ -O2 -pthread tools/core_latency.cpp -o "$S/core_latency" 2>/dev/null &&
+    timeout 20 "$S/core_latency" 1 $((N / 2)) $((N - 1)) | tee "$W/core_latency.txt"
   pack; }
 
 H005=$W/flume_h005.json; H005BB=$W/flume_h005_block_buffers.json
