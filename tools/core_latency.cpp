@@ -5,8 +5,8 @@
 //
 // Why: a small scene (the default flume) lives in the caches, and with a dynamic schedule its blocks,
 // nodes and barriers pass between the cores' caches in every pass. Its per-core slowdown c(T)
-// follows this time. On the 2-vCPU development VM, the 2-thread flume ran at ×1.23–1.34 while this
-// printed 205 ns, and at ×1.84 while it printed 57 ns, on the same day with the same binary
+// follows this time. On the 2-vCPU development VM, the 2-thread flume ran at 10.0–10.3 M/s while this
+// printed 205–234 ns, and at 13.5–14.1 M/s (×1.84) while it printed 56–60 ns, the same day and binary
 // (docs/performance.md, "2 threads when the host puts the vCPUs far apart"). tools/node_scaling.sh records it.
 #include <pthread.h>
 #include <sched.h>

@@ -65,7 +65,7 @@ phase references 30 && [ -n "$ST" ] && {
   # the time a cache line takes from CPU 0 to a neighbour, the middle and the last CPU: a small scene's
   # c(T) follows it (docs/performance.md, "2 threads when the host puts the vCPUs far apart")
   g++ -O2 -pthread tools/core_latency.cpp -o "$S/core_latency" 2>/dev/null &&
-    timeout 20 "$S/core_latency" 1 $((N / 2)) $((N - 1)) | tee "$W/core_latency.txt"
+    timeout 20 "$S/core_latency" $(printf "%s\n" 1 $((N / 2)) $((N - 1)) | sort -un) | tee "$W/core_latency.txt"
   pack; }
 
 H005=$W/flume_h005.json; H005BB=$W/flume_h005_block_buffers.json
