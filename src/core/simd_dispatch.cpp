@@ -20,11 +20,14 @@ void force_target(std::int64_t target) {
   hwy::SetSupportedTargetsForTest(target);  // dispatch re-evaluates: it takes this target alone
 }
 
-// Highway's name, lower case, with AVX3 (AVX-512 F/VL/DQ/BW) called what users know it as.
+// Highway's name, lower case, with AVX3 (AVX-512 F/VL/DQ/BW) called what users know it as, and
+// the portable baseline called "scalar" whichever form this compiler's Highway builds: SCALAR
+// (g++ 12) or EMU128 (clang 14), both plain C++ that the compiler turns into SSE2.
 std::string isa_name(std::int64_t target) {
   std::string name = hwy::TargetName(target);
   for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (name.rfind("avx3", 0) == 0) name.replace(0, 4, "avx512");
+  if (name == "emu128") name = "scalar";
   return name;
 }
 

@@ -192,17 +192,19 @@ void smooth_cell(CellScratch& S, const MlsPass& pass, double rg, const double (&
 
 template <int Degree, int Axes>
 MlsCounts smooth_cells_impl(const MlsPass& pass) {
-  const auto& [P, sort, grid, bc, cells_per_block, cell_start, rg] = mls_detail::PassCells(pass);
+  const mls_detail::PassCells cells(pass);
+  const ParticleStore& P = cells.P;
+  const int bc = cells.bc;
   return for_each_work_unit(pass, [&](MlsCounts& counts, auto&& for_units) {
     CellScratch S;
     std::vector<std::uint8_t> fits;  // per particle of the cell: fitted (smoothed body, finite position)
     for_units([&](const mls_detail::WorkUnits& work, std::int64_t u) {
       const std::size_t bi = work.block(u);
-      const std::array<int, 3> origin = sort.block_origin(bi);
-      const std::size_t base = bi * cells_per_block;
+      const std::array<int, 3> origin = cells.sort.block_origin(bi);
+      const std::size_t base = bi * cells.cells_per_block;
       const std::size_t first = work.first_cell(u);
       for (std::size_t l = first; l < first + static_cast<std::size_t>(bc); ++l) {
-        const std::uint32_t p_begin = cell_start[base + l], p_end = cell_start[base + l + 1];
+        const std::uint32_t p_begin = cells.cell_start[base + l], p_end = cells.cell_start[base + l + 1];
         if (p_begin == p_end) continue;
         fits.assign(p_end - p_begin, 0);
         for (std::uint32_t q = p_begin; q < p_end; ++q) {
@@ -216,7 +218,7 @@ MlsCounts smooth_cells_impl(const MlsPass& pass) {
         const int cell[3] = {origin[0] + static_cast<int>(l / (bc * bc)), origin[1] + static_cast<int>((l / bc) % bc),
                              origin[2] + static_cast<int>(l % bc)};
         double xc[3];
-        for (int d = 0; d < 3; ++d) xc[d] = grid.node_position(d, cell[d]) + 0.5 * grid.h;
+        for (int d = 0; d < 3; ++d) xc[d] = cells.grid.node_position(d, cell[d]) + 0.5 * cells.grid.h;
         // One fit per body present (almost always one), in the order the bodies first appear.
         std::uint32_t first_fit = p_begin;
         while (first_fit < p_end && !fits[first_fit - p_begin]) ++first_fit;
@@ -225,7 +227,7 @@ MlsCounts smooth_cells_impl(const MlsPass& pass) {
           one_body = one_body && (!fits[q - p_begin] || P.body[q] == P.body[first_fit]);
         if (one_body) {
           if (first_fit < p_end)
-            smooth_cell<Degree, Axes>(S, pass, rg, xc, P.body[first_fit], p_begin, p_end, fits.data(),
+            smooth_cell<Degree, Axes>(S, pass, cells.rg, xc, P.body[first_fit], p_begin, p_end, fits.data(),
                                       counts.smoothed, counts.unsmoothed);
           continue;
         }
@@ -234,7 +236,7 @@ MlsCounts smooth_cells_impl(const MlsPass& pass) {
           bool first = true;
           for (std::uint32_t o = p_begin; o < q && first; ++o) first = !(fits[o - p_begin] && P.body[o] == P.body[q]);
           if (first)
-            smooth_cell<Degree, Axes>(S, pass, rg, xc, P.body[q], p_begin, p_end, fits.data(), counts.smoothed,
+            smooth_cell<Degree, Axes>(S, pass, cells.rg, xc, P.body[q], p_begin, p_end, fits.data(), counts.smoothed,
                                       counts.unsmoothed);
         }
       }

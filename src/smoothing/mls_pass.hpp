@@ -52,8 +52,8 @@ struct MlsPass {
   MlsStoredWeights* record = nullptr;  // the particle fit's weights, kept (the `reused` variant)
 };
 
-/// What both fits read of a pass as they walk its blocks' cells, under the names they use:
-/// `const auto& [P, sort, grid, bc, cells_per_block, cell_start, rg] = PassCells(pass);`
+/// What both fits read of a pass as they walk its blocks' cells: `const PassCells cells(pass);`
+/// (not a structured binding: clang before 16 cannot capture one in the fits' lambdas).
 struct PassCells {
   const ParticleStore& P;
   const CellSort& sort;

@@ -359,7 +359,7 @@ void smooth_group(GroupScratch& S, const std::int64_t* idx, std::size_t nc, cons
 
 template <int Degree, int Axes>
 MlsCounts smooth_impl(const MlsPass& pass) {
-  const auto& [P, sort, grid, bc, cells_per_block, cell_start, rg] = mls_detail::PassCells(pass);
+  const mls_detail::PassCells cells(pass);
   return for_each_work_unit(pass, [&](MlsCounts& counts, auto&& for_units) {
     GroupScratch S;
     S.thread = omp_get_thread_num();
@@ -382,14 +382,14 @@ MlsCounts smooth_impl(const MlsPass& pass) {
           if (!is_fitted(pass, q)) continue;
           ++fittable_in_range;
           for (int d = 0; d < 3; ++d) {
-            const double x = P.x[d][q], xg = grid.to_grid(d, x);
+            const double x = cells.P.x[d][q], xg = cells.grid.to_grid(d, x);
             box.lo[d] = xg < box.lo[d] ? xg : box.lo[d];
             box.hi[d] = xg > box.hi[d] ? xg : box.hi[d];
             box.xlo[d] = x < box.xlo[d] ? x : box.xlo[d];
             box.xhi[d] = x > box.xhi[d] ? x : box.xhi[d];
           }
         }
-        nc = gather_candidates(S, pass, box, rg);
+        nc = gather_candidates(S, pass, box, cells.rg);
         S.idx_x_current = false;
         gathered_begin = range_begin;
         gathered_end = range_end;
@@ -406,11 +406,11 @@ MlsCounts smooth_impl(const MlsPass& pass) {
       double xlo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, xhi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
       for (int g = 0; g < n; ++g)
         for (int d = 0; d < 3; ++d) {
-          const double x = P.x[d][group[g]];
+          const double x = cells.P.x[d][group[g]];
           xlo[d] = x < xlo[d] ? x : xlo[d];
           xhi[d] = x > xhi[d] ? x : xhi[d];
         }
-      const std::size_t ng = filter_for_group(S, P, nc, xlo, xhi, keep2);
+      const std::size_t ng = filter_for_group(S, cells.P, nc, xlo, xhi, keep2);
       smooth_group<Degree, Axes>(S, S.group_idx.data(), ng, pass, group, n, counts.smoothed, counts.unsmoothed);
       n = 0;
     };
@@ -418,12 +418,12 @@ MlsCounts smooth_impl(const MlsPass& pass) {
       // Groups: up to kGroup particles from consecutive cells of one column along k (their box
       // stays about one cell wide); a cell joins the open group only if all of it fits. A group
       // never spans two columns (it is flushed at the end of each).
-      const std::size_t base = work.block(u) * cells_per_block + work.first_cell(u);
-      for (std::size_t l = 0; l < static_cast<std::size_t>(bc); ++l) {
-        const std::uint32_t p_begin = cell_start[base + l], p_end = cell_start[base + l + 1];
+      const std::size_t base = work.block(u) * cells.cells_per_block + work.first_cell(u);
+      for (std::size_t l = 0; l < static_cast<std::size_t>(cells.bc); ++l) {
+        const std::uint32_t p_begin = cells.cell_start[base + l], p_end = cells.cell_start[base + l + 1];
         if (p_begin == p_end) continue;
         if (n > 0 && (static_cast<std::uint32_t>(n) + (p_end - p_begin) > kGroup || l == 0 ||
-                      cell_start[base + l - 1] == cell_start[base + l]))
+                      cells.cell_start[base + l - 1] == cells.cell_start[base + l]))
           flush();
         for (std::uint32_t q = p_begin; q < p_end; ++q) {
           if (!is_fitted(pass, q)) {

@@ -85,7 +85,7 @@ void add_node_phase(TileStages& stages, Grid& grid, const GhostMap& ghosts, Scat
     return;
   }
   const std::vector<NodeVectors*> targets = mirrored_fields(grid, mirror);
-  auto copy = [&grid, targets](const GhostMap::Pair& pair, std::size_t to, std::size_t from) {
+  auto copy = [targets](const GhostMap::Pair& pair, std::size_t to, std::size_t from) {
     for (auto* field : targets)
       for (int d = 0; d < 3; ++d) (*field)[d][to] = pair.sign[d] * (*field)[d][from];
   };

@@ -57,7 +57,8 @@ std::size_t expect_same_as_walls(const Case& c, std::size_t& unfolded) {
       Walls::GhostNodes ghosts;
       Walls::GhostSigns signs;
       const int count = walls.ghosts_of(node, ghosts, signs);
-      for (int k = 0; k < count; ++k) fold.push_back({n, grid.node(ghosts[k][0], ghosts[k][1], ghosts[k][2]), signs[k]});
+      for (int k = 0; k < count; ++k)
+        fold.push_back({n, grid.node(ghosts[k][0], ghosts[k][1], ghosts[k][2]), signs[k], true});
       std::array<int, 3> image;
       std::array<double, 3> sign;
       if (walls.mirror(node, image, sign)) {
@@ -81,6 +82,7 @@ std::size_t expect_same_as_walls(const Case& c, std::size_t& unfolded) {
       EXPECT_EQ(listed_folds[i].node, fold[i].node) << c.name << ", tile " << tile << ", fold " << i;
       EXPECT_EQ(listed_folds[i].other, fold[i].other) << c.name << ", tile " << tile << ", fold " << i;
       EXPECT_EQ(listed_folds[i].sign, fold[i].sign) << c.name << ", tile " << tile << ", fold " << i;
+      EXPECT_EQ(listed_folds[i].folded, fold[i].folded) << c.name << ", tile " << tile << ", fold " << i;
     }
     for (std::size_t i = 0; i < std::min(mirror.size(), listed_mirrors.size()); ++i) {
       EXPECT_EQ(listed_mirrors[i].node, mirror[i].node) << c.name << ", tile " << tile << ", mirror " << i;
