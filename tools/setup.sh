@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages talus needs to build, test and plot. Idempotent and non-interactive:
 # packages already present are skipped, so a second run costs a second.
+# `tools/setup.sh --with-clang` adds clang and LLVM's OpenMP runtime, for tools/check_clang.sh.
 set -euo pipefail
 
 packages=(
@@ -9,6 +10,11 @@ packages=(
   libcli11-dev libfmt-dev libhwy-dev libopenmpi-dev openmpi-bin
   python3-matplotlib python3-numpy python3-vtk9 python3-jsonschema hdf5-tools
 )
+case "${1:-}" in
+  "") ;;
+  --with-clang) packages+=(clang libomp-dev) ;;
+  *) echo "setup: unknown option '$1'; the one option is --with-clang" >&2; exit 2 ;;
+esac
 
 missing=()
 for p in "${packages[@]}"; do
