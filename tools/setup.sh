@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages talus needs to build, test and plot. Idempotent and non-interactive:
 # packages already present are skipped, so a second run costs a second.
-# `tools/setup.sh --with-clang` adds clang and LLVM's OpenMP runtime, for tools/check_clang.sh.
+# `tools/setup.sh --with-clang` adds clang and LLVM's OpenMP runtime, for tools/check_builds.sh.
 set -euo pipefail
 
 packages=(

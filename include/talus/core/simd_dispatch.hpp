@@ -18,7 +18,7 @@
 namespace talus {
 
 /// The paths this build and this CPU can run, worst first: "reference", then the Highway targets
-/// ("scalar", "avx2", "avx512").
+/// ("scalar", "avx2", "avx512"; a -DTALUS_NATIVE=ON build has only its CPU's own, e.g. "avx512_dl").
 std::vector<std::string> available_isas();
 
 /// Select a path by name ("auto" = the best available). Throws input_error naming `source` (the
