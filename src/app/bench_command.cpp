@@ -2,6 +2,7 @@
 // second, seconds per phase and memory per particle. Under mpirun the scene is split over the ranks
 // as `talus run` splits it (slabs along x); rank 0 prints and writes for all of them. See
 // docs/performance.md, "Distributed runs (MPI)".
+#include "build_info.hpp"
 #include "commands.hpp"
 #include "option_checks.hpp"
 #include "talus/core/comm.hpp"
@@ -318,6 +319,8 @@ void run_update_bench(const BenchOptions& o) {
   if (!o.json_path.empty()) {
     nlohmann::json j;
     j["talus_version"] = kVersion;
+  j["build"] = build_json();
+    j["build"] = build_json();
     j["scene"] = "update";
     j["material"] = o.material;
     j["particles"] = n;
@@ -474,6 +477,7 @@ void run_bench(const BenchOptions& o) {
   const int threads = omp_get_max_threads();
   nlohmann::json j;
   j["talus_version"] = kVersion;
+  j["build"] = build_json();
   j["scene"] = o.scene;
   j["shape"] = o.shape;
   j["material"] = o.material;

@@ -1,9 +1,9 @@
 // The talus command-line program: parses the subcommand and reports errors in one line.
+#include "build_info.hpp"
 #include "commands.hpp"
 #include "talus/core/comm.hpp"
 #include "talus/core/error.hpp"
 #include "talus/core/simd_dispatch.hpp"
-#include "talus/core/version.hpp"
 
 #include <fmt/core.h>
 #include <omp.h>
@@ -60,7 +60,7 @@ int main(int argc, char** argv) {
   CLI::App app{
       "talus: explicit 3D material point method (MPM) solver for granular runout.\n"
       "Scene files are JSON (SI units); see docs/scene-reference.md."};
-  app.set_version_flag("--version", std::string("talus ") + talus::kVersion);
+  app.set_version_flag("--version", talus::app::build_summary());
   app.require_subcommand(1);
   talus::app::add_run_command(app);
   talus::app::add_check_command(app);

@@ -22,8 +22,7 @@ struct Result {
   std::string output;  // stdout and stderr together
 };
 
-Result run(const std::string& args) {
-  const std::string command = std::string(TALUS_BINARY) + " " + args + " 2>&1";
+Result run_shell(const std::string& command) {
   FILE* pipe = popen(command.c_str(), "r");
   std::string out;
   std::array<char, 4096> buffer;
@@ -31,6 +30,8 @@ Result run(const std::string& args) {
   const int status = pclose(pipe);
   return {WEXITSTATUS(status), out};
 }
+
+Result run(const std::string& args) { return run_shell(std::string(TALUS_BINARY) + " " + args + " 2>&1"); }
 
 fs::path temp_dir(const std::string& name) {
   fs::path dir = fs::temp_directory_path() / ("talus_cli_" + name + "_" + std::to_string(::getpid()));
@@ -52,6 +53,28 @@ TEST(Cli, HelpAndVersion) {
   const Result extra = run("--version extra");
   EXPECT_EQ(extra.exit_code, 2);
   EXPECT_EQ(extra.output, "talus: error: --version takes nothing else; got 'extra' (see talus --help)\n");
+}
+
+// --version names the build (app/build_info.cpp): the commit of the source tree it was built from,
+// the compiler, and the vector paths; the bench's JSON records the same under "build".
+TEST(Cli, VersionNamesTheCommitAndTheVectorPaths) {
+  const Result head = run_shell("git -C " + std::string(TALUS_SOURCE_DIR) + " rev-parse --short=12 HEAD 2>/dev/null");
+  const std::string commit = head.exit_code == 0 && head.output.size() > 1
+                                 ? head.output.substr(0, head.output.size() - 1)  // less the newline
+                                 : std::string("unknown");
+  const Result version = run("--version");
+  EXPECT_EQ(version.exit_code, 0);
+  EXPECT_NE(version.output.find("(commit " + commit), std::string::npos) << version.output;
+  EXPECT_NE(version.output.find("vector paths here: reference"), std::string::npos) << version.output;
+
+  const fs::path dir = temp_dir("version");
+  fs::create_directories(dir);
+  const Result bench = run("bench --particles 1000 --steps 1 --json " + (dir / "bench.json").string());
+  ASSERT_EQ(bench.exit_code, 0) << bench.output;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "bench.json"));
+  EXPECT_EQ(j.at("build").at("commit").get<std::string>().rfind(commit, 0), 0u) << j.at("build");
+  EXPECT_EQ(j.at("build").at("vector_paths").at(0), "reference");
+  fs::remove_all(dir);
 }
 
 TEST(Cli, CheckValidatesEveryShippedScene) {
