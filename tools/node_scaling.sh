@@ -52,7 +52,8 @@ N=$(nproc)
 phase machine 1
 { date -u; uname -a; head -2 /etc/os-release; nproc; lscpu; free -g; ls /sys/devices/system/node/ | grep node; } > "$W/env.txt" 2>&1
 grep -E "Model name|^CPU\(s\)|Thread|Socket|NUMA" "$W/env.txt"
-"$TALUS" --version || { echo "talus does not start: $TALUS"; pack; exit 1; }
+"$TALUS" --version > "$W/talus_version.txt" 2>&1 || { cat "$W/talus_version.txt"; echo "talus does not start: $TALUS"; pack; exit 1; }
+cat "$W/talus_version.txt"  # the commit, compiler and vector paths of the binary measured
 
 ML=""; ST=""
 if g++ -O3 -march=native -fopenmp "$MPM_LIMIT_SRC" -o "$S/mpm_limit" 2>/dev/null &&
