@@ -319,7 +319,6 @@ void run_update_bench(const BenchOptions& o) {
   if (!o.json_path.empty()) {
     nlohmann::json j;
     j["talus_version"] = kVersion;
-  j["build"] = build_json();
     j["build"] = build_json();
     j["scene"] = "update";
     j["material"] = o.material;
