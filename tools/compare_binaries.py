@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Do two talus binaries give the same bits? Runs short versions of a set of scenes with both and
-compares every output file byte for byte (all but scene.json, which names the binary's run).
+compares every output file byte for byte (all but scene.json and run.json, the run's record, which
+name the binary's run).
 
     tools/compare_binaries.py OLD_TALUS NEW_TALUS [--end 0.02] [--threads 2] [--work /tmp/compare]
                               [--scene FILE ...] [--variants]
@@ -74,11 +75,14 @@ def run(talus, scene_file, out, threads):
     return r.returncode, (r.stderr.strip().splitlines() or [""])[-1]
 
 
+RECORDS = ("scene.json", "run.json")  # what names a run, not what it computed
+
+
 def differing(a, b):
     diffs = []
     for root, _, files in os.walk(a):
         for name in files:
-            if name == "scene.json":
+            if name in RECORDS:
                 continue
             pa = os.path.join(root, name)
             pb = os.path.join(b, os.path.relpath(pa, a))
@@ -87,6 +91,8 @@ def differing(a, b):
     for root, _, files in os.walk(b):
         for name in files:
             pb = os.path.join(root, name)
+            if name in RECORDS:
+                continue
             if not os.path.exists(os.path.join(a, os.path.relpath(pb, b))):
                 diffs.append(os.path.relpath(pb, b) + " (only in the new run)")
     return diffs

@@ -3,6 +3,7 @@
 // as `talus run` splits it (slabs along x); rank 0 prints and writes for all of them. See
 // docs/performance.md, "Distributed runs (MPI)".
 #include "build_info.hpp"
+#include "host_info.hpp"
 #include "commands.hpp"
 #include "option_checks.hpp"
 #include "talus/core/comm.hpp"
@@ -87,23 +88,6 @@ double stream_triad_bytes_per_second(const Comm& comm) {
   }
   if (a[n / 2] != 1.0 + 7.0 * 2.0) throw io_error("stream triad: wrong result");  // keeps the loop honest
   return comm.sum_in_rank_order(24.0 * double(n) / best);
-}
-
-/// A memory line of /proc/self/status in bytes: "VmHWM:" (peak resident) or "VmRSS:" (now).
-std::size_t status_bytes(const char* key) {
-  std::ifstream status("/proc/self/status");
-  const std::string prefix = key;
-  for (std::string line; std::getline(status, line);)
-    if (line.rfind(prefix, 0) == 0) return std::stoull(line.substr(prefix.size())) * 1024;
-  return 0;
-}
-std::size_t peak_rss_bytes() { return status_bytes("VmHWM:"); }
-
-std::string cpu_model() {
-  std::ifstream info("/proc/cpuinfo");
-  for (std::string line; std::getline(info, line);)
-    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-  return "unknown";
 }
 
 /// The sand the `dp` material and the column scene use: Abe, Johansson & Konagai 2005, Table 2 (E = 2 MPa, nu = 0.3,

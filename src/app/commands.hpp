@@ -6,6 +6,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace talus::app {
 
@@ -19,6 +20,10 @@ void add_schema_command(CLI::App& app);
 /// The exit code a command sets instead of calling exit(), so that main() returns it after MPI is
 /// finalised (a run stopped by a signal exits with 128 + the signal); 0 by default.
 int& exit_code();
+
+/// The program's arguments as main() received them, the program's name first (a run's record,
+/// run.json, names the command that made it).
+std::vector<std::string>& command_line();
 
 /// The --isa option of the commands that run the solver (core/simd_dispatch.hpp); apply it with
 /// select_isa(*value) in the callback: "auto" (default) or a path of available_isas().

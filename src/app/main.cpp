@@ -56,6 +56,7 @@ int stdout_failed(int error) {
 int main(int argc, char** argv) {
   // Under mpirun (and with an MPI build) every rank runs this same program; otherwise nothing changes.
   talus::MpiSession mpi(argc, argv);
+  talus::app::command_line().assign(argv, argv + argc);
   const talus::Comm world = talus::Comm::world();
   CLI::App app{
       "talus: explicit 3D material point method (MPM) solver for granular runout.\n"
@@ -124,6 +125,11 @@ namespace talus::app {
 int& exit_code() {
   static int code = 0;
   return code;
+}
+
+std::vector<std::string>& command_line() {
+  static std::vector<std::string> words;
+  return words;
 }
 
 void add_isa_option(CLI::App* command, const std::shared_ptr<std::string>& value) {

@@ -2,6 +2,7 @@
 // what a run would do, writing nothing.
 #include "commands.hpp"
 #include "option_checks.hpp"
+#include "run_record.hpp"
 #include "talus/core/simd_dispatch.hpp"
 #include "talus/core/error.hpp"
 #include "talus/io/checkpoint.hpp"
@@ -220,10 +221,12 @@ void add_run_command(CLI::App& app) {
       recorder = std::make_unique<WorkRecorder>(1000, *record_interval, RecordSpan::WholeRun);
       options.recorder = recorder.get();
     }
+    RunRecord record(dir, solver, RunStart{*scene_path, *restart, memory.total(), start.particles}, world);
     RunSummary summary;
     try {
       summary = run_scene(solver, options);
     } catch (const Error& e) {
+      record.end_with_error(solver, e);
       if (!world.distributed()) throw;
       // This rank may have failed alone while the others wait in a collective: it names itself and
       // ends the whole job with its exit code (MPI_Abort), so nothing hangs.
@@ -231,6 +234,7 @@ void add_run_command(CLI::App& app) {
       std::fflush(stderr);
       world.abort(e.exit_code());
     } catch (const std::exception& e) {
+      record.end_with_error(solver, e);
       if (!world.distributed()) throw;
       fmt::print(stderr, "talus: internal error on rank {} of {}: {}\n", world.rank(), world.size(), e.what());
       std::fflush(stderr);
@@ -238,6 +242,7 @@ void add_run_command(CLI::App& app) {
     }
     const DistributionStats end = solver.distribution();
     const std::int64_t outflow_particles = solver.outflow_particles();
+    record.end(solver, summary, RunEnd{end.particles, outflow_particles});
     const double outflow_mass = solver.outflow_mass();
     double mass = outflow_mass;
     for (double m : solver.particles().mass) mass += m;
@@ -310,8 +315,8 @@ void add_run_command(CLI::App& app) {
     const std::string written = summary.frames_in_series == summary.frames
                                     ? ""
                                     : fmt::format(", {} written by this run", summary.frames);
-    fmt::print("talus: ParaView series: {} ({} frame{}{}); energy history: {}/energy.csv\n", summary.pvd_path,
-               summary.frames_in_series, summary.frames_in_series == 1 ? "" : "s", written, dir);
+    fmt::print("talus: ParaView series: {} ({} frame{}{}); energy history: {}/energy.csv; run record: {}/run.json\n",
+               summary.pvd_path, summary.frames_in_series, summary.frames_in_series == 1 ? "" : "s", written, dir, dir);
     if (!summary.terrain_path.empty()) fmt::print("talus: terrain surface: {} (open it with the series)\n", summary.terrain_path);
     if (summary.runout) print_runout(*summary.runout, summary);
   });

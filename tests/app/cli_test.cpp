@@ -9,7 +9,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
+#include <vector>
 #include <sys/wait.h>
 
 namespace cli_test {
@@ -142,6 +144,66 @@ TEST(Cli, RunWritesAParaViewSeries) {
   fs::remove_all(dir);
 }
 
+
+// run.json (app/run_record.hpp): which build ran the scene, how, on what, and how it ended, each
+// field checked against what the run itself wrote or was given.
+TEST(Cli, RunRecordNamesTheBuildTheCommandAndTheEnd) {
+  const fs::path dir = temp_dir("run_record");
+  fs::create_directories(dir);
+  std::ifstream in(kInputs + "elastic_block_slide.json");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  text.replace(text.find("\"end\": 1.0"), 10, "\"end\": 0.02");
+  std::ofstream(dir / "short.json") << text;
+  const fs::path out = dir / "out";
+  const Result r = run("run " + (dir / "short.json").string() + " --out " + out.string() +
+                       " --threads 2 --isa reference --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("run record: " + out.string() + "/run.json"), std::string::npos) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(out / "run.json"));
+  EXPECT_EQ(j.at("status"), "completed");
+  EXPECT_EQ(j.at("message"), "");
+  // the build --version names
+  const Result version = run("--version");
+  EXPECT_NE(version.output.find("(commit " + j.at("talus").at("commit").get<std::string>() + ","), std::string::npos)
+      << version.output << j.at("talus");
+  // the command and the settings it asked for
+  const std::vector<std::string> command = j.at("command");
+  ASSERT_EQ(command.size(), 10u);
+  EXPECT_EQ(command[0], TALUS_BINARY);
+  EXPECT_EQ(command[1], "run");
+  EXPECT_EQ(command[2], (dir / "short.json").string());
+  EXPECT_EQ(j.at("scene").at("file"), (dir / "short.json").string());
+  EXPECT_EQ(j.at("scene").at("name"), "elastic_block_slide");
+  EXPECT_EQ(j.at("threads"), 2);
+  EXPECT_EQ(j.at("ranks"), 1);
+  EXPECT_EQ(j.at("isa"), "reference");
+  EXPECT_FALSE(j.contains("restart"));
+  // its end, as the other outputs have it: the last history row's step, the frames the series lists
+  std::ifstream history(out / "energy.csv");
+  std::string line, last;
+  while (std::getline(history, line)) last = line;
+  const std::string last_step = last.substr(last.find(',') + 1, last.find(',', last.find(',') + 1) - last.find(',') - 1);
+  EXPECT_EQ(j.at("end").at("step").get<std::int64_t>(), std::stoll(last_step)) << last;
+  EXPECT_EQ(j.at("end").at("steps_this_part"), j.at("end").at("step"));
+  EXPECT_DOUBLE_EQ(j.at("end").at("time").get<double>(), 0.02);
+  std::ifstream pvd(out / "particles.pvd");
+  const std::string index((std::istreambuf_iterator<char>(pvd)), std::istreambuf_iterator<char>());
+  std::size_t frames = 0;
+  for (std::size_t at = index.find("<DataSet"); at != std::string::npos; at = index.find("<DataSet", at + 1)) ++frames;
+  EXPECT_EQ(j.at("end").at("frames_in_series").get<std::size_t>(), frames);
+  EXPECT_EQ(j.at("start").at("particles"), 8000);
+  EXPECT_EQ(j.at("end").at("particles"), 8000);
+  EXPECT_GT(j.at("end").at("particle_updates_per_second").get<double>(), 0.0);
+  EXPECT_LE(j.at("started").get<std::string>(), j.at("finished").get<std::string>());
+  EXPECT_EQ(j.at("started").get<std::string>().size(), 20u) << j.at("started");  // 2026-12-06T13:40:05Z
+  // The resolved scene beside it stays a scene: the record is not in it.
+  EXPECT_EQ(run("check " + (out / "scene.json").string()).exit_code, 0);
+  // A fresh run in the same folder replaces the record.
+  const Result again = run("run " + (dir / "short.json").string() + " --out " + out.string() + " --threads 1 --quiet");
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(out / "run.json")).at("threads"), 1);
+  fs::remove_all(dir);
+}
 
 TEST(Cli, BenchWritesTheJsonContract) {
   const fs::path dir = temp_dir("bench");

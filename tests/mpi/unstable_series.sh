@@ -2,7 +2,8 @@
 # `mpirun -np N talus run` that one rank's instability ends (MPI_Abort): the job exits with the
 # instability's code 3, and the ParaView series lists the frames written before it, each with its
 # .pvtu, so that it opens. Two cases: a breach in the first step (the first frame is listed before the
-# first step: before 2026-12-05 there was no .pvd at all) and one after six frames. (ctest Mpi.UnstableRunKeepsItsSeries)
+# first step: before 2026-12-05 there was no .pvd at all) and one after six frames. Either way run.json
+# says "unstable" with the error's message. (ctest Mpi.UnstableRunKeepsItsSeries)
 set -uo pipefail
 mpirun_cmd=$1; talus=$2; ranks=$3
 work=$(mktemp -d)
@@ -35,7 +36,10 @@ check() {  # $1: case name, $2: speed, $3: the fewest frames the .pvd must list
   for f in $listed; do
     [ -f "$work/$1/$f" ] || { echo "FAIL ($1): $f is listed but missing"; fail=1; }
   done
-  echo "ok ($1): exit code 3, $count frames listed, each on disk"
+  # run.json: the rank that failed wrote how the run ended, whichever rank it was
+  grep -q '"status": "unstable"' "$work/$1/run.json" || { echo "FAIL ($1): run.json does not say unstable"; cat "$work/$1/run.json"; fail=1; }
+  grep -q '"message": ".*CFL breach' "$work/$1/run.json" || { echo "FAIL ($1): run.json has not the error's message"; fail=1; }
+  echo "ok ($1): exit code 3, $count frames listed, each on disk, run.json says unstable (rank $(grep -o '"rank": [0-9]*' "$work/$1/run.json" | grep -o '[0-9]*$'))"
 }
 check first_step 30.0 1
 check later 2.0 5

@@ -6,6 +6,7 @@
 #include "talus/io/checkpoint.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -90,6 +91,9 @@ void expect_same_output(const fs::path& out, const fs::path& ref) {
     EXPECT_TRUE(test::read_text(f) == test::read_text(out / "frames" / f.filename())) << f.filename() << " differs";
 }
 
+/// The run's record, run.json (app/run_record.hpp).
+nlohmann::json read_record(const fs::path& dir) { return nlohmann::json::parse(std::ifstream(dir / "run.json")); }
+
 bool wait_for_file(const fs::path& path, pid_t pid, double timeout) {
   const auto t0 = Clock::now();
   while (!fs::exists(path)) {
@@ -116,8 +120,21 @@ TEST(Crash, SigtermWritesACheckpointAndRestartMatchesAnUninterruptedRun) {
   const Checkpoint c = read_checkpoint((out / "checkpoint.h5").string());
   EXPECT_GT(c.solver.step, 0);
   test::expect_readable_run_folder(out);
+  const nlohmann::json stopped = read_record(out);
+  EXPECT_EQ(stopped.at("status"), "interrupted");
+  EXPECT_EQ(stopped.at("message"), "stopped by signal 15 after writing a checkpoint");
+  EXPECT_EQ(stopped.at("end").at("step").get<std::int64_t>(), c.solver.step);
+  EXPECT_EQ(stopped.at("end").at("checkpoint"), (out / "checkpoint.h5").string());
   ASSERT_EQ(run_talus({"run", ref.scene.string(), "--restart", (out / "checkpoint.h5").string(), "--quiet", "--threads", "1"}), 0);
   expect_same_output(out, ref.out);
+  // The resumed run's record names its checkpoint and keeps the first part's.
+  const nlohmann::json resumed = read_record(out);
+  EXPECT_EQ(resumed.at("status"), "completed");
+  EXPECT_EQ(resumed.at("restart").at("step").get<std::int64_t>(), c.solver.step);
+  EXPECT_EQ(resumed.at("start").at("step").get<std::int64_t>(), c.solver.step);
+  EXPECT_EQ(resumed.at("end").at("step"), read_record(ref.out).at("end").at("step"));
+  ASSERT_EQ(resumed.at("earlier_parts").size(), 1u);
+  EXPECT_EQ(resumed.at("earlier_parts")[0], stopped);
 }
 
 TEST(Crash, SigkillAtRandomMomentsLeavesReadableOutputAndTheRestartFinishes) {
@@ -139,9 +156,15 @@ TEST(Crash, SigkillAtRandomMomentsLeavesReadableOutputAndTheRestartFinishes) {
     Checkpoint c;
     ASSERT_NO_THROW(c = read_checkpoint((out / "checkpoint.h5").string()));
     EXPECT_LE(c.run.frame_times.size(), test::pvd_frames(out / "particles.pvd").size());
+    nlohmann::json killed;
+    ASSERT_NO_THROW(killed = read_record(out));  // whole, whenever the kill came
     // The restart continues from the last checkpoint to the end, and ends where the reference ends.
     ASSERT_EQ(run_talus({"run", ref.scene.string(), "--restart", (out / "checkpoint.h5").string(), "--quiet", "--threads", "1"}), 0);
     expect_same_output(out, ref.out);
+    // The killed part's record is kept; one that still said "running" is marked as ended unrecorded.
+    const nlohmann::json part = read_record(out).at("earlier_parts").at(0);
+    EXPECT_EQ(part.at("status"), killed.at("status") == "running" ? "ended_unrecorded" : killed.at("status")) << part;
+    EXPECT_EQ(part.at("started"), killed.at("started"));
     ++restarted;
     fs::remove_all(out);
   }
@@ -387,6 +410,10 @@ TEST(Crash, InstabilityExitsThreeWithOneLineAndTheLastGoodState) {
   EXPECT_NE(error.find("last good state"), std::string::npos) << error;
   test::expect_readable_run_folder(dir / "out");
   EXPECT_NO_THROW(read_checkpoint((dir / "out" / "checkpoint.h5").string()));
+  const nlohmann::json record = read_record(dir / "out");
+  EXPECT_EQ(record.at("status"), "unstable");
+  EXPECT_EQ("talus: error: " + record.at("message").get<std::string>(), error);
+  EXPECT_GT(record.at("end").at("step").get<std::int64_t>(), 0);
   fs::remove_all(dir);
 }
 

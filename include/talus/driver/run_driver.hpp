@@ -13,6 +13,7 @@
 //   runout.json          the runout after the last step: front, tail, gate, runout plane (diagnostics.runout)
 //   deposit.csv          the deposit thickness raster at the end (only with diagnostics.runout)
 //   terrain.vtu          the terrain surface, written once (only when the scene has a terrain)
+//   run.json             the run's record (written by `talus run`, app/run_record.hpp, not by run_scene)
 #include "talus/diagnostics/runout.hpp"
 #include "talus/io/checkpoint.hpp"
 #include "talus/solver/solver.hpp"

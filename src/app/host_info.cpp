@@ -1,0 +1,31 @@
+#include "host_info.hpp"
+
+#include <unistd.h>
+
+#include <array>
+#include <fstream>
+
+namespace talus::app {
+
+std::string cpu_model() {
+  std::ifstream info("/proc/cpuinfo");
+  for (std::string line; std::getline(info, line);)
+    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+  return "unknown";
+}
+
+std::string host_name() {
+  std::array<char, 256> name{};
+  if (::gethostname(name.data(), name.size() - 1) != 0 || name[0] == '\0') return "unknown";
+  return name.data();
+}
+
+std::size_t status_bytes(const char* key) {
+  std::ifstream status("/proc/self/status");
+  const std::string prefix = key;
+  for (std::string line; std::getline(status, line);)
+    if (line.rfind(prefix, 0) == 0) return std::stoull(line.substr(prefix.size())) * 1024;
+  return 0;
+}
+
+}  // namespace talus::app

@@ -1,0 +1,168 @@
+#include "run_record.hpp"
+
+#include "build_info.hpp"
+#include "commands.hpp"
+#include "host_info.hpp"
+#include "talus/core/simd_dispatch.hpp"
+#include "talus/solver/work_recorder.hpp"
+
+#include <fmt/core.h>
+#include <omp.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <ctime>
+#include <fstream>
+
+namespace talus::app {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string absolute(const std::string& path) {
+  std::error_code ec;
+  const fs::path p = fs::absolute(path, ec);
+  return ec ? path : p.lexically_normal().string();
+}
+
+/// The parts of a run before a resumed one: the record in the checkpoint's folder, with its own
+/// earlier parts before it. A part that still says "running" ended without finishing its record.
+nlohmann::ordered_json earlier_parts(const fs::path& folder) {
+  std::ifstream in(folder / "run.json");
+  if (!in) return nlohmann::ordered_json::array();
+  nlohmann::ordered_json last = nlohmann::ordered_json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (!last.is_object()) return nlohmann::ordered_json::array();  // not a record of ours: left out
+  nlohmann::ordered_json parts = last.contains("earlier_parts") && last["earlier_parts"].is_array() ? last["earlier_parts"]
+                                                                                           : nlohmann::ordered_json::array();
+  last.erase("earlier_parts");
+  if (last.value("status", "") == "running") {
+    last["status"] = "ended_unrecorded";
+    last["message"] = "this part ended without finishing its record (killed, or its machine stopped)";
+  }
+  parts.push_back(std::move(last));
+  return parts;
+}
+
+}  // namespace
+
+std::string utc_now() {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  return text;
+}
+
+RunRecord::RunRecord(const fs::path& dir, const Solver& solver, const RunStart& start, const Comm& comm)
+    : path_(dir / "run.json"), comm_(comm), started_(std::chrono::steady_clock::now()) {
+  const Scene& scene = solver.scene();
+  record_["record_version"] = 1;
+  record_["status"] = "running";
+  record_["message"] = "";  // (here, beside the status, for every end that says something)
+  record_["talus"] = nlohmann::ordered_json::parse(build_json().dump());
+  record_["command"] = command_line();
+  std::error_code ec;
+  record_["working_directory"] = fs::current_path(ec).string();
+  record_["scene"] = {{"name", scene.name}, {"file", absolute(start.scene_path)}, {"resolved", "scene.json"}};
+  if (!start.restart_path.empty()) {
+    record_["restart"] = {{"checkpoint", absolute(start.restart_path)}, {"step", solver.step_count()},
+                          {"time", solver.time()}};
+    std::string folder = fs::path(start.restart_path).parent_path().string();
+    record_["earlier_parts"] = earlier_parts(folder.empty() ? "." : folder);
+  }
+  record_["host"] = {{"name", host_name()}, {"cpu", cpu_model()}, {"logical_cpus", omp_get_num_procs()}};
+  record_["ranks"] = comm.size();
+  record_["threads"] = omp_get_max_threads();
+  record_["isa"] = active_isa();
+  nlohmann::ordered_json openmp;
+  for (const char* name : {"OMP_WAIT_POLICY", "OMP_PROC_BIND", "OMP_PLACES"}) {
+    std::string key(name);
+    std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return std::tolower(c); });
+    openmp[key] = WorkRecorder::openmp_setting(name);
+  }
+  record_["openmp"] = openmp;
+  record_["started"] = utc_now();
+  record_["start"] = {{"step", solver.step_count()}, {"time", solver.time()}, {"particles", start.particles},
+                      {"estimated_memory_bytes", start.estimated_bytes}};
+  record_["end_time"] = scene.end_time;
+  // Rank 0 writes; a record it cannot write (a full disk) stops every rank alike, before the run.
+  std::string problem;
+  if (comm_.root()) try {
+      write();
+    } catch (const Error& e) {
+      problem = e.what();
+    }
+  const bool failed = comm_.distributed() ? comm_.allgather(int(!problem.empty()))[0] != 0 : !problem.empty();
+  if (failed) throw io_error(problem.empty() ? "cannot write " + path_.string() + " (rank 0)" : problem);
+}
+
+void RunRecord::end_common(const Solver& solver, std::string_view status, const std::string& message) {
+  record_["status"] = std::string(status);
+  record_["message"] = message;
+  record_["finished"] = utc_now();
+  record_["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+  record_["end"] = {{"step", solver.step_count()}, {"time", solver.time()}};
+  // (this process's: rank 0's in a distributed run, or the rank that failed)
+  record_["peak_resident_bytes"] = peak_rss_bytes();
+}
+
+void RunRecord::end(const Solver& solver, const RunSummary& summary, const RunEnd& counts) {
+  const bool interrupted = summary.interrupted_signal != 0;
+  end_common(solver, interrupted ? "interrupted" : "completed",
+             interrupted ? fmt::format("stopped by signal {} after writing a checkpoint", summary.interrupted_signal) : "");
+  nlohmann::ordered_json& end = record_["end"];
+  end["particles"] = counts.particles;
+  end["steps_this_part"] = summary.steps - summary.first_step;
+  end["particle_updates_per_second"] = summary.wall_seconds > 0.0 ? summary.particle_updates / summary.wall_seconds : 0.0;
+  end["frames_in_series"] = summary.frames_in_series;
+  if (interrupted) {
+    end["checkpoint"] = summary.checkpoint_path;
+  } else {
+    if (solver.emptied()) end["every_particle_left"] = true;
+    const double e0 = summary.initial.total();
+    const double scale = std::max(
+        {std::abs(e0), summary.initial.kinetic + summary.initial.strain + std::abs(summary.initial.gravity), 1e-300});
+    end["energy_budget_gap"] = (summary.final.total() - e0) / scale;  // as the run's last lines print it
+  }
+  end["outflow_particles"] = counts.outflow_particles;
+  if (comm_.root()) write();
+}
+
+void RunRecord::end_with_error(const Solver& solver, const Error& error) {
+  end_after_error(solver, error.kind() == Error::Kind::Instability ? "unstable" : "failed", error.what());
+}
+
+void RunRecord::end_with_error(const Solver& solver, const std::exception& error) {
+  end_after_error(solver, "failed", fmt::format("internal error: {}", error.what()));
+}
+
+void RunRecord::end_after_error(const Solver& solver, std::string_view status, const std::string& message) {
+  end_common(solver, status, message);
+  if (comm_.distributed()) record_["end"]["rank"] = comm_.rank();
+  try {
+    write();
+  } catch (const Error&) {
+    // (the run's own error is the one to report: a record that cannot be written, on a full disk
+    // say, keeps its "running")
+  }
+}
+
+void RunRecord::write() const {
+  // A temporary name of this process's own: in a distributed run two ranks that fail at once may
+  // both write the record (the last rename wins, each file whole).
+  const fs::path tmp = path_.string() + "." + std::to_string(::getpid()) + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::trunc);
+    out << record_.dump(2) << "\n";
+    out.flush();
+    if (!out) throw io_error(fmt::format("cannot write {}", path_.string()));
+  }
+  std::error_code ec;
+  fs::rename(tmp, path_, ec);
+  if (ec) throw io_error(fmt::format("cannot write {}: {}", path_.string(), ec.message()));
+}
+
+}  // namespace talus::app
