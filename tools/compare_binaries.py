@@ -3,8 +3,8 @@
 compares every output file byte for byte (all but scene.json and run.json, the run's record, which
 name the binary's run).
 
-    tools/compare_binaries.py OLD_TALUS NEW_TALUS [--end 0.02] [--threads 2] [--work /tmp/compare]
-                              [--scene FILE ...] [--variants]
+    tools/compare_binaries.py OLD_TALUS NEW_TALUS [--end 0.02] [--threads 2] [--new-threads N]
+                              [--work /tmp/compare] [--scene FILE ... | --all-inputs] [--variants]
 
 By default the scenes are the flumes (colour passes and block buffers), the collapses, the terrain
 slope, the walls and bar benchmarks with and without MLS, the elastic block, and the elastic block
@@ -12,7 +12,9 @@ with 3D linear MLS fits (per particle at 1 and 2 cells, per cell at 1). --varian
 for the default flume and the block between walls, every scheme (musl, usl, usf, usavg) with each
 scatter (colour passes, block buffers). Each run ends at --end seconds of simulated time (frames
 every end/2). Exit status 1 when any file differs or a run fails on one side only.
-Used for refactors that must not change results (docs/performance.md).
+Used for refactors that must not change results (docs/performance.md). With one binary on both
+sides and --new-threads, it checks that the results do not depend on the thread count:
+`tools/compare_binaries.py build/talus build/talus --threads 1 --new-threads 16 --all-inputs`.
 """
 import argparse
 import filecmp
@@ -46,7 +48,7 @@ VARIANT_SCENES = ["inputs/denlinger_flume.json", "inputs/benchmarks/block_betwee
 MLS_3D_CASES = [("particle", 1.0), ("particle", 2.0), ("cell", 1.0)]
 
 
-def short_scene(path, end, scheme=None, scatter=None, mls=None):
+def short_scene(path, end, scheme=None, scatter=None, mls=None, name=None):
     with open(path) as f:
         s = json.load(f)
     s.setdefault("time", {})["end"] = end
@@ -65,7 +67,7 @@ def short_scene(path, end, scheme=None, scatter=None, mls=None):
         variant, radius = mls
         s.setdefault("solver", {})["smoothing"] = {"basis": "linear", "radius_factor": radius, "variant": variant}
         tag += f"_mls3d_{variant}_{radius:g}"
-    s["name"] = s.get("name", os.path.splitext(os.path.basename(path))[0]) + tag
+    s["name"] = (name or s.get("name", os.path.splitext(os.path.basename(path))[0])) + tag
     return s
 
 
@@ -104,6 +106,10 @@ def main():
     ap.add_argument("new")
     ap.add_argument("--end", type=float, default=0.02, help="simulated seconds per run (default 0.02)")
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--new-threads", type=int, help="threads of the NEW run (default: --threads); with the same "
+                    "binary on both sides, a check that the results do not depend on the thread count")
+    ap.add_argument("--all-inputs", action="store_true",
+                    help="every scene under inputs/ (the element tests aside) instead of the set above")
     ap.add_argument("--work", default="/tmp/talus_compare")
     ap.add_argument("--scene", action="append", help="a scene file (repeatable; default: the set above)")
     ap.add_argument("--variants", action="store_true", help="every scheme with each scatter, on two scenes")
@@ -112,7 +118,17 @@ def main():
     require_talus(a.new, "NEW")
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the defaults are the repo's inputs
     in_repo = lambda path: os.path.join(root, path)
-    cases = [(p, None, None, None) for p in (a.scene or [in_repo(p) for p in DEFAULT_SCENES])]
+    if a.all_inputs and a.scene:
+        sys.exit("compare_binaries.py: --all-inputs and --scene: give one of them")
+    scenes = a.scene or [in_repo(p) for p in DEFAULT_SCENES]
+    if a.all_inputs:
+        scenes = sorted(os.path.join(d, f) for d, _, files in os.walk(in_repo("inputs")) for f in files
+                        if f.endswith(".json") and "element_tests" not in d)
+    for threads in (a.threads, a.new_threads):
+        if threads is not None and threads < 1:
+            sys.exit(f"compare_binaries.py: threads {threads}: give 1 or more")
+    new_threads = a.new_threads or a.threads
+    cases = [(p, None, None, None) for p in scenes]
     if not a.scene:
         cases += [(in_repo("inputs/elastic_block_slide.json"), None, None, mls) for mls in MLS_3D_CASES]
     if a.variants:
@@ -124,14 +140,16 @@ def main():
     os.makedirs(a.work, exist_ok=True)
     bad = failed = 0
     for path, scheme, scatter, mls in cases:
-        scene = short_scene(path, a.end, scheme, scatter, mls)
+        # (--all-inputs: named by the file, as two scenes in inputs/ may share a name)
+        name = os.path.relpath(path, in_repo("inputs"))[:-len(".json")].replace(os.sep, "_") if a.all_inputs else None
+        scene = short_scene(path, a.end, scheme, scatter, mls, name)
         scene_file = os.path.join(a.work, scene["name"] + ".json")
         with open(scene_file, "w") as f:
             json.dump(scene, f)
         outs = [os.path.join(a.work, side, scene["name"]) for side in ("old", "new")]
         for o in outs:  # no frames left from an earlier, longer comparison
             shutil.rmtree(o, ignore_errors=True)
-        results = [run(t, scene_file, o, a.threads) for t, o in zip((a.old, a.new), outs)]
+        results = [run(t, scene_file, o, n) for t, o, n in zip((a.old, a.new), outs, (a.threads, new_threads))]
         if results[0][0] != results[1][0]:
             print(f"DIFFER {scene['name']}: exit {results[0][0]} (old) against {results[1][0]} (new): {results[1][1]}")
             bad += 1

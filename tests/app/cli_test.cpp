@@ -128,13 +128,18 @@ TEST(Cli, CheckWarnsAboutAnMlsRadiusMeasuredUnstable) {
   fs::remove_all(dir);
 }
 
-TEST(Cli, RunWritesAParaViewSeries) {
-  const fs::path dir = temp_dir("run");
+/// The elastic block slide of inputs/, ended at 0.02 s, as `dir`/short.json (the folder made).
+void write_short_block_slide(const fs::path& dir) {
   fs::create_directories(dir);
   std::ifstream in(kInputs + "elastic_block_slide.json");
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   text.replace(text.find("\"end\": 1.0"), 10, "\"end\": 0.02");
   std::ofstream(dir / "short.json") << text;
+}
+
+TEST(Cli, RunWritesAParaViewSeries) {
+  const fs::path dir = temp_dir("run");
+  write_short_block_slide(dir);
   const Result r = run("run " + (dir / "short.json").string() + " --out " + (dir / "out").string() + " --threads 2 --quiet");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("ParaView series"), std::string::npos);
@@ -144,16 +149,11 @@ TEST(Cli, RunWritesAParaViewSeries) {
   fs::remove_all(dir);
 }
 
-
 // run.json (app/run_record.hpp): which build ran the scene, how, on what, and how it ended, each
 // field checked against what the run itself wrote or was given.
 TEST(Cli, RunRecordNamesTheBuildTheCommandAndTheEnd) {
   const fs::path dir = temp_dir("run_record");
-  fs::create_directories(dir);
-  std::ifstream in(kInputs + "elastic_block_slide.json");
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  text.replace(text.find("\"end\": 1.0"), 10, "\"end\": 0.02");
-  std::ofstream(dir / "short.json") << text;
+  write_short_block_slide(dir);
   const fs::path out = dir / "out";
   const Result r = run("run " + (dir / "short.json").string() + " --out " + out.string() +
                        " --threads 2 --isa reference --quiet");

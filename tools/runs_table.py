@@ -1,0 +1,127 @@
+#!/usr/bin/env python3
+"""A table of talus runs from their records (run.json, README "What the files hold"): for a
+parameter sweep or a scaling study, which runs finished, which build and settings made each, and
+what each cost.
+
+    tools/runs_table.py [FOLDER ...] [--csv FILE]
+
+Each FOLDER is a run's output folder, or a folder searched for them (every run.json below it).
+Default: runs/. One row a run, oldest first: the folder, scene, status, commit, ranks x threads,
+vector path, steps, simulated time reached of the end time, wall seconds, million particle-updates
+per second and the energy budget's gap (completed runs), and for a run that did not complete its
+message. A resumed run counts its earlier parts (`parts`). Exit status 1 when no record is found,
+or when a run's status is not "completed" (so that a sweep's script can stop on it); a folder
+that does not exist is one line and exit 2.
+Only the standard library.
+"""
+import argparse
+import csv
+import json
+import os
+import sys
+
+COLUMNS = ["run", "scene", "status", "commit", "ranks_x_threads", "isa", "steps", "time", "end_time",
+           "wall_seconds", "m_updates_per_s", "energy_gap", "parts", "started", "message"]
+
+
+def find_records(folders):
+    """The run.json files in or below each folder, in the order found (sorted within a folder)."""
+    found = []
+    for folder in folders:
+        if not os.path.isdir(folder):
+            sys.exit(f"runs_table.py: {folder}: no such folder")
+        for root, dirs, files in os.walk(folder):
+            dirs.sort()
+            if "run.json" in files:
+                found.append(os.path.join(root, "run.json"))
+    return found
+
+
+def row(path, base):
+    """One row of the table from a record; a file that is no record gives a row that says so."""
+    run = os.path.relpath(os.path.dirname(path), base)
+    try:
+        with open(path) as f:
+            r = json.load(f)
+        if not isinstance(r, dict) or "record_version" not in r:
+            raise ValueError("not a talus run record")
+    except (OSError, ValueError) as e:
+        return {"run": run, "status": "unreadable", "message": str(e)}
+    end = r.get("end", {})
+    start = r.get("start", {})
+    rate = end.get("particle_updates_per_second")
+    gap = end.get("energy_budget_gap")
+    return {
+        "run": run,
+        "scene": r.get("scene", {}).get("name", ""),
+        "status": r.get("status", ""),
+        "commit": r.get("talus", {}).get("commit", ""),
+        "ranks_x_threads": f"{r.get('ranks', '?')}x{r.get('threads', '?')}",
+        "isa": r.get("isa", ""),
+        "steps": end.get("step", start.get("step", "")),
+        "time": end.get("time", start.get("time", "")),
+        "end_time": r.get("end_time", ""),
+        "wall_seconds": r.get("wall_seconds", ""),
+        "m_updates_per_s": rate / 1e6 if rate is not None else "",
+        "energy_gap": gap if gap is not None else "",
+        "parts": 1 + len(r.get("earlier_parts", [])),
+        "started": r.get("started", ""),
+        "message": r.get("message", ""),
+    }
+
+
+def text(value, column):
+    if isinstance(value, float):
+        if column in ("time", "end_time"):
+            return f"{value:.6g}"
+        if column == "energy_gap":
+            return f"{value:.2e}"
+        return f"{value:.2f}"
+    return str(value)
+
+
+def print_table(rows):
+    shown = [c for c in COLUMNS if c != "message"]
+    cells = [[text(r.get(c, ""), c) for c in shown] for r in rows]
+    widths = [max(len(c), *(len(line[i]) for line in cells)) for i, c in enumerate(shown)]
+    print("  ".join(c.ljust(w) for c, w in zip(shown, widths)).rstrip())
+    for r, line in zip(rows, cells):
+        print("  ".join(v.ljust(w) for v, w in zip(line, widths)).rstrip())
+        if r.get("message"):
+            print(f"    {r['message']}")
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
+    p.add_argument("folders", nargs="*", default=["runs"], metavar="FOLDER")
+    p.add_argument("--csv", metavar="FILE", help="also write the table as CSV (every column, the message too)")
+    a = p.parse_args()
+    if a.csv and not os.path.isdir(os.path.dirname(os.path.abspath(a.csv))):
+        sys.exit(f"runs_table.py: --csv {a.csv}: the folder {os.path.dirname(os.path.abspath(a.csv))} does not exist")
+    missing = [f for f in a.folders if not os.path.isdir(f)]
+    if missing:
+        print(f"runs_table.py: {missing[0]}: no such folder", file=sys.stderr)
+        sys.exit(2)
+    records = find_records(a.folders)
+    if not records:
+        print(f"runs_table.py: no run.json in or below {', '.join(a.folders)}", file=sys.stderr)
+        sys.exit(1)
+    base = os.path.commonpath([os.path.abspath(f) for f in a.folders])
+    base = base if len(a.folders) > 1 or not os.path.isfile(os.path.join(base, "run.json")) else os.path.dirname(base)
+    rows = sorted((row(os.path.abspath(path), base) for path in records), key=lambda r: r.get("started", ""))
+    print_table(rows)
+    if a.csv:
+        with open(a.csv, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=COLUMNS)
+            w.writeheader()
+            for r in rows:
+                w.writerow({c: r.get(c, "") for c in COLUMNS})
+    unfinished = [r for r in rows if r.get("status") != "completed"]
+    if unfinished:
+        print(f"runs_table.py: {len(unfinished)} of {len(rows)} runs did not complete", file=sys.stderr)
+        sys.exit(1)
+
+
+if __name__ == "__main__":
+    main()
