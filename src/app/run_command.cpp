@@ -207,6 +207,9 @@ void add_run_command(CLI::App& app) {
                  active_isa(), format_bytes(double(memory.total())), world.distributed() ? " (all ranks)" : "", dir);
     if (world.root() && !world.distributed())
       if (const auto hint = scatter_hint(solver.scene(), solver.cell_sort(), threads)) fmt::print("{}\n", *hint);
+    // Out now, ahead of the progress lines and any error on stderr: a log of both (`> log 2>&1`)
+    // had this banner after the error that ended the run.
+    std::fflush(stdout);
     RunOptions options;
     options.out_dir = dir;
     options.progress = !*quiet;

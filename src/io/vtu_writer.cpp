@@ -6,8 +6,10 @@
 #include <vtkCellArray.h>
 #include <vtkCellType.h>
 #include <vtkDoubleArray.h>
+#include <vtkErrorCode.h>
 #include <vtkFieldData.h>
 #include <vtkNew.h>
+#include <vtkObject.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkSmartPointer.h>
@@ -242,9 +244,22 @@ void write_vtu_atomically(vtkUnstructuredGrid* grid, const std::string& path, bo
     writer->SetCompressorTypeToLZ4();
   else
     writer->SetCompressorTypeToNone();
+  // A write that fails is talus's one-line error, with the system's reason (the error code holds
+  // errno when the file could not be opened): VTK's own report was some twenty lines from three
+  // objects of its pipeline, ahead of it. Its display is a process-wide switch, turned off once.
+  static const bool vtk_reports_off = [] {
+    vtkObject::GlobalWarningDisplayOff();
+    return true;
+  }();
+  (void)vtk_reports_off;
   // Write() can return 1 when the file could not be opened (VTK 9.1 reports it through the
   // pipeline and the error code only): both are checked.
-  if (writer->Write() != 1 || writer->GetErrorCode() != 0) throw io_error(fmt::format("cannot write {} {}", what, path));
+  const int written = writer->Write();
+  const unsigned long code = writer->GetErrorCode();
+  if (written != 1 || code != 0) {
+    const char* reason = code != 0 ? vtkErrorCode::GetStringFromErrorCode(code) : nullptr;
+    throw io_error(fmt::format("cannot write {} {}{}", what, path, reason && *reason ? std::string(": ") + reason : ""));
+  }
   rename_into_place(tmp, path);
 }
 

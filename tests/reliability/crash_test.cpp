@@ -49,6 +49,23 @@ int wait_for(pid_t pid) {
 
 int run_talus(const std::vector<std::string>& args) { return wait_for(spawn(args)); }
 
+/// spawn() with standard output and error both into the file `log`, as `talus ... > log 2>&1`.
+pid_t spawn_logged(const std::vector<std::string>& args, const fs::path& log) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int file = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(file, 1);
+    dup2(file, 2);
+    std::vector<char*> argv;
+    argv.push_back(const_cast<char*>(TALUS_BINARY));
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execv(TALUS_BINARY, argv.data());
+    _exit(127);
+  }
+  return pid;
+}
+
 /// Runs the scene uninterrupted once per test binary: the reference output.
 struct Reference {
   fs::path root, scene, out;
@@ -414,6 +431,32 @@ TEST(Crash, InstabilityExitsThreeWithOneLineAndTheLastGoodState) {
   EXPECT_EQ(record.at("status"), "unstable");
   EXPECT_EQ("talus: error: " + record.at("message").get<std::string>(), error);
   EXPECT_GT(record.at("end").at("step").get<std::int64_t>(), 0);
+  fs::remove_all(dir);
+}
+
+// A frame that cannot be written mid-run (its folder replaced by a file, as a full or vanished disk
+// would fail it) ends the run with talus's one line naming the frame and the system's reason, and
+// nothing of VTK's own report (some twenty lines before 2026-12-06); the banner comes first in a log
+// of both streams; run.json says "failed" with the same message.
+TEST(Crash, AFrameThatCannotBeWrittenEndsTheRunWithOneLineAndTheRecordSaysFailed) {
+  const fs::path dir = test::temp_dir("frame_fails");
+  std::ofstream(dir / "s.json") << test::small_slide_json(3.0, 0.0);
+  const fs::path out = dir / "out", log = dir / "log.txt";
+  const pid_t pid = spawn_logged({"run", (dir / "s.json").string(), "--out", out.string(), "--quiet", "--threads", "1"}, log);
+  if (!wait_for_file(out / "frames" / "particles_000002.vtu", pid, 60.0)) GTEST_SKIP() << "the run ended first";
+  fs::remove_all(out / "frames");
+  std::ofstream(out / "frames") << "not a folder";
+  ASSERT_EQ(wait_for(pid), 2) << test::read_text(log);
+  std::vector<std::string> lines;
+  std::istringstream text(test::read_text(log));
+  for (std::string line; std::getline(text, line);) lines.push_back(line);
+  ASSERT_EQ(lines.size(), 2u) << test::read_text(log);
+  EXPECT_EQ(lines[0].rfind("talus: 1000 particles, 1 thread", 0), 0u) << lines[0];
+  const std::regex error(R"(talus: error: cannot write (particle frame )?\S+/frames/particles_0000[0-9]{2}\.vtu: Not a directory)");
+  EXPECT_TRUE(std::regex_match(lines[1], error)) << lines[1];
+  const nlohmann::json record = read_record(out);
+  EXPECT_EQ(record.at("status"), "failed");
+  EXPECT_EQ("talus: error: " + record.at("message").get<std::string>(), lines[1]);
   fs::remove_all(dir);
 }
 
