@@ -2,6 +2,9 @@
 
 #include <unistd.h>
 
+#include <charconv>
+#include <cctype>
+#include <cmath>
 #include <filesystem>
 
 namespace talus::app {
@@ -28,6 +31,46 @@ void check_writable_folder(const std::string& dir, std::string_view what) {
     throw input_error(fmt::format("{} {}: cannot make it: {} is a file, not a folder", what, dir, existing.string()));
   if (::access(existing.c_str(), W_OK | X_OK) != 0)
     throw input_error(fmt::format("{} {}: cannot write there: no write permission in {}", what, dir, existing.string()));
+}
+
+std::optional<double> parse_duration(std::string_view text) {
+  double total = 0.0;
+  std::string_view units = "hms";  // the units still allowed, in order
+  std::size_t at = 0;
+  while (at < text.size()) {
+    std::size_t end = at;
+    while (end < text.size() && (std::isdigit(static_cast<unsigned char>(text[end])) || text[end] == '.')) ++end;
+    double value = 0.0;
+    const auto [stop, error] = std::from_chars(text.data() + at, text.data() + end, value);
+    if (end == at || error != std::errc() || stop != text.data() + end) return std::nullopt;
+    if (end == text.size() && at == 0) {  // a bare number: seconds
+      total = value;
+      at = end;
+      break;
+    }
+    const std::size_t unit = end < text.size() ? units.find(text[end]) : std::string_view::npos;
+    if (unit == std::string_view::npos) return std::nullopt;
+    total += value * (text[end] == 'h' ? 3600.0 : text[end] == 'm' ? 60.0 : 1.0);
+    units.remove_prefix(unit + 1);
+    at = end + 1;
+  }
+  if (at == 0 || !std::isfinite(total) || total <= 0.0) return std::nullopt;
+  return total;
+}
+
+CLI::Option* check_duration(CLI::Option* option) {
+  const std::string name = option->get_name();
+  // (a transform, not a check: CLI11 keeps a check's changes to the text from the conversion)
+  return option->type_name("DURATION")->transform(CLI::Validator(
+      [name](std::string& text) {
+        const std::optional<double> seconds = parse_duration(text);
+        if (!seconds)
+          throw input_error(fmt::format("{} = {} is not a duration; give e.g. 3h50m, 90m, 1.5h, 5400s or 5400 (seconds)",
+                                        name, text));
+        text = fmt::format("{}", *seconds);
+        return std::string();
+      },
+      ""));
 }
 
 }  // namespace talus::app

@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 
+#include <optional>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -56,5 +57,14 @@ void check_writable_file(const std::string& path, std::string_view option);
 /// its path that exists must be a writable folder (`--out results.csv/run` or a read-only tree
 /// failed only after the solver was built and its banner printed).
 void check_writable_folder(const std::string& dir, std::string_view what);
+
+/// A wall-clock duration as a user writes it for a batch job: "3h50m", "90m", "1.5h", "5400s", or a
+/// bare number of seconds ("5400"); the units h, m, s in that order, each at most once. Nothing for
+/// any other text, or a duration that is not positive and finite.
+std::optional<double> parse_duration(std::string_view text);
+
+/// Makes `option` a duration (parse_duration): its value is replaced by the seconds, and anything
+/// else is refused with one line naming the option and the forms allowed.
+CLI::Option* check_duration(CLI::Option* option);
 
 }  // namespace talus::app

@@ -18,7 +18,9 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
+#include <ctime>
 #include <fstream>
 #include <cstdlib>
 #include <filesystem>
@@ -28,6 +30,10 @@
 namespace talus::app {
 
 namespace {
+
+/// The exit code of a run that --stop-after stopped with a checkpoint: sysexits.h's EX_TEMPFAIL,
+/// "a temporary failure; the user is invited to retry", which a job script can tell from an error.
+constexpr int kStoppedAtDeadline = 75;
 
 void print_warnings(const Scene& scene) {
   for (const std::string& w : scene_warnings(scene)) fmt::print(stderr, "talus: warning: {}\n", w);
@@ -166,11 +172,19 @@ void add_run_command(CLI::App& app) {
   check_range(cmd->add_option("--record-interval", *record_interval, "Steps between the steps --record-work records"), 1,
               1000000)
       ->capture_default_str();
+  auto stop_after = std::make_shared<double>(0.0);
+  check_duration(cmd->add_option(
+      "--stop-after", *stop_after,
+      "Stop once the run has taken this long (wall clock from its start: 3h50m, 90m, 5400s, ...), at the end of "
+      "a step, with a checkpoint to resume from, and exit with code 75: for a batch job's time limit, less a "
+      "margin for the checkpoint"));
   auto foreground_frames = std::make_shared<bool>(false);
   cmd->add_flag("--foreground-frames", *foreground_frames,
                 "Write each frame before the next step starts (by default a frame's compression and file write "
                 "run on a thread of their own while the next steps run)");
   cmd->callback([=]() {
+    const auto started = std::chrono::steady_clock::now();  // --stop-after and run.json count from here
+    const std::time_t utc_started = std::time(nullptr);
     set_threads(*threads);
     select_isa_option(*isa);
     // Under mpirun: every rank reads the scene and builds its slab of the solver; rank 0 speaks.
@@ -215,6 +229,9 @@ void add_run_command(CLI::App& app) {
     options.progress = !*quiet;
     options.frames_in_background = !*foreground_frames;
     options.folder_prepared = true;
+    if (*stop_after > 0.0)
+      options.deadline = started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                       std::chrono::duration<double>(*stop_after));
     if (checkpoint) {
       options.resume = &checkpoint->run;
       options.resume_dir = checkpoint_folder(*restart);
@@ -224,7 +241,7 @@ void add_run_command(CLI::App& app) {
       recorder = std::make_unique<WorkRecorder>(1000, *record_interval, RecordSpan::WholeRun);
       options.recorder = recorder.get();
     }
-    RunRecord record(dir, solver, RunStart{*scene_path, *restart, memory.total(), start.particles}, world);
+    RunRecord record(dir, solver, RunStart{*scene_path, *restart, memory.total(), start.particles, started, utc_started}, world);
     RunSummary summary;
     try {
       summary = run_scene(solver, options);
@@ -251,6 +268,7 @@ void add_run_command(CLI::App& app) {
     for (double m : solver.particles().mass) mass += m;
     mass = world.distributed() ? world.sum_in_rank_order(mass - outflow_mass) + outflow_mass : mass;
     if (summary.interrupted_signal) exit_code() = 128 + summary.interrupted_signal;
+    if (summary.stopped_at_deadline) exit_code() = kStoppedAtDeadline;
     if (!world.root()) return;
     if (recorder) {
       nlohmann::json meta = WorkRecorder::threading_meta();
@@ -265,9 +283,14 @@ void add_run_command(CLI::App& app) {
       out << recorder->to_json(meta).dump() << "\n";
       fmt::print("talus: work record: {} steps, {}\n", recorder->steps().size(), *record_path);
     }
-    if (summary.interrupted_signal) {
-      fmt::print("talus: stopped by signal {} at step {}, t = {:.6g} s; checkpoint {}\n", summary.interrupted_signal,
-                 summary.steps, summary.time, summary.checkpoint_path);
+    if (summary.interrupted_signal || summary.stopped_at_deadline) {
+      if (summary.stopped_at_deadline)
+        fmt::print("talus: stopped after {:.1f} s of wall clock (--stop-after) at step {}, t = {:.6g} s; checkpoint {}\n",
+                   std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(), summary.steps,
+                   summary.time, summary.checkpoint_path);
+      else
+        fmt::print("talus: stopped by signal {} at step {}, t = {:.6g} s; checkpoint {}\n", summary.interrupted_signal,
+                   summary.steps, summary.time, summary.checkpoint_path);
       // (any rank count resumes it; the same one continues bit for bit)
       fmt::print("talus: resume with: {}talus run {} --restart {}\n",
                  world.distributed() ? fmt::format("mpirun -np {} ", world.size()) : "", *scene_path, summary.checkpoint_path);

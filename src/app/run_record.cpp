@@ -47,17 +47,16 @@ nlohmann::ordered_json earlier_parts(const fs::path& folder) {
 
 }  // namespace
 
-std::string utc_now() {
-  const std::time_t now = std::time(nullptr);
+std::string utc_text(std::time_t time) {
   std::tm utc{};
-  gmtime_r(&now, &utc);
+  gmtime_r(&time, &utc);
   char text[32];
   std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
   return text;
 }
 
 RunRecord::RunRecord(const fs::path& dir, const Solver& solver, const RunStart& start, const Comm& comm)
-    : path_(dir / "run.json"), comm_(comm), started_(std::chrono::steady_clock::now()) {
+    : path_(dir / "run.json"), comm_(comm), started_(start.clock_start) {
   const Scene& scene = solver.scene();
   record_["record_version"] = 1;
   record_["status"] = "running";
@@ -84,7 +83,7 @@ RunRecord::RunRecord(const fs::path& dir, const Solver& solver, const RunStart& 
     openmp[key] = WorkRecorder::openmp_setting(name);
   }
   record_["openmp"] = openmp;
-  record_["started"] = utc_now();
+  record_["started"] = utc_text(start.utc_start);
   record_["start"] = {{"step", solver.step_count()}, {"time", solver.time()}, {"particles", start.particles},
                       {"estimated_memory_bytes", start.estimated_bytes}};
   record_["end_time"] = scene.end_time;
@@ -102,7 +101,7 @@ RunRecord::RunRecord(const fs::path& dir, const Solver& solver, const RunStart& 
 void RunRecord::end_common(const Solver& solver, std::string_view status, const std::string& message) {
   record_["status"] = std::string(status);
   record_["message"] = message;
-  record_["finished"] = utc_now();
+  record_["finished"] = utc_text(std::time(nullptr));
   record_["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
   record_["end"] = {{"step", solver.step_count()}, {"time", solver.time()}};
   // (this process's: rank 0's in a distributed run, or the rank that failed)
@@ -110,9 +109,11 @@ void RunRecord::end_common(const Solver& solver, std::string_view status, const 
 }
 
 void RunRecord::end(const Solver& solver, const RunSummary& summary, const RunEnd& counts) {
-  const bool interrupted = summary.interrupted_signal != 0;
+  const bool interrupted = summary.interrupted_signal != 0 || summary.stopped_at_deadline;
   end_common(solver, interrupted ? "interrupted" : "completed",
-             interrupted ? fmt::format("stopped by signal {} after writing a checkpoint", summary.interrupted_signal) : "");
+             summary.stopped_at_deadline ? "stopped at its --stop-after time after writing a checkpoint"
+             : interrupted ? fmt::format("stopped by signal {} after writing a checkpoint", summary.interrupted_signal)
+                           : "");
   nlohmann::ordered_json& end = record_["end"];
   end["particles"] = counts.particles;
   end["steps_this_part"] = summary.steps - summary.first_step;

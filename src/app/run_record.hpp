@@ -20,6 +20,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <ctime>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -32,6 +33,10 @@ struct RunStart {
   std::string restart_path;     // the checkpoint resumed from (empty: a fresh run)
   std::size_t estimated_bytes;  // the memory estimate of `talus check` (all ranks)
   std::int64_t particles;       // on every rank together
+  /// When the command started (before the scene was read and the particles seeded): the record's
+  /// "started" and "wall_seconds" count from here, as --stop-after does.
+  std::chrono::steady_clock::time_point clock_start;
+  std::time_t utc_start;
 };
 
 /// What a run's record says of its end beyond the RunSummary (each a collective to count).
@@ -68,7 +73,7 @@ class RunRecord {
   nlohmann::ordered_json record_;
 };
 
-/// The current UTC time as ISO 8601 to the second ("2026-12-06T13:40:05Z").
-std::string utc_now();
+/// A time as UTC, ISO 8601 to the second ("2026-12-06T13:40:05Z").
+std::string utc_text(std::time_t time);
 
 }  // namespace talus::app

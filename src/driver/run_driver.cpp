@@ -219,7 +219,8 @@ class RunLoop {
         history_schedule_{scene_.output.history_interval, progress_.next_history},
         frame_schedule_{scene_.output.frame_interval, progress_.next_frame},
         checkpoint_schedule_{scene_.output.checkpoint_interval, progress_.next_checkpoint},
-        progress_line_(solver, options), signals_(options.handle_signals), recording_(solver, options.recorder) {}
+        progress_line_(solver, options), signals_(options.handle_signals), deadline_(options.deadline),
+        recording_(solver, options.recorder) {}
 
   RunSummary run();
 
@@ -262,6 +263,12 @@ class RunLoop {
   Snapshot snapshot_;
   ProgressLine progress_line_;
   SignalCatcher signals_;
+  std::optional<std::chrono::steady_clock::time_point> deadline_;
+  /// What each rank saw after a step: a signal caught (its number), its deadline passed (1).
+  struct StopRequest {
+    int signal;
+    int late;
+  };
   LoopRecording recording_;
   RunSummary summary_;
   double local_updates_ = 0.0;  // this rank's particles summed over the steps taken
@@ -285,13 +292,14 @@ RunSummary RunLoop::run() {
     // ParticleStore::copy_from and Solver::state: two parallel loops
     if (keep) recording_.parallel_part(LoopRecording::Part::Snapshot, [&] { return take_snapshot(); }, 2);
     recording_.loop_done();
-    int sig = signals_.caught();
-    if (comm_.distributed()) {  // every rank stops at the same step when any was signalled
-      for (int s : comm_.allgather(sig)) sig = std::max(sig, s);
+    StopRequest stop{signals_.caught(), deadline_ && std::chrono::steady_clock::now() >= *deadline_ ? 1 : 0};
+    if (comm_.distributed()) {  // every rank stops at the same step when any was signalled or is out of time
+      for (const StopRequest& r : comm_.allgather(stop)) stop = {std::max(stop.signal, r.signal), std::max(stop.late, r.late)};
     }
-    if (sig != 0 && !solver_.finished()) {
+    if ((stop.signal != 0 || stop.late != 0) && !solver_.finished()) {
       write_checkpoint();
-      summary_.interrupted_signal = sig;
+      summary_.interrupted_signal = stop.signal;
+      summary_.stopped_at_deadline = stop.signal == 0;
       break;
     }
     progress_line_.update();

@@ -63,6 +63,17 @@ TEST_F(CliErrors, BenchNumberOptionsRefuseNonFiniteValuesAndNonNumbersNamingTheR
 
 // The bench learned that it could not write its files only after it had run (minutes at 1e6
 // particles) and printed its results.
+// talus run --stop-after: a batch job's time limit as its users write one; anything else is refused
+// before the scene is read. (The forms accepted reach the scene, which is missing here.)
+TEST_F(CliErrors, StopAfterTakesTheDurationsOfABatchJobAndRefusesTheRest) {
+  for (const char* accepted : {"3h50m", "90m", "1.5h", "5400s", "5400", "1h2m3s", "0.5s"})
+    expect_error_line(run(std::string("run missing.json --stop-after ") + accepted), "cannot open scene file missing.json");
+  for (const char* refused : {"3h50", "2m3h", "1e3", "-5", "0", "0s", "nan", "inf", "h", "5 m", "1h1h"})
+    expect_error_line(run(std::string("run missing.json --stop-after '") + refused + "'"),
+                      std::string("--stop-after = ") + refused +
+                          " is not a duration; give e.g. 3h50m, 90m, 1.5h, 5400s or 5400 (seconds)");
+}
+
 TEST_F(CliErrors, BenchRefusesAnUnwritableOutputBeforeAnyWork) {
   const std::string bench = "bench --particles 1000 --threads 1 --steps 1 ";
   const std::string missing = (dir_ / "no_such_folder" / "b.json").string();

@@ -154,6 +154,27 @@ TEST(Crash, SigtermWritesACheckpointAndRestartMatchesAnUninterruptedRun) {
   EXPECT_EQ(resumed.at("earlier_parts")[0], stopped);
 }
 
+// --stop-after (a batch job's time limit) stops as SIGTERM does, with exit code 75: the restart
+// then finishes with the uninterrupted run's output.
+TEST(Crash, StopAfterWritesACheckpointAndTheRestartMatchesAnUninterruptedRun) {
+  const Reference& ref = reference();
+  const fs::path out = ref.root / "stop_after";
+  fs::remove_all(out);
+  const std::string limit = fmt::format("{:.3f}s", std::max(0.3 * ref.seconds, 0.001));
+  const int code = run_talus({"run", ref.scene.string(), "--out", out.string(), "--quiet", "--threads", "1", "--stop-after", limit});
+  ASSERT_TRUE(code == 75 || code == 0) << code;
+  if (code == 0) GTEST_SKIP() << "the run finished within " << limit;
+  const Checkpoint c = read_checkpoint((out / "checkpoint.h5").string());
+  test::expect_readable_run_folder(out);
+  const nlohmann::json stopped = read_record(out);
+  EXPECT_EQ(stopped.at("status"), "interrupted");
+  EXPECT_EQ(stopped.at("message"), "stopped at its --stop-after time after writing a checkpoint");
+  EXPECT_EQ(stopped.at("end").at("step").get<std::int64_t>(), c.solver.step);
+  EXPECT_GE(stopped.at("wall_seconds").get<double>(), std::stod(limit));
+  ASSERT_EQ(run_talus({"run", ref.scene.string(), "--restart", (out / "checkpoint.h5").string(), "--quiet", "--threads", "1"}), 0);
+  expect_same_output(out, ref.out);
+}
+
 TEST(Crash, SigkillAtRandomMomentsLeavesReadableOutputAndTheRestartFinishes) {
   const Reference& ref = reference();
   std::mt19937 rng(20240611);

@@ -19,6 +19,7 @@
 #include "talus/solver/solver.hpp"
 #include "talus/solver/work_recorder.hpp"
 
+#include <chrono>
 #include <optional>
 #include <string>
 
@@ -37,6 +38,10 @@ struct RunOptions {
   std::string resume_dir;
   /// Catch SIGINT/SIGTERM: finish the step, write a checkpoint and return (interrupted_signal).
   bool handle_signals = true;
+  /// Stop as a signal would (finish the step, write a checkpoint, return with stopped_at_deadline)
+  /// after the first step that ends at or past this time (talus run --stop-after: a batch job's
+  /// wall-time limit less a margin). In a distributed run every rank stops at the same step.
+  std::optional<std::chrono::steady_clock::time_point> deadline;
   /// Work recorder (talus run --record-work): attached to the solver for the run; the time the
   /// loop spends outside a recorded step (output, guards) is added to that step as serial time.
   WorkRecorder* recorder = nullptr;
@@ -62,6 +67,7 @@ struct RunSummary {
   std::string checkpoint_path;  // <out_dir>/checkpoint.h5
   std::size_t checkpoints = 0;  // checkpoints written by this call
   int interrupted_signal = 0;   // SIGINT/SIGTERM caught: the run stopped after writing a checkpoint
+  bool stopped_at_deadline = false;  // RunOptions::deadline passed: the run stopped after writing a checkpoint
   std::optional<RunoutResult> runout;  // with diagnostics.runout: the front after the last step
   std::string runout_path;             // <out_dir>/runout.csv (with diagnostics.runout)
   std::string runout_summary_path;     // <out_dir>/runout.json (with diagnostics.runout)
