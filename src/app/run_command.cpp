@@ -17,6 +17,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -156,6 +158,11 @@ void add_run_command(CLI::App& app) {
                "give a folder, or leave --out out for runs/<scene name>");
   check_range(cmd->add_option("--threads", *threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)"), 1, 4096);
   cmd->add_flag("--quiet", *quiet, "No progress line");
+  auto progress_every = std::make_shared<double>(0.0);
+  check_range(cmd->add_option("--progress-every", *progress_every,
+                              "Seconds between progress lines (default: 2 on a terminal, where the line is rewritten "
+                              "in place; 30 into a file or pipe, where each is a new line of the log)"),
+              0.1, 86400.0);
   auto restart = std::make_shared<std::string>();
   refuse_empty(cmd->add_option("--restart", *restart,
                                "Continue from a checkpoint (e.g. runs/<name>/checkpoint.h5) of this same scene; output "
@@ -227,6 +234,7 @@ void add_run_command(CLI::App& app) {
     RunOptions options;
     options.out_dir = dir;
     options.progress = !*quiet;
+    options.progress_seconds = *progress_every > 0.0 ? *progress_every : isatty(fileno(stderr)) ? 2.0 : 30.0;
     options.frames_in_background = !*foreground_frames;
     options.folder_prepared = true;
     if (*stop_after > 0.0)

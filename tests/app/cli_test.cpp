@@ -149,6 +149,26 @@ TEST(Cli, RunWritesAParaViewSeries) {
   fs::remove_all(dir);
 }
 
+// Into a file or pipe each progress line is a new line of the log: one every 30 s by default (it
+// was every 2 s, 1 800 lines an hour), and the last after the last step; --progress-every sets it.
+TEST(Cli, ProgressIntoALogComesEveryThirtySecondsUnlessAsked) {
+  const fs::path dir = temp_dir("progress");
+  write_short_block_slide(dir);
+  const std::string args = "run " + (dir / "short.json").string() + " --out " + (dir / "out").string() + " --threads 1";
+  const auto progress_lines = [](const std::string& output) {
+    std::size_t n = 0;
+    for (std::size_t at = output.find("talus: step"); at != std::string::npos; at = output.find("talus: step", at + 1)) ++n;
+    return n;
+  };
+  const Result usual = run(args);  // a run of well under 30 s
+  ASSERT_EQ(usual.exit_code, 0) << usual.output;
+  EXPECT_EQ(progress_lines(usual.output), 1u) << usual.output;
+  EXPECT_NE(usual.output.find("  t = 0.02/0.02 s (100.0%)"), std::string::npos) << usual.output;  // the last step
+  EXPECT_EQ(run(args + " --progress-every 0").output,
+            "talus: error: --progress-every = 0 is outside [0.1, 86400]\n");
+  fs::remove_all(dir);
+}
+
 // run.json (app/run_record.hpp): which build ran the scene, how, on what, and how it ended, each
 // field checked against what the run itself wrote or was given.
 TEST(Cli, RunRecordNamesTheBuildTheCommandAndTheEnd) {

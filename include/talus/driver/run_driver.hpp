@@ -28,7 +28,7 @@ namespace talus {
 struct RunOptions {
   std::string out_dir;
   bool progress = true;       // print a progress line to stderr
-  double progress_seconds = 2.0;
+  double progress_seconds = 2.0;  // between progress lines (talus run: 2 on a terminal, 30 into a log; --progress-every)
   /// Continue a run from a checkpoint already restored into the solver (restore_checkpoint): keep
   /// its frames and history up to the checkpoint, drop what came later.
   const RunProgress* resume = nullptr;
