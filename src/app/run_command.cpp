@@ -1,6 +1,7 @@
 // `talus run SCENE`: run a scene and write its outputs. `talus check SCENE`: validate it and print
 // what a run would do, writing nothing.
 #include "commands.hpp"
+#include "disk_estimate.hpp"
 #include "option_checks.hpp"
 #include "run_record.hpp"
 #include "talus/core/simd_dispatch.hpp"
@@ -58,6 +59,9 @@ void print_scene_summary(const Scene& s, const MemoryEstimate& memory) {
              format_bytes(double(memory.total())), memory.bytes_per_particle, format_bytes(double(memory.grid_bytes)),
              format_bytes(double(memory.grid_bytes_bound)),
              available ? format_bytes(double(*available)) + " available" : "available memory unknown");
+  // (where `talus run` writes by default; --out names another folder)
+  const std::string out_dir = "runs/" + s.name;
+  fmt::print("disk       {}\n", estimate_disk(s, memory.particles, out_dir).summary(out_dir));
 }
 
 // The end-of-run lines of a scene with runout diagnostics (docs/flume.md).
@@ -228,6 +232,12 @@ void add_run_command(CLI::App& app) {
                  active_isa(), format_bytes(double(memory.total())), world.distributed() ? " (all ranks)" : "", dir);
     if (world.root() && !world.distributed())
       if (const auto hint = scatter_hint(solver.scene(), solver.cell_sort(), threads)) fmt::print("{}\n", *hint);
+    if (world.root()) {
+      const DiskEstimate disk = estimate_disk(solver.scene(), std::size_t(start.particles), dir);
+      if (disk.available && disk.total() > *disk.available)
+        fmt::print("talus: warning: the frames may not fit: {} (a frame that cannot be written stops the run)\n",
+                   disk.summary(dir));
+    }
     // Out now, ahead of the progress lines and any error on stderr: a log of both (`> log 2>&1`)
     // had this banner after the error that ended the run.
     std::fflush(stdout);

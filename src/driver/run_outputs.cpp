@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <memory>
 #include <optional>
 #include <regex>
@@ -72,6 +73,14 @@ std::vector<fs::path> run_output_files(const fs::path& dir) {
                         "deposit.csv", "terrain.vtu", "run.json"})
     files.push_back(dir / f);
   return files;
+}
+
+std::size_t frames_of_run(const Scene& scene) {
+  const double interval = scene.output.frame_interval;
+  if (interval <= 0.0) return 2;
+  // (a frame falls on the first step at or past each multiple, and the last step writes one unless
+  // it was such a step: 1 + ceil(end / interval), less a rounding margin when end is a multiple)
+  return 1 + static_cast<std::size_t>(std::ceil(scene.end_time / interval * (1.0 - 1e-12)));
 }
 
 bool same_file(const fs::path& a, const fs::path& b) {

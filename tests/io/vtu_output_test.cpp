@@ -2,6 +2,7 @@
 // and the run driver writes a .pvd index, the resolved scene and the energy history.
 #include "../solver/scene_fixtures.hpp"
 #include "talus/driver/run_driver.hpp"
+#include "talus/driver/run_outputs.hpp"
 #include "talus/io/vtu_writer.hpp"
 #include "vtk_xml_headers.hpp"
 #include "talus/solver/solver.hpp"
@@ -69,6 +70,29 @@ TEST(VtuOutput, FrameReadsBackWithAllArrays) {
   fs::remove_all(dir);
 }
 
+// particle_frame_bytes, the disk-use estimate of `talus check` and `talus run`, against the files:
+// an uncompressed frame (with its time, as the runs write them) within 64 bytes, whatever its
+// particle count; a compressed one no larger but for its block headers.
+TEST(VtuOutput, FrameBytesEstimateMatchesAFrame) {
+  Solver solver(test::tumbling_block_scene(0.01));
+  const fs::path dir = temp_dir("vtu_bytes");
+  fs::create_directories(dir);
+  ParticleStore none;
+  for (const ParticleStore* store : {&solver.particles(), static_cast<const ParticleStore*>(&none)}) {
+    for (bool compress : {false, true}) {
+      const fs::path path = dir / (compress ? "lz4.vtu" : "raw.vtu");
+      write_particles_vtu(path.string(), *store, compress, 0.125);
+      const auto actual = static_cast<double>(fs::file_size(path));
+      const auto estimate = static_cast<double>(particle_frame_bytes(store->size()));
+      if (compress)  // (each compressed array's block header is 12 bytes longer than a raw one's: 13 arrays)
+        EXPECT_LE(actual, estimate + 13 * 12) << store->size() << " particles";
+      else
+        EXPECT_NEAR(actual, estimate, 64.0) << store->size() << " particles";
+    }
+  }
+  fs::remove_all(dir);
+}
+
 TEST(VtuOutput, RunWritesSeriesIndexSceneAndHistory) {
   Scene scene = test::tumbling_block_scene(0.02);
   scene.output.frame_interval = 0.005;
@@ -111,6 +135,23 @@ TEST(VtuOutput, RunWritesSeriesIndexSceneAndHistory) {
   // No temporary file is left behind.
   for (const auto& entry : fs::recursive_directory_iterator(dir)) EXPECT_NE(entry.path().extension(), ".tmp");
   fs::remove_all(dir);
+}
+
+// frames_of_run (the disk estimate's frame count) against the frames runs write: intervals that
+// divide the end time, that do not, that exceed it, and none.
+TEST(VtuOutput, FramesOfRunCountsTheFramesARunWrites) {
+  for (const double interval : {0.005, 0.003, 0.02, 0.03, 0.0}) {
+    Scene scene = test::tumbling_block_scene(0.02);
+    scene.output.frame_interval = interval;
+    Solver solver(scene);
+    const fs::path dir = temp_dir("frames_of_run");
+    RunOptions options;
+    options.out_dir = dir.string();
+    options.progress = false;
+    const RunSummary summary = run_scene(solver, options);
+    EXPECT_EQ(summary.frames, frames_of_run(scene)) << "frame_interval " << interval;
+    fs::remove_all(dir);
+  }
 }
 
 }  // namespace

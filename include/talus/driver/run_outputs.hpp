@@ -202,6 +202,11 @@ class CheckpointFile {
   std::string path_;
 };
 
+/// The most frames a run of `scene` writes from its start: the first at t = 0, one each
+/// output.frame_interval, and the last at the end (2 with no interval). Fewer when max_steps or an
+/// emptied grid ends it early.
+std::size_t frames_of_run(const Scene& scene);
+
 /// The name of frame i: frames/particles_<i:06>.vtu, or, for a distributed run, the summary of its
 /// pieces frames/particles_<i:06>.pvtu.
 std::string frame_name(std::size_t index, bool distributed = false);

@@ -39,6 +39,12 @@ std::optional<bool> frame_stress_in_vtk_order(const std::string& path);
 void write_particles_vtu(const std::string& path, const ParticleStore& particles, bool compress,
                          std::optional<double> time = std::nullopt);
 
+/// The bytes write_particles_vtu writes for a frame of `particles` particles without compression
+/// (the arrays' values, the vertex cells, their block headers and the XML around them), from the
+/// arrays it builds; with compression (output.compress, the default) a frame is smaller. For the
+/// disk-use estimate of `talus check` and `talus run`.
+std::size_t particle_frame_bytes(std::size_t particles);
+
 /// One frame's point arrays (those write_particles_vtu writes), copied out of the store, in
 /// parallel, when it is built: the store may change afterwards while the frame is written, on
 /// another thread (FrameSeries). write(path, compress) gives the bytes write_particles_vtu would

@@ -1,0 +1,34 @@
+#include "disk_estimate.hpp"
+
+#include "talus/driver/run_outputs.hpp"
+#include "talus/io/vtu_writer.hpp"
+#include "talus/solver/memory_estimate.hpp"
+
+#include <fmt/core.h>
+
+namespace talus::app {
+
+namespace fs = std::filesystem;
+
+std::string DiskEstimate::summary(const fs::path& out_dir) const {
+  std::string text = fmt::format("{} frames of at most {}{}: at most {}", frames, format_bytes(double(bytes_per_frame)),
+                                 compressed ? " (LZ4 writes less)" : "", format_bytes(double(total())));
+  text += available ? fmt::format("; {} free in {}", format_bytes(double(*available)), out_dir.string())
+                    : fmt::format("; free space in {} unknown", out_dir.string());
+  return text;
+}
+
+DiskEstimate estimate_disk(const Scene& scene, std::size_t particles, const fs::path& out_dir) {
+  DiskEstimate e;
+  e.frames = frames_of_run(scene);
+  e.bytes_per_frame = particle_frame_bytes(particles);
+  e.compressed = scene.output.compress;
+  std::error_code ec;
+  fs::path existing = fs::absolute(out_dir, ec);
+  while (!existing.empty() && !fs::exists(existing, ec) && existing.has_relative_path()) existing = existing.parent_path();
+  const fs::space_info space = fs::space(existing, ec);
+  if (!ec) e.available = static_cast<std::size_t>(space.available);
+  return e;
+}
+
+}  // namespace talus::app
