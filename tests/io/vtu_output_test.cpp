@@ -28,6 +28,15 @@ namespace fs = std::filesystem;
 
 using test::temp_dir;
 
+/// run_scene on `scene` into `dir`, without a progress line.
+RunSummary run_quietly(const Scene& scene, const fs::path& dir) {
+  Solver solver(scene);
+  RunOptions options;
+  options.out_dir = dir.string();
+  options.progress = false;
+  return run_scene(solver, options);
+}
+
 TEST(VtuOutput, FrameReadsBackWithAllArrays) {
   Solver solver(test::tumbling_block_scene(0.01));
   while (!solver.finished()) solver.step();
@@ -96,12 +105,8 @@ TEST(VtuOutput, FrameBytesEstimateMatchesAFrame) {
 TEST(VtuOutput, RunWritesSeriesIndexSceneAndHistory) {
   Scene scene = test::tumbling_block_scene(0.02);
   scene.output.frame_interval = 0.005;
-  Solver solver(scene);
   const fs::path dir = temp_dir("run");
-  RunOptions options;
-  options.out_dir = dir.string();
-  options.progress = false;
-  const RunSummary summary = run_scene(solver, options);
+  const RunSummary summary = run_quietly(scene, dir);
   EXPECT_EQ(summary.frames, 5u);  // t = 0, 0.005, 0.01, 0.015, 0.02
   std::ifstream pvd(dir / "particles.pvd");
   std::stringstream text;
@@ -143,12 +148,8 @@ TEST(VtuOutput, FramesOfRunCountsTheFramesARunWrites) {
   for (const double interval : {0.005, 0.003, 0.02, 0.03, 0.0}) {
     Scene scene = test::tumbling_block_scene(0.02);
     scene.output.frame_interval = interval;
-    Solver solver(scene);
     const fs::path dir = temp_dir("frames_of_run");
-    RunOptions options;
-    options.out_dir = dir.string();
-    options.progress = false;
-    const RunSummary summary = run_scene(solver, options);
+    const RunSummary summary = run_quietly(scene, dir);
     EXPECT_EQ(summary.frames, frames_of_run(scene)) << "frame_interval " << interval;
     fs::remove_all(dir);
   }

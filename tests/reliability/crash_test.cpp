@@ -24,12 +24,14 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-pid_t spawn(const std::vector<std::string>& args) {
+/// Runs talus with `args` in a child process, its standard output and error both into `log` (as
+/// `talus ... > log 2>&1`; by default nowhere).
+pid_t spawn(const std::vector<std::string>& args, const fs::path& log = "/dev/null") {
   const pid_t pid = fork();
   if (pid == 0) {
-    const int null = open("/dev/null", O_WRONLY);
-    dup2(null, 1);
-    dup2(null, 2);
+    const int file = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(file, 1);
+    dup2(file, 2);
     std::vector<char*> argv;
     argv.push_back(const_cast<char*>(TALUS_BINARY));
     for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
@@ -48,23 +50,6 @@ int wait_for(pid_t pid) {
 }
 
 int run_talus(const std::vector<std::string>& args) { return wait_for(spawn(args)); }
-
-/// spawn() with standard output and error both into the file `log`, as `talus ... > log 2>&1`.
-pid_t spawn_logged(const std::vector<std::string>& args, const fs::path& log) {
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const int file = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    dup2(file, 1);
-    dup2(file, 2);
-    std::vector<char*> argv;
-    argv.push_back(const_cast<char*>(TALUS_BINARY));
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    execv(TALUS_BINARY, argv.data());
-    _exit(127);
-  }
-  return pid;
-}
 
 /// Runs the scene uninterrupted once per test binary: the reference output.
 struct Reference {
@@ -463,7 +448,7 @@ TEST(Crash, AFrameThatCannotBeWrittenEndsTheRunWithOneLineAndTheRecordSaysFailed
   const fs::path dir = test::temp_dir("frame_fails");
   std::ofstream(dir / "s.json") << test::small_slide_json(3.0, 0.0);
   const fs::path out = dir / "out", log = dir / "log.txt";
-  const pid_t pid = spawn_logged({"run", (dir / "s.json").string(), "--out", out.string(), "--quiet", "--threads", "1"}, log);
+  const pid_t pid = spawn({"run", (dir / "s.json").string(), "--out", out.string(), "--quiet", "--threads", "1"}, log);
   if (!wait_for_file(out / "frames" / "particles_000002.vtu", pid, 60.0)) GTEST_SKIP() << "the run ended first";
   fs::remove_all(out / "frames");
   std::ofstream(out / "frames") << "not a folder";
