@@ -9,7 +9,8 @@ Each FOLDER is a run's output folder, or a folder searched for them (every run.j
 Default: runs/. One row a run, oldest first: the folder, scene, status, commit, ranks x threads,
 vector path, steps, simulated time reached of the end time, wall seconds, million particle-updates
 per second and the energy budget's gap (completed runs), and for a run that did not complete its
-message. A resumed run counts its earlier parts (`parts`). Exit status 1 when no record is found,
+message. A run still going (or killed) shows the step and time it last recorded. A resumed run
+counts its earlier parts (`parts`). Exit status 1 when no record is found,
 or when a run's status is not "completed" (so that a sweep's script can stop on it); a folder
 that does not exist is one line and exit 2.
 Only the standard library.
@@ -49,6 +50,8 @@ def row(path, base):
         return {"run": run, "status": "unreadable", "message": str(e)}
     end = r.get("end", {})
     start = r.get("start", {})
+    if not end and "progress" in r:  # a run still going (or killed): how far it got, and when
+        end = r["progress"]
     rate = end.get("particle_updates_per_second")
     gap = end.get("energy_budget_gap")
     return {

@@ -260,6 +260,7 @@ void add_run_command(CLI::App& app) {
       options.recorder = recorder.get();
     }
     RunRecord record(dir, solver, RunStart{*scene_path, *restart, memory.total(), start.particles, started, utc_started}, world);
+    options.heartbeat = [&record](const Solver& s) { record.progress(s); };
     RunSummary summary;
     try {
       summary = run_scene(solver, options);

@@ -98,9 +98,20 @@ RunRecord::RunRecord(const fs::path& dir, const Solver& solver, const RunStart& 
   if (failed) throw io_error(problem.empty() ? "cannot write " + path_.string() + " (rank 0)" : problem);
 }
 
+void RunRecord::progress(const Solver& solver) {
+  record_["progress"] = {{"step", solver.step_count()}, {"time", solver.time()}, {"updated", utc_text(std::time(nullptr))}};
+  if (!comm_.root()) return;
+  try {
+    write();
+  } catch (const Error&) {
+    // (a full disk: the frames meet it too, and stop the run with their own error)
+  }
+}
+
 void RunRecord::end_common(const Solver& solver, std::string_view status, const std::string& message) {
   record_["status"] = std::string(status);
   record_["message"] = message;
+  record_.erase("progress");  // ("end" says where it ended)
   record_["finished"] = utc_text(std::time(nullptr));
   record_["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
   record_["end"] = {{"step", solver.step_count()}, {"time", solver.time()}};

@@ -53,6 +53,10 @@ class RunRecord {
   /// that fails alone in a distributed run can write how it ended.
   RunRecord(const std::filesystem::path& dir, const Solver& solver, const RunStart& start, const Comm& comm);
 
+  /// While the run goes on (RunOptions::heartbeat): "progress" says the step and time reached and
+  /// when. Rank 0 writes; a record it cannot write now is left as it was (the run goes on).
+  void progress(const Solver& solver);
+
   /// The end of a run that returned: "completed" or "interrupted", with its results. Rank 0 writes.
   void end(const Solver& solver, const RunSummary& summary, const RunEnd& counts);
   /// The end of a run that an error stopped on this rank: "unstable" (an Instability) or "failed",

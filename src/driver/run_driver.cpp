@@ -220,6 +220,7 @@ class RunLoop {
         frame_schedule_{scene_.output.frame_interval, progress_.next_frame},
         checkpoint_schedule_{scene_.output.checkpoint_interval, progress_.next_checkpoint},
         progress_line_(solver, options), signals_(options.handle_signals), deadline_(options.deadline),
+        heartbeat_(options.heartbeat), heartbeat_seconds_(options.progress_seconds),
         recording_(solver, options.recorder) {}
 
   RunSummary run();
@@ -264,6 +265,9 @@ class RunLoop {
   ProgressLine progress_line_;
   SignalCatcher signals_;
   std::optional<std::chrono::steady_clock::time_point> deadline_;
+  std::function<void(const Solver&)> heartbeat_;
+  double heartbeat_seconds_;
+  std::chrono::steady_clock::time_point last_heartbeat_ = std::chrono::steady_clock::now();
   /// What each rank saw after a step: a signal caught (its number), its deadline passed (1).
   struct StopRequest {
     int signal;
@@ -303,6 +307,13 @@ RunSummary RunLoop::run() {
       break;
     }
     progress_line_.update();
+    if (heartbeat_ && !solver_.finished()) {
+      const auto now = std::chrono::steady_clock::now();
+      if (std::chrono::duration<double>(now - last_heartbeat_).count() >= heartbeat_seconds_) {
+        last_heartbeat_ = now;
+        heartbeat_(solver_);
+      }
+    }
   }
   finish();
   return summary_;

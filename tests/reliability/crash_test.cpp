@@ -139,6 +139,35 @@ TEST(Crash, SigtermWritesACheckpointAndRestartMatchesAnUninterruptedRun) {
   EXPECT_EQ(resumed.at("earlier_parts")[0], stopped);
 }
 
+// While a run goes on, its record says how far it got ("progress", at the progress lines' cadence
+// even with --quiet), so a killed run's record does too; the end replaces it.
+TEST(Crash, TheRecordOfARunningRunSaysHowFarItGot) {
+  const fs::path dir = test::temp_dir("heartbeat");
+  std::ofstream(dir / "s.json") << test::small_slide_json(3.0, 0.0);
+  const fs::path out = dir / "out";
+  const pid_t pid = spawn({"run", (dir / "s.json").string(), "--out", out.string(), "--quiet", "--threads", "1",
+                           "--progress-every", "0.1"});
+  nlohmann::json seen;
+  const auto t0 = Clock::now();
+  while (!seen.contains("progress") && std::chrono::duration<double>(Clock::now() - t0).count() < 60.0) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    std::ifstream in(out / "run.json");
+    if (in) seen = nlohmann::json::parse(in, nullptr, false);
+  }
+  kill(pid, SIGKILL);
+  const int code = wait_for(pid);
+  ASSERT_TRUE(seen.contains("progress")) << seen.dump();
+  if (code == 0) GTEST_SKIP() << "the run ended before the kill";
+  EXPECT_EQ(seen.at("status"), "running");
+  EXPECT_GT(seen.at("progress").at("step").get<std::int64_t>(), 0);
+  EXPECT_GT(seen.at("progress").at("time").get<double>(), 0.0);
+  EXPECT_EQ(seen.at("progress").at("updated").get<std::string>().size(), 20u);
+  const nlohmann::json killed = read_record(out);  // whole after the kill, and no earlier than what was seen
+  EXPECT_EQ(killed.at("status"), "running");
+  EXPECT_GE(killed.at("progress").at("step").get<std::int64_t>(), seen.at("progress").at("step").get<std::int64_t>());
+  fs::remove_all(dir);
+}
+
 // --stop-after (a batch job's time limit) stops as SIGTERM does, with exit code 75: the restart
 // then finishes with the uninterrupted run's output.
 TEST(Crash, StopAfterWritesACheckpointAndTheRestartMatchesAnUninterruptedRun) {

@@ -44,6 +44,9 @@ class RunsTable(unittest.TestCase):
                                       ("c_killed", "running", "")):
             os.makedirs(os.path.join(cls.sweep, name))
             r = dict(cls.record, status=status, message=message, started="2999-01-01T00:00:00Z")
+            if status == "running":  # as a killed run leaves it: how far it got, no end
+                del r["end"]
+                r["progress"] = {"step": 77, "time": 0.005, "updated": "2999-01-01T00:01:00Z"}
             with open(os.path.join(cls.sweep, name, "run.json"), "w") as f:
                 json.dump(r, f)
 
@@ -61,6 +64,8 @@ class RunsTable(unittest.TestCase):
         rows = [line.split() for line in lines[1:] if not line.startswith("    ")]
         self.assertEqual([r[0] for r in rows], ["a_done", "b_unstable", "c_killed"])  # oldest first
         self.assertEqual([r[2] for r in rows], ["completed", "unstable", "running"])
+        killed = dict(zip(header, rows[2]))
+        self.assertEqual((killed["steps"], killed["time"]), ("77", "0.005"))
         self.assertIn("    step 12, t = 0.001 s: CFL breach", lines)  # the message under its run
         done = dict(zip(header, rows[0]))
         self.assertEqual(done["commit"], self.record["talus"]["commit"])

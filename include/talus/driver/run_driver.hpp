@@ -20,6 +20,7 @@
 #include "talus/solver/work_recorder.hpp"
 
 #include <chrono>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -29,6 +30,10 @@ struct RunOptions {
   std::string out_dir;
   bool progress = true;       // print a progress line to stderr
   double progress_seconds = 2.0;  // between progress lines (talus run: 2 on a terminal, 30 into a log; --progress-every)
+  /// Called on every rank after a step, at most every progress_seconds (whether or not the line is
+  /// printed), and not after the last step: talus run updates its record (run.json) with the step
+  /// reached, so that a killed run's record says how far it got.
+  std::function<void(const Solver&)> heartbeat;
   /// Continue a run from a checkpoint already restored into the solver (restore_checkpoint): keep
   /// its frames and history up to the checkpoint, drop what came later.
   const RunProgress* resume = nullptr;
