@@ -12,7 +12,7 @@ namespace fs = std::filesystem;
 
 std::string DiskEstimate::summary(const fs::path& out_dir) const {
   std::string text = fmt::format("{} frames of at most {}{}: at most {}", frames, format_bytes(double(bytes_per_frame)),
-                                 compressed ? " (LZ4 writes less)" : "", format_bytes(double(total())));
+                                 compressed ? " (LZ4 writes less)" : "", format_bytes(total()));
   text += available ? fmt::format("; {} free in {}", format_bytes(double(*available)), out_dir.string())
                     : fmt::format("; free space in {} unknown", out_dir.string());
   return text;

@@ -16,7 +16,7 @@ struct DiskEstimate {
   std::size_t bytes_per_frame = 0;  // uncompressed (io/vtu_writer.hpp): an upper bound with LZ4
   bool compressed = true;           // output.compress
   std::optional<std::size_t> available;  // free to this user on the output folder's file system
-  std::size_t total() const { return frames * bytes_per_frame; }
+  double total() const { return double(frames) * double(bytes_per_frame); }  // (in double: 10^15 frames of 1 MB overflow 64 bits)
   /// "51 frames of at most 1.5 MB (LZ4 writes less): at most 76.5 MB; 20.1 GB free in runs/x".
   std::string summary(const std::filesystem::path& out_dir) const;
 };

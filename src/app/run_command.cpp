@@ -234,7 +234,7 @@ void add_run_command(CLI::App& app) {
       if (const auto hint = scatter_hint(solver.scene(), solver.cell_sort(), threads)) fmt::print("{}\n", *hint);
     if (world.root()) {
       const DiskEstimate disk = estimate_disk(solver.scene(), std::size_t(start.particles), dir);
-      if (disk.available && disk.total() > *disk.available)
+      if (disk.available && disk.total() > double(*disk.available))
         fmt::print("talus: warning: the frames may not fit: {} (a frame that cannot be written stops the run)\n",
                    disk.summary(dir));
     }

@@ -80,7 +80,11 @@ std::size_t frames_of_run(const Scene& scene) {
   if (interval <= 0.0) return 2;
   // (a frame falls on the first step at or past each multiple, and the last step writes one unless
   // it was such a step: 1 + ceil(end / interval), less a rounding margin when end is a multiple)
-  return 1 + static_cast<std::size_t>(std::ceil(scene.end_time / interval * (1.0 - 1e-12)));
+  const double frames = 1.0 + std::ceil(scene.end_time / interval * (1.0 - 1e-12));
+  // (a run writes at most one frame a step, and none takes 10^15 steps: the cap keeps a vanishing
+  // interval, 1e-300 s, from overflowing the count and still bounds what is written)
+  constexpr double kMostFrames = 1e15;
+  return static_cast<std::size_t>(std::min(frames, kMostFrames));
 }
 
 bool same_file(const fs::path& a, const fs::path& b) {

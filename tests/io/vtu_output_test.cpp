@@ -153,6 +153,10 @@ TEST(VtuOutput, FramesOfRunCountsTheFramesARunWrites) {
     EXPECT_EQ(summary.frames, frames_of_run(scene)) << "frame_interval " << interval;
     fs::remove_all(dir);
   }
+  // A vanishing interval (allowed: a frame every step) is capped, not overflowed.
+  Scene every_step = test::tumbling_block_scene(1e6);
+  every_step.output.frame_interval = 1e-300;
+  EXPECT_EQ(frames_of_run(every_step), std::size_t(1e15));
 }
 
 }  // namespace
