@@ -7,6 +7,7 @@
 #include "talus/core/simd_dispatch.hpp"
 #include "talus/core/error.hpp"
 #include "talus/io/checkpoint.hpp"
+#include "talus/driver/folder_lock.hpp"
 #include "talus/driver/run_driver.hpp"
 #include "talus/driver/run_outputs.hpp"
 #include "talus/scene/scene_json.hpp"
@@ -219,6 +220,17 @@ void add_run_command(CLI::App& app) {
     // Every rank sees the same folder and stops alike (rank 0 reports); --record-work is refused under mpirun.
     check_writable_folder(dir, "output folder");
     if (!record_path->empty()) check_writable_file(*record_path, "--record-work");
+    // One run at a time in a folder: claimed before anything in it is cleared (rank 0 claims it for
+    // the job and tells the others; driver/folder_lock.hpp).
+    std::optional<FolderLock> lock;
+    std::string refusal;
+    if (world.root()) try {
+        lock.emplace(dir);
+      } catch (const Error& e) {
+        if (!world.distributed()) throw;
+        refusal = e.what();
+      }
+    if (world.distributed() && !(refusal = world.broadcast(refusal)).empty()) throw input_error(refusal);
     // Made (or cleared) here, before the run starts: a folder that cannot be used is an error every
     // rank meets alike (rank 0 prepares it and tells the others), said once, with nothing started.
     prepare_output_folder(dir, checkpoint ? &checkpoint->run : nullptr, world);

@@ -222,6 +222,7 @@ TEST(Cli, RunRecordNamesTheBuildTheCommandAndTheEnd) {
   EXPECT_EQ(j.at("isa"), "reference");
   EXPECT_FALSE(j.contains("restart"));
   EXPECT_FALSE(j.contains("progress"));  // (while it ran; "end" replaces it)
+  EXPECT_FALSE(fs::exists(out / ".talus.lock"));  // the folder's lock goes with the run (driver/folder_lock.hpp)
   // its end, as the other outputs have it: the last history row's step, the frames the series lists
   std::ifstream history(out / "energy.csv");
   std::string line, last;

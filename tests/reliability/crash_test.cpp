@@ -51,6 +51,16 @@ int wait_for(pid_t pid) {
 
 int run_talus(const std::vector<std::string>& args) { return wait_for(spawn(args)); }
 
+/// `talus ARGS` (as a shell splits them), its standard output and error together.
+std::pair<int, std::string> run_captured(const std::string& args) {
+  FILE* pipe = popen((std::string(TALUS_BINARY) + " " + args + " 2>&1").c_str(), "r");
+  std::string text;
+  char buffer[4096];
+  while (fgets(buffer, sizeof buffer, pipe)) text += buffer;
+  const int status = pclose(pipe);
+  return {WEXITSTATUS(status), text};
+}
+
 /// Runs the scene uninterrupted once per test binary: the reference output.
 struct Reference {
   fs::path root, scene, out;
@@ -168,6 +178,36 @@ TEST(Crash, TheRecordOfARunningRunSaysHowFarItGot) {
   fs::remove_all(dir);
 }
 
+// One run at a time in a folder (driver/folder_lock.hpp): a second run into the folder of one that
+// is running is refused with one line naming the holder, before it touches anything; once the
+// first has ended, however it ended, the folder is free again.
+TEST(Crash, ASecondRunIntoTheFolderOfARunningOneIsRefused) {
+  const fs::path dir = test::temp_dir("folder_lock");
+  std::ofstream(dir / "s.json") << test::small_slide_json(3.0, 0.0);
+  const fs::path out = dir / "out";
+  const pid_t pid = spawn({"run", (dir / "s.json").string(), "--out", out.string(), "--quiet", "--threads", "1"});
+  ASSERT_TRUE(wait_for_file(out / "energy.csv", pid, 60.0));
+  const std::string scene_before = test::read_text(out / "scene.json");
+  const auto [code, text] = run_captured("run " + (dir / "s.json").string() + " --out " + out.string() + " --quiet --threads 1");
+  const bool first_still_ran = ::kill(pid, SIGKILL) == 0;
+  wait_for(pid);
+  if (!first_still_ran) GTEST_SKIP() << "the first run ended before the second started";
+  EXPECT_EQ(code, 2) << text;
+  EXPECT_EQ(text.rfind("talus: error: output folder " + out.string() + " is in use by another talus run (pid " +
+                           std::to_string(pid) + " on ", 0),
+            0u) << text;
+  const std::string tail = "); wait for it to end, or choose another folder (--out)\n";
+  EXPECT_TRUE(text.size() > tail.size() && text.compare(text.size() - tail.size(), tail.size(), tail) == 0) << text;
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
+  EXPECT_EQ(test::read_text(out / "scene.json"), scene_before);  // nothing of the first run's was cleared
+  EXPECT_TRUE(fs::exists(out / "particles.pvd"));
+  // Killed, the first run holds nothing: the folder takes a new run.
+  const auto [again, again_text] = run_captured("run " + (dir / "s.json").string() + " --out " + out.string() +
+                                                " --quiet --threads 1 --stop-after 0.05s");
+  EXPECT_TRUE(again == 75 || again == 0) << again_text;
+  fs::remove_all(dir);
+}
+
 // --stop-after (a batch job's time limit) stops as SIGTERM does, with exit code 75: the restart
 // then finishes with the uninterrupted run's output.
 TEST(Crash, StopAfterWritesACheckpointAndTheRestartMatchesAnUninterruptedRun) {
@@ -256,14 +296,6 @@ std::string ref_scene_for_missing(const fs::path& dir) {
   return (dir / "ok.json").string();
 }
 
-std::pair<int, std::string> run_captured(const std::string& args) {
-  FILE* pipe = popen((std::string(TALUS_BINARY) + " " + args + " 2>&1").c_str(), "r");
-  std::string text;
-  char buffer[4096];
-  while (fgets(buffer, sizeof buffer, pipe)) text += buffer;
-  const int status = pclose(pipe);
-  return {WEXITSTATUS(status), text};
-}
 
 // A restart into a folder that holds another run's output (not the checkpoint's own folder) kept
 // that run's frames and energy rows below the checkpoint's step: refused, the folder untouched.
