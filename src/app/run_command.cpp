@@ -327,8 +327,7 @@ void add_run_command(CLI::App& app) {
                  world.distributed() ? fmt::format("mpirun -np {} ", world.size()) : "", *scene_path, summary.checkpoint_path);
       return;
     }
-    const double e0 = summary.initial.total();
-    const double scale = std::max({std::abs(e0), summary.initial.kinetic + summary.initial.strain + std::abs(summary.initial.gravity), 1e-300});
+    const double scale = summary.energy_scale();
     // (a resumed run's rate counts the steps it took, not those before its checkpoint)
     const std::int64_t taken = summary.steps - summary.first_step;
     fmt::print("talus: done: {} steps to t = {:.6g} s{} in {:.2f} s ({:.2f} M particle-updates/s)\n", summary.steps,
@@ -342,7 +341,7 @@ void add_run_command(CLI::App& app) {
                  "{} particles migrated, {:.3g} MB of node sums exchanged ({:.3g} kB a step)\n",
                  end.ranks, end.max_imbalance, end.rebalances, end.migrated, end.exchange_bytes / 1e6,
                  taken > 0 ? end.exchange_bytes / 1e3 / taken : 0.0);
-    fmt::print("talus: energy budget closes to {:.3e} of the initial energy\n", (summary.final.total() - e0) / scale);
+    fmt::print("talus: energy budget closes to {:.3e} of the initial energy\n", summary.energy_budget_gap());
     if (solver.scene().output.energy_gap_terms) {
       // the parts of that gap (docs/theory.md, "Where the budget's gap comes from"), on the same scale
       const EnergyGapParts p = energy_gap_parts(summary.initial, summary.final, summary.final_gap);

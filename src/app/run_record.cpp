@@ -4,14 +4,13 @@
 #include "commands.hpp"
 #include "host_info.hpp"
 #include "talus/core/simd_dispatch.hpp"
+#include "talus/io/vtu_writer.hpp"
 #include "talus/solver/work_recorder.hpp"
 
 #include <fmt/core.h>
 #include <omp.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cctype>
 #include <ctime>
 #include <fstream>
 
@@ -20,6 +19,9 @@ namespace talus::app {
 namespace fs = std::filesystem;
 
 namespace {
+
+/// A JSON object of the project's helpers as a member of the record (whose keys keep their order).
+nlohmann::ordered_json ordered(const nlohmann::json& object) { return nlohmann::ordered_json::parse(object.dump()); }
 
 std::string absolute(const std::string& path) {
   std::error_code ec;
@@ -61,7 +63,7 @@ RunRecord::RunRecord(const fs::path& dir, const Solver& solver, const RunStart& 
   record_["record_version"] = 1;
   record_["status"] = "running";
   record_["message"] = "";  // (here, beside the status, for every end that says something)
-  record_["talus"] = nlohmann::ordered_json::parse(build_json().dump());
+  record_["talus"] = ordered(build_json());
   record_["command"] = command_line();
   std::error_code ec;
   record_["working_directory"] = fs::current_path(ec).string();
@@ -76,13 +78,7 @@ RunRecord::RunRecord(const fs::path& dir, const Solver& solver, const RunStart& 
   record_["ranks"] = comm.size();
   record_["threads"] = omp_get_max_threads();
   record_["isa"] = active_isa();
-  nlohmann::ordered_json openmp;
-  for (const char* name : {"OMP_WAIT_POLICY", "OMP_PROC_BIND", "OMP_PLACES"}) {
-    std::string key(name);
-    std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return std::tolower(c); });
-    openmp[key] = WorkRecorder::openmp_setting(name);
-  }
-  record_["openmp"] = openmp;
+  record_["openmp"] = ordered(WorkRecorder::openmp_settings());
   record_["started"] = utc_text(start.utc_start);
   record_["start"] = {{"step", solver.step_count()}, {"time", solver.time()}, {"particles", start.particles},
                       {"estimated_memory_bytes", start.estimated_bytes}};
@@ -134,10 +130,7 @@ void RunRecord::end(const Solver& solver, const RunSummary& summary, const RunEn
     end["checkpoint"] = summary.checkpoint_path;
   } else {
     if (solver.emptied()) end["every_particle_left"] = true;
-    const double e0 = summary.initial.total();
-    const double scale = std::max(
-        {std::abs(e0), summary.initial.kinetic + summary.initial.strain + std::abs(summary.initial.gravity), 1e-300});
-    end["energy_budget_gap"] = (summary.final.total() - e0) / scale;  // as the run's last lines print it
+    end["energy_budget_gap"] = summary.energy_budget_gap();  // as the run's last lines print it
   }
   end["outflow_particles"] = counts.outflow_particles;
   if (comm_.root()) write();
@@ -162,19 +155,6 @@ void RunRecord::end_after_error(const Solver& solver, std::string_view status, c
   }
 }
 
-void RunRecord::write() const {
-  // A temporary name of this process's own: in a distributed run two ranks that fail at once may
-  // both write the record (the last rename wins, each file whole).
-  const fs::path tmp = path_.string() + "." + std::to_string(::getpid()) + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::trunc);
-    out << record_.dump(2) << "\n";
-    out.flush();
-    if (!out) throw io_error(fmt::format("cannot write {}", path_.string()));
-  }
-  std::error_code ec;
-  fs::rename(tmp, path_, ec);
-  if (ec) throw io_error(fmt::format("cannot write {}: {}", path_.string(), ec.message()));
-}
+void RunRecord::write() const { write_file_atomically(path_.string(), record_.dump(2) + "\n"); }
 
 }  // namespace talus::app

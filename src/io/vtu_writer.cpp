@@ -20,6 +20,8 @@
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridWriter.h>
 
+#include <unistd.h>
+
 #include <bit>
 #include <cmath>
 #include <cstdio>
@@ -278,7 +280,9 @@ void write_vtu_atomically(vtkUnstructuredGrid* grid, const std::string& path, bo
 }
 
 void write_file_atomically(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
+  // (the process's own temporary name: two ranks that write one file at once, as a distributed
+  // run's ranks that fail together write run.json, each rename a whole file)
+  const std::string tmp = path + "." + std::to_string(::getpid()) + ".tmp";
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     out << text;

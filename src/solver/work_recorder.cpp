@@ -245,12 +245,18 @@ nlohmann::json WorkRecorder::threading_meta() {
   nlohmann::json meta;
   meta["fork_join_seconds"] = measure_fork_join(max_threads);  // index = thread count (0 unused)
   meta["barrier_seconds"] = measure_barrier(max_threads);
+  meta.update(openmp_settings());
+  return meta;
+}
+
+nlohmann::json WorkRecorder::openmp_settings() {
+  nlohmann::json settings;
   for (const char* name : {"OMP_WAIT_POLICY", "OMP_PROC_BIND", "OMP_PLACES"}) {
     std::string key(name);
     std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return std::tolower(c); });
-    meta[key] = openmp_setting(name);
+    settings[key] = openmp_setting(name);
   }
-  return meta;
+  return settings;
 }
 
 std::string WorkRecorder::openmp_setting(const char* name) {

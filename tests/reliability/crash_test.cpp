@@ -186,7 +186,8 @@ TEST(Crash, ASecondRunIntoTheFolderOfARunningOneIsRefused) {
   std::ofstream(dir / "s.json") << test::small_slide_json(3.0, 0.0);
   const fs::path out = dir / "out";
   const pid_t pid = spawn({"run", (dir / "s.json").string(), "--out", out.string(), "--quiet", "--threads", "1"});
-  ASSERT_TRUE(wait_for_file(out / "energy.csv", pid, 60.0));
+  // (scene.json is written whole, under a temporary name, once the run has started)
+  ASSERT_TRUE(wait_for_file(out / "scene.json", pid, 60.0));
   const std::string scene_before = test::read_text(out / "scene.json");
   const auto [code, text] = run_captured("run " + (dir / "s.json").string() + " --out " + out.string() + " --quiet --threads 1");
   const bool first_still_ran = ::kill(pid, SIGKILL) == 0;
@@ -200,7 +201,7 @@ TEST(Crash, ASecondRunIntoTheFolderOfARunningOneIsRefused) {
   EXPECT_TRUE(text.size() > tail.size() && text.compare(text.size() - tail.size(), tail.size(), tail) == 0) << text;
   EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
   EXPECT_EQ(test::read_text(out / "scene.json"), scene_before);  // nothing of the first run's was cleared
-  EXPECT_TRUE(fs::exists(out / "particles.pvd"));
+  EXPECT_TRUE(fs::exists(out / "energy.csv"));
   // Killed, the first run holds nothing: the folder takes a new run.
   const auto [again, again_text] = run_captured("run " + (dir / "s.json").string() + " --out " + out.string() +
                                                 " --quiet --threads 1 --stop-after 0.05s");

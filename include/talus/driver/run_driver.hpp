@@ -19,7 +19,9 @@
 #include "talus/solver/solver.hpp"
 #include "talus/solver/work_recorder.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <functional>
 #include <optional>
 #include <string>
@@ -67,6 +69,13 @@ struct RunSummary {
   std::size_t frames = 0;            // frames written by this call
   std::size_t frames_in_series = 0;  // frames the .pvd lists (a run resumed in its folder: the earlier ones too)
   EnergyBudget initial, final;
+  /// The scale the budget's gap is measured on: the initial total, or, where that is near zero, the
+  /// sum of the energies it is made of.
+  double energy_scale() const {
+    return std::max({std::abs(initial.total()), initial.kinetic + initial.strain + std::abs(initial.gravity), 1e-300});
+  }
+  /// How far the budget failed to close: (final total - initial total) / energy_scale().
+  double energy_budget_gap() const { return (final.total() - initial.total()) / energy_scale(); }
   EnergyGapTerms final_gap;  // output.energy_gap_terms: at the end (zero when off)
   std::string pvd_path;
   std::string checkpoint_path;  // <out_dir>/checkpoint.h5

@@ -116,6 +116,9 @@ class WorkRecorder {
   static nlohmann::json threading_meta();
   /// An OpenMP setting as the environment gives it (e.g. "OMP_WAIT_POLICY"), "unset" where unset.
   static std::string openmp_setting(const char* name);
+  /// OMP_WAIT_POLICY, OMP_PROC_BIND and OMP_PLACES as set ("unset" where not), under lower-case keys
+  /// (omp_wait_policy, ...): the record's, the bench's and run.json's.
+  static nlohmann::json openmp_settings();
   /// OMP_WAIT_POLICY=PASSIVE (any case): the threads sleep as soon as a region ends.
   static bool passive_wait_policy();
 
