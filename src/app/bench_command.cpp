@@ -217,16 +217,16 @@ void start_in_simple_shear(Solver& solver) {
 void record_work(Solver& solver, const BenchOptions& o, const nlohmann::json& bench);
 
 /// A bench scene too large for this machine stops before it allocates (--particles 1e8 at ~300 B
-/// each was killed by the kernel's out-of-memory killer), with the count that fits.
-void require_bench_fits(const Scene& scene, long long particles) {
-  const MemoryEstimate e = estimate_memory(scene, MemoryScope::Solver);
+/// each was killed by the kernel's out-of-memory killer), with the count that fits. `bytes`: what
+/// the scene of `seeded` particles (about the count asked for) holds at its peak, in proportion to them.
+void require_bench_fits(long long particles, std::size_t seeded, double bytes, const char* what) {
   const std::optional<std::size_t> available = available_memory();
-  if (!available || e.total() <= *available) return;
+  if (!available || bytes <= double(*available)) return;
   // the bench's grid grows with its particles: what fits is in proportion
-  const double fits = double(e.particles) * double(*available) / double(e.total());
+  const double fits = double(seeded) * double(*available) / bytes;
   const double suggested = std::floor(0.9 * fits / 1000.0) * 1000.0;  // 10% spare: the program and the allocator
-  throw input_error(fmt::format("--particles {} needs about {} ({:.0f} B a particle with the grid) but {} is available{}; {}",
-                                particles, format_bytes(double(e.total())), double(e.total()) / double(e.particles),
+  throw input_error(fmt::format("--particles {} needs about {} ({:.0f} B a particle{}) but {} is available{}; {}",
+                                particles, format_bytes(bytes), bytes / double(seeded), what,
                                 format_bytes(double(*available)),
                                 std::getenv("TALUS_MEMORY_LIMIT") ? " (TALUS_MEMORY_LIMIT)" : "",
                                 suggested >= 1000.0 ? fmt::format("use --particles {:.0f} or fewer", suggested)
@@ -240,8 +240,9 @@ void require_bench_fits(const Scene& scene, long long particles) {
 /// return in every pass. No grid, no transfers: the ratio of two materials here is the ratio of
 /// their updates per particle (docs/performance.md, "μ(I) against Drucker-Prager").
 void run_update_bench(const BenchOptions& o) {
-  set_threads(o.threads);
   const std::size_t n = static_cast<std::size_t>(o.particles);
+  require_bench_fits(o.particles, n, double(n) * 7.0 * sizeof(double), "");  // the stress and the plastic strain
+  set_threads(o.threads);
   const double dt = 1.0e-4, rate = 1.0, shear = 2.0e6 / (2.0 * 1.3);
   std::array<std::vector<double>, 6> stress;
   for (auto& c : stress) c.assign(n, 0.0);
@@ -294,8 +295,9 @@ void run_update_bench(const BenchOptions& o) {
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double rate_updates = double(n) * o.steps / wall;
-  fmt::print("talus bench: update scene (the constitutive update alone), {} particles, {} material, {} threads, {} kernels, {} passes\n",
-             n, o.material, omp_get_max_threads(), active_isa(), o.steps);
+  const int threads = omp_get_max_threads();
+  fmt::print("talus bench: update scene (the constitutive update alone), {} particles, {} material, {} thread{}, {} kernels, {} passes\n",
+             n, o.material, threads, threads == 1 ? "" : "s", active_isa(), o.steps);
   fmt::print("  {:.3f} M updates/s ({:.3f} s, {:.2f} ns per particle update)\n", rate_updates / 1e6, wall,
              1e9 * wall * omp_get_max_threads() / (double(n) * o.steps));
   fmt::print("  plastic: {:.1f}% of the updates (dissipated {:.3e} J/m^3 in all, G = {:.4g} Pa)\n",
@@ -371,6 +373,9 @@ void run_bench(const BenchOptions& o) {
   refuse_unwritable_outputs(o, world);
   if (world.distributed() && o.scene == "update")
     throw input_error("--scene update: one rank only (it has no grid to split); run it without mpirun");
+  if (world.distributed() && o.mls != "off")
+    throw input_error(fmt::format("--mls {}: MLS smoothing is not available in a distributed run yet; run it without "
+                                  "mpirun", o.mls));
   if (world.distributed() && !o.record_path.empty())
     throw input_error("--record-work: one rank only (the record is of one process's threads); run it without mpirun");
   if (o.scene == "update") {
@@ -392,7 +397,8 @@ void run_bench(const BenchOptions& o) {
                                                              : std::string());
   Scene scene = o.scene == "column" ? column_scene(o.particles, o.shape, o.scheme, o.material, mls_json)
                                     : block_scene(o.particles, o.shape, o.scheme, o.material, mls_json);
-  require_bench_fits(scene, o.particles);
+  const MemoryEstimate estimate = estimate_memory(scene, MemoryScope::Solver);
+  require_bench_fits(o.particles, estimate.particles, double(estimate.total()), " with the grid");
   Solver solver(std::move(scene), world);
   if (o.scene == "shear") start_in_simple_shear(solver);
   solver.step();  // first step: first touch of the grid pages; not timed

@@ -59,6 +59,7 @@ std::optional<double> parse_duration(std::string_view text) {
 }
 
 CLI::Option* check_duration(CLI::Option* option) {
+  constexpr double kLongestDuration = 8760.0 * 3600.0;
   const std::string name = option->get_name();
   // (a transform, not a check: CLI11 keeps a check's changes to the text from the conversion)
   return option->type_name("DURATION")->transform(CLI::Validator(
@@ -67,6 +68,11 @@ CLI::Option* check_duration(CLI::Option* option) {
         if (!seconds)
           throw input_error(fmt::format("{} = {} is not a duration; give e.g. 3h50m, 90m, 1.5h, 5400s or 5400 (seconds)",
                                         name, text));
+        // (no batch job runs a year; past about 2.5 million hours the deadline's nanoseconds overflowed,
+        // and the run stopped at its first step)
+        if (*seconds > kLongestDuration)
+          throw input_error(fmt::format("{} = {} is longer than a year (8760h); give a shorter duration, or leave {} out",
+                                        name, text, name));
         text = fmt::format("{}", *seconds);
         return std::string();
       },

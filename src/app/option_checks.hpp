@@ -64,7 +64,7 @@ void check_writable_folder(const std::string& dir, std::string_view what);
 std::optional<double> parse_duration(std::string_view text);
 
 /// Makes `option` a duration (parse_duration): its value is replaced by the seconds, and anything
-/// else is refused with one line naming the option and the forms allowed.
+/// else is refused with one line naming the option and the forms allowed; so is a duration over a year.
 CLI::Option* check_duration(CLI::Option* option);
 
 }  // namespace talus::app

@@ -59,11 +59,11 @@ void run_stages(WorkRecorder* recorder, const char* name, std::size_t tiles, con
 // What a distributed run cannot do yet (Solver::check_ranks and the constructor).
 void refuse_undistributable(const Scene& scene) {
   if (scene.smoothing.enabled)
-    throw input_error("smoothing.enabled: MLS smoothing is not available in a distributed run yet (its neighbour "
-                      "search would need the particles of the next slab); run it on one rank");
+    throw input_error("solver.smoothing.enabled = true: MLS smoothing is not available in a distributed run yet (its "
+                      "neighbour search would need the particles of the next slab); run it on one rank");
   if (scene.grid.periodic[0])
-    throw input_error("walls: a periodic x axis is not available in a distributed run yet (the slabs cut x); run it "
-                      "on one rank");
+    throw input_error("boundaries.x- = \"periodic\": a periodic x axis is not available in a distributed run yet (the "
+                      "slabs cut x); run it on one rank");
 }
 
 // A restart's particles must be ones a step could have left (a damaged or edited checkpoint is

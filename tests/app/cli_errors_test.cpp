@@ -72,6 +72,12 @@ TEST_F(CliErrors, StopAfterTakesTheDurationsOfABatchJobAndRefusesTheRest) {
     expect_error_line(run(std::string("run missing.json --stop-after '") + refused + "'"),
                       std::string("--stop-after = ") + refused +
                           " is not a duration; give e.g. 3h50m, 90m, 1.5h, 5400s or 5400 (seconds)");
+  // (3000000h overflowed the deadline's clock, and the run stopped at its first step with exit 75)
+  expect_error_line(run("run missing.json --stop-after 8760h"), "cannot open scene file missing.json");
+  for (const char* refused : {"8760h1s", "3000000h", "99999999999999999999s"})
+    expect_error_line(run(std::string("run missing.json --stop-after ") + refused),
+                      std::string("--stop-after = ") + refused +
+                          " is longer than a year (8760h); give a shorter duration, or leave --stop-after out");
 }
 
 TEST_F(CliErrors, BenchRefusesAnUnwritableOutputBeforeAnyWork) {
@@ -167,6 +173,13 @@ TEST_F(CliErrors, EnvironmentVariablesAreCheckedAndTheOptionsOverrideThem) {
   EXPECT_NE(big.err.find("but 100.0 MB is available (TALUS_MEMORY_LIMIT); use --particles "), std::string::npos) << big.err;
   const ProgramResult fits = run_with_env("TALUS_MEMORY_LIMIT", "100M", "bench --particles 100000 --steps 1 --threads 1");
   EXPECT_EQ(fits.exit_code, 0) << fits.err;
+  // so does the update scene (56 B a particle, no grid), which allocated whatever it was asked for
+  const ProgramResult update =
+      run_with_env("TALUS_MEMORY_LIMIT", "100M", "bench --scene update --material mu_i --particles 3000000 --steps 1");
+  EXPECT_EQ(update.exit_code, 2);
+  EXPECT_EQ(update.out, "");
+  EXPECT_EQ(update.err, "talus: error: --particles 3000000 needs about 168.0 MB (56 B a particle) but 100.0 MB is "
+                        "available (TALUS_MEMORY_LIMIT); use --particles 1607000 or fewer\n");
   // The advice: a cell size factor that makes the scene fit (particles and grid both scale with
   // 1/h^3), rounded up; fewer particles per cell only while the grid alone fits.
   for (const auto& [limit, advice] : std::vector<std::pair<const char*, std::string>>{
