@@ -18,12 +18,28 @@ def require_talus(path, option="--talus"):
     return path
 
 
+def _option(option):
+    return "--" + option.replace("_", "-")
+
+
 def require_folders(**outputs):
-    """Stop with one line when the folder of an output file does not exist (`option=path`; an empty
-    path is no output). Checked right after parsing: the write at the end came after all the work."""
+    """Stop with one line when the folder of an output file does not exist, or the file is a folder
+    (`option=path`; an empty path is no output). Checked right after parsing: the write at the end
+    came after all the work."""
     for option, path in outputs.items():
         if not path:
             continue
         folder = os.path.dirname(os.path.abspath(path))
         if not os.path.isdir(folder):
-            sys.exit(f"{os.path.basename(sys.argv[0])}: --{option.replace('_', '-')} {path}: the folder {folder} does not exist")
+            sys.exit(f"{os.path.basename(sys.argv[0])}: {_option(option)} {path}: the folder {folder} does not exist")
+        if os.path.isdir(path):
+            sys.exit(f"{os.path.basename(sys.argv[0])}: {_option(option)} {path}: is a folder; give a file name")
+
+
+def require_inputs(**inputs):
+    """Stop with one line when an input file given does not exist or is a folder (`option=path`; an
+    empty path is no input), before any work (a missing file was a traceback)."""
+    for option, path in inputs.items():
+        if path and not os.path.isfile(path):
+            what = "is a folder, not a file" if os.path.isdir(path) else "no such file"
+            sys.exit(f"{os.path.basename(sys.argv[0])}: {_option(option)} {path}: {what}")

@@ -30,7 +30,6 @@ the --runs folder for any other sweep, so that a quick look does not overwrite t
 """
 import argparse
 import json
-import math
 import os
 import subprocess
 import sys
@@ -40,7 +39,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, make_collapse_scene
 import make_collapse_scene  # noqa: E402
-from talus_plot import ROOT, read_csv_columns, read_vtu, save_figure, write_csv_rows  # noqa: E402
+from talus_plot import ROOT, read_csv_columns, read_vtu, save_figure, series_frames, write_csv_rows  # noqa: E402
 
 MODELS = {"dp": "Drucker-Prager", "mu_i": "mu(I)"}
 
@@ -97,8 +96,7 @@ def measure(run_dir, o):
     h = L0 / o.cells
     spacing = h / o.particles_per_cell
     res = json.load(open(os.path.join(run_dir, "runout.json")))
-    frames = sorted(f for f in os.listdir(os.path.join(run_dir, "frames")) if f.endswith(".vtu"))
-    xyz = read_vtu(os.path.join(run_dir, "frames", frames[-1]))["points"]
+    xyz = read_vtu(series_frames(run_dir)[-1][1])["points"]
     away = xyz[:, 0] > 2 * h  # the height away from the back wall: see height_at_wall in the docstring
     x = np.sort(xyz[:, 0])
     gaps = np.nonzero(np.diff(x) > 2 * h)[0]

@@ -137,6 +137,8 @@ def main():
     for path, *_ in cases:
         if not os.path.isfile(path):
             sys.exit(f"compare_binaries.py: scene {path} does not exist")
+    if os.path.exists(a.work) and not os.path.isdir(a.work):  # (was a FileExistsError traceback)
+        sys.exit(f"compare_binaries.py: --work {a.work}: is a file; give a folder")
     os.makedirs(a.work, exist_ok=True)
     bad = failed = 0
     for path, scheme, scatter, mls in cases:

@@ -6,7 +6,9 @@ Usage: tools/compare_ranks.py RUN_1RANK RUN_2RANKS ... [--markdown]
 Each RUN is a `talus run` output folder. Prints, against the first run: the runout (front, tail,
 distance beyond the gate; runout.json), the final energy ledger and how well it closes (energy.csv),
 the particles left in the last frame plus those that left through open faces (mass conservation),
-and the wall time if the folder holds a `talus.log` with talus's end-of-run lines.
+and the wall time. The rank count, the particles that left and the wall time come from the run's
+record (run.json; of a resumed run, its last part's wall time), or from a `talus.log` with talus's
+end-of-run lines in a folder written before talus kept that record.
 """
 import argparse
 import csv
@@ -47,6 +49,24 @@ def log_value(run, pattern):
     return m.group(1) if m else None
 
 
+def run_facts(run):
+    """(ranks, particles that left through open faces, wall seconds or None) of a run folder."""
+    record = run / "run.json"
+    if record.is_file():
+        try:
+            r = json.loads(record.read_text())
+            return int(r["ranks"]), int(r["end"]["outflow_particles"]), r.get("wall_seconds")
+        except (ValueError, KeyError, TypeError):
+            pass  # a record of a run that did not end: the log, if any
+    outflow = log_value(run, r"talus: (\d+) particles \([^)]*\) left through open faces")
+    ranks = log_value(run, r"(\d+) ranks x")
+    wall = log_value(run, r"in ([0-9.]+) s \(")
+    if ranks is None and not (run / "talus.log").exists():
+        sys.exit(f"compare_ranks.py: {run}: neither run.json of a finished run nor talus.log: cannot tell its ranks "
+                 "and outflow")
+    return int(ranks or 1), int(outflow or 0), float(wall) if wall else None
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("runs", nargs="+", type=pathlib.Path)
@@ -64,19 +84,16 @@ def main():
         e0 = float(first["total"])
         closure = (float(last["total"]) - e0) / e0
         particles = particles_in_last_frame(run)
-        outflow = log_value(run, r"talus: (\d+) particles \([^)]*\) left through open faces")
-        outflow = int(outflow) if outflow else 0
-        ranks = log_value(run, r"(\d+) ranks x") or "1"
-        wall = log_value(run, r"in ([0-9.]+) s \(")
+        ranks, outflow, wall = run_facts(run)
         if ref is None:
             ref = runout
         row = {
-            "run": str(run), "ranks": int(ranks), "front": runout["front"],
+            "run": str(run), "ranks": ranks, "front": runout["front"],
             "front_diff": (runout["front"] - ref["front"]) / ref["front"],
             "from_gate_diff": (runout["from_gate"] - ref["from_gate"]) / ref["from_gate"],
             "tail_diff": (runout["tail"] - ref["tail"]) / ref["tail"],
             "closure": closure, "particles": particles, "outflow": outflow, "kept_plus_out": particles + outflow,
-            "wall": float(wall) if wall else None,
+            "wall": wall,
         }
         rows.append(row)
     if args.markdown:
@@ -86,7 +103,7 @@ def main():
         for r in rows:
             print(f"| {r['ranks']} | {r['front']:.4f} | {100 * r['front_diff']:+.3f}% | {100 * r['from_gate_diff']:+.3f}% | "
                   f"{100 * r['tail_diff']:+.3f}% | {r['closure']:.3e} | {r['particles']} + {r['outflow']} = "
-                  f"{r['kept_plus_out']} | {r['wall'] if r['wall'] else '-'} |")
+                  f"{r['kept_plus_out']} | {'%.2f' % r['wall'] if r['wall'] else '-'} |")
     else:
         json.dump(rows, sys.stdout, indent=1)
         print()

@@ -17,21 +17,16 @@ import argparse
 import json
 import os
 import sys
-import xml.etree.ElementTree as ET
 
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from talus_plot import read_vtu, require_folders, write_csv_rows  # noqa: E402
+from talus_plot import read_vtu, require_folders, series_frames, write_csv_rows  # noqa: E402
 
 
 def frame_near(run, time):
     """(time, path) of the frame in run/particles.pvd nearest to `time`."""
-    root = ET.parse(os.path.join(run, "particles.pvd")).getroot()
-    frames = [(float(d.get("timestep")), os.path.join(run, d.get("file"))) for d in root.iter("DataSet")]
-    if not frames:
-        sys.exit(f"{run}: particles.pvd lists no frames")
-    return min(frames, key=lambda f: abs(f[0] - time))
+    return min(series_frames(run), key=lambda f: abs(f[0] - time))
 
 
 def read_particles(path):

@@ -173,6 +173,8 @@ def main():
     for option in ("wedge_width", "height", "cell", "end", "frame_interval"):
         if not getattr(a, option) > 0:
             p.error(f"--{option.replace('_', '-')} = {getattr(a, option)} must be positive")
+    if not 0 < a.slope < 90:  # (0, 90 and beyond wrote scenes that talus refused)
+        p.error(f"--slope = {a.slope} must be between 0 and 90 degrees")
     if not (a.separation_volume_ratio > 1 or a.separation_volume_ratio == 0):
         p.error(f"--separation-volume-ratio = {a.separation_volume_ratio} must be above 1, or 0 (off)")
     if a.particles_per_cell < 1:

@@ -17,7 +17,6 @@ Needs numpy, matplotlib and VTK's Python module (Debian: python3-numpy python3-m
 """
 import argparse
 import copy
-import glob
 import json
 import os
 import re
@@ -30,7 +29,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
-from talus_plot import finish_axes, read_vtu, run_talus, save_figure, write_csv_rows  # noqa: E402
+from talus_plot import finish_axes, read_vtu, run_talus, save_figure, series_frames, write_csv_rows  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENE = os.path.join(ROOT, "inputs", "column_collapse_2d.json")
@@ -69,8 +68,7 @@ def run(talus, runs, s, threads, rerun):
             json.dump({"wall_s": wall, "fitted": fitted}, f)
     with open(summary) as f:
         info = json.load(f)
-    frame = sorted(glob.glob(os.path.join(out, "frames", "*.vtu")))[-1]
-    data = read_vtu(frame, "id")
+    data = read_vtu(series_frames(out)[-1][1], "id")
     return data["points"][np.argsort(data["id"])], info["wall_s"], info["fitted"]
 
 

@@ -31,6 +31,9 @@ import math
 import os
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_checks import require_inputs  # noqa: E402
+
 TILE_BYTES = 64 * 8  # one field of one 4x4x4-node tile
 FIELDS = (7, 3)      # after P2G (mass, momentum, force) and after the MUSL remap (momentum)
 SORT_INTERVAL = 20   # solver.sort_interval default: the column counts are summed at every sort
@@ -91,7 +94,11 @@ def main():
     a = ap.parse_args()
     if a.out and not os.path.isdir(os.path.dirname(os.path.abspath(a.out))):  # found before the model, not after
         sys.exit(f"mpi_weak_scaling_model.py: --out {a.out}: the folder {os.path.dirname(os.path.abspath(a.out))} does not exist")
-    bench = json.load(open(a.bench))
+    require_inputs(bench=a.bench)
+    with open(a.bench) as f:
+        bench = json.load(f)
+    if "summary" not in bench or "runs" not in bench:
+        sys.exit(f"mpi_weak_scaling_model.py: --bench {a.bench}: not a tools/mpi_bench.py report (no summary and runs)")
     s = bench["summary"]
     # S: tiles a rank sends its neighbour a step, from the 2-rank bench
     ex = s["2x1-bound"]["exchange_bytes_per_step"]

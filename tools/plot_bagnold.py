@@ -19,14 +19,13 @@ Usage (from the repository root):
   /usr/bin/python3 tools/plot_bagnold.py --no-run --cells 8 16 32     # plot runs already in --work
 """
 import argparse
-import glob
 import json
 import math
 import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from talus_plot import ROOT, read_vtu, require_folders, run_talus, write_csv_rows  # noqa: E402
+from talus_plot import ROOT, read_vtu, require_folders, run_talus, series_frames, write_csv_rows  # noqa: E402
 
 import matplotlib  # noqa: E402
 
@@ -123,11 +122,11 @@ def main():
             with open(path, "w") as f:
                 json.dump(scene_at(base, n), f, indent=2)
             run_talus(args.talus, "run", path, "--out", out, threads=args.threads)
-        frames = sorted(glob.glob(os.path.join(out, "frames", "*.vtu")))
+        if not os.path.isfile(os.path.join(out, "particles.pvd")):
+            sys.exit(f"plot_bagnold.py: {out} holds no run: run it without --no-run first")
+        times, frames = zip(*series_frames(out))
         if len(frames) < 2:  # (was an IndexError)
             sys.exit(f"plot_bagnold.py: {out} holds {len(frames)} frames: run it without --no-run first")
-        times = [base["output"]["frame_interval"] * k for k in range(len(frames))]
-        times[-1] = base["time"]["end"]
         history = []
         for t, fr in zip(times[1:], frames[1:]):
             z, u = rows(fr, n, setup.h)

@@ -17,7 +17,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
-from talus_plot import ROOT, read_vtu, run_talus  # noqa: E402
+from talus_plot import ROOT, read_vtu, run_talus, series_frames  # noqa: E402
 
 
 def read_frame_xz(path):
@@ -32,6 +32,8 @@ def main():
     ap.add_argument("--out", default=os.path.join(ROOT, "docs", "verification"))
     args = ap.parse_args()
     run = args.run_dir or os.path.join(ROOT, "runs", "column_collapse_2d")
+    if args.run_dir and not os.path.isfile(os.path.join(run, "energy.csv")):
+        sys.exit(f"plot_column_collapse.py: --run-dir {run}: no energy.csv there: give the folder of a talus run")
     if not args.run_dir:
         run_talus(args.talus, "run", os.path.join(ROOT, "inputs", "column_collapse_2d.json"), "--out", run, quiet=False)
     d = np.genfromtxt(os.path.join(run, "energy.csv"), delimiter=",", names=True)
@@ -65,9 +67,9 @@ def main():
           f"max {np.max(np.abs(d['total'] - e0)) / released:.3e}")
     print(f"plastic {d['plastic_work'][-1] / released:.3f}, friction {d['friction_work'][-1] / released:.3f}")
 
-    frames = sorted(os.listdir(os.path.join(run, "frames")))
-    x0, z0 = read_frame_xz(os.path.join(run, "frames", frames[0]))
-    x1, z1 = read_frame_xz(os.path.join(run, "frames", frames[-1]))
+    frames = series_frames(run)
+    x0, z0 = read_frame_xz(frames[0][1])
+    x1, z1 = read_frame_xz(frames[-1][1])
     fig, ax = plt.subplots(figsize=(7, 3.2))
     ax.scatter(x0, z0, s=1, c="0.7", label="initial column")
     ax.scatter(x1, z1, s=1, c="tab:brown", label="deposit")

@@ -26,7 +26,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
-from talus_plot import finish_axes, save_figure  # noqa: E402
+from talus_plot import finish_axes, require_inputs, save_figure  # noqa: E402
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PAPER = "equal_end_forces"
@@ -156,6 +156,7 @@ def main():
     parser.add_argument("--csv", help="plot this sweep instead of running the tests")
     parser.add_argument("--out-dir", default=os.path.join(REPO, "docs", "verification"))
     args = parser.parse_args()
+    require_inputs(csv=args.csv)
 
     if args.csv:
         csv_path = args.csv

@@ -177,6 +177,11 @@ def main():
         if not os.access(a.talus, os.X_OK):
             sys.exit(f"plot_element_tests: {a.talus} is not an executable; pass --talus")
         run_specs(a.talus, hardening + dilatancy, csv_dir)
+    else:
+        for spec in hardening + dilatancy:  # (a missing CSV was a traceback)
+            csv = os.path.join(csv_dir, os.path.basename(spec).replace(".json", ".csv"))
+            if not os.path.isfile(csv):
+                sys.exit(f"plot_element_tests: --no-run: {csv} not found: run it without --no-run first, or give --csv-dir")
     os.makedirs(a.out_dir, exist_ok=True)
     plot_hardening(hardening, csv_dir, os.path.join(a.out_dir, "dp_hardening.png"))
     plot_dilatancy(dilatancy, csv_dir, os.path.join(a.out_dir, "dp_dilatancy.png"))

@@ -20,7 +20,7 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from cli_checks import require_talus  # noqa: E402
+from cli_checks import require_inputs, require_talus  # noqa: E402
 
 import matplotlib
 
@@ -44,6 +44,10 @@ def main():
     ap.add_argument("--out", default=os.path.join(ROOT, "docs", "verification", "mu_i_simple_shear.png"),
                     help="the plot (.png; added when the name has no extension; default: %(default)s)")
     args = ap.parse_args()
+    if args.no_run:
+        if not args.csv:
+            ap.error("--no-run plots the CSV of an earlier run: give it with --csv")
+        require_inputs(csv=args.csv)
     csv_path = args.csv or os.path.join(tempfile.mkdtemp(prefix="talus_mu_i_"), "mu_i_simple_shear.csv")
     if not args.no_run:
         require_talus(args.talus)  # was a subprocess traceback

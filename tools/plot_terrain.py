@@ -15,7 +15,6 @@ import argparse
 import math
 import os
 import sys
-import xml.etree.ElementTree as ET
 
 import matplotlib
 matplotlib.use("Agg")
@@ -23,7 +22,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
-from talus_plot import ROOT, finish_axes, read_vtu, run_talus, save_figure  # noqa: E402
+from talus_plot import ROOT, finish_axes, read_vtu, run_talus, save_figure, series_frames  # noqa: E402
 G = 9.81
 THETA = math.radians(30.0)
 
@@ -38,9 +37,9 @@ def run(args, name):
 def frames(run_dir):
     """(time, xyz array, mass weights) of every particle frame of a run."""
     result = []
-    for ds in ET.parse(os.path.join(run_dir, "particles.pvd")).getroot().iter("DataSet"):
-        d = read_vtu(os.path.join(run_dir, ds.get("file")), "density", "volume")
-        result.append((float(ds.get("timestep")), d["points"], d["density"] * d["volume"]))
+    for time, path in series_frames(run_dir):
+        d = read_vtu(path, "density", "volume")
+        result.append((time, d["points"], d["density"] * d["volume"]))
     return result
 
 

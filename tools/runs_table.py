@@ -21,6 +21,9 @@ import json
 import os
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_checks import require_folders  # noqa: E402
+
 COLUMNS = ["run", "scene", "status", "commit", "ranks_x_threads", "isa", "steps", "time", "end_time",
            "wall_seconds", "m_updates_per_s", "energy_gap", "parts", "started", "message"]
 
@@ -100,8 +103,7 @@ def main():
     p.add_argument("folders", nargs="*", default=["runs"], metavar="FOLDER")
     p.add_argument("--csv", metavar="FILE", help="also write the table as CSV (every column, the message too)")
     a = p.parse_args()
-    if a.csv and not os.path.isdir(os.path.dirname(os.path.abspath(a.csv))):
-        sys.exit(f"runs_table.py: --csv {a.csv}: the folder {os.path.dirname(os.path.abspath(a.csv))} does not exist")
+    require_folders(csv=a.csv)
     missing = [f for f in a.folders if not os.path.isdir(f)]
     if missing:
         print(f"runs_table.py: {missing[0]}: no such folder", file=sys.stderr)

@@ -200,7 +200,7 @@ def main():
     ax1.plot(threads, model, "x--", color="C3", label="model (strong)")
     ax2.plot(threads, [m / t for m, t in zip(model, threads)], "x--", color="C3", label="model (strong)")
     model_c = [with_c[t]["speedup"] for t in threads]
-    label_c = f"model with the measured c(T)" + (f" (c({counts[-1]}) = {c_t[counts[-1]]:.2f})" if c_t else "")
+    label_c = "model with the measured c(T)" + (f" (c({counts[-1]}) = {c_t[counts[-1]]:.2f})" if c_t else "")
     ax1.plot(threads, model_c, ":", color="C3", label=label_c)
     ax2.plot(threads, [m / t for m, t in zip(model_c, threads)], ":", color="C3", label=label_c)
     ax1.plot(threads, threads, "k--", lw=0.8, label="ideal")

@@ -28,7 +28,6 @@ Usage: /usr/bin/python3 tools/separation_study.py [--talus build/talus] [--ratio
            [--scenes flume column] [--threads 2] [--runs build/separation_study] [--out DIR] [--rerun]
 """
 import argparse
-import glob
 import itertools
 import json
 import os
@@ -40,7 +39,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
-from talus_plot import (finish_axes, read_csv_columns, read_vtu, run_talus, save_figure,  # noqa: E402
+from talus_plot import (finish_axes, read_csv_columns, read_vtu, run_talus, save_figure, series_frames,  # noqa: E402
                         write_csv_rows)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -95,8 +94,7 @@ def interior_packing(positions, mass, origin, h, plane_strain):
 
 def measure(scene, run_dir, plane_strain):
     """The row of this run (see the module's doc)."""
-    frames = sorted(glob.glob(os.path.join(run_dir, "frames", "particles_*.vtu")))
-    last = read_vtu(frames[-1], "volume", "density", "stress")
+    last = read_vtu(series_frames(run_dir)[-1][1], "volume", "density", "stress")
     x = last["points"].astype(float)
     volume, density = last["volume"], last["density"]
     mass = density * volume

@@ -25,7 +25,7 @@ import numpy as np  # noqa: E402
 import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from talus_plot import finish_axes, read_vtu, run_talus, save_figure, write_csv_rows  # noqa: E402
+from talus_plot import finish_axes, read_vtu, run_talus, save_figure, series_frames, write_csv_rows  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 OUT = os.path.join(ROOT, "docs", "verification")
@@ -83,7 +83,6 @@ def variant(scene, shape, scheme, h=None, ppc=None, mls="off"):
     s["solver"]["scheme"] = scheme
     s["output"]["frame_interval"] = 0.0  # first and last frame only
     if h is not None:  # refine along the bar, keep a one-cell cross-section
-        old = s["grid"]["cell_size"]
         s["grid"]["cell_size"] = h
         axis = 2 if s["name"] == "elastic_free_fall" else 0
         for d in range(3):
@@ -116,8 +115,7 @@ def run(talus, scene, threads):
         if r.returncode != 0:
             return None
         energy = np.genfromtxt(os.path.join(out, "energy.csv"), delimiter=",", names=True)
-        frames = sorted(os.listdir(os.path.join(out, "frames")))
-        last = read_vtu(os.path.join(out, "frames", frames[-1]), "stress")
+        last = read_vtu(series_frames(out)[-1][1], "stress")
         x, stress = last["points"], last["stress"]
         steps = int(energy["step"][-1])
         return {"wall": wall, "cpu": cpu, "energy": energy, "x": x, "stress": stress, "steps": steps, "particles": len(x)}

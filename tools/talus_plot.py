@@ -9,21 +9,26 @@ import os
 import subprocess
 import sys
 import time
+import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from cli_checks import require_folders, require_talus  # noqa: F401 (the scripts import them from here too)
+from cli_checks import require_folders, require_inputs, require_talus  # noqa: F401 (the scripts import them from here too)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def read_vtu(path, *arrays):
-    """One .vtu frame as {"points": n x 3 positions, name: array for each name in arrays}.
+    """One frame as {"points": n x 3 positions, name: array for each name in arrays}: a .vtu, or the
+    .pvtu of a run on several ranks (all its pieces).
 
     Needs VTK's Python module (python3-vtk9, installed by tools/setup.sh)."""
     import vtk
     from vtk.util.numpy_support import vtk_to_numpy
-    reader = vtk.vtkXMLUnstructuredGridReader()
+    if str(path).endswith(".pvtu"):
+        reader = vtk.vtkXMLPUnstructuredGridReader()
+    else:
+        reader = vtk.vtkXMLUnstructuredGridReader()
     reader.SetFileName(path)
     reader.Update()
     grid = reader.GetOutput()
@@ -34,6 +39,20 @@ def read_vtu(path, *arrays):
             raise KeyError(f"{path} has no point array '{name}'")
         data[name] = vtk_to_numpy(array)
     return data
+
+
+def series_frames(run_dir):
+    """[(time, path)] of the frames a run's particles.pvd lists, in order: the whole frames (.vtu, or
+    .pvtu on several ranks), never one rank's piece of a frame. Stops with one line when there is no
+    series there."""
+    pvd = os.path.join(run_dir, "particles.pvd")
+    if not os.path.isfile(pvd):
+        sys.exit(f"{os.path.basename(sys.argv[0])}: {run_dir}: no particles.pvd there: give the folder of a talus run")
+    frames = [(float(d.get("timestep")), os.path.join(run_dir, d.get("file")))
+              for d in ET.parse(pvd).getroot().iter("DataSet")]
+    if not frames:
+        sys.exit(f"{os.path.basename(sys.argv[0])}: {pvd} lists no frames")
+    return frames
 
 
 def run_talus(talus, *args, threads=None, quiet=True, capture=False, check=True):
