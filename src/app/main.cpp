@@ -1,6 +1,7 @@
 // The talus command-line program: parses the subcommand and reports errors in one line.
 #include "build_info.hpp"
 #include "commands.hpp"
+#include "option_checks.hpp"
 #include "talus/core/comm.hpp"
 #include "talus/core/error.hpp"
 #include "talus/core/simd_dispatch.hpp"
@@ -133,12 +134,14 @@ std::vector<std::string>& command_line() {
 }
 
 void add_isa_option(CLI::App* command, const std::shared_ptr<std::string>& value) {
-  command->add_option("--isa", *value,
+  // (an empty --isa, an unset shell variable, ran the automatic choice without a word)
+  refuse_empty(command->add_option("--isa", *value,
                       "Vector path of the kernels: auto (the default: the best this CPU has) or one of " + [] {
                         std::string names;
                         for (const std::string& n : available_isas()) names += (names.empty() ? "" : ", ") + n;
                         return names;
-                      }() + " (reference: the plain C++ path). Every path gives the same bits; also TALUS_ISA");
+                      }() + " (reference: the plain C++ path). Every path gives the same bits; also TALUS_ISA"),
+               "give auto or a vector path, or leave --isa out");
 }
 
 void set_threads(int threads) {

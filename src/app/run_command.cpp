@@ -22,6 +22,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <ctime>
@@ -53,7 +54,10 @@ void print_scene_summary(const Scene& s, const MemoryEstimate& memory) {
   fmt::print("particles  {} in {} bod{}\n", memory.particles, s.bodies.size(), s.bodies.size() == 1 ? "y" : "ies");
   fmt::print("method     {} with {} shape functions, Courant {}\n", to_string(s.scheme), to_string(s.shape), s.courant);
   const double dt = s.initial_time_step();
-  fmt::print("time       end {} s, initial dt {:.3e} s (~{:.0f} steps if speeds stay low)\n", s.end_time, dt, s.end_time / dt);
+  // (a count past 10^15 in full was a line of 154 digits for a vanishing density)
+  const double steps = s.end_time / dt;
+  fmt::print("time       end {} s, initial dt {:.3e} s (~{} steps if speeds stay low)\n", s.end_time, dt,
+             steps < 1e15 ? fmt::format("{:.0f}", steps) : fmt::format("{:.3g}", steps));
   const std::optional<std::size_t> available = available_memory();
   fmt::print("memory     about {}: {} B per particle, {} of grid at the start (up to {} if the flow covers the whole "
              "grid); {}\n",
@@ -104,15 +108,28 @@ std::optional<std::string> scatter_hint(const Scene& scene, const CellSort& sort
       per_pass, threads, kColours);
 }
 
+/// Whether the file at `path` holds the scene as a run writes it to scene.json (as JSON: the layout
+/// may differ).
+bool holds_resolved_scene(const std::string& path, const Scene& scene) {
+  std::ifstream in(path);
+  try {
+    return nlohmann::json::parse(in) == scene_file_json(scene);
+  } catch (const nlohmann::json::exception&) {
+    return false;
+  }
+}
+
 /// Refuses a run that would replace one of its own inputs, before anything is written: the scene
 /// file among the files the run writes or clears in its folder (`talus run proj/scene.json --out proj` replaced the user's scene by the resolved one),
-/// or the work record written over the scene, the checkpoint or one of those files.
-void require_outputs_spare_inputs(const std::filesystem::path& dir, const std::string& scene_path,
+/// or the work record written over the scene, the checkpoint, one of those files or a frame.
+void require_outputs_spare_inputs(const std::filesystem::path& dir, const std::string& scene_path, const Scene& scene,
                                   const std::string& restart_path, const std::string& record_path) {
   for (const std::filesystem::path& output : run_output_files(dir)) {
     // A resumed run may read the scene.json its first part wrote (`talus run runs/x/scene.json
     // --restart runs/x/checkpoint.h5`): it matches the checkpoint, and is written back unchanged.
-    const bool resumed_from_its_own_scene = !restart_path.empty() && output.filename() == "scene.json";
+    // A scene file of the user's own there (the checkpoint copied next to it) is not: it was replaced.
+    const bool resumed_from_its_own_scene = !restart_path.empty() && output.filename() == "scene.json" &&
+                                            holds_resolved_scene(scene_path, scene);
     if (same_file(scene_path, output) && !resumed_from_its_own_scene)
       throw input_error(fmt::format("output folder {}: the run would replace the scene file {} by its {}; choose "
                                     "another folder (--out)",
@@ -121,11 +138,39 @@ void require_outputs_spare_inputs(const std::filesystem::path& dir, const std::s
       throw input_error(fmt::format("--record-work {}: the run writes its {} there; choose another file", record_path,
                                     output.filename().string()));
   }
+  // (a frame's name was accepted, and the record replaced that frame of the series)
+  if (!record_path.empty() && same_file(std::filesystem::path(record_path).parent_path(), dir / "frames"))
+    throw input_error(fmt::format("--record-work {}: the run writes its particle frames in {}; choose another file",
+                                  record_path, (dir / "frames").string()));
   if (!record_path.empty() && same_file(record_path, scene_path))
     throw input_error(fmt::format("--record-work {}: that is the scene file; choose another file", record_path));
   if (!record_path.empty() && !restart_path.empty() && same_file(record_path, restart_path))
     throw input_error(fmt::format("--record-work {}: that is the checkpoint to resume from; choose another file",
                                   record_path));
+}
+
+/// A path as a shell word: as it is when it holds only characters no shell reads specially, else in
+/// single quotes (the resume line is copied into a shell; a path with a space split in two there).
+std::string shell_word(const std::string& path) {
+  const bool plain = !path.empty() && std::all_of(path.begin(), path.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || std::string_view("_-./+:=,@%").find(c) != std::string_view::npos;
+  });
+  if (plain) return path;
+  std::string quoted = "'";
+  for (char c : path) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+
+/// Refuses a folder in the output folder with the name of a file the run writes (particles.pvd/):
+/// an empty one was deleted without a word, and one with files in it stopped the run at its first
+/// write of that file, with frames already written and a temporary file left behind.
+void require_no_folder_in_place_of_an_output(const std::filesystem::path& dir) {
+  std::error_code ec;
+  for (const std::filesystem::path& output : run_output_files(dir))
+    if (std::filesystem::is_directory(output, ec))
+      throw input_error(fmt::format("output folder {}: {} there is a folder, where the run writes a file of that name; "
+                                    "remove it or choose another folder (--out)",
+                                    dir.string(), output.filename().string()));
 }
 
 /// The folder a checkpoint lies in ("." for a bare file name): where a resumed run writes unless
@@ -215,10 +260,11 @@ void add_run_command(CLI::App& app) {
       restore_checkpoint(solver, *checkpoint, *restart);
       if (out_dir->empty()) dir = checkpoint_folder(*restart);
     }
-    require_outputs_spare_inputs(dir, *scene_path, *restart, *record_path);
+    require_outputs_spare_inputs(dir, *scene_path, solver.scene(), *restart, *record_path);
     if (checkpoint && !out_dir->empty()) require_fresh_folder_for_restart(dir, *restart);
     // Every rank sees the same folder and stops alike (rank 0 reports); --record-work is refused under mpirun.
     check_writable_folder(dir, "output folder");
+    require_no_folder_in_place_of_an_output(dir);
     if (!record_path->empty()) check_writable_file(*record_path, "--record-work");
     // One run at a time in a folder: claimed before anything in it is cleared (rank 0 claims it for
     // the job and tells the others; driver/folder_lock.hpp).
@@ -324,7 +370,8 @@ void add_run_command(CLI::App& app) {
                    summary.steps, summary.time, summary.checkpoint_path);
       // (any rank count resumes it; the same one continues bit for bit)
       fmt::print("talus: resume with: {}talus run {} --restart {}\n",
-                 world.distributed() ? fmt::format("mpirun -np {} ", world.size()) : "", *scene_path, summary.checkpoint_path);
+                 world.distributed() ? fmt::format("mpirun -np {} ", world.size()) : "", shell_word(*scene_path),
+                 shell_word(summary.checkpoint_path));
       return;
     }
     const double scale = summary.energy_scale();

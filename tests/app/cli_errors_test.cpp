@@ -144,6 +144,9 @@ TEST_F(CliErrors, EnvironmentVariablesAreCheckedAndTheOptionsOverrideThem) {
   EXPECT_FALSE(fs::exists(dir_ / "a"));
   const ProgramResult overridden = run_with_env("TALUS_ISA", "bogus", "bench --isa reference --steps 1 --particles 1000");
   EXPECT_EQ(overridden.exit_code, 0) << overridden.err;
+  // an empty --isa (an unset shell variable) ran the automatic choice without a word
+  for (const char* command : {"bench", "run missing.json"})
+    expect_error_line(run(std::string(command) + " --isa ''"), "--isa is empty: give auto or a vector path, or leave --isa out");
   expect_error_line(run_with_env("OMP_NUM_THREADS", "70000", "run " + kScene + " --out " + (dir_ / "b").string()),
                     "OMP_NUM_THREADS = 70000 is outside [1, 4096] (or give --threads)");
   // past an unsigned long libgomp warned and used every core: the run went on

@@ -213,11 +213,12 @@ TEST(Crash, ASecondRunIntoTheFolderOfARunningOneIsRefused) {
 // then finishes with the uninterrupted run's output.
 TEST(Crash, StopAfterWritesACheckpointAndTheRestartMatchesAnUninterruptedRun) {
   const Reference& ref = reference();
-  const fs::path out = ref.root / "stop_after";
+  const fs::path out = ref.root / "stop after";  // a space: the resume line quotes it for the shell
   fs::remove_all(out);
   const std::string limit = fmt::format("{:.3f}s", std::max(0.3 * ref.seconds, 0.001));
-  const int code = run_talus({"run", ref.scene.string(), "--out", out.string(), "--quiet", "--threads", "1", "--stop-after", limit});
-  ASSERT_TRUE(code == 75 || code == 0) << code;
+  const auto [code, text] = run_captured("run " + ref.scene.string() + " --out '" + out.string() +
+                                         "' --quiet --threads 1 --stop-after " + limit);
+  ASSERT_TRUE(code == 75 || code == 0) << code << text;
   if (code == 0) GTEST_SKIP() << "the run finished within " << limit;
   const Checkpoint c = read_checkpoint((out / "checkpoint.h5").string());
   test::expect_readable_run_folder(out);
@@ -226,7 +227,14 @@ TEST(Crash, StopAfterWritesACheckpointAndTheRestartMatchesAnUninterruptedRun) {
   EXPECT_EQ(stopped.at("message"), "stopped at its --stop-after time after writing a checkpoint");
   EXPECT_EQ(stopped.at("end").at("step").get<std::int64_t>(), c.solver.step);
   EXPECT_GE(stopped.at("wall_seconds").get<double>(), std::stod(limit));
-  ASSERT_EQ(run_talus({"run", ref.scene.string(), "--restart", (out / "checkpoint.h5").string(), "--quiet", "--threads", "1"}), 0);
+  // The resume line, as printed, is one shell command that resumes the run.
+  const std::string lead = "talus: resume with: talus ";
+  const auto at = text.find(lead);
+  ASSERT_NE(at, std::string::npos) << text;
+  const std::string resume = text.substr(at + lead.size(), text.find('\n', at) - at - lead.size());
+  EXPECT_EQ(resume, "run " + ref.scene.string() + " --restart '" + (out / "checkpoint.h5").string() + "'");
+  const auto [resumed, resumed_text] = run_captured(resume + " --quiet --threads 1");
+  ASSERT_EQ(resumed, 0) << resumed_text;
   expect_same_output(out, ref.out);
 }
 
@@ -321,6 +329,21 @@ TEST(Crash, RestartIntoAnotherRunsFolderIsRefused) {
   EXPECT_EQ(resumed, 0) << resumed_text;
   EXPECT_EQ(test::read_text(own / "scene.json"), test::read_text(ref.out / "scene.json"));
   EXPECT_EQ(resumed_text.find("earlier build"), std::string::npos) << resumed_text;
+  // The user's own scene file next to a copied checkpoint is not that file: it was replaced by the
+  // resolved scene (its notes and layout lost). Refused as a fresh run into its folder is.
+  const fs::path mine = ref.root / "my_project";
+  fs::remove_all(mine);
+  fs::create_directories(mine);
+  const std::string my_text = "{ \"comment\": \"my notes\",\n" + test::read_text(ref.scene).substr(1);
+  std::ofstream(mine / "scene.json") << my_text;
+  fs::copy_file(ref.out / "checkpoint.h5", mine / "checkpoint.h5");
+  const auto [refused, refused_text] = run_captured("run " + (mine / "scene.json").string() + " --restart " +
+                                                    (mine / "checkpoint.h5").string() + " --quiet --threads 1");
+  EXPECT_EQ(refused, 2) << refused_text;
+  EXPECT_EQ(std::count(refused_text.begin(), refused_text.end(), '\n'), 1) << refused_text;
+  EXPECT_NE(refused_text.find("would replace the scene file"), std::string::npos) << refused_text;
+  EXPECT_EQ(test::read_text(mine / "scene.json"), my_text);
+  EXPECT_FALSE(fs::exists(mine / "energy.csv"));
 }
 
 // Frames written before 2026-12-04 held stress and strain in the solver's Voigt order, without
@@ -442,6 +465,10 @@ TEST(Crash, ARunThatWouldReplaceItsOwnInputsExitsTwoAndTouchesNothing) {
       {"run " + scene + " --out " + (dir / "out").string() + " --record-work " + scene, "that is the scene file"},
       {"run " + scene + " --out " + (dir / "out").string() + " --record-work " + (dir / "out" / "energy.csv").string(),
        "the run writes its energy.csv there"},
+      // (a frame's name was accepted, and the record replaced that frame of the series)
+      {"run " + scene + " --out " + (dir / "out").string() + " --record-work " +
+           (dir / "out" / "frames" / "particles_000001.vtu").string(),
+       "the run writes its particle frames in"},
   };
   for (const auto& [args, expect] : cases) {
     const auto [code, out] = run_captured(args + " --quiet --threads 1");
@@ -477,6 +504,17 @@ TEST(Crash, UnwritableOutputsAreRefusedBeforeAnyWork) {
     EXPECT_NE(out.find(expect), std::string::npos) << out;
     EXPECT_FALSE(fs::exists(dir / "out")) << args;
   }
+  // a folder where the run writes a file: the run stopped at the first write of that file, with
+  // frames written and a temporary file left
+  fs::create_directories(dir / "out" / "particles.pvd" / "kept");
+  const auto [code, out] = run_captured("run " + scene + " --out " + (dir / "out").string() + " --quiet --threads 1");
+  EXPECT_EQ(code, 2) << out;
+  EXPECT_EQ(out, "talus: error: output folder " + (dir / "out").string() +
+                     ": particles.pvd there is a folder, where the run writes a file of that name; remove it or "
+                     "choose another folder (--out)\n");
+  EXPECT_FALSE(fs::exists(dir / "out" / "frames"));
+  EXPECT_FALSE(fs::exists(dir / "out" / "energy.csv"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "particles.pvd" / "kept"));
   fs::remove_all(dir);
 }
 
