@@ -213,7 +213,9 @@ class RunLoop {
  public:
   RunLoop(Solver& solver, const RunOptions& options)
       : solver_(solver), scene_(solver.scene()), comm_(solver.comm()), dir_(options.out_dir),
-        resuming_(options.resume != nullptr), progress_(resuming_ ? *options.resume : RunProgress{}),
+        resuming_(options.resume != nullptr),
+        resumed_in_place_(resuming_ && (options.resume_dir.empty() || same_file(options.resume_dir, options.out_dir))),
+        progress_(resuming_ ? *options.resume : RunProgress{}),
         history_(dir_, resume_step(), comm_.root(), scene_.output.energy_gap_terms), runout_(scene_, dir_, resume_step(), comm_, options.resume_dir),
         frames_(dir_, scene_.output.compress, progress_, comm_, options.frames_in_background), checkpoint_(dir_),
         history_schedule_{scene_.output.history_interval, progress_.next_history},
@@ -254,6 +256,7 @@ class RunLoop {
   Comm comm_;  // a distributed run: rank 0 writes the shared files, every rank its frame piece
   fs::path dir_;
   bool resuming_;
+  bool resumed_in_place_;  // resuming in the checkpoint's own folder, which holds the outputs before it
   RunProgress progress_;
   EnergyHistory history_;
   RunoutFiles runout_;
@@ -337,13 +340,15 @@ void RunLoop::start() {
                  "earlier build (xx yy zz yz xz xy, unnamed); the frames this run writes use VTK's (xx yy zz xy yz xz, "
                  "named): the shear components of the two do not match, so run the scene from the start for a uniform "
                  "series\n");
-    // The run's own folder (it holds frames of the checkpoint's) with some of them deleted, or its
-    // energy.csv lost: the restart goes on, but says what its outputs lack.
-    if (comm_.root() && frames_.kept_frames() > 0 && frames_.missing_kept_frames() > 0)
+    // The run's own folder with some or all of the checkpoint's frames deleted, or its energy.csv
+    // lost: the restart goes on, but says what its outputs lack. (Into another folder the frames and
+    // rows before the checkpoint stay where they are: nothing is missing. The test was "a frame is
+    // kept", so a folder that had lost every frame and its history said nothing.)
+    if (comm_.root() && resumed_in_place_ && frames_.missing_kept_frames() > 0)
       fmt::print(stderr, "talus: warning: {} of the {} frames the checkpoint lists are missing from {}: the series has "
                  "gaps there\n", frames_.missing_kept_frames(), frames_.kept_frames() + frames_.missing_kept_frames(),
                  (dir_ / "frames").string());
-    if (comm_.root() && frames_.kept_frames() > 0 && history_.kept_rows() == 0)
+    if (comm_.root() && resumed_in_place_ && history_.kept_rows() == 0)
       fmt::print(stderr, "talus: warning: {} held no row up to the checkpoint's step {}: the energy history starts at "
                  "the restart\n", (dir_ / "energy.csv").string(), solver_.step_count());
     summary_.initial = progress_.initial;

@@ -390,6 +390,17 @@ TEST(Crash, ResumingADamagedOwnFolderSaysWhatItsOutputsLack) {
                       ": the series has gaps there"), std::string::npos) << text;
   EXPECT_NE(text.find((damaged / "energy.csv").string() + " held no row up to the checkpoint's step "), std::string::npos)
       << text;
+  // every frame gone, and the history: said too (the test was "a frame is kept", and this said nothing)
+  fs::remove_all(damaged);
+  fs::copy(ref.out, damaged, fs::copy_options::recursive);
+  fs::remove_all(damaged / "frames");
+  fs::remove(damaged / "energy.csv");
+  const auto [all_code, all_text] = run_captured("run " + (damaged / "scene.json").string() + " --restart " +
+                                                 (damaged / "checkpoint.h5").string() + " --quiet --threads 1");
+  EXPECT_EQ(all_code, 0) << all_text;
+  EXPECT_TRUE(std::regex_search(all_text, std::regex("talus: warning: ([0-9]+) of the \\1 frames the checkpoint lists are missing")))
+      << all_text;
+  EXPECT_NE(all_text.find(" held no row up to the checkpoint's step "), std::string::npos) << all_text;
 }
 
 // An output folder whose frames/ is a file: one line naming frames/, exit 2, nothing else written
