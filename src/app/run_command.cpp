@@ -439,6 +439,16 @@ void add_check_command(CLI::App& app) {
     print_warnings(scene);
     const MemoryEstimate memory = estimate_memory(scene);
     print_scene_summary(scene, memory);
+    // (check said ok, and the run stopped at once: the default folder held this scene file, or
+    // could not be made here)
+    try {
+      const std::string out_dir = "runs/" + scene.name;
+      require_outputs_spare_inputs(out_dir, *scene_path, scene, "", "");
+      require_no_folder_in_place_of_an_output(out_dir);
+      check_writable_folder(out_dir, "output folder");
+    } catch (const Error& e) {
+      fmt::print("note       talus run without --out would stop: {}\n", e.what());
+    }
     require_memory_fits(scene, memory);
     fmt::print("ok{}\n", world.distributed() ? fmt::format(" (for {} ranks)", world.size()) : "");
   });

@@ -192,6 +192,24 @@ TEST(Cli, CheckEstimatesTheFramesDiskUseAndRunWarnsWhenTheyMayNotFit) {
   fs::remove_all(dir);
 }
 
+// check said ok where `talus run` then stopped at once: run from its own folder, the scene.json a
+// run wrote there would be replaced by the run's. It still says ok (the scene is valid), with a note.
+TEST(Cli, CheckNotesADefaultFolderTheRunCouldNotUse) {
+  const fs::path dir = temp_dir("default_folder");
+  fs::create_directories(dir / "runs" / "elastic_block_slide");
+  fs::copy_file(kInputs + "elastic_block_slide.json", dir / "runs" / "elastic_block_slide" / "scene.json");
+  const Result inside = run_shell("cd " + dir.string() + " && " + TALUS_BINARY + " check runs/elastic_block_slide/scene.json 2>&1");
+  EXPECT_EQ(inside.exit_code, 0) << inside.output;
+  EXPECT_NE(inside.output.find("\nnote       talus run without --out would stop: output folder runs/elastic_block_slide: the "
+                               "run would replace the scene file runs/elastic_block_slide/scene.json"),
+            std::string::npos)
+      << inside.output;
+  EXPECT_NE(inside.output.find("\nok\n"), std::string::npos) << inside.output;
+  const Result elsewhere = run("check " + kInputs + "elastic_block_slide.json");
+  EXPECT_EQ(elsewhere.output.find("note "), std::string::npos) << elsewhere.output;
+  fs::remove_all(dir);
+}
+
 // run.json (app/run_record.hpp): which build ran the scene, how, on what, and how it ended, each
 // field checked against what the run itself wrote or was given.
 TEST(Cli, RunRecordNamesTheBuildTheCommandAndTheEnd) {
