@@ -23,8 +23,10 @@
 #include <unistd.h>
 
 #include <bit>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -273,6 +275,9 @@ void write_vtu_atomically(vtkUnstructuredGrid* grid, const std::string& path, bo
   const int written = writer->Write();
   const unsigned long code = writer->GetErrorCode();
   if (written != 1 || code != 0) {
+    // (a partial file left behind took room a full disk needs for the run's record of the failure)
+    std::error_code ignored;
+    std::filesystem::remove(tmp, ignored);
     const char* reason = code != 0 ? vtkErrorCode::GetStringFromErrorCode(code) : nullptr;
     throw io_error(fmt::format("cannot write {} {}{}", what, path, reason && *reason ? std::string(": ") + reason : ""));
   }
@@ -284,10 +289,17 @@ void write_file_atomically(const std::string& path, const std::string& text) {
   // run's ranks that fail together write run.json, each rename a whole file)
   const std::string tmp = path + "." + std::to_string(::getpid()) + ".tmp";
   {
+    errno = 0;
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     out << text;
     out.flush();
-    if (!out) throw io_error(fmt::format("cannot write {}", path));
+    if (!out) {
+      const int error = errno;  // (the stream's failure leaves the system's reason in errno)
+      out.close();
+      std::error_code ignored;
+      std::filesystem::remove(tmp, ignored);  // a partial or empty file was left behind
+      throw io_error(fmt::format("cannot write {}{}", path, error ? std::string(": ") + std::strerror(error) : ""));
+    }
   }
   rename_into_place(tmp, path);
 }
