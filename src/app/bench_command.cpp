@@ -636,7 +636,7 @@ void add_bench_command(CLI::App& app) {
       ->capture_default_str();
   refuse_empty(cmd->add_option("--json", o->json_path, "Also write the results as JSON to this file"),
                "give a file, or leave --json out");
-  refuse_empty(cmd->add_option("--record-work", o->record_path,
+  CLI::Option* record_work = refuse_empty(cmd->add_option("--record-work", o->record_path,
                                "Also record the work of every block and parallel region for --record-steps more steps, "
                                "as JSON (tools/scaling_model.py)"),
                "give a file, or leave --record-work out");
@@ -651,7 +651,8 @@ void add_bench_command(CLI::App& app) {
       ->check(CLI::IsMember({"colour_passes", "block_buffers"}))
       ->capture_default_str();
   check_range(cmd->add_option("--record-steps", o->record_steps, "Steps recorded by --record-work"), 1, 1000)
-      ->capture_default_str();
+      ->capture_default_str()
+      ->needs(record_work);  // (given alone it was ignored without a word)
   cmd->add_flag("--cpu-time", o->cpu_time,
                 "Time with the process's CPU time instead of the wall clock (phases and the rate): on a shared "
                 "machine a 1-thread bench is then not charged for waiting for a core");

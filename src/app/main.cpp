@@ -33,7 +33,13 @@ std::string parse_error_line(CLI::App& app, const CLI::ParseError& e) {
       for (const std::string& word : given.front()->remaining())
         if (word.rfind('-', 0) == 0 && word.size() > 1)
           return fmt::format("talus {} has no option {} (see talus {} --help)", name, word, name);
-    return fmt::format("{} (see talus {} --help)", e.what(), name);
+    // an option given twice: CLI11 says "--threads: At Most 1 required but received 2"
+    const std::string what = e.what();
+    const std::string twice = ": At Most 1 required but received ";
+    if (const auto at = what.find(twice); dynamic_cast<const CLI::ArgumentMismatch*>(&e) && at != std::string::npos)
+      return fmt::format("{} is given {} times; give it once (see talus {} --help)", what.substr(0, at),
+                         what.substr(at + twice.size()), name);
+    return fmt::format("{} (see talus {} --help)", what, name);
   }
   std::string commands;
   for (const CLI::App* command : app.get_subcommands([](const CLI::App*) { return true; }))

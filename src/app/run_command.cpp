@@ -220,15 +220,17 @@ void add_run_command(CLI::App& app) {
                "give a checkpoint file, or leave --restart out for a fresh run");
   auto record_path = std::make_shared<std::string>();
   auto record_interval = std::make_shared<int>(37);  // prime: does not alias with sort_interval (20) or output cadences
-  refuse_empty(cmd->add_option("--record-work", *record_path,
+  CLI::Option* record_work = refuse_empty(cmd->add_option("--record-work", *record_path,
                                "Record the work of every block and parallel region of every --record-interval-th step, "
                                "as JSON (tools/scaling_model.py, docs/performance.md \"Scaling\"); a record keeps at "
                                "most 1000 steps: past that it keeps every third one and triples the interval, so that "
                                "it spans the whole run"),
                "give a file, or leave --record-work out");
+  // (given alone it was ignored without a word)
   check_range(cmd->add_option("--record-interval", *record_interval, "Steps between the steps --record-work records"), 1,
               1000000)
-      ->capture_default_str();
+      ->capture_default_str()
+      ->needs(record_work);
   auto stop_after = std::make_shared<double>(0.0);
   check_duration(cmd->add_option(
       "--stop-after", *stop_after,

@@ -57,6 +57,11 @@ TEST_F(CliErrors, BenchNumberOptionsRefuseNonFiniteValuesAndNonNumbersNamingTheR
   expect_error_line(run("bench --mls linear --mls-radius -inf"), "--mls-radius = -inf is outside [0.5, 8]");
   expect_error_line(run("bench --mls-radius 9"), "--mls-radius = 9 is outside [0.5, 8]");
   expect_error_line(run("bench --threads abc"), "--threads = abc is not an integer; allowed [1, 4096]");
+  // CLI11 said "--threads: At Most 1 required but received 2"
+  expect_error_line(run("bench --threads 1 --threads 2"), "--threads is given 2 times; give it once (see talus bench --help)");
+  // an option that only shapes another one, given without it, was ignored without a word
+  expect_error_line(run("bench --record-steps 5"), "--record-steps requires --record-work (see talus bench --help)");
+  expect_error_line(run("run missing.json --record-interval 5"), "--record-interval requires --record-work (see talus run --help)");
   expect_error_line(run("bench --steps 0"), "--steps = 0 is outside [1, 1000000]");
   expect_error_line(run("bench --particles 1e6"), "--particles = 1e6 is not an integer; allowed [1000, 100000000]");
 }
@@ -90,6 +95,10 @@ TEST_F(CliErrors, BenchRefusesAnUnwritableOutputBeforeAnyWork) {
                     "--record-work " + missing + ": cannot write there: the folder " +
                         (dir_ / "no_such_folder").string() + " does not exist");
   expect_error_line(run(bench + "--json " + dir_.string()), "--json " + dir_.string() + ": is a folder, not a file");
+  std::ofstream(dir_ / "a_file") << "x";  // a file where the folder should be: it said "does not exist"
+  expect_error_line(run(bench + "--json " + (dir_ / "a_file" / "b.json").string()),
+                    "--json " + (dir_ / "a_file" / "b.json").string() + ": cannot write there: " +
+                        (dir_ / "a_file").string() + " is a file, not a folder");
   const std::string same = (dir_ / "b.json").string();
   expect_error_line(run(bench + "--json " + same + " --record-work " + same),
                     "--json and --record-work name the same file, " + same + ": the one would overwrite the other");

@@ -506,7 +506,10 @@ TEST(Crash, UnwritableOutputsAreRefusedBeforeAnyWork) {
        "--record-work " + (dir / "none" / "r.json").string() + ": cannot write there: the folder"},
       {"--out " + (dir / "out").string() + " --record-work " + dir.string(), "is a folder, not a file"},
       {"--out ''", "--out is empty"},  // an unset shell variable: it fell back to runs/<name>
+      // a link to nothing: "cannot create output folder: File exists"
+      {"--out " + (dir / "dangling").string(), "is a link to " + (dir / "gone").string() + ", which does not exist"},
   };
+  fs::create_symlink(dir / "gone", dir / "dangling");
   for (const auto& [args, expect] : cases) {
     const auto [code, out] = run_captured("run " + scene + " " + args + " --quiet --threads 1");
     EXPECT_EQ(code, 2) << args << ": " << out;
