@@ -468,9 +468,12 @@ void check_inside_grid(const BodySpec& b, const std::string& path, const Scene& 
     if (d == 2 && s.grid.has_terrain() && b.frame == BoxFrame::Physical) continue;
     const double lo = s.grid.origin[d];
     const double hi = lo + s.grid.cells[d] * s.grid.h;
-    if (b.box_min[d] < lo - 1e-12 * std::abs(lo) || b.box_max[d] > hi + 1e-12 * std::abs(hi))
-      throw input_error(fmt::format("{} [{}, {}] along axis {} lies outside the grid [{}, {}]", path, b.box_min[d],
-                                    b.box_max[d], d, lo, hi));
+    // (round-off of the grid's extent, the same margin on both sides: relative to the lower bound
+    // alone it was none at an origin of 0, where a min of -1e-17 was refused)
+    const double margin = 1e-12 * (std::abs(lo) + std::abs(hi));
+    if (b.box_min[d] < lo - margin || b.box_max[d] > hi + margin)
+      throw input_error(fmt::format("{} [{}, {}] along axis {} lies outside the grid [{:.12g}, {:.12g}]", path,
+                                    b.box_min[d], b.box_max[d], d, lo, hi));
   }
 }
 
@@ -623,6 +626,10 @@ WallSpec read_wall(const Json& j, const std::string& path) {
       throw input_error(fmt::format("{} = \"friction\" needs an object with friction_coefficient", path));
     return w;
   }
+  // (a number said "must be an object", as if a string were not allowed)
+  if (!j.is_object())
+    throw input_error(fmt::format("{} must be a string (open, slip, fixed, periodic) or an object with type (friction needs one), got {}", path,
+                                  j.type_name()));
   ObjectReader r(j, path);
   w.type = wall_type(r.string("type"), r.key_path("type"));
   if (w.type == WallType::Friction) w.friction_coefficient = r.number("friction_coefficient", 0.0, 100.0);

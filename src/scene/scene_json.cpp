@@ -55,9 +55,9 @@ void check_runout(const Scene& s) {
     throw input_error("diagnostics.runout cannot run with periodic x faces (the flow wraps, so no front or runout along x exists)");
   const double x0 = s.grid.origin[0], x1 = x0 + s.grid.cells[0] * s.grid.h;
   if (s.runout.has_gate && !(s.runout.gate_x >= x0 && s.runout.gate_x <= x1))
-    throw input_error(fmt::format("diagnostics.runout.gate_x = {} is outside the grid along x, [{}, {}]", s.runout.gate_x, x0, x1));
+    throw input_error(fmt::format("diagnostics.runout.gate_x = {} is outside the grid along x, [{:.12g}, {:.12g}]", s.runout.gate_x, x0, x1));
   if (s.runout.has_runout_plane && !(s.runout.runout_plane_x >= x0 && s.runout.runout_plane_x <= x1))
-    throw input_error(fmt::format("diagnostics.runout.runout_plane_x = {} is outside the grid along x, [{}, {}]",
+    throw input_error(fmt::format("diagnostics.runout.runout_plane_x = {} is outside the grid along x, [{:.12g}, {:.12g}]",
                                   s.runout.runout_plane_x, x0, x1));
 }
 

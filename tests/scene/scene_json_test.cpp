@@ -70,8 +70,17 @@ TEST(SceneJson, BadInputNamesTheKeyAndTheRange) {
   test::expect_variant_error(ok, "\"density\": 1000", "\"density\": \"heavy\"", "materials.m.density must be a number");
   test::expect_variant_error(ok, "\"material\": \"m\"", "\"material\": \"sand\"", "bodies[0].material = \"sand\" names no material");
   test::expect_variant_error(ok, "\"max\": [0.5, 0.5, 0.5]", "\"max\": [0.5, 0.5, 1.5]", "lies outside the grid");
+  // round-off past the grid's faces is accepted on both sides alike (at an origin of 0 the lower face
+  // allowed none: a min of -1e-17 was refused while a max 1 ulp past the upper face was accepted)
+  EXPECT_NO_THROW(parse_scene(replace_once(ok, "\"min\": [0.2, 0.2, 0.2]", "\"min\": [-1e-17, 0.2, 0.2]"), "t.json"));
+  EXPECT_NO_THROW(parse_scene(replace_once(ok, "\"max\": [0.5, 0.5, 0.5]", "\"max\": [0.5, 0.5, 1.0000000000000002]"), "t.json"));
+  test::expect_variant_error(ok, "\"min\": [0.2, 0.2, 0.2]", "\"min\": [-1e-6, 0.2, 0.2]",
+                             "bodies[0].box [-1e-06, 0.5] along axis 0 lies outside the grid [0, 1]");
   test::expect_variant_error(ok, "\"cell_size\": 0.1", "\"cell_size\": 0.3", "grid.size[0] = 1 must be a positive whole multiple of grid.cell_size");
   test::expect_variant_error(ok, "\"young\": 1e6", "\"young\": 0", "materials.m.young");
+  test::expect_variant_error(ok, "\"time\"", "\"boundaries\": { \"x-\": 1 }, \"time\"",
+                             "boundaries.x- must be a string (open, slip, fixed, periodic) or an object with type "
+                             "(friction needs one), got number");
   EXPECT_NE(error_of("{ \"grid\": ").find("malformed JSON"), std::string::npos);
   test::expect_variant_error(ok, "\"time\"", "\"solver\": { \"scheme\": \"rk4\" }, \"time\"", "solver.scheme = \"rk4\" is not one of: musl, usl");
 }
