@@ -403,11 +403,11 @@ void Solver::step() {
       setup_exchange_ = setup_exchange_ || r.tiles_changed;
     }
     if (particles == 0)
-      throw instability_error(fmt::format("step {}, t = {:.6g} s: every particle has left the grid through its open faces",
-                                          step_, time_));
+      throw instability_error(
+          fmt::format("{}: every particle has left the grid through its open faces", step_started(step_, time_)));
   }
   if (!std::isfinite(dt) || dt <= 0.0)
-    throw instability_error(fmt::format("step {}, t = {:.6g} s: time step {} is not positive and finite", step_, time_, dt));
+    throw instability_error(fmt::format("{}: time step {} is not positive and finite", step_started(step_, time_), dt));
   const double remaining = scene_.end_time - time_;
   if (dt > remaining) dt = remaining;
   // The shape function and the terrain type are chosen here, once per step; the kernels below are
@@ -580,7 +580,14 @@ void Solver::step_with(double dt) {
     if (options.block_increment_kinetic)
       for (double k : block_increment_kinetic_) gap_.transfer_loss -= k;  // in block order
     if (r.nonfinite >= 0) report_bad_particle(r.nonfinite, "velocity is not finite");
-    if (r.outside >= 0) report_bad_particle(r.outside, "left the grid");
+    if (r.outside >= 0) {
+      // (the position alone is the one before the step, still inside: where this step takes it says why)
+      const auto q = static_cast<std::size_t>(r.outside);
+      const std::array<std::span<double>, 3> dx = displacement();
+      report_bad_particle(r.outside, fmt::format("left the grid (this step moves it to ({:.6g}, {:.6g}, {:.6g}) m)",
+                                                 particles_.x[0][q] + dx[0][q], particles_.x[1][q] + dx[1][q],
+                                                 particles_.x[2][q] + dx[2][q]));
+    }
     needs_sort_ = r.needs_sort;
     // Counted before the move, so the drift the smoother allows for already holds this step's
     // (larger than needed until the move; never smaller).
@@ -856,13 +863,13 @@ EnergyGapTerms Solver::energy_gap_terms() const {
   return sum;
 }
 
-void Solver::report_bad_particle(long long index, const char* what) const {
+void Solver::report_bad_particle(long long index, std::string_view what) const {
   const auto p = static_cast<std::size_t>(index);
   const ParticleStore& P = particles_;
   throw instability_error(fmt::format(
-      "step {}, t = {:.6g} s: particle {} (body \"{}\") {}: position ({:.6g}, {:.6g}, {:.6g}) m, velocity ({:.6g}, "
+      "{}: particle {} (body \"{}\") {}: position ({:.6g}, {:.6g}, {:.6g}) m, velocity ({:.6g}, "
       "{:.6g}, {:.6g}) m/s",
-      step_, time_, P.id[p], scene_.bodies[P.body[p]].name, what, P.x[0][p], P.x[1][p], P.x[2][p], P.v[0][p],
+      step_started(step_, time_), P.id[p], scene_.bodies[P.body[p]].name, what, P.x[0][p], P.x[1][p], P.x[2][p], P.v[0][p],
       P.v[1][p], P.v[2][p]));
 }
 

@@ -11,6 +11,10 @@
 
 namespace talus {
 
+std::string step_started(std::int64_t step, double time) {
+  return fmt::format("in step {}, from t = {:.6g} s", step + 1, time);
+}
+
 namespace {
 
 std::string particle_label(const ParticleStore& P, const Scene& scene, std::size_t p) {
@@ -84,23 +88,23 @@ void check_particle_fields(const ParticleStore& P, const Scene& scene, std::int6
     const double* data = arrays[a]->data();
     for (std::size_t p = 0; p < n; ++p)
       if (!std::isfinite(data[p]))
-        throw instability_error(fmt::format("step {}, t = {:.6g} s: {} field {} = {} is not finite; {}", step, time,
+        throw instability_error(fmt::format("{}: {} field {} = {} is not finite; {}", step_started(step, time),
                                             particle_label(P, scene, p), names[a], data[p], where(P, p)));
   }
   if (inverted)
     for (std::size_t p = 0; p < n; ++p)
       if (!(P.volume[p] > 0.0))
-        throw instability_error(fmt::format("step {}, t = {:.6g} s: {} field volume = {:.6g} m^3 is not positive "
+        throw instability_error(fmt::format("{}: {} field volume = {:.6g} m^3 is not positive "
                                             "(particle inverted); {}",
-                                            step, time, particle_label(P, scene, p), P.volume[p], where(P, p)));
+                                            step_started(step, time), particle_label(P, scene, p), P.volume[p], where(P, p)));
   if (crushed)
     for (std::size_t p = 0; p < n; ++p)
       if (compressed(p)) {
         const double ratio = P.volume[p] * seeded_density[P.body[p]] / P.mass[p];
         throw instability_error(fmt::format(
-            "step {}, t = {:.6g} s: {} field volume = {:.6g} m^3 is {:.6g} of its seeded volume, below "
+            "{}: {} field volume = {:.6g} m^3 is {:.6g} of its seeded volume, below "
             "guards.min_volume_ratio = {} (density {:.3g} kg/m^3); {}",
-            step, time, particle_label(P, scene, p), P.volume[p], ratio, min_ratio, P.mass[p] / P.volume[p], where(P, p)));
+            step_started(step, time), particle_label(P, scene, p), P.volume[p], ratio, min_ratio, P.mass[p] / P.volume[p], where(P, p)));
       }
 }
 
@@ -119,9 +123,9 @@ void check_step_displacement(const ParticleStore& P, const std::array<std::span<
     if (d2 > limit2) {
       const double d = std::sqrt(d2);
       throw instability_error(fmt::format(
-            "step {}, t = {:.6g} s: {} field displacement = {:.6g} m in one step, {:.6g} cells > "
+            "{}: {} field displacement = {:.6g} m in one step, {:.6g} cells > "
             "guards.max_step_displacement = {} (CFL breach); {}",
-            step, time, particle_label(P, scene, p), d, d / h, scene.guards.max_step_displacement, where(P, p)));
+            step_started(step, time), particle_label(P, scene, p), d, d / h, scene.guards.max_step_displacement, where(P, p)));
     }
   }
 }
@@ -159,7 +163,7 @@ void EnergyGuard::check(const EnergyBudget& e, const ParticleStore& P, const Sce
     }
   }
   throw instability_error(fmt::format(
-      "step {}, t = {:.6g} s: total energy = {:.6g} J grew by {:.6g} J, more than guards.energy_growth_factor = {} times "
+      "after step {}, t = {:.6g} s: total energy = {:.6g} J grew by {:.6g} J, more than guards.energy_growth_factor = {} times "
       "the energy available ({:.6g} J); fastest: {} field speed = {:.6g} m/s; {}",
       step, time, e.total(), growth, factor_, a, particle_label(P, scene, fastest), std::sqrt(std::max(v2max, 0.0)),
       where(P, fastest)));

@@ -540,7 +540,7 @@ TEST(Crash, InstabilityExitsThreeWithOneLineAndTheLastGoodState) {
       0.5, 0.0, R"(, "gravity": [200.0, 0.0, -9.81], "guards": {"max_step_displacement": 0.08})");
   const auto [code, out] = run_captured("run " + (dir / "s.json").string() + " --quiet --threads 1 --out " + (dir / "out").string());
   EXPECT_EQ(code, 3) << out;
-  const auto line = out.find("talus: error: step ");
+  const auto line = out.find("talus: error: in step ");
   ASSERT_NE(line, std::string::npos) << out;
   const std::string error = out.substr(line, out.find('\n', line) - line);  // one line holds it all
   EXPECT_NE(error.find("field displacement"), std::string::npos) << error;

@@ -25,6 +25,7 @@
 #include <memory>
 #include <optional>
 #include <span>
+#include <string_view>
 #include <vector>
 
 namespace talus {
@@ -224,7 +225,7 @@ class Solver {
   /// Sum the `scattered` node fields (mass, momentum, force: what the scatter wrote) on the tiles
   /// shared with other ranks (TileExchange); nothing in a serial run.
   void sum_shared_nodes(ScatteredFields scattered);
-  [[noreturn]] void report_bad_particle(long long index, const char* what) const;
+  [[noreturn]] void report_bad_particle(long long index, std::string_view what) const;
 
   Scene scene_;
   Comm comm_;

@@ -20,9 +20,16 @@
 #include <array>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace talus {
+
+/// How an instability's message names the step it happened in: `step` steps were done at `time`
+/// when it began, so it is step `step` + 1, as the progress line counts ("in step 1, from t = 0 s"
+/// for the first; it read "step 0, t = 0 s", and the energy guard, which checks after a step,
+/// named that step one higher than the other guards did).
+std::string step_started(std::int64_t step, double time);
 
 /// Every per-particle double array finite and every volume positive. `step` and `time` are those
 /// at the start of the step just taken (as in the solver's messages). It reads every particle
@@ -49,6 +56,7 @@ class EnergyGuard {
   EnergyGuard() = default;
   EnergyGuard(const Scene& scene, const ParticleStore& particles, const EnergyBudget& initial);
   /// Throws when the budget `e` breaks the bound; otherwise records the released potential energy.
+  /// `step` and `time`: those after the step that gave `e`.
   void check(const EnergyBudget& e, const ParticleStore& particles, const Scene& scene, std::int64_t step, double time);
   double available() const;
   /// Guard state to checkpoint: the most potential energy released so far.
