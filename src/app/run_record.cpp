@@ -10,6 +10,8 @@
 #include <fmt/core.h>
 #include <omp.h>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <ctime>
 #include <fstream>
@@ -74,7 +76,12 @@ RunRecord::RunRecord(const fs::path& dir, const Solver& solver, const RunStart& 
     std::string folder = fs::path(start.restart_path).parent_path().string();
     record_["earlier_parts"] = earlier_parts(folder.empty() ? "." : folder);
   }
-  record_["host"] = {{"name", host_name()}, {"cpu", cpu_model()}, {"logical_cpus", omp_get_num_procs()}};
+  // (the CPUs of the host, and those this process may run on: under mpirun's binding or taskset the
+  // one figure that was recorded, OpenMP's, said 1 on a 2-CPU host)
+  record_["host"] = {{"name", host_name()},
+                     {"cpu", cpu_model()},
+                     {"logical_cpus", ::sysconf(_SC_NPROCESSORS_ONLN)},
+                     {"cpus_allowed", omp_get_num_procs()}};
   record_["ranks"] = comm.size();
   record_["threads"] = omp_get_max_threads();
   record_["isa"] = active_isa();

@@ -238,6 +238,11 @@ TEST(Cli, RunRecordNamesTheBuildTheCommandAndTheEnd) {
   EXPECT_EQ(j.at("threads"), 2);
   EXPECT_EQ(j.at("ranks"), 1);
   EXPECT_EQ(j.at("isa"), "reference");
+  // the host's CPUs, and those this process may use (fewer under a binding: it recorded only these)
+  const int allowed = j.at("host").at("cpus_allowed").get<int>();
+  EXPECT_GE(allowed, 1);
+  EXPECT_GE(j.at("host").at("logical_cpus").get<int>(), allowed);
+  EXPECT_EQ(j.at("host").at("logical_cpus").get<long>(), ::sysconf(_SC_NPROCESSORS_ONLN));
   EXPECT_FALSE(j.contains("restart"));
   EXPECT_FALSE(j.contains("progress"));  // (while it ran; "end" replaces it)
   EXPECT_FALSE(fs::exists(out / ".talus.lock"));  // the folder's lock goes with the run (driver/folder_lock.hpp)
