@@ -42,8 +42,8 @@ void run_mu_i_test_command(const MuIShearSpec& spec, const std::string& out_file
   write_csv(out_file, [&](std::ostream& out) { write_mu_i_shear_csv(out, points); });
   double worst = 0.0;
   for (const MuIShearPoint& p : points) worst = std::fmax(worst, std::abs(p.relative_error));
-  fmt::print("element-test: mu(I) simple shear at {} inertial numbers, largest |tau/p / mu(I) - 1| = {:.2e}, wrote {}\n",
-             points.size(), worst, out_file);
+  fmt::print("element-test: mu(I) simple shear at {} inertial number{}, largest |tau/p / mu(I) - 1| = {:.2e}, wrote {}\n",
+             points.size(), points.size() == 1 ? "" : "s", worst, out_file);
 }
 
 void run_element_test_command(const std::string& spec_file, const std::string& out_file) {

@@ -77,7 +77,7 @@ Fields<ElementTestSpec> drucker_prager_path_fields() {
 Field<MuIShearSpec> inertial_number_field() {
   Json number = {{"type", "number"}, {"exclusiveMinimum", 0}};
   return custom<MuIShearSpec>(
-      "inertial_number", "object", "required", "{min > 0, max ≥ min, count in [1, 100000]}",
+      "inertial_number", "object", "required", "{min > 0, max ≥ min, count in [1, 100000]; 1 only with max = min}",
       "the imposed inertial numbers I: `count` values from `min` to `max`, log-spaced",
       {{"type", "object"},
        {"properties", {{"min", number}, {"max", number}, {"count", {{"type", "integer"}, {"minimum", 1}, {"maximum", 100000}}}}},
@@ -88,6 +88,11 @@ Field<MuIShearSpec> inertial_number_field() {
         const double lo = range.number("min", 0.0, kHuge, true);
         const double hi = range.number("max", lo, kHuge);
         const int n = range.integer("count", 1, 100000);
+        // (one value from a range was min, with max ignored without a word)
+        if (n == 1 && hi != lo)
+          throw input_error(fmt::format("{} = 1 gives one inertial number, but min = {} and max = {} differ; give max = "
+                                        "min, or a count of 2 or more",
+                                        range.key_path("count"), lo, hi));
         range.finish();
         s.inertial_numbers.clear();
         for (int k = 0; k < n; ++k)

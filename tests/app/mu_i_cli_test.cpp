@@ -70,6 +70,14 @@ TEST_F(MuICli, BadElementTestParameterExitsTwoNamingTheKey) {
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_NE(r.err.find("material.mu_2 = 0.4 is out of range; allowed mu_2 > mu_s = 0.5"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "x.csv"));
+  // one value from a range of two: it took min and ignored max without a word
+  const fs::path one = write("one.json", R"({"material": {"model": "mu_i", "young": 1e7, "poisson": 0.3},
+      "path": {"type": "mu_i_shear", "pressure": 1e3, "inertial_number": {"min": 1e-3, "max": 1, "count": 1}}})");
+  const Result r1 = run("element-test \"" + one.string() + "\" --out \"" + (dir_ / "x.csv").string() + "\"");
+  EXPECT_EQ(r1.exit_code, 2);
+  EXPECT_EQ(r1.err, "talus: error: path.inertial_number.count = 1 gives one inertial number, but min = 0.001 and max = 1 "
+                    "differ; give max = min, or a count of 2 or more\n");
+  EXPECT_FALSE(fs::exists(dir_ / "x.csv"));
 }
 
 // A spec whose total shear strain is below the elastic approach to mu(I_max) p (p = 100 MPa with the
