@@ -73,7 +73,8 @@ def main():
             require_talus(binary, option)
     if a.json and not os.path.isdir(os.path.dirname(os.path.abspath(a.json))):
         sys.exit(f"bench_kernels.py: --json {a.json}: its folder does not exist")  # found before the runs, not after
-    print(time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()), os.getloadavg(), flush=True)
+    print(time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
+          "load average %.2f %.2f %.2f" % os.getloadavg(), flush=True)
     results = {"paths": paths, "cpu_time": a.cpu_time, "threads": a.threads, "particles": a.particles, "cases": {}, "mpm_limit": [], "stream": []}
     env1 = dict(os.environ, OMP_NUM_THREADS=str(a.threads))
     for rnd in range(a.rounds):
@@ -103,7 +104,7 @@ def main():
         lim = sorted(results["mpm_limit"])[len(results["mpm_limit"]) // 2]
         print(f"  mpm_limit median {lim:.3f} M/s; USL B-spline DP / mpm_limit: " +
               "  ".join(f"{p} {sorted(r['rate'] for r in usl[p])[len(usl[p]) // 2] / lim:.2f}" for p in paths))
-    print(os.getloadavg())
+    print("load average %.2f %.2f %.2f" % os.getloadavg())
     if a.json:
         with open(a.json, "w") as f:
             json.dump(results, f, indent=1)

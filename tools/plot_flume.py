@@ -37,7 +37,8 @@ def main():
     p.add_argument("run_dir")
     p.add_argument("--out", help="folder for the PNGs (default: the run folder)")
     a = p.parse_args()
-    for needed in ("runout.csv", "runout.json", "scene.json"):  # checked before any plot (was a traceback)
+    # (runout.json comes at the end of a run: a killed run's history is plotted without it)
+    for needed in ("runout.csv", "scene.json"):  # checked before any plot (was a traceback)
         if not os.path.isfile(os.path.join(a.run_dir, needed)):
             sys.exit(f"plot_flume.py: {os.path.join(a.run_dir, needed)} not found: give the folder of a run of a scene "
                      "with diagnostics.runout (talus run SCENE --out DIR)")
@@ -47,6 +48,8 @@ def main():
     with open(os.path.join(a.run_dir, "scene.json")) as f:
         scene = json.load(f)
     gate, plane = reference_s(a.run_dir, runout)
+    if not os.path.isfile(os.path.join(a.run_dir, "runout.json")):
+        print("runout.json missing (the run did not reach its end): the gate drawn is the initial front")
     name = scene.get("name", os.path.basename(a.run_dir.rstrip("/")))
 
     t = runout["time"]
