@@ -31,6 +31,7 @@
 #include <initializer_list>
 #include <limits>
 #include <memory>
+#include <tuple>
 #include <optional>
 #include <string>
 
@@ -171,6 +172,17 @@ void refuse_unavailable(const BenchOptions& o) {
     throw input_error(fmt::format("--mls {}: unknown; available: off, linear, quadratic, cubic", o.mls));
   if (!one_of(o.mls_variant, {"particle", "cell", "reused"}))
     throw input_error(fmt::format("--mls-variant {}: unknown; available: particle, cell, reused", o.mls_variant));
+  // The update scene times the constitutive update alone: the grid's options were ignored without a word.
+  const BenchOptions defaults;
+  if (o.scene == "update")
+    for (const auto& [option, value, given] :
+         {std::tuple{"--shape", o.shape, o.shape != defaults.shape}, std::tuple{"--scheme", o.scheme, o.scheme != defaults.scheme},
+          std::tuple{"--mls", o.mls, o.mls != defaults.mls}, std::tuple{"--scatter", o.scatter, o.scatter != defaults.scatter},
+          std::tuple{"--block-cells", std::to_string(o.block_cells), o.block_cells != defaults.block_cells}})
+      if (given)
+        throw input_error(fmt::format("{} {}: the update scene has no grid (it times the constitutive update alone); "
+                                      "leave {} out",
+                                      option, value, option));
 }
 
 /// The shear scene: the block scene's sand put into steady simple shear at its yield stress, so that
