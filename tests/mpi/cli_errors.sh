@@ -6,19 +6,30 @@ set -uo pipefail
 mpirun_cmd=$1; talus=$2; ranks=$3
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
+
+# expect_refused NAME ERROR_START: runs $work/NAME.json on the ranks and checks the one line, the
+# exit code and that no output folder was made
+expect_refused() {
+  local name=$1 error=$2
+  "$mpirun_cmd" -np "$ranks" --oversubscribe "$talus" run "$work/$name.json" --out "$work/${name}_out" --quiet \
+    > "$work/log" 2>&1
+  local rc=$?
+  local lines
+  lines=$(grep -c "^talus: error: $error" "$work/log")
+  cat "$work/log"
+  if [ "$rc" -ne 2 ]; then echo "FAIL: $name: exit code $rc, expected 2"; exit 1; fi
+  if [ "$lines" -ne 1 ]; then echo "FAIL: $name: the error was printed $lines times, expected once"; exit 1; fi
+  if [ -e "$work/${name}_out" ]; then echo "FAIL: $name: the output folder was created"; exit 1; fi
+}
+
 cat > "$work/bad.json" <<'JSON'
 { "name": "bad", "grid": { "origin": [0, 0, 0], "size": [0.2, 0.2, 0.2], "cell_size": 0.02 },
   "time": { "end": 0.1, "courant": 7.3 },
   "materials": { "rubber": { "model": "linear_elastic", "density": 1000, "young": 1e5, "poisson": 0.3 } },
   "bodies": [ { "name": "b", "material": "rubber", "box": { "min": [0, 0, 0], "max": [0.1, 0.1, 0.1] } } ] }
 JSON
-"$mpirun_cmd" -np "$ranks" --oversubscribe "$talus" run "$work/bad.json" --out "$work/out" --quiet > "$work/log" 2>&1
-rc=$?
-lines=$(grep -c "^talus: error: time.courant" "$work/log")
-cat "$work/log"
-if [ "$rc" -ne 2 ]; then echo "FAIL: exit code $rc, expected 2"; exit 1; fi
-if [ "$lines" -ne 1 ]; then echo "FAIL: the error was printed $lines times, expected once"; exit 1; fi
-if [ -e "$work/out" ]; then echo "FAIL: the output folder was created"; exit 1; fi
+expect_refused bad "time.courant"
+
 # MLS smoothing needs one rank: the line names the key that asks for it (it said smoothing.enabled)
 cat > "$work/mls.json" <<'JSON'
 { "name": "mls", "grid": { "origin": [0, 0, 0], "size": [0.2, 0.2, 0.2], "cell_size": 0.02 },
@@ -27,11 +38,5 @@ cat > "$work/mls.json" <<'JSON'
   "materials": { "rubber": { "model": "linear_elastic", "density": 1000, "young": 1e5, "poisson": 0.3 } },
   "bodies": [ { "name": "b", "material": "rubber", "box": { "min": [0.04, 0.04, 0.04], "max": [0.1, 0.1, 0.1] } } ] }
 JSON
-"$mpirun_cmd" -np "$ranks" --oversubscribe "$talus" run "$work/mls.json" --out "$work/mls_out" --quiet > "$work/log" 2>&1
-rc=$?
-lines=$(grep -c "^talus: error: solver.smoothing.enabled = true: MLS smoothing is not available in a distributed run" "$work/log")
-cat "$work/log"
-if [ "$rc" -ne 2 ]; then echo "FAIL: MLS scene: exit code $rc, expected 2"; exit 1; fi
-if [ "$lines" -ne 1 ]; then echo "FAIL: MLS scene: the error was printed $lines times, expected once"; exit 1; fi
-if [ -e "$work/mls_out" ]; then echo "FAIL: MLS scene: the output folder was created"; exit 1; fi
+expect_refused mls "solver.smoothing.enabled = true: MLS smoothing is not available in a distributed run"
 echo "ok: one line, exit code 2, nothing written"
