@@ -45,6 +45,20 @@ TEST(SceneJson, AnEndlessNumberOfStepsIsWarnedAbout) {
   EXPECT_TRUE(warned(parse_scene(replace_once(kMinimal, "\"young\": 1e6", "\"young\": 1e29"), "t")));
 }
 
+// A material too soft for its wave speed to bound the step (young = 1 Pa: the first step is the whole
+// run, and the particles fell through the floor) is warned about; the minimal scene is not, and
+// neither is the soft scene without gravity.
+TEST(SceneJson, AMaterialTooSoftToBoundTheStepIsWarnedAbout) {
+  const auto warned = [](const std::string& text) {
+    return test::warnings_with(parse_scene(text, "t"), "is longer than the") > 0;
+  };
+  const std::string soft =
+      replace_once(replace_once(kMinimal, "\"young\": 1e6", "\"young\": 1"), "\"end\": 0.1", "\"end\": 1");
+  EXPECT_FALSE(warned(kMinimal));
+  EXPECT_TRUE(warned(soft));
+  EXPECT_FALSE(warned(replace_once(soft, "\"time\"", "\"gravity\": [0, 0, 0], \"time\"")));
+}
+
 // Two boxes sharing a volume seed it twice: warned about; boxes that only touch are not.
 TEST(SceneJson, OverlappingBoxesAreWarnedAbout) {
   const auto warnings_of = [](const std::string& second_box) {
