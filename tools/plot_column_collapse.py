@@ -8,6 +8,7 @@ Runs inputs/column_collapse_2d.json with talus (or reads an existing run folder)
 Usage: /usr/bin/python3 tools/plot_column_collapse.py --talus build/talus [--run-dir DIR]
 """
 import argparse
+import json
 import os
 import sys
 
@@ -34,6 +35,13 @@ def main():
     run = args.run_dir or os.path.join(ROOT, "runs", "column_collapse_2d")
     if args.run_dir and not os.path.isfile(os.path.join(run, "energy.csv")):
         sys.exit(f"plot_column_collapse.py: --run-dir {run}: no energy.csv there: give the folder of a talus run")
+    # (a flume's run was plotted as a collapse, with a "runout" that was the flume's x extent)
+    if args.run_dir and os.path.isfile(os.path.join(run, "scene.json")):
+        with open(os.path.join(run, "scene.json")) as f:
+            grid = json.load(f).get("grid", {})
+        if "terrain" in grid:
+            sys.exit(f"plot_column_collapse.py: --run-dir {run}: a run of a scene with a terrain; this plots a column "
+                     "collapse on a flat floor (inputs/column_collapse_2d.json)")
     if not args.run_dir:
         run_talus(args.talus, "run", os.path.join(ROOT, "inputs", "column_collapse_2d.json"), "--out", run, quiet=False)
     d = np.genfromtxt(os.path.join(run, "energy.csv"), delimiter=",", names=True)
