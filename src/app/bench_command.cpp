@@ -311,7 +311,7 @@ void run_update_bench(const BenchOptions& o) {
   fmt::print("talus bench: update scene (the constitutive update alone), {} particles, {} material, {} thread{}, {} kernels, {} passes\n",
              n, o.material, threads, threads == 1 ? "" : "s", active_isa(), o.steps);
   fmt::print("  {:.3f} M updates/s ({:.3f} s, {:.2f} ns per particle update)\n", rate_updates / 1e6, wall,
-             1e9 * wall * omp_get_max_threads() / (double(n) * o.steps));
+             1e9 * wall * threads / (double(n) * o.steps));
   fmt::print("  plastic: {:.1f}% of the updates (dissipated {:.3e} J/m^3 in all, G = {:.4g} Pa)\n",
              100.0 * double(plastic_updates) / (double(n) * o.steps), dissipated, shear);
   if (!o.json_path.empty()) {

@@ -454,8 +454,8 @@ void RunLoop::fail(const Error& e) {
         ++summary_.frames;
       }
       write_checkpoint();
-      message += fmt::format(" | last good state (after step {}, t = {:.6g} s) written to {} and checkpoint.h5",
-                             solver_.step_count(), solver_.time(), frame);
+      message += fmt::format(" | last good state ({}) written to {} and checkpoint.h5",
+                             step_ended(solver_.step_count(), solver_.time()), frame);
     }
   } catch (const Error& io) {
     message += fmt::format(" | the last good state could not be written: {}", io.what());

@@ -149,12 +149,13 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
   // for Young's modulus 1 Pa) let the particles fall through the floor, and every such run stopped at
   // its first step with "left the grid".
   const double g = scene.gravity.norm(), first_step = std::min(dt, scene.end_time);
-  if (g > 0.0 && first_step > std::sqrt(2.0 * scene.grid.h / g))
+  const double fall_one_cell = g > 0.0 ? std::sqrt(2.0 * scene.grid.h / g) : 0.0;
+  if (g > 0.0 && first_step > fall_one_cell)
     warnings.push_back(fmt::format(
         "the first time step, {:.3g} s, is longer than the {:.3g} s a particle at rest takes to fall one cell "
         "(grid.cell_size = {} m) under gravity: the materials' wave speed is too slow to bound the step, and the run "
         "will likely stop in its first steps; check the materials' young and density",
-        first_step, std::sqrt(2.0 * scene.grid.h / g), scene.grid.h));
+        first_step, fall_one_cell, scene.grid.h));
   if (scene.smoothing.enabled && scene.smoothing.mls.variant == MlsVariant::Cell)
     warnings.push_back(
         "solver.smoothing.variant = \"cell\" is not energy-stable: one fit per cell fed energy into the elastic block "

@@ -628,8 +628,9 @@ WallSpec read_wall(const Json& j, const std::string& path) {
   }
   // (a number said "must be an object", as if a string were not allowed)
   if (!j.is_object())
-    throw input_error(fmt::format("{} must be a string (open, slip, fixed, periodic) or an object with type (friction needs one), got {}", path,
-                                  j.type_name()));
+    throw input_error(fmt::format(
+        "{} must be a string (open, slip, fixed, periodic) or an object with type (friction needs one), got {}", path,
+        j.type_name()));
   ObjectReader r(j, path);
   w.type = wall_type(r.string("type"), r.key_path("type"));
   if (w.type == WallType::Friction) w.friction_coefficient = r.number("friction_coefficient", 0.0, 100.0);

@@ -15,6 +15,8 @@ std::string step_started(std::int64_t step, double time) {
   return fmt::format("in step {}, from t = {:.6g} s", step + 1, time);
 }
 
+std::string step_ended(std::int64_t step, double time) { return fmt::format("after step {}, t = {:.6g} s", step, time); }
+
 namespace {
 
 std::string particle_label(const ParticleStore& P, const Scene& scene, std::size_t p) {
@@ -163,9 +165,9 @@ void EnergyGuard::check(const EnergyBudget& e, const ParticleStore& P, const Sce
     }
   }
   throw instability_error(fmt::format(
-      "after step {}, t = {:.6g} s: total energy = {:.6g} J grew by {:.6g} J, more than guards.energy_growth_factor = {} times "
+      "{}: total energy = {:.6g} J grew by {:.6g} J, more than guards.energy_growth_factor = {} times "
       "the energy available ({:.6g} J); fastest: {} field speed = {:.6g} m/s; {}",
-      step, time, e.total(), growth, factor_, a, particle_label(P, scene, fastest), std::sqrt(std::max(v2max, 0.0)),
+      step_ended(step, time), e.total(), growth, factor_, a, particle_label(P, scene, fastest), std::sqrt(std::max(v2max, 0.0)),
       where(P, fastest)));
 }
 

@@ -30,6 +30,9 @@ namespace talus {
 /// for the first; it read "step 0, t = 0 s", and the energy guard, which checks after a step,
 /// named that step one higher than the other guards did).
 std::string step_started(std::int64_t step, double time);
+/// The state after `step` steps, at `time`: "after step 34, t = 0.012 s" (the energy guard's check,
+/// and the last good state a run falls back to).
+std::string step_ended(std::int64_t step, double time);
 
 /// Every per-particle double array finite and every volume positive. `step` and `time` are those
 /// at the start of the step just taken (as in the solver's messages). It reads every particle
