@@ -1,5 +1,5 @@
 #pragma once
-// What a run's frames may take on disk, against what the output folder's file system has free:
+// What a run's frames and checkpoint may take on disk, against what the output folder's file system has free:
 // `talus check` prints it, and `talus run` warns before it starts when the frames may not fit (a
 // run that fills the disk stops at the frame that fails, exit code 2).
 #include "talus/scene/scene.hpp"
@@ -15,9 +15,18 @@ struct DiskEstimate {
   std::size_t frames = 0;           // the most a run writes (driver/run_outputs.hpp frames_of_run)
   std::size_t bytes_per_frame = 0;  // uncompressed (io/vtu_writer.hpp): an upper bound with LZ4
   bool compressed = true;           // output.compress
+  /// checkpoint.h5: written by every run that is stopped (signal, --stop-after, an instability) and
+  /// every output.checkpoint_interval, through a temporary file, so that two are on disk while a
+  /// periodic one is replaced
+  std::size_t checkpoint_bytes = 0;
+  int checkpoints_at_once = 1;
   std::optional<std::size_t> available;  // free to this user on the output folder's file system
-  double total() const { return double(frames) * double(bytes_per_frame); }  // (in double: 10^15 frames of 1 MB overflow 64 bits)
-  /// "51 frames of at most 1.5 MB (LZ4 writes less): at most 76.5 MB; 20.1 GB free in runs/x".
+  // (in double: 10^15 frames of 1 MB overflow 64 bits)
+  double total() const {
+    return double(frames) * double(bytes_per_frame) + double(checkpoints_at_once) * double(checkpoint_bytes);
+  }
+  /// "51 frames of at most 1.5 MB (LZ4 writes less) and a checkpoint of 1.6 MB: at most 78.0 MB;
+  /// 20.1 GB free in runs/x".
   std::string summary(const std::filesystem::path& out_dir) const;
 };
 

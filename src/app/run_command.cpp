@@ -256,14 +256,17 @@ void add_run_command(CLI::App& app) {
     require_memory_fits(scene, memory);  // a scene that cannot fit stops here, before anything is allocated
     std::string dir = out_dir->empty() ? "runs/" + scene.name : *out_dir;
     Solver solver(std::move(scene), world);
-    std::unique_ptr<Checkpoint> checkpoint;
+    std::optional<RunProgress> resumed;
     if (!restart->empty()) {  // checked against the scene before anything is written
-      checkpoint = std::make_unique<Checkpoint>(read_checkpoint(*restart));
-      restore_checkpoint(solver, *checkpoint, *restart);
+      const Checkpoint checkpoint = read_checkpoint(*restart);
+      restore_checkpoint(solver, checkpoint, *restart);
+      // Only the run's progress is kept: the checkpoint's copy of the particles (about 190 B a
+      // particle of the whole scene, on every rank) was held to the run's end.
+      resumed = checkpoint.run;
       if (out_dir->empty()) dir = checkpoint_folder(*restart);
     }
     require_outputs_spare_inputs(dir, *scene_path, solver.scene(), *restart, *record_path);
-    if (checkpoint && !out_dir->empty()) require_fresh_folder_for_restart(dir, *restart);
+    if (resumed && !out_dir->empty()) require_fresh_folder_for_restart(dir, *restart);
     // Every rank sees the same folder and stops alike (rank 0 reports); --record-work is refused under mpirun.
     check_writable_folder(dir, "output folder");
     require_no_folder_in_place_of_an_output(dir);
@@ -281,8 +284,8 @@ void add_run_command(CLI::App& app) {
     if (world.distributed() && !(refusal = world.broadcast(refusal)).empty()) throw input_error(refusal);
     // Made (or cleared) here, before the run starts: a folder that cannot be used is an error every
     // rank meets alike (rank 0 prepares it and tells the others), said once, with nothing started.
-    prepare_output_folder(dir, checkpoint ? &checkpoint->run : nullptr, world);
-    if (checkpoint && world.root())
+    prepare_output_folder(dir, resumed ? &*resumed : nullptr, world);
+    if (resumed && world.root())
       fmt::print("talus: restart from {} at step {}, t = {:.6g} s\n", *restart, solver.step_count(), solver.time());
     const int threads = omp_get_max_threads();
     const DistributionStats start = solver.distribution();
@@ -295,7 +298,7 @@ void add_run_command(CLI::App& app) {
     if (world.root()) {
       const DiskEstimate disk = estimate_disk(solver.scene(), std::size_t(start.particles), dir);
       if (disk.available && disk.total() > double(*disk.available))
-        fmt::print("talus: warning: the frames may not fit: {} (a frame that cannot be written stops the run)\n",
+        fmt::print("talus: warning: the outputs may not fit: {} (a frame or checkpoint that cannot be written stops the run)\n",
                    disk.summary(dir));
     }
     // Out now, ahead of the progress lines and any error on stderr: a log of both (`> log 2>&1`)
@@ -310,8 +313,8 @@ void add_run_command(CLI::App& app) {
     if (*stop_after > 0.0)
       options.deadline = started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                        std::chrono::duration<double>(*stop_after));
-    if (checkpoint) {
-      options.resume = &checkpoint->run;
+    if (resumed) {
+      options.resume = &*resumed;
       options.resume_dir = checkpoint_folder(*restart);
     }
     std::unique_ptr<WorkRecorder> recorder;

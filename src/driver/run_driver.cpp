@@ -69,8 +69,8 @@ class ProgressLine {
  public:
   ProgressLine(const Solver& solver, const RunOptions& options)
       : solver_(solver), enabled_(options.progress && solver.comm().root()), seconds_(options.progress_seconds),
-        first_step_(solver.step_count()), start_(std::chrono::steady_clock::now()), last_(start_),
-        tty_(isatty(fileno(stderr))) {}
+        first_step_(solver.step_count()), first_fraction_(done_fraction()), start_(std::chrono::steady_clock::now()),
+        last_(start_), tty_(isatty(fileno(stderr))) {}
 
   double elapsed() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
 
@@ -84,21 +84,31 @@ class ProgressLine {
     last_ = now;
     const Scene& scene = solver_.scene();
     const double wall = elapsed();
-    const double fraction = scene.max_steps > 0
-                                ? std::max(solver_.time() / scene.end_time, double(solver_.step_count()) / scene.max_steps)
-                                : solver_.time() / scene.end_time;
+    const double fraction = done_fraction();
     const double rate = (solver_.step_count() - first_step_) * double(particles_) / std::max(wall, 1e-9);
+    // The time left at the pace of this process: a resumed run's wall clock counts from its restart,
+    // so it is set against the share done since then (against the whole share, a run resumed at 90%
+    // said a tenth of the time it had left).
+    const double eta = wall * (1.0 - fraction) / std::max(fraction - first_fraction_, 1e-12);
     fmt::print(stderr, "{}talus: step {:>8}  t = {:.4g}/{:.4g} s ({:5.1f}%)  dt = {:.3e} s  {:.2f} M particle-updates/s  ETA {}{}",
                tty_ ? "\r" : "", solver_.step_count(), solver_.time(), scene.end_time, 100.0 * fraction, solver_.last_dt(),
-               rate / 1e6, format_duration(wall * (1.0 - fraction) / std::max(fraction, 1e-12)), tty_ ? "   " : "\n");
+               rate / 1e6, format_duration(eta), tty_ ? "   " : "\n");
     if (tty_ && last) fmt::print(stderr, "\n");
   }
 
  private:
+  /// The share of the run done: of its end time, or of its step limit where that comes first.
+  double done_fraction() const {
+    const Scene& scene = solver_.scene();
+    const double of_time = solver_.time() / scene.end_time;
+    return scene.max_steps > 0 ? std::max(of_time, double(solver_.step_count()) / scene.max_steps) : of_time;
+  }
+
   const Solver& solver_;
   bool enabled_;
   double seconds_;
   std::int64_t first_step_;
+  double first_fraction_;
   std::int64_t particles_ = static_cast<std::int64_t>(solver_.particles().size());
   std::chrono::steady_clock::time_point start_, last_;
   bool tty_;

@@ -51,7 +51,8 @@ std::size_t reused_weight_bytes(const Scene& scene) {
   return static_cast<std::size_t>(12.0 * neighbours) + 16 + 64;
 }
 
-std::size_t bytes_per_particle(const Scene& scene, MemoryScope scope) {
+/// The particle store's fields (what a checkpoint and the last good state keep of each particle).
+std::size_t field_bytes(const Scene& scene) {
   bool plastic = false, kinematic = false;
   for (const BodySpec& body : scene.bodies) {
     const MaterialSpec& m = scene.materials[body.material];
@@ -64,9 +65,18 @@ std::size_t bytes_per_particle(const Scene& scene, MemoryScope scope) {
   if (plastic) fields += kPlasticStrain;
   if (kinematic) fields += kBackStress;
   if (scene.shape == ShapeKind::CpGimp) fields += kGimpDomain;
+  return fields;
+}
+
+bool reuses_mls_weights(const Scene& scene) {
+  return scene.smoothing.enabled && scene.smoothing.mls.variant == MlsVariant::Reused;
+}
+
+std::size_t bytes_per_particle(const Scene& scene, MemoryScope scope) {
+  const std::size_t fields = field_bytes(scene);
   std::size_t bytes = fields + kParticleScratch;
   if (scene.smoothing.enabled) bytes += kSmoothing;
-  if (scene.smoothing.enabled && scene.smoothing.mls.variant == MlsVariant::Reused) bytes += reused_weight_bytes(scene);
+  if (reuses_mls_weights(scene)) bytes += reused_weight_bytes(scene);
   if (scope == MemoryScope::Solver) return bytes;
   bytes += kFrameArrays;
   if (scene.guards.snapshot_interval > 0) bytes += fields + kSortCell;  // the last good state
@@ -188,6 +198,11 @@ GhostMapBytes ghost_map_bytes(const Scene& scene, std::size_t all_tiles) {
 }
 
 }  // namespace
+
+std::size_t checkpoint_bytes_per_particle(const Scene& scene) {
+  // the fields and their sort cells, and the `reused` MLS variant's weights without its rows
+  return field_bytes(scene) + kSortCell + (reuses_mls_weights(scene) ? reused_weight_bytes(scene) - 64 : 0);
+}
 
 MemoryEstimate estimate_memory(const Scene& scene, MemoryScope scope) {
   MemoryEstimate e;

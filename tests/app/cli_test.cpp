@@ -169,7 +169,8 @@ TEST(Cli, ProgressIntoALogComesEveryThirtySecondsUnlessAsked) {
   fs::remove_all(dir);
 }
 
-// The disk estimate (app/disk_estimate.hpp): `talus check` prints the frames' count and bound, and
+// The disk estimate (app/disk_estimate.hpp): `talus check` prints the frames' count and bound and
+// the checkpoint's size (Checkpoint.SizePerParticleIsWhatTheDiskEstimateCounts), and
 // `talus run` warns before it starts when they exceed the free space (here a frame every step of a
 // 1 s run, a billion frames of 1.5 MB: petabytes), then runs (--stop-after ends it at once).
 TEST(Cli, CheckEstimatesTheFramesDiskUseAndRunWarnsWhenTheyMayNotFit) {
@@ -178,7 +179,7 @@ TEST(Cli, CheckEstimatesTheFramesDiskUseAndRunWarnsWhenTheyMayNotFit) {
   std::ifstream in(kInputs + "elastic_block_slide.json");
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const std::string check = run("check " + kInputs + "elastic_block_slide.json").output;
-  EXPECT_NE(check.find("\ndisk       51 frames of at most 1.5 MB (LZ4 writes less): at most 76.4 MB; "), std::string::npos)
+  EXPECT_NE(check.find("\ndisk       51 frames of at most 1.5 MB (LZ4 writes less) and a checkpoint of 1.5 MB: at most 78.0 MB; "), std::string::npos)
       << check;
   const std::string interval = "\"frame_interval\": 0.02";
   ASSERT_NE(text.find(interval), std::string::npos);
@@ -187,7 +188,7 @@ TEST(Cli, CheckEstimatesTheFramesDiskUseAndRunWarnsWhenTheyMayNotFit) {
   const Result r = run("run " + (dir / "many.json").string() + " --out " + (dir / "out").string() +
                        " --threads 1 --quiet --stop-after 0.1s");
   EXPECT_EQ(r.exit_code, 75) << r.output;
-  EXPECT_NE(r.output.find("talus: warning: the frames may not fit: 1000000001 frames of at most 1.5 MB"), std::string::npos)
+  EXPECT_NE(r.output.find("talus: warning: the outputs may not fit: 1000000001 frames of at most 1.5 MB"), std::string::npos)
       << r.output;
   fs::remove_all(dir);
 }

@@ -6,6 +6,7 @@
 #include "talus/core/version.hpp"
 #include "talus/io/checkpoint.hpp"
 #include "talus/scene/scene_json.hpp"
+#include "talus/solver/memory_estimate.hpp"
 #include "talus/solver/solver.hpp"
 
 #include <H5Cpp.h>
@@ -267,6 +268,27 @@ TEST(Checkpoint, DefaultSceneSizeAndWriteTime) {
   // The arrays dominate: no more than 10% overhead over the raw data.
   const double raw = solver.particles().size() * (8.0 * (c.double_arrays.size() + 1) + 2 + 12);
   EXPECT_LT(bytes, 1.1 * raw + 64 * 1024);
+  test::fs::remove_all(dir);
+}
+
+// The disk estimate counts a checkpoint as checkpoint_bytes_per_particle a particle (`talus check`'s
+// "disk" line): the file holds that, with a few kB of scene and attributes, for a plastic state with
+// its back stress, with and without cpGIMP's domains, and for an elastic scene.
+TEST(Checkpoint, SizePerParticleIsWhatTheDiskEstimateCounts) {
+  const auto dir = test::temp_dir("estimate");
+  Scene cpgimp = drucker_prager_scene();
+  cpgimp.shape = ShapeKind::CpGimp;
+  const Scene elastic = read_scene_file(std::string(TALUS_SOURCE_DIR) + "/inputs/elastic_block_slide.json");
+  for (const Scene& scene : {drucker_prager_scene(), cpgimp, elastic}) {
+    Solver solver(scene);
+    solver.step();
+    const std::string path = (dir / "checkpoint.h5").string();
+    write_checkpoint(path, solver, RunProgress{});
+    const double bytes = double(test::fs::file_size(path));
+    const double estimate = double(solver.particles().size() * checkpoint_bytes_per_particle(scene));
+    EXPECT_GE(bytes, estimate) << scene.name << " " << to_string(scene.shape);
+    EXPECT_LE(bytes, estimate + 32 * 1024) << scene.name << " " << to_string(scene.shape);
+  }
   test::fs::remove_all(dir);
 }
 

@@ -5,7 +5,7 @@
 //
 // The model counts the arrays the solver really holds, per particle (fields, sort and scratch
 // arrays, MLS buffers, the guard's snapshot copy, the largest transient buffer: a VTU frame) and
-// per grid node (10 doubles, committed tile by tile where particles are). The grid part is the
+// per grid node (12 doubles, committed tile by tile where particles are). The grid part is the
 // tiles the bodies cover at the start; a flow that spreads commits more, at most the whole grid
 // (reported as `grid_bytes_bound`). tests/solver/memory_estimate_test.cpp checks the model against
 // the peak resident memory of real runs.
@@ -33,6 +33,10 @@ enum class MemoryScope { Run, Solver };
 /// Counts the particles (particles/seeding.hpp count_particles: same input errors, no allocation)
 /// and sizes what the solver and, for a run, the run's outputs will hold.
 MemoryEstimate estimate_memory(const Scene& scene, MemoryScope scope = MemoryScope::Run);
+
+/// The bytes a checkpoint holds for each particle (its fields, their sort cells, the `reused` MLS
+/// variant's weights): about checkpoint.h5's size per particle, what a restart reads of it.
+std::size_t checkpoint_bytes_per_particle(const Scene& scene);
 
 /// Memory this process may still use [bytes]: the environment variable TALUS_MEMORY_LIMIT when set
 /// (bytes, or with a K/M/G/T suffix: a share of a node for one run), else the smaller of the
