@@ -6,6 +6,7 @@ cell size, particles per cell), measures the error of each run and its time (CPU
     docs/verification/speed_vs_error.csv       one row per run
     docs/verification/column_convergence.csv   column error against cell size
     docs/verification/*.png                    error vs time, convergence, energy histories
+(when every run succeeded: a failed run prints talus's error, and then nothing is written, exit 1).
 Usage:  /usr/bin/python3 tools/speed_vs_error.py [--talus build/talus] [--threads 1] [--quick] [--wall]
         [--mls off,cubic]   MLS axis: each column / bar run once per basis listed (Edo & Matsubara 2015, eq. 54;
                             the bars are 2 particles across, so the fit spans x only, radius 2 cells)
@@ -161,7 +162,8 @@ def energy_drift(res):
 def main():
     ap = benchmark_parser(__doc__, scratch_when="with --quick")
     ap.add_argument("--quick", action="store_true", help="fewer variants (a smoke test of the driver)")
-    ap.add_argument("--mls", default="off", type=lambda t: choices_list("--mls", t, MLS_BASES), help="comma-separated MLS bases for the column and bar runs: off,linear,quadratic,cubic")
+    ap.add_argument("--mls", default="off", type=lambda t: choices_list("--mls", t, MLS_BASES),
+                    help="comma-separated MLS bases for the column and bar runs: off,linear,quadratic,cubic")
     ap.add_argument("--wall", action="store_true",
                     help="rate and plots from the wall clock (default: the run's CPU time, which a shared machine does "
                          "not inflate at 1 thread; with more threads CPU time sums the threads, so use --wall there)")
