@@ -3,7 +3,7 @@
 
 For each case of issue 18's table it runs `talus bench` on the reference path and on the vector
 paths, alternating, ROUNDS times, and prints M particle-updates/s and the stress phase; beside them
-the minimal MPM step of ../shared/bench (mpm_limit, USL, 2 colour) and the STREAM triad when their
+the minimal MPM step of shared/bench or ../shared/bench (mpm_limit, USL, 2 colour) and the STREAM triad when their
 binaries are given, in the same sitting. Results also go to a JSON file.
 
 Usage: /usr/bin/python3 tools/bench_kernels.py --talus build/talus [--paths reference,avx2,avx512]
@@ -20,7 +20,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from cli_checks import require_talus  # noqa: E402
+from cli_checks import choices_list, require_at_least, require_talus  # noqa: E402
 
 CASES = [  # name, talus bench arguments
     ("shear, B-spline, DP, MUSL", ["--scene", "shear", "--material", "dp", "--shape", "bspline2"]),
@@ -31,7 +31,18 @@ CASES = [  # name, talus bench arguments
 
 
 def run(cmd, env=None):
-    return subprocess.run(cmd, check=True, capture_output=True, text=True, env=env).stdout
+    r = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    if r.returncode != 0:  # the program's own error, then one line, not a CalledProcessError
+        print(r.stderr.strip() or r.stdout.strip(), file=sys.stderr)
+        sys.exit(f"bench_kernels.py: {' '.join(cmd)} failed (exit {r.returncode})")
+    return r.stdout
+
+
+def vector_paths(talus):
+    """The --isa values this binary takes on this CPU: auto and the paths `talus --version` lists
+    ("vector paths here: reference, scalar, avx2"); a wrong --paths failed mid-run, after other cases."""
+    m = re.search(r"vector paths here: ([^;)]*)", run([talus, "--version"]))
+    return ["auto"] + ([p.strip() for p in m.group(1).split(",")] if m else [])
 
 
 def talus_bench(talus, args, path, particles, threads, steps, cpu_time):
@@ -59,7 +70,7 @@ def main():
                     help="case numbers to leave out, comma-separated, 1 = the first case of the table (the names hold commas)")
     ap.add_argument("--json")
     a = ap.parse_args()
-    paths = a.paths.split(",")
+    require_at_least(1, particles=a.particles, threads=a.threads, steps=a.steps, rounds=a.rounds)
     try:
         skipped = {int(n) for n in a.skip.split(",") if n.strip()}
     except ValueError:
@@ -68,6 +79,7 @@ def main():
         sys.exit(f"bench_kernels.py: --skip {a.skip}: the cases are 1..{len(CASES)}: " +
                  "; ".join(f"{i} {name}" for i, (name, _) in enumerate(CASES, start=1)))
     require_talus(a.talus)
+    paths = choices_list("--paths", a.paths, vector_paths(a.talus))
     for option, binary in (("--mpm-limit", a.mpm_limit), ("--stream", a.stream)):
         if binary:
             require_talus(binary, option)

@@ -1,5 +1,5 @@
-"""Argument checks shared by the scripts in tools/: one line and exit 1 for a wrong path, right after
-parsing, before any work.
+"""Argument checks shared by the scripts in tools/: one line and exit 1 for a wrong path, exit 2 for a
+value out of range (argparse's status for a bad argument), right after parsing, before any work.
 
 Only the standard library: the scripts that run without numpy (bench_kernels, compare_binaries,
 check_scene_schema) use it too. They put their own folder on sys.path before importing it.
@@ -43,3 +43,38 @@ def require_inputs(**inputs):
         if path and not os.path.isfile(path):
             what = "is a folder, not a file" if os.path.isdir(path) else "no such file"
             sys.exit(f"{os.path.basename(sys.argv[0])}: {_option(option)} {path}: {what}")
+
+
+def refuse(option, value, allowed):
+    """Stop with one line naming the option, the value given and what it allows; exit 2, as argparse
+    does for a bad argument (a value out of range gave a traceback, or a silent empty result, later)."""
+    print(f"{os.path.basename(sys.argv[0])}: {option} {value}: {allowed}", file=sys.stderr)
+    sys.exit(2)
+
+
+def require_at_least(minimum, **values):
+    """Refuse each `option=value` below minimum (None: not given)."""
+    for option, value in values.items():
+        if value is not None and value < minimum:
+            refuse(_option(option), value, f"give {minimum} or more")
+
+
+def int_list(option, text, minimum=1):
+    """A comma-separated list of whole numbers, each at least minimum (empty items, as in a trailing
+    comma, are skipped); refused with one line otherwise."""
+    try:
+        values = [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        values = []
+    if not values or any(v < minimum for v in values):
+        refuse(option, text, f"give whole numbers separated by commas, each {minimum} or more")
+    return values
+
+
+def choices_list(option, text, allowed):
+    """A comma-separated list whose every item is one of allowed; refused with one line otherwise."""
+    values = text.split(",")
+    wrong = [v for v in values if v not in allowed]
+    if wrong:
+        refuse(option, text, f"{wrong[0]} is not one of {', '.join(allowed)}")
+    return values

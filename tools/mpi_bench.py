@@ -29,7 +29,8 @@ import sys
 import tempfile
 import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from talus_plot import require_folders, require_talus  # noqa: E402
+# from cli_checks, not talus_plot: talus_plot imports numpy, which this tool does not need
+from cli_checks import choices_list, require_at_least, require_folders, require_talus  # noqa: E402
 
 MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1"}
 PINNED = {"OMP_PROC_BIND": "close", "OMP_PLACES": "cores"}
@@ -80,10 +81,15 @@ def main():
     ap.add_argument("--message-costs", help="binary of tools/mpi_message_costs.cpp")
     ap.add_argument("--json")
     a = ap.parse_args()
+    require_at_least(1, rounds=a.rounds)
     require_talus(a.talus)
+    for option, binary in (("--stream", a.stream), ("--mpm-limit", a.mpm_limit), ("--message-costs", a.message_costs)):
+        if binary:
+            require_talus(binary, option)
     require_folders(json=a.json)
     all_layouts = layouts(a.talus)
-    names = a.layouts.split(",")
+    # checked before the reference runs: a wrong name was a KeyError after them
+    names = choices_list("--layouts", a.layouts, list(all_layouts))
     results = {"started": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()), "bench_args": a.bench_args,
                "cpu": open("/proc/cpuinfo").read().split("model name")[1].split("\n")[0].strip(" :\t"),
                "nproc": os.cpu_count(), "references": [], "message_costs": [], "runs": []}

@@ -6,16 +6,27 @@
 #
 #   TALUS=build/talus BUDGET=510 tools/node_scaling.sh OUT
 #
-# Phases, most needed first: the machine (lscpu, NUMA nodes); STREAM at 1, 2, 4, 8, N threads, mpm_limit at 1 and N, and the core-to-core time (tools/core_latency.cpp)
-# (../shared/bench, built with -march=native when g++ is there; MPM_LIMIT_SRC / STREAM_SRC point at the
-# sources); determinism (the outputs of 1, 7 and N threads, same bits, three flumes); tools/scaling_runs.py
+# Phases, most needed first: the machine (lscpu, NUMA nodes, the OMP_* variables, BUDGET); STREAM at
+# 1, 2, 4, 8 (those up to N) and N threads and mpm_limit at 1 and N, built with -march=native from
+# shared/bench inside the checkout (the only copy that travels to a device machine), else ../shared/bench
+# (MPM_LIMIT_SRC / STREAM_SRC point at other sources; a WARNING names a source missing or not built);
+# the core-to-core time (tools/core_latency.cpp, measured with or without the references); determinism
+# (the outputs of 1, 7 and N threads, same bits, three flumes); tools/scaling_runs.py
 # (the default flume with both scatters to 0.1 s, the h = 0.005 m flume with both to 0.0025 s);
 # tools/scaling.py (bench block, strong and weak); issue 18's 1-thread table (tools/bench_kernels.py);
 # issue 18's MLS shares on the AVX2 and the automatic path, and the reused variant's; the shear bench (tools/scaling.py). Each model's c(T) is measured at every thread count. OMP_PROC_BIND=close, OMP_PLACES=cores; OMP_WAIT_POLICY is left unset
 # (libgomp's own: spin, then sleep), as users run: the 2026-12-04 node ran under PASSIVE by mistake,
 # which measured the waking of sleeping threads (about 100 us per region at 16 threads).
 set -u
-OUT=${1:?usage: tools/node_scaling.sh OUT}
+usage() { sed -n '2,/^[^#]/{/^#/s/^# \{0,1\}//p}' "$0"; }  # the header above
+case "${1:-}" in
+  -h|--help) usage; exit 0;;
+  # an empty OUT or an option taken for one wrote log.txt and results.tar.gz into / (OUT=-h)
+  ""|-*) echo "node_scaling.sh: OUT ${1:-(none)}: give the folder for log.txt and results.tar.gz (usage: tools/node_scaling.sh -h)" >&2; exit 2;;
+esac
+OUT=$1
+# a BUDGET like 8m broke every phase's arithmetic; refused before any work
+[[ "${BUDGET:-510}" =~ ^[0-9]+$ ]] || { echo "node_scaling.sh: BUDGET=$BUDGET: give whole seconds, 0 or more (e.g. BUDGET=510)" >&2; exit 2; }
 # OUT and TALUS are read from the caller's folder, before the cd (a relative OUT lost its results:
 # pack() runs tar inside the temporary folder)
 OUT=$(realpath -m "$OUT")
@@ -24,15 +35,21 @@ cd "$(dirname "$0")/.."
 TALUS=${TALUS:-$PWD/build/talus}
 [ -x "$TALUS" ] || { echo "node_scaling.sh: $TALUS is not an executable talus (build it: bash tools/build.sh, or set TALUS)" >&2; exit 2; }
 BUDGET=${BUDGET:-510}
-MPM_LIMIT_SRC=${MPM_LIMIT_SRC:-../shared/bench/mpm_limit.cpp}
-STREAM_SRC=${STREAM_SRC:-../shared/bench/stream.cpp}
+# only a shared/ inside the checkout travels to a device machine: ../shared/bench alone left the node
+# without its references, silently
+BENCH=../shared/bench
+[ -d shared/bench ] && BENCH=shared/bench
+MPM_LIMIT_SRC=${MPM_LIMIT_SRC:-$BENCH/mpm_limit.cpp}
+STREAM_SRC=${STREAM_SRC:-$BENCH/stream.cpp}
 T0=$(date +%s)
-W=$(mktemp -d); S=$(mktemp -d); mkdir -p "$OUT"  # W: results, S: scratch
+W=$(mktemp -d) && S=$(mktemp -d) || { echo "node_scaling.sh: mktemp -d failed (is ${TMPDIR:-/tmp} writable?)" >&2; exit 1; }
+mkdir -p "$OUT" || { echo "node_scaling.sh: cannot create $OUT" >&2; exit 1; }  # W: results, S: scratch
 trap 'rm -rf "$W" "$S"' EXIT
 exec > >(tee -a "$OUT/log.txt") 2>&1
 el() { echo $(( $(date +%s) - T0 )); }
 pack() {
-  if (cd "$W" && tar czf "$OUT/results.tar.gz" .); then echo "[$(el) s] packed"; else echo "[$(el) s] packing into $OUT/results.tar.gz FAILED"; fi
+  # through a .part file: a kill during tar kept the results packed before
+  if (cd "$W" && tar czf "$OUT/results.tar.gz.part" . && mv -f "$OUT/results.tar.gz.part" "$OUT/results.tar.gz"); then echo "[$(el) s] packed"; else echo "[$(el) s] packing into $OUT/results.tar.gz FAILED"; fi
 }
 phase() { # name, seconds it needs
   local left=$(( BUDGET - $(el) ))
@@ -50,23 +67,35 @@ unset OMP_WAIT_POLICY
 N=$(nproc)
 
 phase machine 1
-{ date -u; uname -a; head -2 /etc/os-release; nproc; lscpu; free -g; ls /sys/devices/system/node/ | grep node; } > "$W/env.txt" 2>&1
+{ date -u; echo "BUDGET=$BUDGET s; $(env | grep '^OMP_' | sort | tr '\n' ' ')OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-unset}"
+  uname -a; head -2 /etc/os-release; nproc; lscpu; free -g; ls /sys/devices/system/node/ | grep node; } > "$W/env.txt" 2>&1
 grep -E "Model name|^CPU\(s\)|Thread|Socket|NUMA" "$W/env.txt"
 "$TALUS" --version > "$W/talus_version.txt" 2>&1 || { cat "$W/talus_version.txt"; echo "talus does not start: $TALUS"; pack; exit 1; }
 cat "$W/talus_version.txt"  # the commit, compiler and vector paths of the binary measured
 
+# the references: a source missing or not built is named (g++'s errors were thrown away, and the
+# kernels phase then ran without --mpm-limit/--stream unnoticed)
+build_ref() { # source, binary
+  if [ ! -f "$1" ]; then echo "WARNING: no $1: its reference is not measured"; return 1; fi
+  g++ -O3 -march=native -fopenmp "$1" -o "$2" > "$2.log" 2>&1 && return 0
+  echo "WARNING: g++ could not build $1: its reference is not measured"; head -5 "$2.log"; return 1
+}
 ML=""; ST=""
-if g++ -O3 -march=native -fopenmp "$MPM_LIMIT_SRC" -o "$S/mpm_limit" 2>/dev/null &&
-   g++ -O3 -march=native -fopenmp "$STREAM_SRC" -o "$S/stream" 2>/dev/null; then
-  ML=$S/mpm_limit; ST=$S/stream
-fi
-phase references 30 && [ -n "$ST" ] && {
-  for t in 1 2 4 8 "$N"; do echo "STREAM $t threads: $(OMP_NUM_THREADS=$t "$ST") GB/s"; done | tee "$W/stream.txt"
-  for t in 1 "$N"; do echo "mpm_limit 2 colour 20 50 10, $t threads: $(OMP_NUM_THREADS=$t "$ML" 2 colour 20 50 10 | grep -o 'particle-updates/s: [0-9.e+]*')"; done | tee "$W/mpm_limit.txt"
+build_ref "$MPM_LIMIT_SRC" "$S/mpm_limit" && ML=$S/mpm_limit
+build_ref "$STREAM_SRC" "$S/stream" && ST=$S/stream
+phase references 30 && {
+  # 1, 2, 4, 8 up to N, and N: at N = 2 the list ran 8 threads on 2 cores, and 2 twice
+  [ -n "$ST" ] && for t in $(printf "%s\n" 1 2 4 8 | awk -v n="$N" '$1 < n'; echo "$N"); do
+    echo "STREAM $t threads: $(OMP_NUM_THREADS=$t "$ST") GB/s"; done | tee "$W/stream.txt"
+  [ -n "$ML" ] && for t in $(printf "%s\n" 1 "$N" | sort -un); do echo "mpm_limit 2 colour 20 50 10, $t threads: $(OMP_NUM_THREADS=$t "$ML" 2 colour 20 50 10 | grep -o 'particle-updates/s: [0-9.e+]*')"; done | tee "$W/mpm_limit.txt"
   # the time a cache line takes from CPU 0 to a neighbour, the middle and the last CPU: a small scene's
-  # c(T) follows it (docs/performance.md, "2 threads when the host puts the vCPUs far apart")
-  g++ -O2 -pthread tools/core_latency.cpp -o "$S/core_latency" 2>/dev/null &&
-    timeout 20 "$S/core_latency" $(printf "%s\n" 1 $((N / 2)) $((N - 1)) | sort -un) | tee "$W/core_latency.txt"
+  # c(T) follows it (docs/performance.md, "2 threads when the host puts the vCPUs far apart"); it needs
+  # no reference source, so it runs without them
+  if g++ -O2 -pthread tools/core_latency.cpp -o "$S/core_latency" > "$S/core_latency.log" 2>&1; then
+    timeout 20 "$S/core_latency" $(printf "%s\n" 1 $((N / 2)) $((N - 1)) | sort -un) > "$W/core_latency.txt" ||
+      echo "WARNING: core_latency failed or ran past 20 s: its times are partial or missing"
+    cat "$W/core_latency.txt"
+  else echo "WARNING: g++ could not build tools/core_latency.cpp"; head -5 "$S/core_latency.log"; fi
   pack; }
 
 H005=$W/flume_h005.json; H005BB=$W/flume_h005_block_buffers.json

@@ -10,7 +10,7 @@ scaling_node_shear.json (tools/scaling.py), bench_{colour_passes,block_buffers}_
 --json), and optionally run2_log.txt (the printed lines of a second sitting: repeats of the same
 commands, read back with the regular expressions below). Left: the whole runs (talus run), measured
 speed-up (best of the repeats) against the model with the measured c(N). Right: the 1 M-particle
-benches, strong scaling of every sitting, and the model.
+benches, strong scaling of every sitting, and the model without and with the measured c(T).
 """
 import argparse
 import glob
@@ -90,6 +90,9 @@ def main():
         t = [r["threads"] for r in strong]
         ax2.plot(t, [r["speedup"] for r in strong], "o-", color=f"C{i}", label=f"{label} 1 M, strong: measured")
         ax2.plot(t, [r["model_speedup"] for r in strong], "x--", color=f"C{i}", label=f"{label}: model (no c)")
+        if all("model_speedup_with_contention" in r for r in strong):  # older JSONs lack it
+            ax2.plot(t, [r["model_speedup_with_contention"] for r in strong], "+", ls=(0, (1, 1)), color=f"C{i}",
+                     label=f"{label}: model with c(T)")
         ax2.plot([r["threads"] for r in weak], [r["speedup"] for r in weak], "s-.", color=f"C{i}", alpha=0.7,
                  label=f"{label}, weak (1 M per thread): measured")
         ax2.plot(t, [r["stream_speedup"] for r in strong], ":", color=f"C{i}", lw=0.9, label=f"STREAM ({label} runs)")
@@ -110,7 +113,7 @@ def main():
     for ax, title in ((ax1, "talus run: flumes (strong scaling)"), (ax2, "talus bench: 1 M particles")):
         ax.plot([1, top], [1, top], "k--", lw=0.8, label="ideal")
         ax.set(xscale="log", yscale="log", xlabel="threads", ylabel="speed-up over 1 thread", title=title)
-        ticks = [1, 2, 4, 8, top]
+        ticks = [x for x in (1, 2, 4, 8) if x < top] + [top]  # 8 on a 2-core node stretched the axes
         ax.set_xticks(ticks, [str(x) for x in ticks])
         ax.set_yticks(ticks, [str(x) for x in ticks])
         ax.minorticks_off()

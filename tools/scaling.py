@@ -37,9 +37,8 @@ import subprocess
 import sys
 import tempfile
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from talus_plot import require_talus  # noqa: E402
-
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+# from cli_checks, not talus_plot: talus_plot imports numpy, which this tool does not need
+from cli_checks import refuse, require_at_least, require_talus  # noqa: E402
 import scaling_model  # noqa: E402
 
 
@@ -91,7 +90,10 @@ def bench(talus, particles, threads, steps, extra, record=None):
                "--json", f.name, "--stream"] + extra
         if record:
             cmd += ["--record-work", record, "--record-steps", "3"]
-        subprocess.run(cmd, check=True, env=pinned_env(), stdout=subprocess.DEVNULL)
+        # talus's own error line reaches stderr; then one line here, not a CalledProcessError traceback
+        r = subprocess.run(cmd, env=pinned_env(), stdout=subprocess.DEVNULL)
+        if r.returncode != 0:
+            sys.exit(f"{os.path.basename(sys.argv[0])}: talus bench failed (exit {r.returncode}): {' '.join(cmd)}")
         return json.load(open(f.name))
 
 
@@ -114,6 +116,14 @@ def main():
     add_wait_policy_argument(ap)
     ap.add_argument("bench_args", nargs="*", help="extra arguments for talus bench (after --)")
     a = ap.parse_args()
+    require_at_least(1, particles=a.particles, steps=a.steps, max_threads=a.max_threads, repeat=a.repeat)
+    scene = next((x.split("=", 1)[1] for x in a.bench_args if x.startswith("--scene=")), None)
+    if "--scene" in a.bench_args[:-1]:
+        scene = a.bench_args[a.bench_args.index("--scene") + 1]
+    if scene == "update":
+        # the model needs a work record, which talus bench --scene update does not write
+        refuse("--scene", scene, "talus bench --scene update writes no work record (--record-work), which the "
+                                 "model needs: use talus bench --scene update --threads T directly")
     require_talus(a.talus)
     wait_policy = apply_wait_policy(a.wait_policy)
     os.makedirs(a.out, exist_ok=True)

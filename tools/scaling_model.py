@@ -57,18 +57,49 @@ import math
 import os
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_checks import int_list, refuse  # noqa: E402
 
-def parse_counts(text):
-    return [int(t) for t in text.split(",") if t]
+
+def parse_counts(text, option="--threads"):
+    """Thread counts, each 1 or more (0 divided by zero in the schedules); one line and exit 2 otherwise."""
+    return int_list(option, text, 1)
 
 
-def parse_pairs(text):
+def parse_pairs(text, option):
+    """T:value pairs, e.g. 2:1.16,4:1.3: T a thread count (1 or more), the value above 0 (a slowdown
+    factor or GB/s: 0 or less scales the work to nothing or divides by zero); one line and exit 2 otherwise."""
     out = {}
     for item in text.split(","):
         if item:
-            k, v = item.split(":")
-            out[int(k)] = float(v)
+            try:
+                k, v = item.split(":")
+                k, v = int(k), float(v)
+            except ValueError:
+                k = v = None
+            if k is None or k < 1 or not v > 0 or math.isinf(v):
+                where = "" if item == text else f"{item}: "
+                refuse(option, text, f"{where}give T:value pairs separated by commas (e.g. 2:1.16), T 1 or more "
+                                     "and the value above 0")
+            out[k] = v
     return out
+
+
+def load_record(path, option="record"):
+    """A work record (talus-work-record/1), or one line and exit 2 naming what the file is instead (a
+    bench --json file gave KeyError 'fork_join_seconds')."""
+    if not os.path.isfile(path):
+        refuse(option, path, "is a folder, not a file" if os.path.isdir(path) else "no such file")
+    try:
+        with open(path) as f:
+            record = json.load(f)
+    except (ValueError, UnicodeDecodeError) as e:
+        refuse(option, path, f"not JSON ({e}); give a work record: talus bench/run ... --record-work FILE")
+    if not (isinstance(record, dict) and str(record.get("format", "")).startswith("talus-work-record")
+            and "fork_join_seconds" in record and record.get("steps")):
+        refuse(option, path, "not a work record (talus-work-record/1; a bench --json file is not one): "
+                             "make one with talus bench ... --record-work FILE or talus run ... --record-work FILE")
+    return record
 
 
 class Barrier:
@@ -329,16 +360,22 @@ def main():
     ap.add_argument("--out", default="", help="write OUT.json and OUT.png")
     a = ap.parse_args()
     if a.measure_contention:
-        r1, rt = (json.load(open(p)) for p in a.measure_contention)
+        r1, rt = (load_record(p, "--measure-contention") for p in a.measure_contention)
+        for path, rec in zip(a.measure_contention, (r1, rt)):
+            if not any(r["schedule"] == "dynamic" and r["block_particles"] for s in rec["steps"] for r in s["regions"]):
+                refuse("--measure-contention", path, "has no block loops (dynamic regions with particles) to "
+                                                     "measure c(T) from")
         c = block_seconds_per_particle(rt) / block_seconds_per_particle(r1)
         print(f"c({rt['threads']}) = {c:.4f}")
         return
+    if not a.records:  # it printed nothing and exited 0 (with --out: an empty JSON and plot)
+        refuse("records", "(none)", "give one or more work records (talus bench/run ... --record-work FILE)")
     counts = parse_counts(a.threads)
-    contention = parse_pairs(a.contention) if a.contention else None
+    contention = parse_pairs(a.contention, "--contention") if a.contention else None
     labels = a.labels.split(",") if a.labels else [os.path.basename(r) for r in a.records]
     if len(labels) != len(a.records):  # zip() below dropped the records past the shorter list
-        sys.exit(f"--labels: {len(labels)} labels for {len(a.records)} records")
-    stream = parse_pairs(a.stream) if a.stream else {}
+        refuse("--labels", a.labels, f"{len(labels)} labels for {len(a.records)} records: give one per record")
+    stream = parse_pairs(a.stream, "--stream") if a.stream else {}
     bandwidth = None
     if a.bytes_per_update > 0 and stream:
         def bandwidth(particles, threads):
@@ -348,11 +385,12 @@ def main():
     if len(outputs) == 1:
         outputs = outputs * len(a.records)
     if len(outputs) != len(a.records):
-        sys.exit(f"--output: {len(outputs)} values for {len(a.records)} records (give one, or one per record)")
-    for path, label, output in zip(a.records, labels, outputs):
-        if output not in ("run-mean", "sampled"):
-            sys.exit(f"--output: {output} is not run-mean or sampled")
-        record = json.load(open(path))
+        refuse("--output", a.output, f"{len(outputs)} values for {len(a.records)} records: give one, or one per record")
+    if any(output not in ("run-mean", "sampled") for output in outputs):
+        refuse("--output", a.output, "give run-mean or sampled, once or once per record")
+    # every record checked before the first is modelled: a wrong one later stopped the tool halfway
+    records = [load_record(path) for path in a.records]
+    for path, record, label, output in zip(a.records, records, labels, outputs):
         if record.get("omp_wait_policy", "").upper() == "PASSIVE":
             print(f"note: {path} was recorded with OMP_WAIT_POLICY=PASSIVE: its fork/join costs are those of waking "
                   "sleeping threads, and the model predicts runs under that policy", file=sys.stderr)

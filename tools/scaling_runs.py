@@ -33,9 +33,8 @@ import subprocess
 import sys
 import tempfile
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from talus_plot import require_talus  # noqa: E402
-
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+# from cli_checks, not talus_plot: talus_plot imports numpy, which this tool does not need
+from cli_checks import refuse, require_at_least, require_talus  # noqa: E402
 import scaling_model  # noqa: E402
 from scaling import add_wait_policy_argument, apply_wait_policy, contention as slowdown, pinned_env, thread_counts  # noqa: E402
 
@@ -47,7 +46,11 @@ def run(talus, scene, threads, workdir, record=None, interval=7):
     cmd = [talus, "run", scene, "--threads", str(threads), "--quiet", "--out", os.path.join(workdir, "out")]
     if record:
         cmd += ["--record-work", record, "--record-interval", str(interval)]
-    out = subprocess.run(cmd, check=True, env=pinned_env(), capture_output=True, text=True).stdout
+    r = subprocess.run(cmd, env=pinned_env(), capture_output=True, text=True)
+    if r.returncode != 0:  # talus's own error, then one line: it was a CalledProcessError traceback
+        print(r.stderr.strip() or r.stdout.strip(), file=sys.stderr)
+        sys.exit(f"{os.path.basename(sys.argv[0])}: talus run failed (exit {r.returncode}): {' '.join(cmd)}")
+    out = r.stdout
     m = RATE.search(out)
     if not m:
         sys.exit(f"no rate in the output of {' '.join(cmd)}:\n{out}")
@@ -70,9 +73,26 @@ def model_speedups(record, counts, contention=None):
     return {r["threads"]: r["speedup"] for r in rows}
 
 
+def scene_spec(spec, default_end):
+    """SCENE[@END] as (path, end), checked before any run: a missing scene file was a FileNotFoundError
+    and SCENE@abc a ValueError, after the runs of the scenes before it."""
+    path, at, end = spec.partition("@")
+    if not os.path.isfile(path):
+        what = "is a folder, not a file" if os.path.isdir(path) else "no such file"
+        refuse("SCENE", spec, what if path == spec else f"{path}: {what}")
+    if not at:
+        return path, default_end
+    try:
+        value = float(end)
+    except ValueError:
+        value = -1.0
+    if not value >= 0 or value == float("inf"):
+        refuse("SCENE@END", spec, "END is the simulated seconds of the run, a number 0 or more (0: the scene's own)")
+    return path, value
+
+
 def measure(a, spec, counts, workdir):
-    path, _, end = spec.partition("@")
-    end = float(end) if end else a.end
+    path, end = spec
     scene, _ = scene_with_end(path, end, workdir)
     name = os.path.splitext(os.path.basename(path))[0]
     rec1, recn = os.path.join(workdir, "record_1.json"), os.path.join(workdir, "record_t.json")
@@ -144,16 +164,17 @@ def main():
     ap.add_argument("--name", default="scaling_runs", help="file stem of the JSON and PNG")
     add_wait_policy_argument(ap)
     a = ap.parse_args()
+    require_at_least(1, max_threads=a.max_threads, repeat=a.repeat, record_interval=a.record_interval)
+    require_at_least(0, end=a.end)
+    specs = [scene_spec(s, a.end) for s in a.scenes]
     require_talus(a.talus)
     wait_policy = apply_wait_policy(a.wait_policy)
-    if a.max_threads < 1:
-        sys.exit("--max-threads: at least 1")
     counts = thread_counts(a.max_threads)
     os.makedirs(a.out, exist_ok=True)
     results = []
-    for path in a.scenes:
+    for spec in specs:
         with tempfile.TemporaryDirectory() as workdir:
-            res = measure(a, path, counts, workdir)
+            res = measure(a, spec, counts, workdir)
         results.append(res)
         cs = ", ".join(f"c({t}) = {c:.3f}" for t, c in res["contention"].items())
         print(f"{res['scene']} ({res['particles']} particles, to {res['end']} s): {cs}")

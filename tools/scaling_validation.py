@@ -9,7 +9,8 @@ work at 1 thread, predicts the speed-up at 2 (or --threads) threads, then measur
 Cases: block (talus bench, 1 M particles, linear elastic), shear (talus bench --scene shear --material dp
 --shape bspline2, 1 M particles), flume (inputs/denlinger_flume.json run to --flume-end seconds of
 simulated time, with its outputs). Threads are pinned (OMP_PROC_BIND=close, OMP_PLACES=cores unless
-set). The bench rates are those of the timed steps; the flume rate is the run's particle-updates per
+set); OMP_WAIT_POLICY is --wait-policy's (unset by default, whatever the environment says), as in
+tools/scaling.py, and the values used are written to the JSON. The bench rates are those of the timed steps; the flume rate is the run's particle-updates per
 second of wall time, output included. The prediction for the flume is the run's wall time at 1 thread
 split by the record into the steps (scaled by the model's speed-up of the recorded steps, the run loop's
 work after them left out) and the rest of the run loop (output, guards: kept serial; the last-good-state
@@ -24,10 +25,10 @@ import sys
 import tempfile
 import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from talus_plot import require_folders, require_talus  # noqa: E402
-
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+# from cli_checks, not talus_plot: talus_plot imports numpy, which this tool does not need
+from cli_checks import refuse, require_at_least, require_folders, require_talus  # noqa: E402
 import scaling_model  # noqa: E402
+from scaling import add_wait_policy_argument, apply_wait_policy  # noqa: E402
 
 
 def env():
@@ -46,7 +47,9 @@ def bench(talus, args, threads, record=None):
         cmd = [talus, "bench", "--threads", str(threads), "--json", f.name] + args
         if record:
             cmd += ["--record-work", record]
-        subprocess.run(cmd, check=True, env=env(), stdout=subprocess.DEVNULL)
+        r = subprocess.run(cmd, env=env(), stdout=subprocess.DEVNULL)
+        if r.returncode != 0:  # talus's error is on stderr; then one line, not a CalledProcessError
+            sys.exit(f"{os.path.basename(sys.argv[0])}: talus bench failed (exit {r.returncode}): {' '.join(cmd)}")
         return json.load(open(f.name))["particle_updates_per_second"]
 
 
@@ -62,8 +65,12 @@ def run(talus, scene, threads, out, record=None):
     cmd = [talus, "run", scene, "--threads", str(threads), "--quiet", "--out", out]
     if record:
         cmd += ["--record-work", record, "--record-interval", "37"]
-    text = subprocess.run(cmd, check=True, env=env(), capture_output=True, text=True).stdout
-    m = re.search(r"done: (\d+) steps .* in ([0-9.]+) s \(([0-9.]+) M particle-updates/s\)", text)
+    r = subprocess.run(cmd, env=env(), capture_output=True, text=True)
+    m = re.search(r"done: (\d+) steps .* in ([0-9.]+) s \(([0-9.]+) M particle-updates/s\)", r.stdout)
+    if r.returncode != 0 or not m:
+        print(r.stderr.strip() or r.stdout.strip(), file=sys.stderr)
+        sys.exit(f"{os.path.basename(sys.argv[0])}: talus run failed or printed no rate (exit {r.returncode}): "
+                 f"{' '.join(cmd)}")
     return float(m.group(3)) * 1e6, float(m.group(2))
 
 
@@ -119,10 +126,16 @@ def main():
     ap.add_argument("--flume-end", type=float, default=0.5)
     ap.add_argument("--workdir", default="build/validation")
     ap.add_argument("--out", default="")
+    add_wait_policy_argument(ap)
     a = ap.parse_args()
+    require_at_least(1, threads=a.threads, repeat=a.repeat, particles=a.particles, steps=a.steps)
+    if not 0 < a.flume_end < float("inf"):
+        refuse("--flume-end", a.flume_end, "give the simulated seconds of the flume run, above 0")
     require_talus(a.talus)
-    require_folders(out=a.out)
+    # the workdir first: an --out inside a workdir this tool was about to create was refused
     os.makedirs(a.workdir, exist_ok=True)
+    require_folders(out=a.out)
+    wait_policy = apply_wait_policy(a.wait_policy)
     results = []
     for case in a.case or ["block", "shear", "flume"]:
         rec = os.path.join(a.workdir, f"{case}_record_1thread.json")
@@ -170,8 +183,10 @@ def main():
     if a.out:
         plot(results, a.out.rsplit(".", 1)[0] + ".png")
         with open(a.out, "w") as f:
+            e = env()
             json.dump({"cpu": open("/proc/cpuinfo").read().split("model name")[1].split("\n")[0].strip(": "),
-                       "results": results}, f, indent=1)
+                       "omp_proc_bind": e["OMP_PROC_BIND"], "omp_places": e["OMP_PLACES"],
+                       "omp_wait_policy": wait_policy, "nproc": os.cpu_count(), "results": results}, f, indent=1)
         print("wrote", a.out)
 
 

@@ -6,6 +6,7 @@ cell size, particles per cell), measures the error of each run and its time (CPU
     docs/verification/speed_vs_error.csv       one row per run
     docs/verification/column_convergence.csv   column error against cell size
     docs/verification/*.png                    error vs time, convergence, energy histories
+(when every run succeeded: a failed run prints talus's error, and then nothing is written, exit 1).
 Usage:  /usr/bin/python3 tools/speed_vs_error.py [--talus build/talus] [--threads 1] [--quick] [--wall]
         [--mls off,cubic]   MLS axis: each column / bar run once per basis listed (Edo & Matsubara 2015, eq. 54;
                             the bars are 2 particles across, so the fit spans x only, radius 2 cells)
@@ -26,11 +27,13 @@ import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from talus_plot import finish_axes, read_vtu, run_talus, save_figure, series_frames, write_csv_rows  # noqa: E402
+from cli_checks import choices_list, require_at_least  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 OUT = os.path.join(ROOT, "docs", "verification")
 SHAPES = ["linear", "ugimp", "cpgimp", "bspline2"]
 SCHEMES = ["musl", "usl", "usf", "usavg"]
+MLS_BASES = ["off", "linear", "quadratic", "cubic"]
 E, RHO0, L0 = 1.0e6, 1.0, 50.0
 TIME_KEY = "cpu"  # what the rates and plots use: "cpu" (1 thread) or "wall" (main() sets it)
 
@@ -66,6 +69,7 @@ def out_folder(a, scratch=False):
 def parse_benchmark_args(ap):
     """Parse a benchmark driver's command line; returns (args, the talus program)."""
     a = ap.parse_args()
+    require_at_least(1, threads=a.threads)
     talus = find_talus(a.talus)
     return a, talus
 
@@ -113,6 +117,9 @@ def run(talus, scene, threads):
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
         cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
         if r.returncode != 0:
+            # talus's own reason: the caller's "run failed" alone did not say why
+            for line in (r.stderr.strip() or r.stdout.strip() or f"exit status {r.returncode}").splitlines()[-3:]:
+                print(f"  {line}", file=sys.stderr, flush=True)
             return None
         energy = np.genfromtxt(os.path.join(out, "energy.csv"), delimiter=",", names=True)
         last = read_vtu(series_frames(out)[-1][1], "stress")
@@ -155,7 +162,8 @@ def energy_drift(res):
 def main():
     ap = benchmark_parser(__doc__, scratch_when="with --quick")
     ap.add_argument("--quick", action="store_true", help="fewer variants (a smoke test of the driver)")
-    ap.add_argument("--mls", default="off", help="comma-separated MLS bases for the column and bar runs: off,linear,quadratic,cubic")
+    ap.add_argument("--mls", default="off", type=lambda t: choices_list("--mls", t, MLS_BASES),
+                    help="comma-separated MLS bases for the column and bar runs: off,linear,quadratic,cubic")
     ap.add_argument("--wall", action="store_true",
                     help="rate and plots from the wall clock (default: the run's CPU time, which a shared machine does "
                          "not inflate at 1 thread; with more threads CPU time sums the threads, so use --wall there)")
@@ -168,7 +176,12 @@ def main():
     rows = []
     histories = {}
 
-    mls_modes = a.mls.split(",")
+    mls_modes = a.mls
+    failed = []
+
+    def run_failed(what):
+        print(f"{what}: run failed", flush=True)
+        failed.append(what)
 
     def record(bench, shape, scheme, h, ppc, res, error, metric, extra="", mls="off"):
         ups = res["particles"] * res["steps"] / res[TIME_KEY]
@@ -191,7 +204,7 @@ def main():
                     for mls in mls_modes:
                         res = run(talus, variant(base, shape, "musl", h, ppc, mls), a.threads)
                         if res is None:
-                            print(f"{name} {shape} h={h} ppc={ppc} mls={mls}: run failed", flush=True)
+                            run_failed(f"{name} {shape} h={h} ppc={ppc} mls={mls}")
                             continue
                         l2, rough = column_metrics(res, b)
                         record(name, shape, "musl", h, ppc, res, l2, "L2 stress", f"roughness={rough:.4g}", mls)
@@ -201,7 +214,9 @@ def main():
         for ppc in ([2] if a.quick else [1, 2, 3]):
             for mls in mls_modes:
                 res = run(talus, variant(base, shape, "musl", None, ppc, mls), a.threads)
-                if res:
+                if res is None:
+                    run_failed(f"dynamic_bar {shape} ppc={ppc} mls={mls}")
+                else:
                     record("dynamic_bar", shape, "musl", base["grid"]["cell_size"], ppc, res,
                            bar_metrics(res, base["bodies"][0]["velocity"][0]), "|mean/exact - 1|", "", mls)
     # 3. Block between walls and 4. free fall: energy histories, shape x scheme.
@@ -212,13 +227,17 @@ def main():
         for shape, scheme in combos:
             res = run(talus, variant(base, shape, scheme), a.threads)
             if res is None:
-                print(f"{name} {shape} {scheme}: run failed", flush=True)
+                run_failed(f"{name} {shape} {scheme}")
                 continue
             worst, final = energy_drift(res)
             histories[(name, shape, scheme)] = res["energy"]
             record(name, shape, scheme, base["grid"]["cell_size"], 2, res, worst, "max |E - E0| / E0",
                    f"final={final:+.4g}")
 
+    if failed:
+        # a partial sweep replaced the committed CSV and plots (13 rows of 73, the PNGs with them)
+        sys.exit(f"speed_vs_error.py: {len(failed)} of {len(failed) + len(rows)} runs failed (the first: {failed[0]}); "
+                 f"nothing written into {out}")
     write_csv_rows(os.path.join(out, "speed_vs_error.csv"), rows)
 
     # Plots: error vs time per benchmark.

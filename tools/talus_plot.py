@@ -105,11 +105,21 @@ def read_csv_columns(path):
 
 
 def write_csv_rows(path, rows, fieldnames=None):
-    """Rows (dicts) as a CSV file; the columns are those of the first row unless fieldnames are given."""
-    with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=fieldnames if fieldnames is not None else list(rows[0].keys()))
-        w.writeheader()
-        w.writerows(rows)
+    """Rows (dicts) as a CSV file; the columns are those of the first row unless fieldnames are given.
+    No rows is an error, and the file is written beside and renamed into place: a sweep whose runs all
+    failed truncated a committed CSV to nothing, then failed on rows[0]."""
+    if not rows:
+        raise ValueError(f"{path}: no rows to write (the file is left as it was)")
+    part = path + ".part"
+    try:
+        with open(part, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=fieldnames if fieldnames is not None else list(rows[0].keys()))
+            w.writeheader()
+            w.writerows(rows)
+        os.replace(part, path)
+    finally:
+        if os.path.exists(part):
+            os.remove(part)
 
 
 def finish_axes(ax, xlabel=None, ylabel=None, title=None, **legend_options):

@@ -1,12 +1,16 @@
 #!/usr/bin/env python3
 """Tests of tools/scaling_model.py (docs/performance.md, "The model"): its schedules, its b(T), its
-per-core slowdown and its replay of a record, on records small enough to predict by hand.
+per-core slowdown and its replay of a record, on records small enough to predict by hand; and its
+refusal of bad arguments in one line (they were tracebacks, or a silent exit 0).
 
     python3 tests/tools/scaling_model_test.py      (ctest: ScalingModel.PredictsRecordsByHand)
 """
+import json
 import math
 import os
+import subprocess
 import sys
+import tempfile
 import unittest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools"))
@@ -157,6 +161,55 @@ class Records(unittest.TestCase):
         as_serial = dict(mean, steps=[dict(mean["steps"][0], regions=[serial if r is rows else r
                                                                         for r in mean["steps"][0]["regions"]])])
         self.assertAlmostEqual(seconds_at(as_serial, 4) - seconds_at(mean, 4), 0.4 * MS - (0.4 * MS - 5 * B[1]) / 4 - 5 * B[4], delta=1e-12)
+
+
+class Refusals(unittest.TestCase):
+    """Bad arguments: exit 2 and one line naming the option, never a traceback."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.TemporaryDirectory()
+        cls.rec = os.path.join(cls.tmp.name, "rec.json")
+        with open(cls.rec, "w") as f:
+            json.dump(record([dynamic([1 * MS, 1 * MS])]), f)
+        cls.bench = os.path.join(cls.tmp.name, "bench.json")  # what talus bench --json writes: no work record
+        with open(cls.bench, "w") as f:
+            json.dump({"threads": 1, "particles": 1000, "cpu": "x"}, f)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.tmp.cleanup()
+
+    def refused(self, *args, naming):
+        tool = os.path.join(os.path.dirname(sm.__file__), "scaling_model.py")
+        out = os.path.join(self.tmp.name, "out")
+        r = subprocess.run([sys.executable, tool, *args], capture_output=True, text=True, timeout=30, cwd=self.tmp.name)
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertNotIn("Traceback", r.stderr)
+        self.assertEqual(len(r.stderr.strip().splitlines()), 1, r.stderr)
+        self.assertIn(naming, r.stderr)
+        self.assertFalse(os.path.exists(out + ".json"), "a refused run wrote its output")
+
+    def test_thread_counts_below_1_or_not_numbers(self):
+        self.refused(self.rec, "--threads", "0", naming="--threads 0")
+        self.refused(self.rec, "--threads", "1,x", naming="--threads 1,x")
+
+    def test_contention_without_a_thread_count_or_not_above_0(self):
+        self.refused(self.rec, "--contention", "2", naming="--contention 2")
+        self.refused(self.rec, "--contention", "2:0", naming="--contention 2:0")
+
+    def test_a_bench_json_file_is_not_a_work_record(self):
+        self.refused(self.rec, self.bench, naming="not a work record")
+        self.refused("--measure-contention", self.rec, self.bench, naming="--record-work")
+
+    def test_no_records_writes_nothing(self):
+        self.refused("--out", "out", naming="give one or more work records")
+
+    def test_a_good_record_still_runs(self):
+        tool = os.path.join(os.path.dirname(sm.__file__), "scaling_model.py")
+        r = subprocess.run([sys.executable, tool, self.rec, "--threads", "1,2", "--contention", "2:1.1"],
+                           capture_output=True, text=True, timeout=30)
+        self.assertEqual(r.returncode, 0, r.stderr)
 
 
 if __name__ == "__main__":
