@@ -57,12 +57,15 @@ TEST_F(CliErrors, BenchNumberOptionsRefuseNonFiniteValuesAndNonNumbersNamingTheR
   expect_error_line(run("bench --mls linear --mls-radius -inf"), "--mls-radius = -inf is outside [0.5, 8]");
   expect_error_line(run("bench --mls-radius 9"), "--mls-radius = 9 is outside [0.5, 8]");
   expect_error_line(run("bench --threads abc"), "--threads = abc is not an integer; allowed [1, 4096]");
-  // the update scene has no grid: its options were ignored without a word
-  expect_error_line(run("bench --scene update --material dp --shape bspline2"),
-                    "--shape bspline2: the update scene has no grid (it times the constitutive update alone); leave "
-                    "--shape out");
-  expect_error_line(run("bench --scene update --material dp --mls linear"),
-                    "--mls linear: the update scene has no grid (it times the constitutive update alone); leave --mls out");
+  // the update scene has no grid, smoother or record: their options were ignored without a word
+  const std::string no_grid = ": the update scene times the constitutive update alone, with no grid, smoother or work "
+                              "record, on the wall clock; leave ";
+  expect_error_line(run("bench --scene update --material dp --shape bspline2"), "--shape bspline2" + no_grid + "--shape out");
+  expect_error_line(run("bench --scene update --material dp --mls linear"), "--mls linear" + no_grid + "--mls out");
+  expect_error_line(run("bench --scene update --material dp --mls-radius 1"), "--mls-radius 1" + no_grid + "--mls-radius out");
+  expect_error_line(run("bench --scene update --material dp --record-work w.json"), "--record-work w.json" + no_grid + "--record-work out");
+  expect_error_line(run("bench --scene update --material dp --stream"), "--stream" + no_grid + "--stream out");
+  expect_error_line(run("bench --scene update --material dp --cpu-time"), "--cpu-time" + no_grid + "--cpu-time out");
   // CLI11 said "--threads: At Most 1 required but received 2"
   expect_error_line(run("bench --threads 1 --threads 2"), "--threads is given 2 times; give it once (see talus bench --help)");
   // an option that only shapes another one, given without it, was ignored without a word

@@ -59,6 +59,17 @@ TEST(SceneJson, AMaterialTooSoftToBoundTheStepIsWarnedAbout) {
   EXPECT_FALSE(warned(replace_once(soft, "\"time\"", "\"gravity\": [0, 0, 0], \"time\"")));
 }
 
+// Runout diagnostics measured every step (no history interval) are warned about; with an interval not.
+TEST(SceneJson, RunoutEveryStepIsWarnedAbout) {
+  const auto warned = [](const std::string& text) {
+    return test::warnings_with(parse_scene(text, "t"), "measures the runout every step") > 0;
+  };
+  const std::string runout = replace_once(kMinimal, "\"time\"", "\"diagnostics\": { \"runout\": {} }, \"time\"");
+  EXPECT_FALSE(warned(kMinimal));
+  EXPECT_TRUE(warned(runout));
+  EXPECT_FALSE(warned(replace_once(runout, "\"time\"", "\"output\": { \"history_interval\": 0.01 }, \"time\"")));
+}
+
 // Two boxes sharing a volume seed it twice: warned about; boxes that only touch are not.
 TEST(SceneJson, OverlappingBoxesAreWarnedAbout) {
   const auto warnings_of = [](const std::string& second_box) {
