@@ -40,6 +40,24 @@ namespace {
 /// "a temporary failure; the user is invited to retry", which a job script can tell from an error.
 constexpr int kStoppedAtDeadline = 75;
 
+/// How this run's ranks sit on the machines, for the memory check: under mpirun the ranks on this
+/// host, known by their host names (a check of the whole scene against each host's memory refused
+/// any scene larger than one node, however many nodes ran it).
+MachineShare machine_share(const Comm& world, bool restart) {
+  MachineShare share;
+  share.restart = restart;
+  if (!world.distributed()) return share;
+  char name[256] = {};
+  ::gethostname(name, sizeof name - 1);
+  // (libstdc++'s string hash has a fixed seed: every rank hashes a name alike)
+  const std::uint64_t mine = std::hash<std::string>{}(name);
+  const std::vector<std::uint64_t> hosts = world.allgather(mine);
+  share.ranks = world.size();
+  share.ranks_here = static_cast<int>(std::count(hosts.begin(), hosts.end(), mine));
+  share.root_here = hosts[0] == mine;
+  return share;
+}
+
 void print_warnings(const Scene& scene) {
   for (const std::string& w : scene_warnings(scene)) fmt::print(stderr, "talus: warning: {}\n", w);
 }
@@ -253,12 +271,16 @@ void add_run_command(CLI::App& app) {
     Scene scene = read_scene_file(*scene_path);  // validated before anything is written
     if (world.root()) print_warnings(scene);
     const MemoryEstimate memory = estimate_memory(scene);
-    require_memory_fits(scene, memory);  // a scene that cannot fit stops here, before anything is allocated
+    // a scene that cannot fit stops here, before anything is allocated (each rank checks its own
+    // machine; one that refuses stops every rank)
+    const MachineShare share = machine_share(world, !restart->empty());
+    world.agree([&] { require_memory_fits(scene, memory, share); });
     std::string dir = out_dir->empty() ? "runs/" + scene.name : *out_dir;
     Solver solver(std::move(scene), world);
     std::optional<RunProgress> resumed;
     if (!restart->empty()) {  // checked against the scene before anything is written
-      const Checkpoint checkpoint = read_checkpoint(*restart);
+      Checkpoint checkpoint;
+      world.agree([&] { checkpoint = read_checkpoint(*restart); });  // (a rank may not see the file)
       restore_checkpoint(solver, checkpoint, *restart);
       // Only the run's progress is kept: the checkpoint's copy of the particles (about 190 B a
       // particle of the whole scene, on every rank) was held to the run's end.
@@ -440,6 +462,7 @@ void add_check_command(CLI::App& app) {
     const Scene scene = read_scene_file(*scene_path);
     available_memory();  // a bad TALUS_MEMORY_LIMIT stops here, not halfway through the summary
     Solver::check_ranks(scene, world.size());  // what `mpirun -np N talus run` would refuse
+    const MachineShare share = machine_share(world, false);  // (collective)
     if (!world.root()) return;
     print_warnings(scene);
     const MemoryEstimate memory = estimate_memory(scene);
@@ -454,7 +477,7 @@ void add_check_command(CLI::App& app) {
     } catch (const Error& e) {
       fmt::print("note       talus run without --out would stop: {}\n", e.what());
     }
-    require_memory_fits(scene, memory);
+    require_memory_fits(scene, memory, share);
     fmt::print("ok{}\n", world.distributed() ? fmt::format(" (for {} ranks)", world.size()) : "");
   });
 }

@@ -1,5 +1,7 @@
 #include "talus/core/comm.hpp"
 
+#include "talus/core/error.hpp"
+
 #include <algorithm>
 #include <cstdlib>
 #include <limits>
@@ -89,6 +91,34 @@ double Comm::min(double local) const {
 bool Comm::any(bool local) const {
   const std::vector<unsigned char> all = allgather(static_cast<unsigned char>(local ? 1 : 0));
   return std::any_of(all.begin(), all.end(), [](unsigned char f) { return f != 0; });
+}
+
+void Comm::agree(const std::function<void()>& local) const {
+  if (size_ == 1) {
+    local();
+    return;
+  }
+  std::string failure;
+  Error::Kind kind = Error::Kind::Input;
+  try {
+    local();
+  } catch (const Error& e) {
+    failure = *e.what() ? e.what() : "failed";
+    kind = e.kind();
+  }
+  if (!any(!failure.empty())) return;
+  std::vector<std::int64_t> counts;
+  const std::vector<char> all = gather(std::vector<char>(failure.begin(), failure.end()), &counts);
+  std::string first;
+  std::size_t at = 0;
+  for (std::size_t r = 0; r < counts.size(); ++r) {  // (rank 0 alone has the counts)
+    const auto n = static_cast<std::size_t>(counts[r]);
+    if (first.empty() && n > 0)
+      first = (r == 0 ? std::string() : "on rank " + std::to_string(r) + " of " + std::to_string(size_) + ": ") +
+              std::string(all.data() + at, n);
+    at += n;
+  }
+  throw Error(kind, root() ? first : failure.empty() ? std::string("another rank failed") : failure);
 }
 
 std::vector<unsigned char> Comm::gather_bytes(const void* data, std::size_t bytes, std::vector<std::int64_t>& counts) const {

@@ -8,6 +8,7 @@
 #include <H5Cpp.h>
 #include <fmt/core.h>
 
+#include <cmath>
 #include <filesystem>
 #include <limits>
 #include <memory>
@@ -74,12 +75,43 @@ template <class T>
 std::vector<T> read_array(const H5::Group& group, const std::string& name) {
   H5::DataSet set = group.openDataSet(name);
   H5::DataSpace space = set.getSpace();
-  if (space.getSimpleExtentNdims() != 1) throw io_error(fmt::format("dataset {} is not one-dimensional", name));
+  const std::string file = group.getFileName();
+  if (space.getSimpleExtentNdims() != 1)
+    throw io_error(fmt::format("checkpoint {} is damaged: dataset {} is not one-dimensional", file, name));
   hsize_t n = 0;
   space.getSimpleExtentDims(&n);
+  // A damaged header's length is refused before it is allocated (2e9 values asked for 16 GB from a
+  // file of 200 kB): no dataset holds more values than the file has bytes for.
+  std::error_code ec;
+  const std::uintmax_t bytes = std::filesystem::file_size(file, ec);
+  if (!ec && n > bytes / sizeof(T))
+    throw io_error(fmt::format("checkpoint {} is damaged: dataset {} claims {} values, more than its {} bytes hold", file,
+                               name, n, bytes));
   std::vector<T> data(n);
   if (n) set.read(data.data(), h5_type<T>());
   return data;
+}
+
+/// The run's and the solver's scalars a step could have left: a damaged or edited value (a time of
+/// NaN stepped forever, writing nothing; a schedule time of NaN wrote no frame) is refused.
+void check_scalars(const Checkpoint& c, const std::string& path) {
+  auto refuse = [&](const std::string& what) {
+    throw input_error(fmt::format("checkpoint {} is inconsistent: {}", path, what));
+  };
+  const SolverState& s = c.solver;
+  if (!(std::isfinite(s.time) && s.time >= 0.0)) refuse(fmt::format("its time is {} s", s.time));
+  if (s.step < 0) refuse(fmt::format("its step is {}", s.step));
+  if (!(std::isfinite(s.last_dt) && s.last_dt >= 0.0)) refuse(fmt::format("its last time step is {} s", s.last_dt));
+  if (!(std::isfinite(s.outflow_mass) && s.outflow_mass >= 0.0)) refuse(fmt::format("its outflow mass is {} kg", s.outflow_mass));
+  for (const auto& [name, value] : {std::pair{"next_frame", c.run.next_frame}, std::pair{"next_history", c.run.next_history},
+                                    std::pair{"next_checkpoint", c.run.next_checkpoint}})
+    if (!std::isfinite(value)) refuse(fmt::format("/run {} is {}", name, value));
+  if (c.run.frame_times.size() != c.run.frame_steps.size())
+    refuse(fmt::format("{} frame times for {} frame steps", c.run.frame_times.size(), c.run.frame_steps.size()));
+  for (std::size_t i = 0; i < c.run.frame_times.size(); ++i)
+    if (!std::isfinite(c.run.frame_times[i]) || c.run.frame_steps[i] < 0 ||
+        (i > 0 && !(c.run.frame_times[i] >= c.run.frame_times[i - 1])))
+      refuse(fmt::format("frame {} is at t = {} s, step {}", i, c.run.frame_times[i], c.run.frame_steps[i]));
 }
 
 std::string first_difference(const nlohmann::json& saved, const nlohmann::json& current) {
@@ -319,13 +351,17 @@ Checkpoint read_checkpoint(const std::string& path) {
     c.run.energy_max_released = read_attribute<double>(r, "energy_max_released");
     c.run.frame_times = read_array<double>(r, "frame_times");
     c.run.frame_steps = read_array<std::int64_t>(r, "frame_steps");
+    check_scalars(c, path);
   } catch (const H5::Exception& e) {
     throw input_error(fmt::format("checkpoint {} is not readable: {}", path, e.getDetailMsg()));
   }
   return c;
 }
 
-void restore_checkpoint(Solver& solver, const Checkpoint& c, const std::string& path) {
+/// The checkpoint's particles in the scene's layout, after the checks one rank makes alone: the
+/// version, the scene, every array the layout has (and no other) at the particles' count, the body
+/// indices, and the ranks' counts.
+ParticleStore checked_particles(const Solver& solver, const Checkpoint& c, const std::string& path) {
   if (c.talus_version != kVersion)
     throw input_error(fmt::format("checkpoint {} was written by talus {}; this is talus {}: restart with that version",
                                   path, c.talus_version, kVersion));
@@ -347,7 +383,7 @@ void restore_checkpoint(Solver& solver, const Checkpoint& c, const std::string& 
   ParticleStore P = solver.particles();  // the scene's layout: which arrays are allocated
   std::set<std::string> used;
   P.for_each_double_array([&](const char* name, ParticleArray<double>& a) {
-    if (a.empty()) return;
+    if (!P.has_array(name)) return;
     auto it = c.double_arrays.find(name);
     if (it == c.double_arrays.end()) throw bad(fmt::format("particle array {} is missing", name));
     if (it->second.size() != n) throw bad(fmt::format("particle array {} has {} values for {} particles", name, it->second.size(), n));
@@ -360,6 +396,18 @@ void restore_checkpoint(Solver& solver, const Checkpoint& c, const std::string& 
   P.body.assign(c.body.begin(), c.body.end());
   for (std::uint16_t b : P.body)
     if (b >= solver.scene().bodies.size()) throw bad("a particle's body index is out of range");
+  std::int64_t saved = 0;
+  for (std::int64_t count : c.rank_particles) saved += count;
+  if (!c.rank_particles.empty() && saved != static_cast<std::int64_t>(n))
+    throw bad("the ranks' particle counts do not add up to the particles");
+  return P;
+}
+
+void restore_checkpoint(Solver& solver, const Checkpoint& c, const std::string& path) {
+  ParticleStore P;
+  // What each rank checks of the file alone; a rank that refuses it must not leave the others
+  // waiting in the restore's collectives (Comm::agree).
+  solver.comm().agree([&] { P = checked_particles(solver, c, path); });
   const Comm& comm = solver.comm();
   const std::size_t saved_ranks = c.rank_particles.empty() ? 1 : c.rank_particles.size();
   if (saved_ranks == static_cast<std::size_t>(comm.size())) {
@@ -371,7 +419,6 @@ void restore_checkpoint(Solver& solver, const Checkpoint& c, const std::string& 
     std::int64_t first = 0;
     for (int r = 0; r < comm.rank(); ++r) first += c.rank_particles[r];
     const std::int64_t count = c.rank_particles[comm.rank()];
-    if (first + count > static_cast<std::int64_t>(n)) throw bad("the ranks' particle counts exceed the particles");
     std::vector<std::uint32_t> mine(static_cast<std::size_t>(count));
     for (std::int64_t i = 0; i < count; ++i) mine[i] = static_cast<std::uint32_t>(first + i);
     P.permute(mine);

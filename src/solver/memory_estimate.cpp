@@ -247,20 +247,36 @@ std::optional<std::size_t> available_memory() {
   return available;
 }
 
-void require_memory_fits(const Scene& scene, const MemoryEstimate& e) {
+std::size_t bytes_on_this_machine(const Scene& scene, const MemoryEstimate& e, const MachineShare& share) {
+  if (share.ranks <= 1) return e.total();
+  const double here = double(e.total()) * double(share.ranks_here) / double(share.ranks);
+  const double whole_fields = double(e.particles) * double(checkpoint_bytes_per_particle(scene));
+  const double gathered = share.root_here ? whole_fields : 0.0;
+  const double restored = share.restart ? 2.0 * whole_fields * double(share.ranks_here) : 0.0;
+  return static_cast<std::size_t>(here + gathered + restored);
+}
+
+void require_memory_fits(const Scene& scene, const MemoryEstimate& e, const MachineShare& share) {
   const std::optional<std::size_t> available = available_memory();
-  if (!available || e.total() <= *available) return;
+  const std::size_t needed = bytes_on_this_machine(scene, e, share);
+  if (!available || needed <= *available) return;
   // What to change: the particles and the grid both go with (1/h)^3, so a cell this many times
   // larger brings the whole down to what fits (rounded up, so that it does fit). Fewer particles per
   // cell help only when the grid alone fits.
-  const double h_factor = std::ceil(100.0 * std::cbrt(double(e.total()) / double(std::max<std::size_t>(*available, 1)))) / 100.0;
+  const double h_factor = std::ceil(100.0 * std::cbrt(double(needed) / double(std::max<std::size_t>(*available, 1)))) / 100.0;
   const bool grid_fits = e.grid_bytes < *available;
+  const std::string where =
+      share.ranks <= 1 ? std::string()
+                       : fmt::format(" on this machine, which runs {} of the {} ranks{}{}", share.ranks_here, share.ranks,
+                                     share.root_here ? " (rank 0 among them, which gathers every particle)" : "",
+                                     share.restart ? ", each of which reads the whole checkpoint" : "");
   throw input_error(fmt::format(
-      "scene \"{}\" needs about {} ({} particles x {} B + {} of grid) but {} is available{}; make grid.cell_size {:.2f}x "
-      "larger{}, or run it on a machine with more memory",
-      scene.name, format_bytes(double(e.total())), e.particles, e.bytes_per_particle, format_bytes(double(e.grid_bytes)),
+      "scene \"{}\" needs about {}{} ({} particles x {} B + {} of grid in all) but {} is available{}; make "
+      "grid.cell_size {:.2f}x larger{}, or run it on {}",
+      scene.name, format_bytes(double(needed)), where, e.particles, e.bytes_per_particle, format_bytes(double(e.grid_bytes)),
       format_bytes(double(*available)), std::getenv("TALUS_MEMORY_LIMIT") ? " (TALUS_MEMORY_LIMIT)" : "",
-      std::max(h_factor, 1.01), grid_fits ? " or use fewer particles_per_cell" : " (the grid alone does not fit)"));
+      std::max(h_factor, 1.01), grid_fits ? " or use fewer particles_per_cell" : " (the grid alone does not fit)",
+      share.ranks <= 1 ? "a machine with more memory" : "more machines or machines with more memory"));
 }
 
 std::string format_bytes(double bytes) {

@@ -84,6 +84,13 @@ void check_restored_particles(const ParticleStore& P, const Grid& grid, ShapeRea
       throw io_error(fmt::format("restart: particle {} has mass {:.6g} kg and volume {:.6g} m3; both must be positive and finite",
                                  P.id[p], P.mass[p], P.volume[p]));
   }
+  // every field finite: a NaN velocity or stress stopped the first step, which then kept the same
+  // state as the "last good state"
+  P.for_each_double_array([&](const char* name, const ParticleArray<double>& a) {
+    for (std::size_t p = 0; p < a.size(); ++p)
+      if (!std::isfinite(a[p]))
+        throw io_error(fmt::format("restart: particle {}'s {} is {}", P.id[p], name, a[p]));
+  });
   std::vector<std::int64_t> ids(P.id.begin(), P.id.end());
   std::sort(ids.begin(), ids.end());
   if (const auto twice = std::adjacent_find(ids.begin(), ids.end()); twice != ids.end())
@@ -934,19 +941,23 @@ void Solver::restore(ParticleStore particles, const SolverState& s, RestoreSort 
   if (counts[0] + counts[1] != seeded_particles_)
     throw io_error(fmt::format("restart: {} particles saved and {} left through open faces, the scene seeds {}", counts[0],
                                counts[1], seeded_particles_));
-  if (mode == RestoreSort::Exact)
-    for (const auto& c : s.sort_cell)
-      if (c.size() != n) throw io_error("restart: the saved sort state does not match the particles");
-  const ShapeReach reach = shape_reach(scene_.shape);
-  check_restored_particles(particles, grid_, reach);
-  if (mode == RestoreSort::Exact) {
-    const auto nodes = scene_.grid.nodes();
-    for (std::size_t p = 0; p < n; ++p)
-      for (int d = 0; d < 3; ++d)
-        if (s.sort_cell[d][p] - reach.low < 0 || s.sort_cell[d][p] + reach.high >= nodes[d])
-          throw io_error(fmt::format("restart: particle {}'s saved sort cell ({}, {}, {}) lies outside the grid",
-                                     particles.id[p], s.sort_cell[0][p], s.sort_cell[1][p], s.sort_cell[2][p]));
-  }
+  // Each rank checks its own particles; one that refuses them must not leave the others waiting in
+  // the sort's collectives (Comm::agree).
+  comm_.agree([&] {
+    if (mode == RestoreSort::Exact)
+      for (const auto& c : s.sort_cell)
+        if (c.size() != n) throw io_error("restart: the saved sort state does not match the particles");
+    const ShapeReach reach = shape_reach(scene_.shape);
+    check_restored_particles(particles, grid_, reach);
+    if (mode == RestoreSort::Exact) {
+      const auto nodes = scene_.grid.nodes();
+      for (std::size_t p = 0; p < n; ++p)
+        for (int d = 0; d < 3; ++d)
+          if (s.sort_cell[d][p] - reach.low < 0 || s.sort_cell[d][p] + reach.high >= nodes[d])
+            throw io_error(fmt::format("restart: particle {}'s saved sort cell ({}, {}, {}) lies outside the grid",
+                                       particles.id[p], s.sort_cell[0][p], s.sort_cell[1][p], s.sort_cell[2][p]));
+    }
+  });
   particles_ = std::move(particles);
   emptied_ = counts[0] == 0;
   wave_rate_from_stress_pass_.reset();
@@ -970,7 +981,9 @@ void Solver::restore(ParticleStore particles, const SolverState& s, RestoreSort 
   const ParticleArray<std::int64_t> ids = particles_.id;
   sort_.sort(particles_, grid_, scratch_);
   prepare_after_sort();
-  if (particles_.id != ids) throw io_error("restart: the saved particle order is not the saved sort's order");
+  comm_.agree([&] {
+    if (particles_.id != ids) throw io_error("restart: the saved particle order is not the saved sort's order");
+  });
   particles_.x = std::move(x);
   tiles_changed_ = true;
   restore_counters(s);

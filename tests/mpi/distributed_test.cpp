@@ -349,6 +349,40 @@ TEST(Distributed, FramesReadBackAsOneDataSet) {
   EXPECT_TRUE(read) << "the last frame holds every particle once";
 }
 
+// A restart on ranks whose slabs seed no particle (a body narrower than a block column, at the
+// grid's low end): each rank took the scene's arrays from its own seeded ones, and one with none
+// refused the checkpoint ("particle array mass is not used") alone while the others waited in the
+// restore's first collective, forever. From a one-rank checkpoint and from one of these ranks.
+TEST(Distributed, RestartWithSlabsThatSeedNothing) {
+  SharedFolder folder("restart_empty_slabs");
+  const Scene scene = parse_scene(R"({
+    "name": "narrow_block",
+    "grid": { "origin": [0, 0, 0], "size": [0.64, 0.04, 0.08], "cell_size": 0.01 },
+    "time": { "end": 0.02, "courant": 0.4 },
+    "materials": { "sand": { "model": "drucker_prager", "density": 1600, "young": 2e5, "poisson": 0.3,
+                             "friction_angle": 30, "cohesion": 50 } },
+    "bodies": [ { "name": "b", "material": "sand", "box": { "min": [0.0, 0, 0], "max": [0.02, 0.04, 0.04] },
+                  "particles_per_cell": 2, "velocity": [1.0, 0, 0] } ],
+    "boundaries": { "x+": "open", "z-": { "type": "friction", "friction_coefficient": 0.3 }, "z+": "open" }
+  })", "narrow_block");
+  const std::string serial_path = (folder.path / "serial.h5").string();
+  const std::string path = (folder.path / "ranks.h5").string();
+  Solver serial(scene);
+  for (int i = 0; i < 10; ++i) serial.step();
+  if (world().root()) write_checkpoint(serial_path, serial, RunProgress{});
+  world().barrier();
+  Solver from_serial(scene, world());
+  ASSERT_NO_THROW(restore_checkpoint(from_serial, read_checkpoint(serial_path), serial_path));
+  EXPECT_EQ(from_serial.step_count(), 10);
+  write_checkpoint(path, from_serial, RunProgress{});
+  world().barrier();
+  Solver same(scene, world());
+  ASSERT_NO_THROW(restore_checkpoint(same, read_checkpoint(path), path));
+  run(from_serial);
+  run(same);
+  EXPECT_TRUE(same_bits(state_by_id(same), state_by_id(from_serial))) << "restart on the same ranks";
+}
+
 // Restart: bit for bit on the same number of ranks; on one rank (every rank restarts the file
 // alone) and from a one-rank checkpoint, to round-off.
 TEST(Distributed, RestartOnAnyRankCount) {

@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <functional>
+#include <limits>
 
 #include <chrono>
 #include <cstring>
@@ -335,6 +336,58 @@ TEST(Checkpoint, RefusesAnotherSceneAnotherVersionAndBadFiles) {
   }
   EXPECT_EQ(restore_error(scene, path, &msg), Error::Kind::Input);
   EXPECT_NE(msg.find("written by talus 0.0.0"), std::string::npos) << msg;
+  test::fs::remove_all(dir);
+}
+
+// A damaged or edited scalar is refused in one line: a time of NaN stepped forever without writing
+// anything; a schedule time of NaN wrote no frame; a NaN velocity stopped the first step, which kept
+// it as the last good state. A dataset whose header claims more values than the file holds is
+// refused before they are allocated (2e9 asked for 16 GB).
+TEST(Checkpoint, RefusesScalarsAndLengthsNoRunCouldHaveWritten) {
+  const auto dir = test::temp_dir("scalars");
+  const Scene scene = test::tumbling_block_scene(0.05);
+  Solver solver(scene);
+  solver.step();
+  const std::string good = (dir / "good.h5").string();
+  write_checkpoint(good, solver, RunProgress{});
+  const auto edited = [&](const std::string& name, const std::function<void(H5::H5File&)>& edit) {
+    const std::string path = (dir / (name + ".h5")).string();
+    test::fs::copy_file(good, path);
+    H5::H5File file(path, H5F_ACC_RDWR);
+    edit(file);
+    return path;
+  };
+  const auto set_double = [](const char* group, const char* name, double value) {
+    return [=](H5::H5File& f) { f.openGroup(group).openAttribute(name).write(H5::PredType::NATIVE_DOUBLE, &value); };
+  };
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::pair<std::string, std::string> cases[] = {
+      {edited("time", set_double("/solver", "time", nan)), "its time is nan s"},
+      {edited("dt", set_double("/solver", "last_dt", -1.0)), "its last time step is -1 s"},
+      {edited("frame", set_double("/run", "next_frame", nan)), "/run next_frame is nan"},
+      {edited("velocity", [&](H5::H5File& f) {
+         H5::DataSet v = f.openGroup("/particles").openDataSet("v0");
+         std::vector<double> values(solver.particles().size(), 0.0);
+         values[3] = nan;
+         v.write(values.data(), H5::PredType::NATIVE_DOUBLE);
+       }), "'s v0 is nan"},
+      {edited("huge", [](H5::H5File& f) {
+         H5::Group p = f.openGroup("/particles");
+         const hsize_t n = 2000000000;
+         p.unlink("x0");
+         H5::DataSpace space(1, &n);
+         H5::DSetCreatPropList chunked;
+         const hsize_t chunk = 1024;
+         chunked.setChunk(1, &chunk);  // (a chunked dataset of 2e9 values takes no room until written)
+         p.createDataSet("x0", H5::PredType::NATIVE_DOUBLE, space, chunked);
+       }), "dataset x0 claims 2000000000 values, more than its"},
+  };
+  for (const auto& [path, expected] : cases) {
+    std::string msg;
+    restore_error(scene, path, &msg);
+    EXPECT_NE(msg.find(expected), std::string::npos) << path << ": " << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos);
+  }
   test::fs::remove_all(dir);
 }
 

@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -45,6 +46,13 @@ class Comm {
   double sum_in_rank_order(double local) const { return sum_in_rank_order(std::vector<double>{local})[0]; }
   double min(double local) const;
   bool any(bool local) const;
+
+  /// Runs `local`, work that may fail on one rank alone (its slab, its machine, its copy of a file),
+  /// and agrees on the outcome: when it threw an Error on any rank, every rank throws one, and rank
+  /// 0's carries the first failure's message, naming the rank when it was not rank 0. Without this
+  /// the ranks that went on waited in their next collective for the one that had stopped, forever.
+  /// Collective; with one rank it only runs `local`.
+  void agree(const std::function<void()>& local) const;
 
   /// The ranks' vectors concatenated in rank order on rank 0 (empty elsewhere); `counts` (if given)
   /// receives each rank's length on rank 0.

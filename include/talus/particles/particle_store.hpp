@@ -8,6 +8,7 @@
 #include "talus/particles/particle_scratch.hpp"
 
 #include <array>
+#include <string_view>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -50,6 +51,15 @@ struct ParticleStore {
   /// hardening (H > 0 and kinematic_fraction > 0), and then costs 48 B per particle for nothing.
   void enable_plastic_state(bool with_back_stress = true);
   bool has_back_stress() const { return back_stress_enabled_; }
+  /// Whether the store's layout (the scene's) has the double array `name` (for_each_double_array's
+  /// names): the optional groups by their flags, for a store of any size, even none (a rank whose
+  /// slab seeded no particle has every array empty).
+  bool has_array(std::string_view name) const {
+    if (name == "plastic_strain") return plastic_enabled_;
+    if (name.starts_with("back_stress")) return back_stress_enabled_;
+    if (name.starts_with("domain")) return domain_enabled_;
+    return true;
+  }
 
   /// Allocate the cpGIMP domain half widths, each set to its initial value V0^(1/3)/2.
   void enable_domain_state();

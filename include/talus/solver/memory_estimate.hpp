@@ -44,9 +44,25 @@ std::size_t checkpoint_bytes_per_particle(const Scene& scene);
 /// input_error for a TALUS_MEMORY_LIMIT that is not a positive size. nullopt when unknown.
 std::optional<std::size_t> available_memory();
 
-/// Throws input_error (exit code 2) when the estimate exceeds the available memory, with the
-/// figures and what to change. Does nothing when the available memory is unknown.
-void require_memory_fits(const Scene& scene, const MemoryEstimate& estimate);
+/// How a run's processes sit on the machines: one process (the default), or under mpirun `ranks`
+/// ranks, `ranks_here` of them on this machine.
+struct MachineShare {
+  int ranks = 1;
+  int ranks_here = 1;
+  bool root_here = true;  // rank 0 runs here
+  bool restart = false;   // the run starts from a checkpoint
+};
+
+/// What this machine holds at the run's peak: its ranks' share of the estimate (the slabs split the
+/// particles and the grid about evenly); in a distributed run, on rank 0's machine, the fields of
+/// every particle, which rank 0 gathers for checkpoints and runout rows; and on a distributed
+/// restart, the whole checkpoint and a copy of its particles that each rank here holds while it
+/// takes its own (io/checkpoint.hpp restore_checkpoint).
+std::size_t bytes_on_this_machine(const Scene& scene, const MemoryEstimate& estimate, const MachineShare& share);
+
+/// Throws input_error (exit code 2) when what this machine holds (bytes_on_this_machine) exceeds the
+/// available memory, with the figures and what to change. Does nothing when the available memory is unknown.
+void require_memory_fits(const Scene& scene, const MemoryEstimate& estimate, const MachineShare& share = {});
 
 /// Bytes as "1.23 GB" (powers of 1000, as `talus check` prints them).
 std::string format_bytes(double bytes);
