@@ -236,6 +236,15 @@ RunoutFiles::RunoutFiles(const Scene& scene, const fs::path& dir, std::optional<
       write_file_atomically(history_path_, runout_csv_header() + "\n");
     }
     if (first) monitor_->resume(*first, *last);
+    // Without a gate_x the runout is measured from the initial front, the first row: a folder
+    // that lacks it (a resume of a resume into another folder, runout.csv removed) gave a runout
+    // from a later front, 22% short, without a word. The checkpoint does not hold that row yet.
+    if (!scene.runout.has_gate && (!first || first->step > 0))
+      fmt::print(stderr, "talus: warning: {} lacks the runout rows from t = 0 (the initial front is the gate when "
+                 "diagnostics.runout.gate_x is not set): this run's runout is measured from {}; set gate_x, or "
+                 "resume in the folder that holds the rows from the start\n",
+                 ((resume_dir.empty() || same_file(resume_dir, dir) ? dir : resume_dir) / "runout.csv").string(),
+                 first ? fmt::format("the front at step {}", first->step) : std::string("the front at the restart"));
   }
   file_.open(history_path_, resume_step ? std::ios::app : std::ios::trunc);
   if (!file_) throw io_error(fmt::format("cannot write {}", history_path_));

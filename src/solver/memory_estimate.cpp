@@ -271,9 +271,10 @@ void require_memory_fits(const Scene& scene, const MemoryEstimate& e, const Mach
                                      share.root_here ? " (rank 0 among them, which gathers every particle)" : "",
                                      share.restart ? ", each of which reads the whole checkpoint" : "");
   throw input_error(fmt::format(
-      "scene \"{}\" needs about {}{} ({} particles x {} B + {} of grid in all) but {} is available{}; make "
+      "scene \"{}\" needs about {}{} ({} particles x {} B + {} of grid{}) but {} is available{}; make "
       "grid.cell_size {:.2f}x larger{}, or run it on {}",
       scene.name, format_bytes(double(needed)), where, e.particles, e.bytes_per_particle, format_bytes(double(e.grid_bytes)),
+      share.ranks <= 1 ? "" : " in all",
       format_bytes(double(*available)), std::getenv("TALUS_MEMORY_LIMIT") ? " (TALUS_MEMORY_LIMIT)" : "",
       std::max(h_factor, 1.01), grid_fits ? " or use fewer particles_per_cell" : " (the grid alone does not fit)",
       share.ranks <= 1 ? "a machine with more memory" : "more machines or machines with more memory"));

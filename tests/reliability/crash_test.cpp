@@ -403,6 +403,27 @@ TEST(Crash, ResumingADamagedOwnFolderSaysWhatItsOutputsLack) {
   EXPECT_NE(all_text.find(" held no row up to the checkpoint's step "), std::string::npos) << all_text;
 }
 
+// Without diagnostics.runout.gate_x the runout is measured from the initial front, runout.csv's
+// first row: a resume whose folder lacks it (here removed) measured it from the front at the
+// restart, 22% short on a terrain slide, without a word. It is said now; an intact folder says nothing.
+TEST(Crash, ResumingWithoutTheRunoutRowsFromTheStartWarns) {
+  const Reference& ref = reference();
+  const fs::path root = ref.root / "runout_gate";
+  fs::remove_all(root);
+  fs::create_directories(root);
+  std::ofstream(root / "scene.json") << test::small_slide_json(0.4, 0.02, R"(, "diagnostics": { "runout": {} })");
+  // (the run keeps its last periodic checkpoint, near its end)
+  ASSERT_EQ(run_talus({"run", (root / "scene.json").string(), "--out", (root / "a").string(), "--quiet", "--threads", "1"}), 0);
+  fs::copy(root / "a", root / "b", fs::copy_options::recursive);
+  fs::remove(root / "b" / "runout.csv");
+  for (const char* folder : {"a", "b"}) {
+    const auto [code, text] = run_captured("run " + (root / "scene.json").string() + " --restart " +
+                                           (root / folder / "checkpoint.h5").string() + " --quiet --threads 1");
+    EXPECT_EQ(code, 0) << text;
+    EXPECT_EQ(text.find("lacks the runout rows from t = 0") != std::string::npos, std::string(folder) == "b") << text;
+  }
+}
+
 // An output folder whose frames/ is a file: one line naming frames/, exit 2, nothing else written
 // (the folder is prepared before the run starts, so under mpirun every rank stops alike, said once).
 TEST(Crash, AnOutputFolderWhoseFramesIsAFileExitsTwoWithOneLine) {
