@@ -238,6 +238,42 @@ TEST(ShapeFunctions, NarrowCpGimpStencilGivesTheSameSumsAsTheFullOne) {
   EXPECT_EQ(nodes, 4);
 }
 
+// The sort's cell (GridGeometry::cell_of) is the cell the linear stencil starts from, to the last
+// bit: the sort computed (x - origin) / h and the stencil (x - origin) * (1/h), which round apart
+// within an ulp of some faces (z = 0.22999999999999998 at h = 0.01: cell 24 and stencil 25), so a
+// particle the sort placed at its block's slack edge scattered to a node past the block's range.
+// Positions within 4 ulps of every face of 2000 cells, at cell sizes that showed it.
+TEST(ShapeFunctions, TheSortsCellIsTheCellTheLinearStencilStartsFrom) {
+  int all_divided_apart = 0;
+  for (double h : {0.01, 0.003, 0.0125, 0.005, 0.025, 0.07}) {
+    GridGeometry g;
+    g.origin = Vec3(-0.3, 0.0, 0.1);
+    g.h = h;
+    g.cells = {2000, 2000, 2000};
+    Grid grid(g);
+    const double hw[3] = {0.0, 0.0, 0.0};
+    Stencil<LinearShape> s;
+    int checked = 0, divided_apart = 0;
+    for (int k = 1; k < 2000; ++k)
+      for (int d = 0; d < 3; ++d) {
+        double x = g.origin[d] + k * h;
+        for (int i = 0; i < 4; ++i) x = std::nextafter(x, -INFINITY);
+        for (int ulp = -4; ulp <= 4; ++ulp, x = std::nextafter(x, INFINITY)) {
+          double p[3] = {g.origin[0] + 1.0, g.origin[1] + 1.0, g.origin[2] + 1.0};
+          p[d] = x;
+          s.evaluate(grid, FlatTerrain{}, p[0], p[1], p[2], hw);
+          ASSERT_EQ(g.cell_of(d, x), s.first[d]) << "h = " << h << ", x = " << x;
+          ++checked;
+          // the sort's former quotient: these positions do tell the two apart
+          divided_apart += static_cast<int>(std::floor((x - g.origin[d]) / h + kPad)) != s.first[d];
+        }
+      }
+    EXPECT_EQ(checked, 1999 * 3 * 9);
+    all_divided_apart += divided_apart;
+  }
+  EXPECT_GT(all_divided_apart, 0);
+}
+
 TEST(ShapeFunctions, QuadraticBSplineWeightsMatchTheClosedForm) {
   // Nearest node i = 4 at u = x - x_i = 0.3: N_3 = (0.5 - u)^2 / 2, N_4 = 0.75 - u^2, N_5 = (0.5 + u)^2 / 2.
   int base;

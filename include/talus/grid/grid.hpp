@@ -112,7 +112,10 @@ struct GridGeometry {
   }
   /// Position in grid units (node spacing 1, ghost offset included). Axis 2 takes w, not z: with a
   /// terrain, map z to w first (Grid::w_of, or the Terrain type of the transfers).
-  double to_grid(int axis, double x) const { return (x - origin[axis]) / h + kPad; }
+  /// Computed as the transfers' stencils compute it (times 1/h, not divided by h): the two rounded
+  /// differently within an ulp of some cell faces, so the sort could put a particle in the cell
+  /// below the one its stencil starts from, and a scatter write a node past its block's range.
+  double to_grid(int axis, double x) const { return (x - origin[axis]) * (1.0 / h) + kPad; }
   double node_position(int axis, int index) const { return origin[axis] + (index - kPad) * h; }
 };
 
