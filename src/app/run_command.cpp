@@ -43,10 +43,11 @@ constexpr int kStoppedAtDeadline = 75;
 /// How this run's ranks sit on the machines, for the memory check: under mpirun the ranks on this
 /// host, known by their host names (a check of the whole scene against each host's memory refused
 /// any scene larger than one node, however many nodes ran it).
-MachineShare machine_share(const Comm& world, bool restart) {
+MachineShare machine_share(const Comm& world, const std::string& restart) {
   MachineShare share;
-  share.restart = restart;
+  share.restart = !restart.empty();
   if (!world.distributed()) return share;
+  share.restart_reads_own_part = share.restart && checkpoint_ranks(restart) == world.size();
   char name[256] = {};
   ::gethostname(name, sizeof name - 1);
   // (libstdc++'s string hash has a fixed seed: every rank hashes a name alike)
@@ -273,14 +274,14 @@ void add_run_command(CLI::App& app) {
     const MemoryEstimate memory = estimate_memory(scene);
     // a scene that cannot fit stops here, before anything is allocated (each rank checks its own
     // machine; one that refuses stops every rank)
-    const MachineShare share = machine_share(world, !restart->empty());
+    const MachineShare share = machine_share(world, *restart);
     world.agree([&] { require_memory_fits(scene, memory, share); });
     std::string dir = out_dir->empty() ? "runs/" + scene.name : *out_dir;
     Solver solver(std::move(scene), world);
     std::optional<RunProgress> resumed;
     if (!restart->empty()) {  // checked against the scene before anything is written
       Checkpoint checkpoint;
-      world.agree([&] { checkpoint = read_checkpoint(*restart); });  // (a rank may not see the file)
+      world.agree([&] { checkpoint = read_checkpoint(*restart, world); });  // (a rank may not see the file)
       restore_checkpoint(solver, checkpoint, *restart);
       // Only the run's progress is kept: the checkpoint's copy of the particles (about 190 B a
       // particle of the whole scene, on every rank) was held to the run's end.
@@ -462,7 +463,7 @@ void add_check_command(CLI::App& app) {
     const Scene scene = read_scene_file(*scene_path);
     available_memory();  // a bad TALUS_MEMORY_LIMIT stops here, not halfway through the summary
     Solver::check_ranks(scene, world.size());  // what `mpirun -np N talus run` would refuse
-    const MachineShare share = machine_share(world, false);  // (collective)
+    const MachineShare share = machine_share(world, "");  // (collective)
     if (!world.root()) return;
     print_warnings(scene);
     const MemoryEstimate memory = estimate_memory(scene);

@@ -114,6 +114,25 @@ void check_scalars(const Checkpoint& c, const std::string& path) {
       refuse(fmt::format("frame {} is at t = {} s, step {}", i, c.run.frame_times[i], c.run.frame_steps[i]));
 }
 
+/// Values [first, first + count) of a one-dimensional dataset of `total` values (a rank's part of
+/// a particle array); the dataset's length is checked against `total`.
+template <class T>
+std::vector<T> read_array_part(const H5::Group& group, const std::string& name, hsize_t first, hsize_t count,
+                               hsize_t total) {
+  H5::DataSet set = group.openDataSet(name);
+  H5::DataSpace space = set.getSpace();
+  hsize_t n = 0;
+  if (space.getSimpleExtentNdims() != 1 || (space.getSimpleExtentDims(&n), n != total))
+    throw io_error(fmt::format("checkpoint {} is inconsistent: {} does not hold the {} particles its ranks saved",
+                               group.getFileName(), name, total));
+  std::vector<T> data(count);
+  if (count == 0) return data;
+  space.selectHyperslab(H5S_SELECT_SET, &count, &first);
+  H5::DataSpace memory(1, &count);
+  set.read(data.data(), h5_type<T>(), memory, space);
+  return data;
+}
+
 std::string first_difference(const nlohmann::json& saved, const nlohmann::json& current) {
   const nlohmann::json patch = nlohmann::json::diff(saved, current);
   if (patch.empty()) return "";
@@ -261,7 +280,23 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
   if (ec) throw io_error(fmt::format("cannot write checkpoint {}: {}", path, ec.message()));
 }
 
-Checkpoint read_checkpoint(const std::string& path) {
+int checkpoint_ranks(const std::string& path) {
+  try {
+    H5::Exception::dontPrint();
+    H5::H5File file(path, H5F_ACC_RDONLY);
+    H5::Group s = file.openGroup("/solver");
+    if (!s.nameExists("ranks")) return 1;
+    H5::DataSpace space = s.openGroup("ranks").openDataSet("particles").getSpace();
+    hsize_t n = 0;
+    if (space.getSimpleExtentNdims() != 1) return 0;
+    space.getSimpleExtentDims(&n);
+    return static_cast<int>(std::min<hsize_t>(n, 1 << 30));
+  } catch (const H5::Exception&) {
+    return 0;
+  }
+}
+
+Checkpoint read_checkpoint(const std::string& path, const Comm& comm) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw input_error(fmt::format("cannot open checkpoint {}", path));
   Checkpoint c;
@@ -303,20 +338,6 @@ Checkpoint read_checkpoint(const std::string& path) {
     // absent in checkpoints of runs that sorted every step with MLS: the next step sorts
     c.solver.sort_drift = s.attrExists("sort_drift") ? read_attribute<double>(s, "sort_drift")
                                                      : std::numeric_limits<double>::infinity();
-    for (int d = 0; d < 3; ++d) c.solver.sort_cell[d] = read_array<std::int32_t>(s, fmt::format("sort_cell{}", d));
-    // absent where the scene is not the `reused` MLS variant, or had no weights yet: the next pass fits
-    if (s.nameExists("mls_weights")) {
-      H5::Group w = s.openGroup("mls_weights");
-      std::vector<std::uint64_t> offsets = read_array<std::uint64_t>(w, "offsets");
-      std::vector<std::uint32_t> neighbour = read_array<std::uint32_t>(w, "neighbour");
-      std::vector<double> phi = read_array<double>(w, "phi");
-      auto weights = std::make_shared<MlsStoredWeights>();
-      if (!weights->assign(offsets, neighbour, phi))
-        throw input_error(fmt::format("checkpoint {}: its MLS weights are inconsistent", path));
-      c.solver.mls_weights = std::move(weights);
-      c.solver.mls_strain_since_fit = read_attribute<double>(w, "strain_since_fit");
-    }
-
     if (s.nameExists("ranks")) {
       H5::Group ranks = s.openGroup("ranks");
       c.rank_particles = read_array<std::int64_t>(ranks, "particles");
@@ -332,13 +353,39 @@ Checkpoint read_checkpoint(const std::string& path) {
       }
     }
 
+    // On the saved number of ranks a rank reads only its own saved particles.
+    hsize_t first = 0, count = 0, total = 0;
+    for (std::size_t r = 0; r < c.rank_particles.size(); ++r) {
+      if (c.rank_particles[r] < 0) throw input_error(fmt::format("checkpoint {} is inconsistent: rank {} saved {} particles", path, r, c.rank_particles[r]));
+      if (r < static_cast<std::size_t>(comm.rank())) first += static_cast<hsize_t>(c.rank_particles[r]);
+      total += static_cast<hsize_t>(c.rank_particles[r]);
+    }
+    c.own_part = comm.distributed() && c.rank_particles.size() == static_cast<std::size_t>(comm.size());
+    if (c.own_part) count = static_cast<hsize_t>(c.rank_particles[comm.rank()]);
+    const auto particle_array = [&]<class T>(const H5::Group& group, const std::string& name, T) {
+      return c.own_part ? read_array_part<T>(group, name, first, count, total) : read_array<T>(group, name);
+    };
+    for (int d = 0; d < 3; ++d) c.solver.sort_cell[d] = particle_array(s, fmt::format("sort_cell{}", d), std::int32_t{});
+    // absent where the scene is not the `reused` MLS variant, or had no weights yet: the next pass fits
+    if (s.nameExists("mls_weights")) {
+      H5::Group w = s.openGroup("mls_weights");
+      std::vector<std::uint64_t> offsets = read_array<std::uint64_t>(w, "offsets");
+      std::vector<std::uint32_t> neighbour = read_array<std::uint32_t>(w, "neighbour");
+      std::vector<double> phi = read_array<double>(w, "phi");
+      auto weights = std::make_shared<MlsStoredWeights>();
+      if (!weights->assign(offsets, neighbour, phi))
+        throw input_error(fmt::format("checkpoint {}: its MLS weights are inconsistent", path));
+      c.solver.mls_weights = std::move(weights);
+      c.solver.mls_strain_since_fit = read_attribute<double>(w, "strain_since_fit");
+    }
+
     H5::Group p = file.openGroup("/particles");
-    c.id = read_array<std::int64_t>(p, "id");
-    c.body = read_array<std::uint16_t>(p, "body");
+    c.id = particle_array(p, "id", std::int64_t{});
+    c.body = particle_array(p, "body", std::uint16_t{});
     for (hsize_t i = 0; i < p.getNumObjs(); ++i) {
       const std::string name = p.getObjnameByIdx(i);
       if (name == "id" || name == "body") continue;
-      c.double_arrays[name] = read_array<double>(p, name);
+      c.double_arrays[name] = particle_array(p, name, double{});
     }
 
     H5::Group r = file.openGroup("/run");
@@ -398,8 +445,11 @@ ParticleStore checked_particles(const Solver& solver, const Checkpoint& c, const
     if (b >= solver.scene().bodies.size()) throw bad("a particle's body index is out of range");
   std::int64_t saved = 0;
   for (std::int64_t count : c.rank_particles) saved += count;
+  if (c.own_part) saved = c.rank_particles[solver.comm().rank()];
   if (!c.rank_particles.empty() && saved != static_cast<std::int64_t>(n))
     throw bad("the ranks' particle counts do not add up to the particles");
+  for (const auto& cells : c.solver.sort_cell)
+    if (!c.rank_particles.empty() && cells.size() != n) throw bad("the sort cells are not one a particle");
   return P;
 }
 
@@ -415,13 +465,16 @@ void restore_checkpoint(Solver& solver, const Checkpoint& c, const std::string& 
       solver.restore(std::move(P), c.solver);
       return;
     }
-    // The same number of ranks: each takes its saved particles, sort cells, counters and ledger.
+    // The same number of ranks: each takes its saved particles (all it read, when it read its own
+    // part), sort cells, counters and ledger.
     std::int64_t first = 0;
-    for (int r = 0; r < comm.rank(); ++r) first += c.rank_particles[r];
+    for (int r = 0; r < comm.rank() && !c.own_part; ++r) first += c.rank_particles[r];
     const std::int64_t count = c.rank_particles[comm.rank()];
-    std::vector<std::uint32_t> mine(static_cast<std::size_t>(count));
-    for (std::int64_t i = 0; i < count; ++i) mine[i] = static_cast<std::uint32_t>(first + i);
-    P.permute(mine);
+    if (!c.own_part) {
+      std::vector<std::uint32_t> mine(static_cast<std::size_t>(count));
+      for (std::int64_t i = 0; i < count; ++i) mine[i] = static_cast<std::uint32_t>(first + i);
+      P.permute(mine);
+    }
     SolverState state = c.rank_states[comm.rank()];
     for (int d = 0; d < 3; ++d)
       state.sort_cell[d].assign(c.solver.sort_cell[d].begin() + first, c.solver.sort_cell[d].begin() + first + count);

@@ -252,7 +252,8 @@ std::size_t bytes_on_this_machine(const Scene& scene, const MemoryEstimate& e, c
   const double here = double(e.total()) * double(share.ranks_here) / double(share.ranks);
   const double whole_fields = double(e.particles) * double(checkpoint_bytes_per_particle(scene));
   const double gathered = share.root_here ? whole_fields : 0.0;
-  const double restored = share.restart ? 2.0 * whole_fields * double(share.ranks_here) : 0.0;
+  const double read_per_rank = share.restart_reads_own_part ? whole_fields / double(share.ranks) : whole_fields;
+  const double restored = share.restart ? 2.0 * read_per_rank * double(share.ranks_here) : 0.0;
   return static_cast<std::size_t>(here + gathered + restored);
 }
 
@@ -269,7 +270,9 @@ void require_memory_fits(const Scene& scene, const MemoryEstimate& e, const Mach
       share.ranks <= 1 ? std::string()
                        : fmt::format(" on this machine, which runs {} of the {} ranks{}{}", share.ranks_here, share.ranks,
                                      share.root_here ? " (rank 0 among them, which gathers every particle)" : "",
-                                     share.restart ? ", each of which reads the whole checkpoint" : "");
+                                     share.restart && !share.restart_reads_own_part
+                                         ? ", each of which reads the whole checkpoint (saved by another number of ranks)"
+                                         : "");
   throw input_error(fmt::format(
       "scene \"{}\" needs about {}{} ({} particles x {} B + {} of grid{}) but {} is available{}; make "
       "grid.cell_size {:.2f}x larger{}, or run it on {}",

@@ -376,11 +376,14 @@ TEST(Distributed, RestartWithSlabsThatSeedNothing) {
   EXPECT_EQ(from_serial.step_count(), 10);
   write_checkpoint(path, from_serial, RunProgress{});
   world().barrier();
-  Solver same(scene, world());
+  Solver same(scene, world()), own_part(scene, world());
   ASSERT_NO_THROW(restore_checkpoint(same, read_checkpoint(path), path));
+  ASSERT_NO_THROW(restore_checkpoint(own_part, read_checkpoint(path, world()), path));  // (some parts empty)
   run(from_serial);
   run(same);
+  run(own_part);
   EXPECT_TRUE(same_bits(state_by_id(same), state_by_id(from_serial))) << "restart on the same ranks";
+  EXPECT_TRUE(same_bits(state_by_id(own_part), state_by_id(from_serial))) << "each rank reading its own part";
 }
 
 // Restart: bit for bit on the same number of ranks; on one rank (every rank restarts the file
@@ -400,8 +403,9 @@ TEST(Distributed, RestartOnAnyRankCount) {
   const State reference = state_by_id(whole);
   const EnergyBudget reference_energy = whole.energies();
 
+  // (each rank reads only its own saved particles: read_checkpoint with the ranks)
   Solver same(scene, world());
-  restore_checkpoint(same, read_checkpoint(path), path);
+  restore_checkpoint(same, read_checkpoint(path, world()), path);
   EXPECT_EQ(same.step_count(), 60);
   run(same);
   EXPECT_TRUE(same_bits(state_by_id(same), reference)) << "restart on the same ranks";

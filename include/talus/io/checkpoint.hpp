@@ -61,6 +61,9 @@ struct Checkpoint {
   std::vector<std::int64_t> rank_particles;
   std::vector<std::int32_t> slab_first_columns;
   std::vector<SolverState> rank_states;  // the scalars only (no sort_cell)
+  /// The particle arrays and sort cells hold only the reading rank's saved particles (read on the
+  /// saved number of ranks, read_checkpoint with that Comm); otherwise every particle.
+  bool own_part = false;
 };
 
 /// FNV-1a 64 of scene_to_json(scene).dump(), as 16 hex digits.
@@ -70,8 +73,14 @@ std::string scene_hash(const Scene& scene);
 /// Collective in a distributed run: the particles are gathered and rank 0 writes one file.
 void write_checkpoint(const std::string& path, const Solver& solver, const RunProgress& run);
 
-/// Read a checkpoint; throws an input Error naming the file if it is missing or unreadable.
-Checkpoint read_checkpoint(const std::string& path);
+/// Read a checkpoint; throws an input Error naming the file if it is missing or unreadable. A rank
+/// of `comm` that restarts a checkpoint of as many ranks reads only its own saved particles (each
+/// read the whole file: a restart of 20 M particles on 16 ranks of a node took 120 GB for a while).
+Checkpoint read_checkpoint(const std::string& path, const Comm& comm = Comm());
+
+/// The number of ranks that wrote the checkpoint (1 for one rank), or 0 when the file cannot be
+/// read as one (read_checkpoint then says why): what a restart's memory check needs to know first.
+int checkpoint_ranks(const std::string& path);
 
 /// Refuse a checkpoint of another talus version or another scene (input Error, one line, naming
 /// the first key that differs), then put its state into `solver` (built from the same scene).

@@ -51,13 +51,15 @@ struct MachineShare {
   int ranks_here = 1;
   bool root_here = true;  // rank 0 runs here
   bool restart = false;   // the run starts from a checkpoint
+  bool restart_reads_own_part = false;  // of as many ranks: each rank reads only its own particles
 };
 
 /// What this machine holds at the run's peak: its ranks' share of the estimate (the slabs split the
 /// particles and the grid about evenly); in a distributed run, on rank 0's machine, the fields of
 /// every particle, which rank 0 gathers for checkpoints and runout rows; and on a distributed
-/// restart, the whole checkpoint and a copy of its particles that each rank here holds while it
-/// takes its own (io/checkpoint.hpp restore_checkpoint).
+/// restart, the checkpoint's particles and a copy of them that each rank here holds while it takes
+/// its own (io/checkpoint.hpp restore_checkpoint): its own part on the saved number of ranks, else
+/// the whole.
 std::size_t bytes_on_this_machine(const Scene& scene, const MemoryEstimate& estimate, const MachineShare& share);
 
 /// Throws input_error (exit code 2) when what this machine holds (bytes_on_this_machine) exceeds the
