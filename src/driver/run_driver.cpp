@@ -226,7 +226,7 @@ class RunLoop {
         resuming_(options.resume != nullptr),
         resumed_in_place_(resuming_ && (options.resume_dir.empty() || same_file(options.resume_dir, options.out_dir))),
         progress_(resuming_ ? *options.resume : RunProgress{}),
-        history_(dir_, resume_step(), comm_.root(), scene_.output.energy_gap_terms), runout_(scene_, dir_, resume_step(), comm_, options.resume_dir),
+        history_(dir_, resume_step(), comm_.root(), scene_.output.energy_gap_terms), runout_(scene_, dir_, resume_step(), comm_, options.resume_dir, progress_.runout_first_row),
         frames_(dir_, scene_.output.compress, progress_, comm_, options.frames_in_background), checkpoint_(dir_),
         history_schedule_{scene_.output.history_interval, progress_.next_history},
         frame_schedule_{scene_.output.frame_interval, progress_.next_frame},
@@ -253,6 +253,7 @@ class RunLoop {
   void write_checkpoint() {
     frames_.complete(solver_);  // a resumed run keeps the frames the checkpoint lists: they must be on disk
     progress_.energy_max_released = energy_guard_.max_released();
+    if (progress_.runout_first_row.empty()) progress_.runout_first_row = runout_.first_row();
     checkpoint_.write(solver_, progress_);
     ++summary_.checkpoints;
   }

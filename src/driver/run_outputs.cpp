@@ -205,7 +205,7 @@ void EnergyHistory::write(const Solver& solver, const EnergyBudget& e) {
 // ---- runout.csv, runout.json, deposit.csv -------------------------------------------------------
 
 RunoutFiles::RunoutFiles(const Scene& scene, const fs::path& dir, std::optional<std::int64_t> resume_step,
-                         const Comm& comm, const fs::path& resume_dir)
+                         const Comm& comm, const fs::path& resume_dir, const std::string& saved_first_row)
     : scene_(scene), dir_(dir), comm_(comm) {
   if (!scene.runout.enabled) return;
   monitor_.emplace(scene.runout, flume_coordinates_of(scene));
@@ -235,10 +235,16 @@ RunoutFiles::RunoutFiles(const Scene& scene, const fs::path& dir, std::optional<
       }
       write_file_atomically(history_path_, runout_csv_header() + "\n");
     }
-    if (first) monitor_->resume(*first, *last);
     // Without a gate_x the runout is measured from the initial front, the first row: a folder
     // that lacks it (a resume of a resume into another folder, runout.csv removed) gave a runout
-    // from a later front, 22% short, without a word. The checkpoint does not hold that row yet.
+    // from a later front, 22% short, without a word. The checkpoint keeps that row; one written
+    // before it did is resumed from the folder's first row, with a warning when that is not the start.
+    const std::optional<RunoutSample> saved = saved_first_row.empty() ? std::nullopt : parse_runout_csv_row(saved_first_row);
+    if (saved) {
+      first = saved;
+      if (!last) last = saved;  // (the front velocity of the first row after the restart is then a mean)
+    }
+    if (first) monitor_->resume(*first, *last);
     if (!scene.runout.has_gate && (!first || first->step > 0))
       fmt::print(stderr, "talus: warning: {} lacks the runout rows from t = 0 (the initial front is the gate when "
                  "diagnostics.runout.gate_x is not set): this run's runout is measured from {}; set gate_x, or "
@@ -249,6 +255,10 @@ RunoutFiles::RunoutFiles(const Scene& scene, const fs::path& dir, std::optional<
   file_.open(history_path_, resume_step ? std::ios::app : std::ios::trunc);
   if (!file_) throw io_error(fmt::format("cannot write {}", history_path_));
   if (!resume_step) file_ << runout_csv_header() << "\n";
+}
+
+std::string RunoutFiles::first_row() const {
+  return monitor_ && monitor_->has_samples() ? runout_csv_row(monitor_->first()) : std::string();
 }
 
 void RunoutFiles::write(const Solver& solver) {

@@ -266,6 +266,7 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
         write_attribute(r, (std::string("initial_") + name).c_str(), value);
       });
       write_attribute(r, "energy_max_released", run.energy_max_released);
+      if (!run.runout_first_row.empty()) write_attribute(r, "runout_first_row", run.runout_first_row);
       write_array(r, "frame_times", run.frame_times);
       write_array(r, "frame_steps", run.frame_steps);
       file.close();
@@ -396,6 +397,8 @@ Checkpoint read_checkpoint(const std::string& path, const Comm& comm) {
       value = read_attribute<double>(r, (std::string("initial_") + name).c_str());
     });
     c.run.energy_max_released = read_attribute<double>(r, "energy_max_released");
+    // absent in checkpoints written before 2026-12-06 and in scenes without runout diagnostics
+    if (r.attrExists("runout_first_row")) c.run.runout_first_row = read_string_attribute(r, "runout_first_row");
     c.run.frame_times = read_array<double>(r, "frame_times");
     c.run.frame_steps = read_array<std::int64_t>(r, "frame_steps");
     check_scalars(c, path);

@@ -5,6 +5,7 @@
 #include "talus/core/error.hpp"
 #include "talus/io/checkpoint.hpp"
 
+#include <H5Cpp.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <fcntl.h>
@@ -13,6 +14,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <map>
 #include <random>
 #include <regex>
 #include <thread>
@@ -404,9 +406,11 @@ TEST(Crash, ResumingADamagedOwnFolderSaysWhatItsOutputsLack) {
 }
 
 // Without diagnostics.runout.gate_x the runout is measured from the initial front, runout.csv's
-// first row: a resume whose folder lacks it (here removed) measured it from the front at the
-// restart, 22% short on a terrain slide, without a word. It is said now; an intact folder says nothing.
-TEST(Crash, ResumingWithoutTheRunoutRowsFromTheStartWarns) {
+// first row: a resume whose folder lacks it (a resume of a resume into another folder, or here a
+// runout.csv removed) measured it from the front at the restart, 22% short on a terrain slide,
+// without a word. The checkpoint keeps that row now (b: the same runout.json as the intact folder
+// a); one written before it did (c: the row removed from the file) warns.
+TEST(Crash, ResumingWithoutTheRunoutRowsFromTheStartKeepsTheGate) {
   const Reference& ref = reference();
   const fs::path root = ref.root / "runout_gate";
   fs::remove_all(root);
@@ -414,14 +418,24 @@ TEST(Crash, ResumingWithoutTheRunoutRowsFromTheStartWarns) {
   std::ofstream(root / "scene.json") << test::small_slide_json(0.4, 0.02, R"(, "diagnostics": { "runout": {} })");
   // (the run keeps its last periodic checkpoint, near its end)
   ASSERT_EQ(run_talus({"run", (root / "scene.json").string(), "--out", (root / "a").string(), "--quiet", "--threads", "1"}), 0);
-  fs::copy(root / "a", root / "b", fs::copy_options::recursive);
-  fs::remove(root / "b" / "runout.csv");
-  for (const char* folder : {"a", "b"}) {
+  for (const char* copy : {"b", "c"}) {
+    fs::copy(root / "a", root / copy, fs::copy_options::recursive);
+    fs::remove(root / copy / "runout.csv");
+  }
+  {
+    H5::H5File file((root / "c" / "checkpoint.h5").string(), H5F_ACC_RDWR);
+    file.openGroup("/run").removeAttr("runout_first_row");
+  }
+  std::map<std::string, std::string> summaries;
+  for (const char* folder : {"a", "b", "c"}) {
     const auto [code, text] = run_captured("run " + (root / "scene.json").string() + " --restart " +
                                            (root / folder / "checkpoint.h5").string() + " --quiet --threads 1");
     EXPECT_EQ(code, 0) << text;
-    EXPECT_EQ(text.find("lacks the runout rows from t = 0") != std::string::npos, std::string(folder) == "b") << text;
+    EXPECT_EQ(text.find("lacks the runout rows from t = 0") != std::string::npos, std::string(folder) == "c") << text;
+    summaries[folder] = test::read_text(root / folder / "runout.json");
   }
+  EXPECT_EQ(summaries["b"], summaries["a"]);
+  EXPECT_NE(summaries["c"], summaries["a"]);  // measured from the front at the restart
 }
 
 // An output folder whose frames/ is a file: one line naming frames/, exit 2, nothing else written

@@ -94,9 +94,14 @@ class RunoutFiles {
   /// In a distributed run the particles are gathered to rank 0, which measures and writes.
   /// `resume_dir`: the checkpoint's folder when a resumed run writes elsewhere (its runout.csv
   /// holds the rows before the checkpoint, which the monitor continues from); empty: `dir`.
+  /// `saved_first_row`: the checkpoint's copy of runout.csv's first row (RunProgress), which
+  /// stands for the folder's when they differ or the folder has none.
   RunoutFiles(const Scene& scene, const std::filesystem::path& dir, std::optional<std::int64_t> resume_step,
-              const Comm& comm = Comm(), const std::filesystem::path& resume_dir = {});
+              const Comm& comm = Comm(), const std::filesystem::path& resume_dir = {},
+              const std::string& saved_first_row = {});
   bool enabled() const { return monitor_.has_value(); }
+  /// runout.csv's first row as the checkpoint keeps it (empty before the first row, and off rank 0).
+  std::string first_row() const;
   /// One row of runout.csv, on the history schedule (collective).
   void write(const Solver& solver);
   /// What finish() wrote: the runout after the last step, and the files' paths.

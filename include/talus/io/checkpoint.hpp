@@ -42,6 +42,10 @@ struct RunProgress {
   double next_checkpoint = 0.0;
   EnergyBudget initial;                    // the energy budget at t = 0
   double energy_max_released = 0.0;        // EnergyGuard state
+  /// runout.csv's first row (io/runout_output.hpp runout_csv_row), the initial front: the gate
+  /// when the scene sets none. Kept here because a folder may lack the rows of the run's start (a
+  /// resume of a resume into another folder). Empty when the scene has no runout diagnostics.
+  std::string runout_first_row;
 };
 
 struct Checkpoint {
