@@ -136,9 +136,20 @@ std::vector<T> read_array_part(const H5::Group& group, const std::string& name, 
 std::string first_difference(const nlohmann::json& saved, const nlohmann::json& current) {
   const nlohmann::json patch = nlohmann::json::diff(saved, current);
   if (patch.empty()) return "";
-  const auto& op = patch.front();
-  std::string path = op.value("path", std::string("/"));
-  return fmt::format("{} ({} in the scene file)", path, op.value("op", std::string("changed")));
+  // A material's model first: it explains the keys that come and go with it (a Drucker-Prager
+  // checkpoint against an elastic scene named /materials/m/cohesion).
+  auto op = patch.begin();
+  for (auto it = patch.begin(); it != patch.end(); ++it) {
+    const std::string path = it->value("path", std::string());
+    if (path.size() >= 6 && path.compare(path.size() - 6, 6, "/model") == 0) {
+      op = it;
+      break;
+    }
+  }
+  const std::string kind = op->value("op", std::string());
+  // (JSON Patch's words, from the checkpoint's scene to this one: "remove" read like an instruction)
+  const char* what = kind == "add" ? "only in this scene" : kind == "remove" ? "only in the checkpoint's scene" : "differs";
+  return fmt::format("{} ({})", op->value("path", std::string("/")), what);
 }
 
 }  // namespace
@@ -408,6 +419,8 @@ Checkpoint read_checkpoint(const std::string& path, const Comm& comm) {
   return c;
 }
 
+namespace {
+
 /// The checkpoint's particles in the scene's layout, after the checks one rank makes alone: the
 /// version, the scene, every array the layout has (and no other) at the particles' count, the body
 /// indices, and the ranks' counts.
@@ -456,11 +469,9 @@ ParticleStore checked_particles(const Solver& solver, const Checkpoint& c, const
   return P;
 }
 
-void restore_checkpoint(Solver& solver, const Checkpoint& c, const std::string& path) {
-  ParticleStore P;
-  // What each rank checks of the file alone; a rank that refuses it must not leave the others
-  // waiting in the restore's collectives (Comm::agree).
-  solver.comm().agree([&] { P = checked_particles(solver, c, path); });
+/// Each rank's particles and state into the solver: on the saved number of ranks bit for bit, on
+/// another number dealt to new slabs (collective).
+void restore_particles(Solver& solver, ParticleStore P, const Checkpoint& c) {
   const Comm& comm = solver.comm();
   const std::size_t saved_ranks = c.rank_particles.empty() ? 1 : c.rank_particles.size();
   if (saved_ranks == static_cast<std::size_t>(comm.size())) {
@@ -498,6 +509,20 @@ void restore_checkpoint(Solver& solver, const Checkpoint& c, const std::string& 
   }
   for (auto& cells : state.sort_cell) cells.clear();
   solver.restore(solver.own_particles(std::move(P)), state, Solver::RestoreSort::Fresh);
+}
+
+}  // namespace
+
+void restore_checkpoint(Solver& solver, const Checkpoint& c, const std::string& path) {
+  ParticleStore P;
+  // What each rank checks of the file alone; a rank that refuses it must not leave the others
+  // waiting in the restore's collectives (Comm::agree).
+  solver.comm().agree([&] { P = checked_particles(solver, c, path); });
+  try {
+    restore_particles(solver, std::move(P), c);
+  } catch (const Error& e) {  // (the solver's checks of the particles do not know the file)
+    throw Error(e.kind(), fmt::format("checkpoint {}: {}", path, e.what()));
+  }
 }
 
 }  // namespace talus
