@@ -65,7 +65,7 @@ void print_warnings(const Scene& scene) {
 
 // What a run would do, from the scene and the memory estimate alone: nothing is seeded or
 // allocated, so this answers at once on any scene (solver/memory_estimate.hpp).
-void print_scene_summary(const Scene& s, const MemoryEstimate& memory) {
+void print_scene_summary(const Scene& s, const MemoryEstimate& memory, const MachineShare& share) {
   const auto& g = s.grid;
   fmt::print("scene      {}{}\n", s.name, s.description.empty() ? "" : " - " + s.description);
   fmt::print("grid       {} x {} x {} cells of {} m, origin ({}, {}, {})\n", g.cells[0], g.cells[1], g.cells[2], g.h,
@@ -83,6 +83,10 @@ void print_scene_summary(const Scene& s, const MemoryEstimate& memory) {
              format_bytes(double(memory.total())), memory.bytes_per_particle, format_bytes(double(memory.grid_bytes)),
              format_bytes(double(memory.grid_bytes_bound)),
              available ? format_bytes(double(*available)) + " available" : "available memory unknown");
+  if (share.ranks > 1)  // (the line above is the whole scene's; the check is of each machine)
+    fmt::print("memory     about {} on this machine ({} of the {} ranks{}), what the check compares\n",
+               format_bytes(double(bytes_on_this_machine(s, memory, share))), share.ranks_here, share.ranks,
+               share.root_here ? ", rank 0 among them, which gathers every particle" : "");
   // (where `talus run` writes by default; --out names another folder)
   const std::string out_dir = "runs/" + s.name;
   fmt::print("disk       {}\n", estimate_disk(s, memory.particles, out_dir).summary(out_dir));
@@ -315,7 +319,11 @@ void add_run_command(CLI::App& app) {
     if (world.root())
       fmt::print("talus: {} particles, {}{} thread{}, {} kernels, about {} of memory{}, output in {}\n", start.particles,
                  world.distributed() ? fmt::format("{} ranks x ", world.size()) : "", threads, threads == 1 ? "" : "s",
-                 active_isa(), format_bytes(double(memory.total())), world.distributed() ? " (all ranks)" : "", dir);
+                 active_isa(), format_bytes(double(memory.total())),
+                 world.distributed() ? fmt::format(" (all ranks; {} on this machine)",
+                                                   format_bytes(double(bytes_on_this_machine(solver.scene(), memory, share))))
+                                     : "",
+                 dir);
     if (world.root() && !world.distributed())
       if (const auto hint = scatter_hint(solver.scene(), solver.cell_sort(), threads)) fmt::print("{}\n", *hint);
     if (world.root()) {
@@ -464,10 +472,13 @@ void add_check_command(CLI::App& app) {
     available_memory();  // a bad TALUS_MEMORY_LIMIT stops here, not halfway through the summary
     Solver::check_ranks(scene, world.size());  // what `mpirun -np N talus run` would refuse
     const MachineShare share = machine_share(world, "");  // (collective)
+    const MemoryEstimate memory = estimate_memory(scene);
+    // every rank checks its machine, as `talus run` does (rank 0 alone said ok where a rank's
+    // smaller machine then refused the run); the refusal comes after the summary on one rank
+    if (world.distributed()) world.agree([&] { require_memory_fits(scene, memory, share); });
     if (!world.root()) return;
     print_warnings(scene);
-    const MemoryEstimate memory = estimate_memory(scene);
-    print_scene_summary(scene, memory);
+    print_scene_summary(scene, memory, share);
     // (check said ok, and the run stopped at once: the default folder held this scene file, or
     // could not be made here)
     try {

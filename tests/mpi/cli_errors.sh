@@ -39,4 +39,25 @@ cat > "$work/mls.json" <<'JSON'
   "bodies": [ { "name": "b", "material": "rubber", "box": { "min": [0.04, 0.04, 0.04], "max": [0.1, 0.1, 0.1] } } ] }
 JSON
 expect_refused mls "solver.smoothing.enabled = true: MLS smoothing is not available in a distributed run"
+# A machine (here the last rank, given less memory) that cannot hold its ranks' share: `run` and
+# `check` both refuse on every rank, once, naming that rank (check said ok on rank 0's word alone)
+cat > "$work/small.json" <<'JSON'
+{ "name": "small", "grid": { "origin": [0, 0, 0], "size": [0.4, 0.2, 0.2], "cell_size": 0.02 },
+  "time": { "end": 0.01 },
+  "materials": { "rubber": { "model": "linear_elastic", "density": 1000, "young": 1e5, "poisson": 0.3 } },
+  "bodies": [ { "name": "b", "material": "rubber", "box": { "min": [0.04, 0.04, 0.04], "max": [0.3, 0.1, 0.1] } } ] }
+JSON
+if [ "$ranks" -ge 2 ]; then
+  for command in check run; do
+    out=(); [ "$command" = run ] && out=(--out "$work/small_out" --quiet)
+    "$mpirun_cmd" --oversubscribe -np $((ranks - 1)) -x TALUS_MEMORY_LIMIT=1G "$talus" $command "$work/small.json" \
+      "${out[@]}" : -np 1 -x TALUS_MEMORY_LIMIT=10k "$talus" $command "$work/small.json" "${out[@]}" > "$work/log" 2>&1
+    rc=$?
+    cat "$work/log"
+    lines=$(grep -c "^talus: error: on rank $((ranks - 1)) of $ranks: scene .* needs about .* on this machine" "$work/log")
+    if [ "$rc" -ne 2 ] || [ "$lines" -ne 1 ] || grep -q "^ok" "$work/log" || [ -e "$work/small_out" ]; then
+      echo "FAIL: $command with a small machine: exit code $rc, $lines refusals"; exit 1
+    fi
+  done
+fi
 echo "ok: one line, exit code 2, nothing written"
