@@ -218,6 +218,15 @@ MemoryEstimate estimate_memory(const Scene& scene, MemoryScope scope) {
   const GhostMapBytes ghosts = ghost_map_bytes(scene, all_tiles);
   e.grid_bytes += ghosts.start;
   e.grid_bytes_bound += ghosts.bound;
+  // The bookkeeping over the whole grid, held from the start: a flag a tile in the grid and in the
+  // sort, and the sort's index of each colour block (a 100 000 x 100 x 100 grid of 64 k particles
+  // held 388 MB against 259 MB estimated without them).
+  const std::size_t block = static_cast<std::size_t>(colour_block_edge(scene));
+  std::size_t all_blocks = 1;
+  for (int d = 0; d < 3; ++d) all_blocks *= (static_cast<std::size_t>(nodes[d]) + block - 1) / block;
+  const std::size_t bookkeeping = 2 * all_tiles + sizeof(std::uint32_t) * all_blocks;
+  e.grid_bytes += bookkeeping;
+  e.grid_bytes_bound += bookkeeping;
   return e;
 }
 
