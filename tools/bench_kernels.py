@@ -15,12 +15,11 @@ import argparse
 import json
 import os
 import re
-import subprocess
 import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from cli_checks import choices_list, require_at_least, require_talus  # noqa: E402
+from cli_checks import choices_list, require_at_least, require_talus, run_or_stop  # noqa: E402
 
 CASES = [  # name, talus bench arguments
     ("shear, B-spline, DP, MUSL", ["--scene", "shear", "--material", "dp", "--shape", "bspline2"]),
@@ -31,11 +30,7 @@ CASES = [  # name, talus bench arguments
 
 
 def run(cmd, env=None):
-    r = subprocess.run(cmd, capture_output=True, text=True, env=env)
-    if r.returncode != 0:  # the program's own error, then one line, not a CalledProcessError
-        print(r.stderr.strip() or r.stdout.strip(), file=sys.stderr)
-        sys.exit(f"bench_kernels.py: {' '.join(cmd)} failed (exit {r.returncode})")
-    return r.stdout
+    return run_or_stop(cmd, os.path.basename(str(cmd[0])), env=env).stdout
 
 
 def vector_paths(talus):

@@ -5,6 +5,7 @@ Only the standard library: the scripts that run without numpy (bench_kernels, co
 check_scene_schema) use it too. They put their own folder on sys.path before importing it.
 """
 import os
+import subprocess
 import sys
 
 
@@ -78,3 +79,17 @@ def choices_list(option, text, allowed):
     if wrong:
         refuse(option, text, f"{wrong[0]} is not one of {', '.join(allowed)}")
     return values
+
+
+def run_or_stop(cmd, what, env=None, keep_stdout=True):
+    """Run a program; when it fails, show its own error (stderr, else stdout) and stop with one line
+    naming `what` and the command (exit 1), not a CalledProcessError traceback. Returns the finished
+    process (stdout as text, or None with keep_stdout False); a success's stderr is passed on."""
+    r = subprocess.run(cmd, env=env, stdout=subprocess.PIPE if keep_stdout else subprocess.DEVNULL,
+                       stderr=subprocess.PIPE, text=True)
+    if r.returncode != 0:
+        print((r.stderr or r.stdout or "").strip(), file=sys.stderr)
+        sys.exit(f"{os.path.basename(sys.argv[0])}: {what} failed (exit {r.returncode}): {' '.join(map(str, cmd))}")
+    if r.stderr:
+        print(r.stderr, end="", file=sys.stderr)
+    return r

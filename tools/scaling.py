@@ -33,12 +33,11 @@ import argparse
 import csv
 import json
 import os
-import subprocess
 import sys
 import tempfile
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 # from cli_checks, not talus_plot: talus_plot imports numpy, which this tool does not need
-from cli_checks import refuse, require_at_least, require_talus  # noqa: E402
+from cli_checks import refuse, require_at_least, require_talus, run_or_stop  # noqa: E402
 import scaling_model  # noqa: E402
 
 
@@ -90,10 +89,7 @@ def bench(talus, particles, threads, steps, extra, record=None):
                "--json", f.name, "--stream"] + extra
         if record:
             cmd += ["--record-work", record, "--record-steps", "3"]
-        # talus's own error line reaches stderr; then one line here, not a CalledProcessError traceback
-        r = subprocess.run(cmd, env=pinned_env(), stdout=subprocess.DEVNULL)
-        if r.returncode != 0:
-            sys.exit(f"{os.path.basename(sys.argv[0])}: talus bench failed (exit {r.returncode}): {' '.join(cmd)}")
+        run_or_stop(cmd, "talus bench", env=pinned_env(), keep_stdout=False)
         return json.load(open(f.name))
 
 

@@ -29,12 +29,11 @@ import argparse
 import json
 import os
 import re
-import subprocess
 import sys
 import tempfile
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 # from cli_checks, not talus_plot: talus_plot imports numpy, which this tool does not need
-from cli_checks import refuse, require_at_least, require_talus  # noqa: E402
+from cli_checks import refuse, require_at_least, require_talus, run_or_stop  # noqa: E402
 import scaling_model  # noqa: E402
 from scaling import add_wait_policy_argument, apply_wait_policy, contention as slowdown, pinned_env, thread_counts  # noqa: E402
 
@@ -46,11 +45,7 @@ def run(talus, scene, threads, workdir, record=None, interval=7):
     cmd = [talus, "run", scene, "--threads", str(threads), "--quiet", "--out", os.path.join(workdir, "out")]
     if record:
         cmd += ["--record-work", record, "--record-interval", str(interval)]
-    r = subprocess.run(cmd, env=pinned_env(), capture_output=True, text=True)
-    if r.returncode != 0:  # talus's own error, then one line: it was a CalledProcessError traceback
-        print(r.stderr.strip() or r.stdout.strip(), file=sys.stderr)
-        sys.exit(f"{os.path.basename(sys.argv[0])}: talus run failed (exit {r.returncode}): {' '.join(cmd)}")
-    out = r.stdout
+    out = run_or_stop(cmd, "talus run", env=pinned_env()).stdout
     m = RATE.search(out)
     if not m:
         sys.exit(f"no rate in the output of {' '.join(cmd)}:\n{out}")

@@ -20,13 +20,12 @@ import argparse
 import json
 import os
 import re
-import subprocess
 import sys
 import tempfile
 import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 # from cli_checks, not talus_plot: talus_plot imports numpy, which this tool does not need
-from cli_checks import refuse, require_at_least, require_folders, require_talus  # noqa: E402
+from cli_checks import refuse, require_at_least, require_folders, require_talus, run_or_stop  # noqa: E402
 import scaling_model  # noqa: E402
 from scaling import add_wait_policy_argument, apply_wait_policy  # noqa: E402
 
@@ -47,9 +46,7 @@ def bench(talus, args, threads, record=None):
         cmd = [talus, "bench", "--threads", str(threads), "--json", f.name] + args
         if record:
             cmd += ["--record-work", record]
-        r = subprocess.run(cmd, env=env(), stdout=subprocess.DEVNULL)
-        if r.returncode != 0:  # talus's error is on stderr; then one line, not a CalledProcessError
-            sys.exit(f"{os.path.basename(sys.argv[0])}: talus bench failed (exit {r.returncode}): {' '.join(cmd)}")
+        run_or_stop(cmd, "talus bench", env=env(), keep_stdout=False)
         return json.load(open(f.name))["particle_updates_per_second"]
 
 
@@ -65,12 +62,10 @@ def run(talus, scene, threads, out, record=None):
     cmd = [talus, "run", scene, "--threads", str(threads), "--quiet", "--out", out]
     if record:
         cmd += ["--record-work", record, "--record-interval", "37"]
-    r = subprocess.run(cmd, env=env(), capture_output=True, text=True)
+    r = run_or_stop(cmd, "talus run", env=env())
     m = re.search(r"done: (\d+) steps .* in ([0-9.]+) s \(([0-9.]+) M particle-updates/s\)", r.stdout)
-    if r.returncode != 0 or not m:
-        print(r.stderr.strip() or r.stdout.strip(), file=sys.stderr)
-        sys.exit(f"{os.path.basename(sys.argv[0])}: talus run failed or printed no rate (exit {r.returncode}): "
-                 f"{' '.join(cmd)}")
+    if not m:
+        sys.exit(f"{os.path.basename(sys.argv[0])}: talus run printed no rate: {' '.join(cmd)}")
     return float(m.group(3)) * 1e6, float(m.group(2))
 
 
