@@ -489,7 +489,7 @@ void add_check_command(CLI::App& app) {
     } catch (const Error& e) {
       fmt::print("note       talus run without --out would stop: {}\n", e.what());
     }
-    require_memory_fits(scene, memory, share);
+    if (!world.distributed()) require_memory_fits(scene, memory, share);  // (under mpirun: checked above, on every rank)
     fmt::print("ok{}\n", world.distributed() ? fmt::format(" (for {} ranks)", world.size()) : "");
   });
 }
