@@ -624,7 +624,8 @@ void record_work(Solver& solver, const BenchOptions& o, const nlohmann::json& be
   meta["scatter"] = to_string(solver.scene().scatter);
   std::ofstream out(o.record_path);
   if (!out) throw io_error(fmt::format("cannot write {}", o.record_path));
-  out << recorder.to_json(meta).dump() << "\n";
+  recorder.write_json(out, meta);
+  if (!out.flush()) throw io_error(fmt::format("writing {} failed (is the disk full?)", o.record_path));
   fmt::print("  work record: {} steps, {}\n", recorder.steps().size(), o.record_path);
 }
 

@@ -246,8 +246,8 @@ void add_run_command(CLI::App& app) {
   CLI::Option* record_work = refuse_empty(cmd->add_option("--record-work", *record_path,
                                "Record the work of every block and parallel region of every --record-interval-th step, "
                                "as JSON (tools/scaling_model.py, docs/performance.md \"Scaling\"); a record keeps at "
-                               "most 1000 steps: past that it keeps every third one and triples the interval, so that "
-                               "it spans the whole run"),
+                               "most 1000 steps and 4 M block entries (about 200 MB): past that it keeps every third "
+                               "step and triples the interval, so that it spans the whole run"),
                "give a file, or leave --record-work out");
   // (given alone it was ignored without a word)
   check_range(cmd->add_option("--record-interval", *record_interval, "Steps between the steps --record-work records"), 1,
@@ -393,7 +393,8 @@ void add_run_command(CLI::App& app) {
       meta["run_particles_end"] = solver.particles().size();
       std::ofstream out(*record_path);
       if (!out) throw io_error(fmt::format("cannot write {}", *record_path));
-      out << recorder->to_json(meta).dump() << "\n";
+      recorder->write_json(out, meta);
+      if (!out.flush()) throw io_error(fmt::format("writing {} failed (is the disk full?)", *record_path));
       fmt::print("talus: work record: {} steps, {}\n", recorder->steps().size(), *record_path);
     }
     if (summary.interrupted_signal || summary.stopped_at_deadline) {

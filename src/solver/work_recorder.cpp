@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdlib>
+#include <ostream>
+#include <string>
 
 namespace talus {
 
@@ -41,6 +43,9 @@ bool WorkRecorder::begin_step(std::int64_t step, std::size_t particles, std::siz
       if (kept != k) steps_[kept] = std::move(steps_[k]);  // a vector moved onto itself would empty
     steps_.resize(kept);
     interval_ *= kThinning;
+    block_entries_ = 0;
+    for (const WorkStep& s : steps_)
+      for (const WorkRegion& r : s.regions) block_entries_ += r.block_seconds.size();
   }
   active_ = !full() && offered % interval_ == 0;
   last_recorded_ = active_;
@@ -99,6 +104,7 @@ void WorkRecorder::add_colour_passes(const char* name, const ColourPassTiming& t
       const std::size_t b = single_pass ? sort.blocks_in_work_order()[bi] : sort.colour(c)[bi];
       r.block_particles[bi] = sort.block_end(b) - sort.block_begin(b);
     }
+    block_entries_ += count;
     steps_.back().regions.push_back(std::move(r));
   }
 }
@@ -125,6 +131,7 @@ void WorkRecorder::add_unit_loop(const char* name, const std::vector<double>& un
   r.seconds = seconds;
   r.block_seconds = unit_seconds;
   r.block_particles = std::move(unit_particles);
+  block_entries_ += r.block_seconds.size();
   steps_.back().regions.push_back(std::move(r));
 }
 
@@ -194,38 +201,41 @@ std::vector<double> WorkRecorder::measure_barrier(int max_threads) {
   });
 }
 
-nlohmann::json WorkRecorder::to_json(const nlohmann::json& meta) const {
+namespace {
+
+nlohmann::json step_to_json(const WorkStep& s) {
+  nlohmann::json js;
+  js["step"] = s.step;
+  js["seconds"] = s.seconds;
+  js["recorder_seconds"] = s.recorder_seconds;
+  js["particles"] = s.particles;
+  js["blocks"] = s.blocks;
+  nlohmann::json regions = nlohmann::json::array();
+  for (const WorkRegion& r : s.regions) {
+    nlohmann::json jr;
+    jr["name"] = r.name;
+    jr["schedule"] = r.schedule == RegionSchedule::Static ? "static" : r.schedule == RegionSchedule::Dynamic ? "dynamic" : "serial";
+    if (r.schedule == RegionSchedule::Dynamic) {
+      jr["chunk"] = r.chunk;
+      jr["block_seconds"] = r.block_seconds;
+      jr["block_particles"] = r.block_particles;
+    }
+    if (r.schedule == RegionSchedule::Static) jr["items"] = r.items;
+    jr["parallel_regions"] = r.parallel_regions;
+    if (r.barriers > 0) jr["barriers"] = r.barriers;
+    jr["seconds"] = r.seconds;
+    regions.push_back(std::move(jr));
+  }
+  js["regions"] = std::move(regions);
+  return js;
+}
+
+}  // namespace
+
+void WorkRecorder::write_json(std::ostream& out, const nlohmann::json& meta) const {
   nlohmann::json j = meta;
   j["format"] = "talus-work-record/1";
   j["record_interval"] = interval_;  // steps between the recorded ones (at the end of a thinned run record)
-  nlohmann::json steps = nlohmann::json::array();
-  for (const WorkStep& s : steps_) {
-    nlohmann::json js;
-    js["step"] = s.step;
-    js["seconds"] = s.seconds;
-    js["recorder_seconds"] = s.recorder_seconds;
-    js["particles"] = s.particles;
-    js["blocks"] = s.blocks;
-    nlohmann::json regions = nlohmann::json::array();
-    for (const WorkRegion& r : s.regions) {
-      nlohmann::json jr;
-      jr["name"] = r.name;
-      jr["schedule"] = r.schedule == RegionSchedule::Static ? "static" : r.schedule == RegionSchedule::Dynamic ? "dynamic" : "serial";
-      if (r.schedule == RegionSchedule::Dynamic) {
-        jr["chunk"] = r.chunk;
-        jr["block_seconds"] = r.block_seconds;
-        jr["block_particles"] = r.block_particles;
-      }
-      if (r.schedule == RegionSchedule::Static) jr["items"] = r.items;
-      jr["parallel_regions"] = r.parallel_regions;
-      if (r.barriers > 0) jr["barriers"] = r.barriers;
-      jr["seconds"] = r.seconds;
-      regions.push_back(std::move(jr));
-    }
-    js["regions"] = std::move(regions);
-    steps.push_back(std::move(js));
-  }
-  j["steps"] = std::move(steps);
   if (totals_.steps > 0) {
     const RunTotals& t = totals_;
     j["run_steps"] = t.steps;
@@ -237,7 +247,12 @@ nlohmann::json WorkRecorder::to_json(const nlohmann::json& meta) const {
     j["run_history_regions"] = t.history_regions;
     j["run_background_seconds"] = t.background_seconds;  // frames written on the writer's thread
   }
-  return j;
+  // The small head as one object, its closing brace replaced by the steps, written one at a time.
+  std::string head = j.dump();
+  head.pop_back();
+  out << head << (j.empty() ? "" : ",") << "\"steps\":[";
+  for (std::size_t k = 0; k < steps_.size(); ++k) out << (k ? "," : "") << step_to_json(steps_[k]);
+  out << "]}\n";
 }
 
 nlohmann::json WorkRecorder::threading_meta() {

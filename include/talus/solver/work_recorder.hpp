@@ -14,6 +14,7 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include <cstdint>
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -55,9 +56,16 @@ enum class RecordSpan {
 class WorkRecorder {
  public:
   /// Record every `interval`-th step that is offered (begin_step), at most `max_steps` of them;
-  /// `span` says what happens when that many are held.
+  /// `span` says what happens when that many are held. A RecordSpan::WholeRun record is full as well
+  /// once it holds kMaxRunBlockEntries block entries, so its memory does not grow with the scene.
   explicit WorkRecorder(int max_steps, int interval = 1, RecordSpan span = RecordSpan::FirstSteps)
       : max_steps_(max_steps), interval_(interval < 1 ? 1 : interval), span_(span) {}
+
+  /// The block entries (one block's seconds and particles in one loop, 12 B, and about 40 B more
+  /// while the record is written as JSON) a run's record holds at most: about 200 MB at its end.
+  /// 1000 steps of the default flume hold 1.4 M; a run of 1 M particles reaches the bound at about
+  /// 250 recorded steps and then keeps 80–250, every third one after each thinning.
+  static constexpr std::size_t kMaxRunBlockEntries = std::size_t(1) << 22;
 
   /// Called by the solver at the start of each step; true when this step is recorded.
   bool begin_step(std::int64_t step, std::size_t particles, std::size_t blocks);
@@ -66,7 +74,12 @@ class WorkRecorder {
   /// Whether the last step offered was recorded (it stays true after end_step, until the next
   /// begin_step): the run loop adds its own time after such a step to it.
   bool last_step_recorded() const { return last_recorded_; }
-  bool full() const { return static_cast<int>(steps_.size()) >= max_steps_; }
+  bool full() const {
+    return static_cast<int>(steps_.size()) >= max_steps_ ||
+           (span_ == RecordSpan::WholeRun && block_entries_ >= kMaxRunBlockEntries);
+  }
+  /// Block entries held (see kMaxRunBlockEntries).
+  std::size_t block_entries() const { return block_entries_; }
   /// Steps between two recorded ones now (tripled at each thinning of a RecordSpan::WholeRun record).
   int interval() const { return interval_; }
 
@@ -122,8 +135,9 @@ class WorkRecorder {
   /// OMP_WAIT_POLICY=PASSIVE (any case): the threads sleep as soon as a region ends.
   static bool passive_wait_policy();
 
-  /// The record as JSON ("format": "talus-work-record/1"); `meta` is merged in.
-  nlohmann::json to_json(const nlohmann::json& meta) const;
+  /// Write the record to `out` as one line of JSON ("format": "talus-work-record/1", `meta` merged in,
+  /// "steps" last), a step at a time: no tree of the whole record, nor a string of it, is held.
+  void write_json(std::ostream& out, const nlohmann::json& meta) const;
 
  private:
   int max_steps_, interval_;
@@ -131,6 +145,7 @@ class WorkRecorder {
   std::int64_t offered_ = 0;
   bool active_ = false, last_recorded_ = false;
   std::vector<WorkStep> steps_;
+  std::size_t block_entries_ = 0;
   RunTotals totals_;
 };
 
