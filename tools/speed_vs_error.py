@@ -141,7 +141,7 @@ def column_metrics(res, b):
     xp, sp = profile(res["x"], res["stress"][:, 0])
     exact = E * (np.sqrt(2 * RHO0 * b * (delta - np.minimum(xp, delta)) / E + 1) - 1)  # Edo & Matsubara 2015, eq. 61
     l2 = math.sqrt(np.sum((sp - exact) ** 2) / np.sum(exact ** 2))
-    rough = math.sqrt(np.mean((sp[2:] - 2 * sp[1:-1] + sp[:-2]) ** 2)) / (RHO0 * b * L0)
+    rough = math.sqrt(np.mean((sp[2:] - 2 * sp[1:-1] + sp[:-2]) ** 2)) / (RHO0 * abs(b) * L0)  # b < 0: compression
     return l2, rough
 
 

@@ -76,7 +76,7 @@ inline ColumnError column_error(const Solver& solver, double E, double rho0, dou
   }
   ColumnError e;
   e.l2 = std::sqrt(num / den);
-  e.roughness = std::sqrt(rough / double(prof.x.size() - 2)) / (rho0 * b * L0);
+  e.roughness = std::sqrt(rough / double(prof.x.size() - 2)) / (rho0 * std::abs(b) * L0);  // b < 0: compression
   return e;
 }
 

@@ -30,18 +30,38 @@ TEST(ElasticBenchmarks, ColumnUnderBodyForceW10000) {
   EXPECT_LT(run_column("column_w10000", ShapeKind::CpGimp).l2, 0.02);  // measured 0.62%
   EXPECT_LT(run_column("column_w10000", ShapeKind::UGimp).l2, 0.02);   // measured 0.62%
   EXPECT_LT(run_column("column_w10000", ShapeKind::Linear).l2, 0.02);  // measured 1.2% (MPM and GIMP match, Edo & Matsubara 2015)
-  // Measured 0.23% with the mirrored ghost nodes at the fixed end (Walls::mirror); 5.4% when the
-  // wall held the ghost node like the wall node (the first two cells over-stiff).
-  EXPECT_LT(run_column("column_w10000", ShapeKind::BSpline2).l2, 0.02);
+  // Measured 0.22% with the mirrored ghost nodes at the fixed end (Walls::mirror); 5.4% when the
+  // wall held the ghost node like the wall node (the first two cells over-stiff). The second bound
+  // is no target: it makes a regression well inside the 2% show.
+  const double bspline = run_column("column_w10000", ShapeKind::BSpline2).l2;
+  EXPECT_LT(bspline, 0.02);
+  EXPECT_LT(bspline, 0.005);
 }
 
-// W = 12500: linear MPM breaks up (cell-crossing jumps between neighbours, Edo & Matsubara 2015, Fig.), GIMP
-// stays smooth.
+// The shipped column_w10000/12500 stretch (b away from the fixed end, Delta > L0 in eq. 62); the
+// paper's Fig. 4 compresses the column (b towards the fixed end, b < 0 in eq. 61-62). The same
+// targets in compression, the paper's own loading: cpGIMP and the B-spline within 2%.
+TEST(ElasticBenchmarks, ColumnUnderBodyForceW10000InCompression) {
+  EXPECT_LT(run_column("column_w10000_compression", ShapeKind::CpGimp).l2, 0.02);    // measured 0.62%
+  EXPECT_LT(run_column("column_w10000_compression", ShapeKind::BSpline2).l2, 0.02);  // measured 0.19%
+  EXPECT_LT(run_column("column_w10000_compression", ShapeKind::Linear).l2, 0.02);    // measured 1.22%
+}
+
+// W = 12500: linear MPM breaks up (cell-crossing jumps between neighbours, Edo & Matsubara 2015, Fig. 6), GIMP
+// stays smooth. Much more so in tension (this mirror) than in the paper's compression.
 TEST(ElasticBenchmarks, ColumnUnderBodyForceW12500LinearIsRoughGimpIsSmooth) {
   const auto linear = run_column("column_w12500", ShapeKind::Linear);
   const auto cpgimp = run_column("column_w12500", ShapeKind::CpGimp);
   EXPECT_GT(linear.roughness, 10 * cpgimp.roughness);  // measured 0.36 vs 0.012
   EXPECT_LT(cpgimp.l2, 0.02);                          // measured 0.58%
+}
+
+TEST(ElasticBenchmarks, ColumnUnderBodyForceW12500InCompressionLinearIsRougherThanGimp) {
+  const auto linear = run_column("column_w12500_compression", ShapeKind::Linear);
+  const auto cpgimp = run_column("column_w12500_compression", ShapeKind::CpGimp);
+  EXPECT_GT(linear.roughness, 5 * cpgimp.roughness);  // measured 0.090 vs 0.012 (7.3x)
+  EXPECT_GT(linear.l2, 0.05);                         // measured 7.2%: the jumps the paper shows
+  EXPECT_LT(cpgimp.l2, 0.02);                         // measured 0.57%
 }
 
 double dynamic_bar_ratio(ShapeKind shape) {
