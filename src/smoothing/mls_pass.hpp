@@ -118,7 +118,7 @@ bool solve_well_conditioned(const double (&A)[T][T], double min_rcond, double (&
   return a_norm * ainv_norm * (2.0 * min_rcond) <= 1.0;  // false for NaN or inf
 }
 
-/// The fit's coefficients a = A^-1 F(0), F(0) = e_0 (Edo & Matsubara 2015, eq. 42, 45), with the
+/// The fit's coefficients a = A^-1 F(0), F(0) = e_0 (Edo & Matsubara 2015, eq. 42, 46), with the
 /// guard: false for a (nearly) singular A. Compiled once (not per target), so every path decides
 /// the guard with the same code.
 template <int T>

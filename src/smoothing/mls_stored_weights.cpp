@@ -1,4 +1,4 @@
-// The stored weights of the `reused` MLS variant: applied (eq. 46 with the kept Phi) and carried
+// The stored weights of the `reused` MLS variant: applied (eq. 45 with the kept Phi) and carried
 // over a sort. The apply is compiled once per instruction set by Highway's foreach_target and
 // dispatched at run time (core/simd_dispatch.hpp): a particle's six increments are one row of 8
 // doubles (a vector of 8 on every path: one AVX-512 register, two AVX2 or four SSE2 registers), so

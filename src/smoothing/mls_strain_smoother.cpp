@@ -228,8 +228,8 @@ template <int T>
 
 /// Smooth the n <= kGroup particles p[] (of smoothed bodies) together (Edo & Matsubara 2015,
 /// eq. 42-46). Pass 1 sums, per lane, A = sum_I W_I F(u_I) F(u_I)^T (eq. 42) over every candidate
-/// I, W_I = 0 outside the lane's ball or body; each lane then solves a = A^-1 e_0 (eq. 45, the
-/// guard); pass 2 sums d_eps_p = sum_I W_I (a^T F(u_I)) d_eps_I (eq. 46, a^T B d_eps per candidate).
+/// I, W_I = 0 outside the lane's ball or body; each lane then solves a = A^-1 e_0 (eq. 46, the
+/// guard); pass 2 sums d_eps_p = sum_I W_I (a^T F(u_I)) d_eps_I (eq. 45, a^T B d_eps per candidate).
 /// Outside a lane's ball W_I = 0 and F(u_I) is finite, so the term is a zero that leaves the sum
 /// unchanged. In pass 2 that holds while the candidates' inputs are finite; a non-finite input
 /// makes every lane's sum non-finite, and pass 2 is then redone with the terms outside the ball
@@ -300,7 +300,7 @@ void smooth_group(GroupScratch& S, const std::int64_t* idx, std::size_t nc, cons
     if (!ok[v])
       for (int r = 0; r < T; ++r) a[r][v] = 0.0;
   }
-  // Pass 2: Phi_I = W_I a^T F(u_I) (eq. 45) times the candidates' increments (eq. 46).
+  // Pass 2: Phi_I = W_I a^T F(u_I) (eq. 46) times the candidates' increments (eq. 45).
   Lanes sum[6] = {};
   const double* in[6];
   for (int c = 0; c < 6; ++c) in[c] = pass.in[c];

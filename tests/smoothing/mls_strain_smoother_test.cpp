@@ -128,11 +128,11 @@ double worst_difference_from_brute_force(const Cloud& c, const MlsStrainSmoother
     }
     Eigen::LLT<Eigen::Matrix<double, 10, 10>> llt(A);
     if (nb.size() < 10 || llt.info() != Eigen::Success || llt.rcond() < 1e-7) continue;  // stay clear of the guard
-    const Eigen::RowVectorXd phi = F(p).transpose() * llt.solve(B);  // eq. 45
+    const Eigen::RowVectorXd phi = F(p).transpose() * llt.solve(B);  // eq. 46
     EXPECT_NEAR(phi.sum(), 1.0, 1e-9);  // partition of unity (the constant is in the basis)
     for (int k = 0; k < 6; ++k) {
       double ref = 0.0;
-      for (std::size_t I = 0; I < nb.size(); ++I) ref += phi[I] * c.in[k][nb[I]];  // eq. 46
+      for (std::size_t I = 0; I < nb.size(); ++I) ref += phi[I] * c.in[k][nb[I]];  // eq. 45
       worst = std::max(worst, std::abs(c.out[k][p] - ref));
     }
     ++compared;

@@ -1,5 +1,5 @@
 #pragma once
-// MlsStoredWeights: the per-particle fits' weights Phi_I (Edo & Matsubara 2015, eq. 45) kept from
+// MlsStoredWeights: the per-particle fits' weights Phi_I (Edo & Matsubara 2015, eq. 46) kept from
 // one smoothing pass, so that later steps can smooth with them without fitting again (the
 // `reused` variant, MlsVariant::Reused). Smoothing with the stored weights gives, bit for bit,
 // what the particle fit gives at the positions the weights were fitted at: each particle's entries
@@ -27,7 +27,7 @@ class MlsStoredWeights {
  public:
   static constexpr std::size_t kSegmentEntries = std::size_t{1} << 16;  // 768 kB a segment
 
-  /// Particle p's entries: its neighbours (store indices) and their Phi = W_I a^T F(u_I) (eq. 45).
+  /// Particle p's entries: its neighbours (store indices) and their Phi = W_I a^T F(u_I) (eq. 46).
   struct Entries {
     const std::uint32_t* neighbour;
     const double* phi;
@@ -61,7 +61,7 @@ class MlsStoredWeights {
     s.used += written;
   }
 
-  /// out[c][p] = sum over p's entries of phi * in[c][neighbour] (eq. 46), or in[c][p] where p has
+  /// out[c][p] = sum over p's entries of phi * in[c][neighbour] (eq. 45), or in[c][p] where p has
   /// none. Parallel over particles; the same bits for any thread count and on every path.
   /// `smooth_body` marks the particles the guard counts (MlsCounts::unsmoothed) when they keep their
   /// own. `rows` is scratch (the increments as rows of 8 doubles; kept by the caller between calls).

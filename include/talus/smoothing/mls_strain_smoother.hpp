@@ -4,8 +4,8 @@
 // (Edo & Matsubara 2015, eq. 54). For particle p with the n neighbours I of its body within the radius h:
 //   A   = sum_I W(r_I, h) F(u_I) F(u_I)^T                         (eq. 42)
 //   B   = [W_1 F(u_1), ..., W_n F(u_n)]                           (eq. 43)
-//   Phi_I = F(u_p)^T (A^-1 B)_{:,I}                               (eq. 45, 46)
-//   d_eps_p <- sum_I Phi_I d_eps_I                                (eq. 46, each of the 6 components)
+//   Phi_I = F(u_p)^T (A^-1 B)_{:,I}                               (eq. 46)
+//   d_eps_p <- sum_I Phi_I d_eps_I                                (eq. 45, each of the 6 components)
 // with u_I = (x_I - x_p) / h: positions relative to the particle, scaled by the radius, so A is
 // well scaled and F(u_p) = F(0) = e_0. Then d_eps_p = a^T sum_I W_I F(u_I) d_eps_I with a = A^-1 e_0:
 // one factorisation of A per particle serves all six components.
