@@ -6,6 +6,8 @@
 #include "talus/shape/gimp.hpp"
 #include "talus/shape/linear.hpp"
 
+#include "terrain_warnings.hpp"
+
 #include <fmt/core.h>
 
 #include <algorithm>
@@ -125,6 +127,7 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
         "the column (1.2 s) and the sliding block (docs/verification.md, \"MLS radius\")",
         radius, kMlsStableRadiusFactor));
   for (std::string& w : seeding_warnings(scene.grid, scene.bodies, body_label(scene))) warnings.push_back(std::move(w));
+  for (std::string& w : terrain_warnings(scene.grid, scene.courant)) warnings.push_back(std::move(w));
   // Two boxes that share a volume seed it twice: twice the mass there, particles on top of each other.
   // (Prisms are left out: their bounding boxes may overlap where the prisms do not.)
   for (std::size_t a = 0; a < scene.bodies.size(); ++a)

@@ -70,6 +70,41 @@ TEST(SceneJson, RunoutEveryStepIsWarnedAbout) {
   EXPECT_FALSE(warned(replace_once(runout, "\"time\"", "\"output\": { \"history_interval\": 0.01 }, \"time\"")));
 }
 
+// A bed so steep that the sheared cells no longer bound the Courant step, and a profile finer than
+// the cells (the runout would be measured along a longer bed than the particles slide on): warned
+// about; the shipped terrains are not.
+TEST(SceneJson, SteepOrFinelyDetailedTerrainsAreWarnedAbout) {
+  const Scene incline = read_scene_file(std::string(TALUS_SOURCE_DIR) + "/inputs/terrain/incline30_coarse.json");
+  const auto warned = [&](const std::vector<std::array<double, 2>>& points, double courant, const std::string& what) {
+    Scene s = incline;
+    s.grid.terrain.points = points;
+    s.grid.terrain.radii.clear();
+    s.courant = courant;
+    return test::warnings_with(s, what);
+  };
+  const auto plane = [](double degrees) {
+    return std::vector<std::array<double, 2>>{{0.0, 8.0 * std::tan(degrees * M_PI / 180.0)}, {8.0, 0.0}};
+  };
+  const std::string steep = "the bed slopes at";
+  EXPECT_EQ(warned(plane(30.0), 0.3, steep), 0);
+  EXPECT_EQ(warned(plane(78.0), 0.3, steep), 0);   // courant / cos = 1.44: the block slid as it should
+  EXPECT_EQ(warned(plane(80.0), 0.3, steep), 1);   // 1.73: it gained energy and stopped
+  EXPECT_EQ(warned(plane(80.0), 0.15, steep), 0);  // 0.86
+  // A no-data value (-9999) in a profile is a step of nearly 90 degrees.
+  EXPECT_EQ(warned({{0.0, 2.0}, {4.0, -9999.0}, {4.1, 1.0}, {8.0, 0.0}}, 0.3, "a no-data value or a step"), 1);
+  // Ripples of 2 cm every 0.1 m on a 30-degree plane, cell 0.25 m: 18% more bed than the grid resolves.
+  std::vector<std::array<double, 2>> ripples;
+  for (int i = 0; i <= 320; ++i) {
+    const double x = 0.025 * i;
+    ripples.push_back({x, (8.0 - x) * std::tan(M_PI / 6.0) + ((i % 4 == 1) ? 0.02 : (i % 4 == 3) ? -0.02 : 0.0)});
+  }
+  EXPECT_EQ(warned(ripples, 0.3, "more detail than grid.cell_size"), 1);
+  EXPECT_EQ(warned(plane(30.0), 0.3, "more detail than grid.cell_size"), 0);
+  for (const char* name : {"denlinger_flume.json", "terrain/slope_to_runout_linear.json", "terrain/incline30_fine.json"})
+    EXPECT_EQ(test::warnings_with(read_scene_file(std::string(TALUS_SOURCE_DIR) + "/inputs/" + name), "grid.terrain"), 0)
+        << name;
+}
+
 // Two boxes sharing a volume seed it twice: warned about; boxes that only touch are not.
 TEST(SceneJson, OverlappingBoxesAreWarnedAbout) {
   const auto warnings_of = [](const std::string& second_box) {

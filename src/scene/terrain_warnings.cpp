@@ -1,0 +1,78 @@
+#include "terrain_warnings.hpp"
+
+#include "talus/grid/terrain_profile.hpp"
+
+#include <fmt/core.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace talus {
+
+namespace {
+
+constexpr double kDegrees = 180.0 / std::numbers::pi;
+/// courant / cos(theta) above which a terrain is warned about: between the 1.44 that held and the
+/// 1.73 that did not (terrain_warnings).
+constexpr double kShearedCourantLimit = 1.5;
+
+/// The steepest straight segment of the profile: the transitions between segments are never
+/// steeper than the segments they join.
+struct Steepest {
+  double slope = 0.0;  // |dz/dx|
+  int first = 0;       // points[first] to points[first + 1]
+};
+
+Steepest steepest_segment(const TerrainSpec& terrain) {
+  Steepest s;
+  for (std::size_t i = 0; i + 1 < terrain.points.size(); ++i) {
+    const auto& a = terrain.points[i];
+    const auto& b = terrain.points[i + 1];
+    const double k = std::abs((b[1] - a[1]) / (b[0] - a[0]));
+    if (k > s.slope) s = {k, static_cast<int>(i)};
+  }
+  return s;
+}
+
+}  // namespace
+
+std::vector<std::string> terrain_warnings(const GridGeometry& grid, double courant) {
+  std::vector<std::string> warnings;
+  if (!grid.has_terrain()) return warnings;
+  // The cells shear with the bed: across its floor a cell is h cos(theta) high, and the step that
+  // h bounds at solver.courant is courant / cos(theta) of the step the sheared cell bounds. An elastic
+  // block (inputs/terrain/incline30_coarse.json's, mu 0.3) slid down a 78-degree bed (courant 0.3:
+  // 1.44) within 0.2% of the rigid block; on an 80-degree bed (1.73) it gained energy and stopped
+  // after 32 steps, and a flume at 80 degrees ran to its end 2% further than at courant 0.15.
+  const Steepest steep = steepest_segment(grid.terrain);
+  const double cos_theta = 1.0 / std::sqrt(1.0 + steep.slope * steep.slope);
+  if (courant / cos_theta > kShearedCourantLimit)
+    warnings.push_back(fmt::format(
+        "grid.terrain.points[{}] to points[{}]: the bed slopes at {:.4g} degrees{}; the cells shear with it to {:.3g} h "
+        "across their floors, and solver.courant = {} is {:.3g} times the Courant step of such a cell. Runs at 1.44 held and "
+        "at 1.73 gained energy and stopped (docs/theory.md, \"How steep\"): lower solver.courant to {:.2g} or less",
+        steep.first, steep.first + 1, std::atan(steep.slope) * kDegrees,
+        steep.slope > 57.0 ? " (a no-data value or a step in the profile?)" : "", cos_theta, courant,
+        courant / cos_theta, cos_theta));
+  // The particles slide on the profile sampled at the node columns (the chords between them); the
+  // runout diagnostics measure s along the profile itself. Ripples finer than the cells made the
+  // measured runout 18% longer than the resolved bed with the same motion.
+  const TerrainProfile profile(grid.terrain);
+  const double x0 = grid.origin[0], h = grid.h;
+  double profile_length = 0.0, resolved_length = 0.0;
+  for (int i = 0; i < grid.cells[0]; ++i) {
+    const double a = x0 + i * h, b = a + h;
+    profile_length += profile.arc_length(b) - profile.arc_length(a);
+    resolved_length += std::hypot(h, profile.height(b) - profile.height(a));
+  }
+  if (profile_length > 1.01 * resolved_length)
+    warnings.push_back(fmt::format(
+        "grid.terrain has more detail than grid.cell_size = {} m resolves: over the grid the profile is {:.1f}% longer "
+        "than the bed the grid samples at its node columns, on which the particles slide; the runout diagnostics "
+        "measure s along the profile, so their distances come out that much longer. Sample the profile no finer "
+        "than the cells, or refine the grid",
+        h, 100.0 * (profile_length / resolved_length - 1.0)));
+  return warnings;
+}
+
+}  // namespace talus
