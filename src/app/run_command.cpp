@@ -425,7 +425,9 @@ void add_run_command(CLI::App& app) {
                  "{} particles migrated, {:.3g} MB of node sums exchanged ({:.3g} kB a step)\n",
                  end.ranks, end.max_imbalance, end.rebalances, end.migrated, end.exchange_bytes / 1e6,
                  taken > 0 ? end.exchange_bytes / 1e3 / taken : 0.0);
-    fmt::print("talus: energy budget closes to {:.3e} of the initial energy\n", summary.energy_budget_gap());
+    fmt::print("talus: energy budget closes to {:.3e} of the energy available ({:.4g} J of {:.4g} J: the initial kinetic "
+               "and strain energy and the potential energy released)\n",
+               summary.energy_budget_gap(), summary.energy_budget_gap_joules(), summary.energy_scale());
     if (solver.scene().output.energy_gap_terms) {
       // the parts of that gap (docs/theory.md, "Where the budget's gap comes from"), on the same scale
       const EnergyGapParts p = energy_gap_parts(summary.initial, summary.final, summary.final_gap);

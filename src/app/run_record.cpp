@@ -137,7 +137,10 @@ void RunRecord::end(const Solver& solver, const RunSummary& summary, const RunEn
     end["checkpoint"] = summary.checkpoint_path;
   } else {
     if (solver.emptied()) end["every_particle_left"] = true;
-    end["energy_budget_gap"] = summary.energy_budget_gap();  // as the run's last lines print it
+    // as the run's last lines print it: of the energy available, and the two in joules
+    end["energy_budget_gap"] = summary.energy_budget_gap();
+    end["energy_budget_gap_joules"] = summary.energy_budget_gap_joules();
+    end["energy_available_joules"] = summary.energy_scale();
   }
   end["outflow_particles"] = counts.outflow_particles;
   if (comm_.root()) write();

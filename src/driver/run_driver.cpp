@@ -487,6 +487,7 @@ void RunLoop::finish() {
   summary_.wall_seconds = progress_line_.elapsed();
   recording_.finish(summary_.wall_seconds, frames_.background_seconds());
   summary_.final = solver_.energies();
+  summary_.energy_available = energy_guard_.available();  // (the guard is kept on rank 0, which reports)
   if (scene_.output.energy_gap_terms) summary_.final_gap = solver_.energy_gap_terms();
   summary_.frames_in_series = frames_.listed();
 }
