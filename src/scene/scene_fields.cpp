@@ -377,7 +377,7 @@ Fields<MuIParameters> mu_i_fields() {
                 {.domain_checked = true}),
       number<P>("grain_diameter", TALUS_AT(grain_diameter), {0.0, kHuge, true}, "d in I = γ̇ᵖ d / √(p/ρs)",
                 {.unit = "m", .domain_checked = true}),
-      number<P>("grain_density", TALUS_AT(grain_density), {0.0, kHuge, true}, "ρs, the density of the grains (not of the packing: that is `density`)",
+      number<P>("grain_density", TALUS_AT(grain_density), {0.0, kHuge, true}, "ρs, the density of the grains (not of the packing: that is `density`, which may not exceed it)",
                 {.unit = "kg/m³", .domain_checked = true}),
   };
 }
@@ -419,6 +419,12 @@ Table<MaterialSpec> make_material_table() {
              m.mu_i.young = m.elastic.young;
              m.mu_i.poisson = m.elastic.poisson;
              with_key_path(r.path() + ".", [&] { (void)MuI(m.mu_i); });
+             // The solid fraction density / grain_density sets the Bagnold scaling (docs/mu-i.md); above 1
+             // it describes no packing (a density of 1600 with grains of 1000 was accepted).
+             if (m.density > m.mu_i.grain_density)
+               throw input_error(fmt::format("{}.density = {} is above grain_density = {}: a packing cannot be denser than "
+                                             "its grains (solid fraction density / grain_density <= 1)",
+                                             r.path(), m.density, m.mu_i.grain_density));
            },
            mu_i),
        number<M>("flowing_plastic_strain", TALUS_AT(granular.flowing_plastic_strain), {0.0, kHuge},

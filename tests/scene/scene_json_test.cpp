@@ -117,6 +117,14 @@ TEST(SceneJson, OverlappingBoxesAreWarnedAbout) {
   EXPECT_EQ(warnings_of(R"({ "min": [0.5, 0.2, 0.2], "max": [0.8, 0.5, 0.5] })"), 0);  // touching
 }
 
+// A μ(I) packing denser than its grains (solid fraction above 1) is no packing: refused.
+TEST(SceneJson, MuIPackingDenserThanItsGrainsIsRefused) {
+  const std::string mu_i = replace_once(kMinimal, "\"poisson\": 0.3", "\"poisson\": 0.3, \"model\": \"mu_i\", \"grain_density\": 2450");
+  EXPECT_NO_THROW(parse_scene(mu_i, "t"));
+  test::expect_variant_error(mu_i, "\"grain_density\": 2450", "\"grain_density\": 100",
+                             "materials.m.density = 1000 is above grain_density = 100: a packing cannot be denser");
+}
+
 TEST(SceneJson, BadInputNamesTheKeyAndTheRange) {
   const std::string ok = kMinimal;
   test::expect_variant_error(ok, "\"poisson\": 0.3", "\"poisson\": 0.5", "materials.m.poisson = 0.5 is outside the allowed range (-1, 0.5)");

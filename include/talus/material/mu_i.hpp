@@ -45,7 +45,7 @@ struct MuIParameters {
 
 struct MuIResult {
   /// Energy dissipated per unit volume in this increment [J/m^3]: flowing (>= 0),
-  /// (tau_tr + tau)/2 gdot_p dt (= the elastic energy the return removes); disconnected,
+  /// tau gdot_p dt with the returned tau (as Drucker-Prager counts it; docs/mu-i.md sec. 3); disconnected,
   /// E(sigma_n) + sigma_n : d_eps (what the step's work left of the stored energy; may be < 0 by
   /// the explicit step's second-order error).
   double plastic_work = 0.0;
