@@ -168,8 +168,8 @@ void Solver::size_scratch() {
 // An open face lets material leave: a particle that has crossed one (it is past the face after
 // this step's move) is removed, so sand can fall off the open side of a flume. The energy it
 // carries (kinetic, stored strain, gravitational, as in energies()) and its mass are added to the
-// outflow, so the energy budget still closes. The CFL guard (at most max_step_displacement = 1
-// cell per step) keeps a particle inside the 2 ghost cells until it is removed.
+// outflow, so the energy budget still closes. G2P does not ask a leaving particle's next support to
+// fit in the padded arrays (it has none): it may pass the 2 ghost cells when max_step_displacement > 1.
 bool Solver::beyond_open_face(std::size_t p) const {
   const ParticleStore& P = particles_;
   const double point[3] = {P.x[0][p], P.x[1][p], grid_.w_of(P.x[0][p], P.x[2][p])};  // w on a terrain grid

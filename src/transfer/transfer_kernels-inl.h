@@ -511,7 +511,12 @@ void gather_blocks(ParticleStore& P, const CellSort& sort, Grid& grid, const std
         inside = inside && cell[d] - Shape::kReachLow >= 0 && cell[d] + Shape::kReachHigh < nodes[d];
       }
       // After the move x_p = x_p + displacement: exactly next[] (the same sum, then wrapped), in (x, y, w).
-      crossing = crossing || options.beyond_open_face(next);
+      // A particle past an open face leaves with this step (Solver::remove_outflow) and needs no next
+      // support: with guards.max_step_displacement above 1 cell a wide shape's support could pass the
+      // padded arrays there, and the step stopped with "left the grid" instead of counting the outflow.
+      const bool leaving = options.beyond_open_face(next);
+      inside = inside || leaving;
+      crossing = crossing || leaving;
       const double d2 = disp[0][p] * disp[0][p] + disp[1][p] * disp[1][p] + disp[2][p] * disp[2][p];
       large = large || d2 > max_d2;
       largest_d2 = d2 > largest_d2 ? d2 : largest_d2;  // a NaN is reported as nonfinite instead
