@@ -134,7 +134,7 @@ std::vector<unsigned char> Comm::gather_bytes(const void* data, std::size_t byte
   counts.assign(size_, 0);
   MPI_Gather(&mine, 1, MPI_INT64_T, counts.data(), 1, MPI_INT64_T, 0, MPI_COMM_WORLD);
   // Point-to-point rather than MPI_Gatherv, whose int counts limit a rank's share to 2 GB.
-  constexpr std::int64_t kChunk = std::numeric_limits<int>::max() / 2;
+  constexpr std::int64_t kChunk = kMaxMessageBytes;
   if (rank_ == 0) {
     std::int64_t total = 0;
     for (std::int64_t c : counts) total += c;
@@ -162,26 +162,45 @@ std::vector<unsigned char> Comm::gather_bytes(const void* data, std::size_t byte
 
 std::vector<std::vector<unsigned char>> Comm::exchange(const std::vector<int>& send_to,
                                                        const std::vector<std::vector<unsigned char>>& to_peer,
-                                                       const std::vector<int>& receive_from) const {
+                                                       const std::vector<int>& receive_from,
+                                                       std::int64_t piece_bytes) const {
   std::vector<std::vector<unsigned char>> received(receive_from.size());
 #ifdef TALUS_HAVE_MPI
   if (send_to.empty() && receive_from.empty()) return received;
-  std::vector<MPI_Request> sends(send_to.size());
-  for (std::size_t i = 0; i < send_to.size(); ++i)
-    MPI_Isend(to_peer[i].data(), static_cast<int>(to_peer[i].size()), MPI_BYTE, send_to[i], kExchangeTag, MPI_COMM_WORLD,
-              &sends[i]);
+  // MPI counts are ints: a buffer goes in pieces of piece_bytes, the last one shorter (empty when the
+  // size is a multiple), so a receiver reads until a short piece. Messages between two ranks on one
+  // tag arrive in the order they were sent. (One message of a migration of more than about 10 M
+  // particles to one neighbour passed 2 GB, and its count wrapped.)
+  const std::int64_t piece = std::clamp<std::int64_t>(piece_bytes, 1, kMaxMessageBytes);
+  std::vector<MPI_Request> sends;
+  for (std::size_t i = 0; i < send_to.size(); ++i) {
+    const auto size = static_cast<std::int64_t>(to_peer[i].size());
+    for (std::int64_t done = 0;; done += piece) {
+      const std::int64_t n = std::min(piece, size - done);
+      sends.emplace_back();
+      MPI_Isend(to_peer[i].data() + done, static_cast<int>(n), MPI_BYTE, send_to[i], kExchangeTag, MPI_COMM_WORLD,
+                &sends.back());
+      if (n < piece) break;
+    }
+  }
   for (std::size_t i = 0; i < receive_from.size(); ++i) {
-    MPI_Status status;
-    MPI_Probe(receive_from[i], kExchangeTag, MPI_COMM_WORLD, &status);
-    int count = 0;
-    MPI_Get_count(&status, MPI_BYTE, &count);
-    received[i].resize(static_cast<std::size_t>(count));
-    MPI_Recv(received[i].data(), count, MPI_BYTE, receive_from[i], kExchangeTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    for (;;) {
+      MPI_Status status;
+      MPI_Probe(receive_from[i], kExchangeTag, MPI_COMM_WORLD, &status);
+      int count = 0;
+      MPI_Get_count(&status, MPI_BYTE, &count);
+      const std::size_t at = received[i].size();
+      received[i].resize(at + static_cast<std::size_t>(count));
+      MPI_Recv(received[i].data() + at, count, MPI_BYTE, receive_from[i], kExchangeTag, MPI_COMM_WORLD,
+               MPI_STATUS_IGNORE);
+      if (count < piece) break;
+    }
   }
   MPI_Waitall(static_cast<int>(sends.size()), sends.data(), MPI_STATUSES_IGNORE);
 #else
   (void)send_to;
   (void)to_peer;
+  (void)piece_bytes;
 #endif
   return received;
 }

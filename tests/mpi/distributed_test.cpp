@@ -174,6 +174,29 @@ struct SharedFolder {
   }
 };
 
+// Comm::exchange sends a buffer in pieces of at most piece_bytes (MPI's counts are ints: a message of
+// more than 2 GB wrapped). Pieces of 7 bytes, buffers of 0 to 40 bytes (multiples of 7 among them),
+// every rank to every rank including itself: what arrives is what was sent.
+TEST(Distributed, ExchangeSendsBuffersInPieces) {
+  const int size = world().size(), rank = world().rank();
+  const auto buffer = [](int from, int to) {
+    std::vector<unsigned char> b(static_cast<std::size_t>((7 * from + 5 * to) % 41));
+    for (std::size_t k = 0; k < b.size(); ++k) b[k] = static_cast<unsigned char>(31 * from + 17 * to + k);
+    return b;
+  };
+  std::vector<int> peers;
+  std::vector<std::vector<unsigned char>> out;
+  for (int r = 0; r < size; ++r) {
+    peers.push_back(r);
+    out.push_back(buffer(rank, r));
+  }
+  for (const std::int64_t piece : {std::int64_t(7), std::int64_t(1), Comm::kMaxMessageBytes}) {
+    const auto in = world().exchange(peers, out, peers, piece);
+    ASSERT_EQ(in.size(), peers.size());
+    for (int r = 0; r < size; ++r) EXPECT_EQ(in[r], buffer(r, rank)) << "from " << r << ", pieces of " << piece;
+  }
+}
+
 // The distributed run against the serial one of the same scene, which every rank also runs alone:
 // the same particles, and mass, momentum, energies and positions equal to round-off.
 TEST(Distributed, MatchesTheSerialRunToRoundOff) {

@@ -12,6 +12,7 @@
 // "Distributed runs").
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <cstring>
 #include <functional>
 #include <string>
@@ -80,10 +81,14 @@ class Comm {
   }
   /// The same with lists that need not be symmetric: send to_peer[i] to send_to[i], and return what
   /// each rank of receive_from sent (in that order). Each rank's send_to must list exactly the ranks
-  /// whose receive_from lists it.
+  /// whose receive_from lists it. A buffer of any size goes in messages of at most `piece_bytes`
+  /// (MPI counts are ints; tests pass small pieces, every rank the same).
   std::vector<std::vector<unsigned char>> exchange(const std::vector<int>& send_to,
                                                    const std::vector<std::vector<unsigned char>>& to_peer,
-                                                   const std::vector<int>& receive_from) const;
+                                                   const std::vector<int>& receive_from,
+                                                   std::int64_t piece_bytes = kMaxMessageBytes) const;
+  /// The largest message the point-to-point calls send: half of MPI's int count.
+  static constexpr std::int64_t kMaxMessageBytes = std::numeric_limits<int>::max() / 2;
   /// All-to-all of one count per rank: out[r] is what rank r put at this rank's index.
   std::vector<std::int64_t> alltoall(const std::vector<std::int64_t>& per_rank) const;
 
