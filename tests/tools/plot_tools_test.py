@@ -7,7 +7,10 @@ generator's refusals and the column collapse's initial half-width.
 """
 import json
 import os
+import shutil
+import subprocess
 import sys
+import tempfile
 import unittest
 
 import matplotlib
@@ -26,6 +29,12 @@ TALUS = None  # the program, from the command line
 def scene(path):
     with open(os.path.join(ROOT, path)) as f:
         return json.load(f)
+
+
+def tool(name, *args):
+    r = subprocess.run([sys.executable, os.path.join(TOOLS, name), *map(str, args)], capture_output=True,
+                       text=True, timeout=120)
+    return r.returncode, r.stdout, r.stderr
 
 
 class BagnoldPlot(unittest.TestCase):
@@ -47,6 +56,66 @@ class BagnoldPlot(unittest.TestCase):
         plot_bagnold.draw_profiles(ax, setup, [{"cells": 2, "z": z, "u": setup.u(z), "surface": 0.0, "l2": 0.0}])
         self.assertEqual(ax.get_xlim()[0], 0.0)
         plt.close(fig)
+
+
+
+class FlumeDepositProfile(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.work = tempfile.mkdtemp(prefix="talus_plot_tools_")
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.work, ignore_errors=True)
+
+    def test_the_band_follows_a_deposit_away_from_y_0(self):
+        # elastic_block_slide's grid starts at y = 0, the block spans 0.1..0.3: the band |y| <= one
+        # cell held no mass and the profile was a zero line labelled "(1 rows)"
+        s = scene("inputs/elastic_block_slide.json")
+        s["time"]["end"] = 0.02
+        s["output"]["frame_interval"] = 0.02
+        s["diagnostics"] = {"runout": {"deposit_cell": 0.04}}
+        path, run = os.path.join(self.work, "block.json"), os.path.join(self.work, "block")
+        with open(path, "w") as f:
+            json.dump(s, f)
+        subprocess.run([TALUS, "run", path, "--out", run, "--threads", "1", "--quiet"], check=True, timeout=120)
+        code, out, err = tool("plot_flume.py", run, "--out", os.path.join(self.work, "plots"))
+        self.assertEqual(code, 0, err)
+        self.assertNotIn("warning", err)
+        import plot_flume
+        from talus_plot import read_csv_columns
+        d = read_csv_columns(os.path.join(run, "deposit.csv"))
+        ys = np.unique(d["y"])
+        thickness = d["thickness"].reshape(len(np.unique(d["s"])), len(ys))
+        centre = plot_flume.band_centre(read_csv_columns(os.path.join(run, "runout.csv")), ys, thickness)
+        self.assertAlmostEqual(centre, 0.2, places=6)  # the block's centre, from runout.csv's centre_y
+        band, cell = plot_flume.centre_line_band(ys, centre)
+        self.assertEqual(list(ys[band]), [0.18, 0.22])
+        self.assertGreater(thickness[:, band].mean(axis=1).max(), 0.1)  # the block's 0.2 m, not a zero line
+        self.assertEqual(plot_flume.band_text(centre, cell, band), "|y - 0.2| <= 0.04 m (2 rows)")
+        # without centre_y (an older runout.csv) the deposit's own centre
+        self.assertAlmostEqual(plot_flume.band_centre({}, ys, thickness), 0.2, places=6)
+
+    def test_one_row_and_a_band_without_deposit_are_said(self):
+        import plot_flume
+        self.assertEqual(plot_flume.band_text(0.0, 0.04, np.array([False, True, False])), "|y| <= 0.04 m (1 row)")
+        # two strips either side of the centre line: the mass centre's band holds nothing, and the tool says so
+        run = os.path.join(self.work, "strips")
+        os.makedirs(run)
+        with open(os.path.join(run, "scene.json"), "w") as f:
+            json.dump({"name": "strips"}, f)
+        with open(os.path.join(run, "runout.csv"), "w") as f:
+            f.write("time,front,tail,s_max,centre_s,centre_y,centre_velocity_s,front_velocity\n"
+                    "0,1,0,1,0.5,0,0,0\n1,1,0,1,0.5,0,0,0\n")
+        with open(os.path.join(run, "deposit.csv"), "w") as f:
+            f.write("s,y,x,thickness\n")
+            for s_ in (0.5, 1.5):
+                for y in (-2.0, -1.0, 0.0, 1.0, 2.0):
+                    f.write(f"{s_},{y},{s_},{0.1 if abs(y) == 2.0 else 0.0}\n")
+        code, out, err = tool("plot_flume.py", run)
+        self.assertEqual(code, 0, err)
+        self.assertEqual(len(err.strip().splitlines()), 1, err)
+        self.assertIn("warning: the deposit profile's band (|y| <= 1 m (3 rows)) holds no deposit", err)
 
 
 if __name__ == "__main__":
