@@ -118,6 +118,20 @@ class FlumeDepositProfile(unittest.TestCase):
         self.assertIn("warning: the deposit profile's band (|y| <= 1 m (3 rows)) holds no deposit", err)
 
 
+
+class TerrainRigidAnswers(unittest.TestCase):
+    def test_each_incline_run_is_quoted_its_own_friction_and_rigid_travel(self):
+        # the mu = 0.7 run was quoted "(rigid mu = 0.3: 2.2957 m)"; a rigid block sticks when mu >= tan theta
+        import plot_terrain
+        stick = scene("inputs/terrain/incline30_stick.json")
+        self.assertEqual(plot_terrain.rigid_incline(stick, 1.5)[0], 0.7)
+        self.assertEqual(plot_terrain.rigid_incline(stick, 1.5)[2], 0.0)
+        self.assertEqual(plot_terrain.rigid_text(stick, 1.5), "rigid mu = 0.7 >= tan 30, sticks: 0.0000 m")
+        for name in ("incline30_coarse", "incline30_fine", "incline30_flat_rotated_gravity"):  # eq. 22, as before
+            self.assertEqual(plot_terrain.rigid_text(scene(f"inputs/terrain/{name}.json"), 1.5),
+                             "rigid mu = 0.3: 2.2957 m", name)
+
+
 if __name__ == "__main__":
     if len(sys.argv) < 2:
         sys.exit("usage: plot_tools_test.py TALUS")
