@@ -132,6 +132,38 @@ class TerrainRigidAnswers(unittest.TestCase):
                              "rigid mu = 0.3: 2.2957 m", name)
 
 
+
+class FlumeSceneRefusals(unittest.TestCase):
+    def test_a_scene_talus_would_refuse_or_a_changed_height_is_refused_in_one_line(self):
+        # --height 0.1 was raised to 0.275 without a word; --slope 89 and --width 0.1 wrote scenes talus refused
+        for args, naming in ((["--height", "0.1"], "--height 0.1: give at least 0.2682 m"),
+                             (["--slope", "89"], "--slope 89: give more than 0 and at most 81.15 degrees"),
+                             (["--width", "0.1"], "--width 0.1: give at least the wedge's width (--wedge-width 0.2)")):
+            code, out, err = tool("make_flume_scene.py", *args)
+            self.assertEqual((code, out), (2, ""), err)
+            self.assertEqual(len(err.strip().splitlines()), 1, err)
+            self.assertIn(naming, err)
+
+    def test_the_limits_given_are_scenes_talus_accepts(self):
+        work = tempfile.mkdtemp(prefix="talus_flume_scene_")
+        try:
+            for args in (["--height", "0.2682"], ["--slope", "81.15"], ["--width", "0.2"], ["--slope", "45"]):
+                code, out, err = tool("make_flume_scene.py", *args)
+                self.assertEqual(code, 0, err)
+                path = os.path.join(work, "scene.json")
+                with open(path, "w") as f:
+                    f.write(out)
+                r = subprocess.run([TALUS, "check", path], capture_output=True, text=True, timeout=60)
+                self.assertEqual(r.returncode, 0, f"{args}: {r.stderr}")
+                if args[0] == "--slope":  # no --height: the default 0.3, raised to 1.5 x the wedge's height
+                    self.assertGreater(json.loads(out)["grid"]["size"][2], 0.3)
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+        code, out, err = tool("make_flume_scene.py")  # the defaults: the shipped scene, byte for byte
+        with open(os.path.join(ROOT, "inputs", "denlinger_flume.json")) as f:
+            self.assertEqual(out, f.read())
+
+
 if __name__ == "__main__":
     if len(sys.argv) < 2:
         sys.exit("usage: plot_tools_test.py TALUS")
