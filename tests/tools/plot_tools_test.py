@@ -164,6 +164,37 @@ class FlumeSceneRefusals(unittest.TestCase):
             self.assertEqual(out, f.read())
 
 
+
+class ColumnCollapseExtents(unittest.TestCase):
+    def test_the_initial_half_width_is_the_box_and_the_front_its_particle_edge(self):
+        # particle centres gave "initial half-width 0.099 m" for the 0.1 m column
+        work = tempfile.mkdtemp(prefix="talus_column_collapse_")
+        try:
+            s = scene("inputs/column_collapse_2d.json")
+            s["time"]["end"] = 0.01
+            s["output"]["frame_interval"] = 0.01
+            path, run = os.path.join(work, "column.json"), os.path.join(work, "column")
+            with open(path, "w") as f:
+                json.dump(s, f)
+            subprocess.run([TALUS, "run", path, "--out", run, "--threads", "1", "--quiet"], check=True, timeout=120)
+            code, out, err = tool("plot_column_collapse.py", "--run-dir", run, "--out", work)
+            self.assertEqual(code, 0, err)
+            self.assertIn("initial half-width 0.1000 m (the body's box)", out)
+            self.assertIn("the outermost particle centre + half a particle spacing, 0.00125 m", out)
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+        import plot_column_collapse
+        centres = np.array([0.00125, 0.09875])  # 2 particles per 5 mm cell
+        s = scene("inputs/column_collapse_2d.json")
+        width, how, front, half = plot_column_collapse.column_extents(s, centres, centres + 0.2)
+        self.assertEqual((width, how), (0.1, "the body's box"))
+        self.assertAlmostEqual(front, 0.3, places=12)
+        del s["bodies"][0]["box"]  # no box: the initial column's particle edge, as the front's
+        width, how, front, half = plot_column_collapse.column_extents(s, centres, centres + 0.2)
+        self.assertAlmostEqual(width, 0.1, places=12)
+        self.assertEqual((how, half), ("outermost particle centre + half a particle spacing", 0.00125))
+
+
 if __name__ == "__main__":
     if len(sys.argv) < 2:
         sys.exit("usage: plot_tools_test.py TALUS")
