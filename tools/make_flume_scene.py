@@ -21,7 +21,13 @@ The grid follows the terrain (third coordinate w = z - z_b(x), the z- face is th
 import argparse
 import json
 import math
+import os
 import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for cli_checks, next to this script
+from cli_checks import refuse  # noqa: E402
+
+DEFAULT_HEIGHT = 0.3
 
 
 def material(a):
@@ -39,6 +45,36 @@ def material(a):
     if a.separation_volume_ratio != 1.5:  # the default scenes leave talus's default unnamed, as they always did
         sand["separation_volume_ratio"] = a.separation_volume_ratio
     return sand
+
+
+def wedge_height(a):
+    """The wedge's height above the bed at the top of the gate (x = C_x), which the grid's height must
+    exceed 1.5 times (build()'s w_top)."""
+    t = math.radians(a.slope)
+    return a.wedge_length * math.tan(t) / math.cos(t)
+
+
+def wedge_overhang(a, slope):
+    """How far the wedge's top at the gate (C) lies beyond the end of build()'s grid along x [m]
+    (negative: inside). C moves down-flume as the slope steepens: from about 81 degrees on (the
+    default lengths) it lies beyond the runout plane, and talus refuses the scene."""
+    t = math.radians(slope)
+    h = a.cell
+    tangent = a.radius * math.tan(t / 2)
+    along = a.slope_length + tangent
+    end_x = along * math.cos(t) + tangent + a.runout_length
+    x0 = math.floor(-(a.wedge_length + a.headroom) * math.cos(t) / h) * h
+    x1 = x0 + math.ceil((end_x - x0) / h - 1e-9) * h
+    return a.wedge_length * math.tan(t) * math.sin(t) - x1
+
+
+def steepest_slope(a):
+    """The steepest slope [deg] whose wedge lies inside build()'s grid (bisection; 2 decimals, down)."""
+    lo, hi = 0.0, 90.0 - 1e-9
+    for _ in range(60):
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if wedge_overhang(a, mid) <= 0 else (lo, mid)
+    return math.floor(lo * 100) / 100
 
 
 def build(a):
@@ -59,7 +95,7 @@ def build(a):
     B = (ax - a.wedge_length * math.cos(t), az + a.wedge_length * math.sin(t))
     C = (ax + d * math.sin(t), az + d * math.cos(t))
     w_top = d / math.cos(t)                              # the wedge's height above the bed at x = C_x
-    nw = math.ceil(max(a.height, 1.5 * w_top) / h - 1e-9)
+    nw = math.ceil(max(a.height, 1.5 * w_top) / h - 1e-9)  # (main refuses a --height below 1.5 w_top)
     ny = math.ceil(a.width / h - 1e-9)
     r6 = lambda v: round(v, 6)
     mu = math.tan(math.radians(a.bed_friction))
@@ -153,7 +189,9 @@ def main():
     p.add_argument("--wedge-length", type=float, default=0.25, help="wedge length along the bed [m]")
     p.add_argument("--wedge-width", type=float, default=0.2, help="wedge width [m]")
     p.add_argument("--headroom", type=float, default=0.1, help="slope behind the wedge [m]")
-    p.add_argument("--height", type=float, default=0.3, help="grid height above the bed [m] (at least 1.5x the wedge)")
+    p.add_argument("--height", type=float, default=None,
+                   help=f"grid height above the bed [m] (default {DEFAULT_HEIGHT}, raised to 1.5x the wedge's height "
+                        "above the bed at the gate where that is more; a smaller --height is refused)")
     p.add_argument("--cell", type=float, default=0.0125, help="cell size [m]")
     p.add_argument("--particles-per-cell", type=int, default=2, help="n: n^3 particles per cell")
     p.add_argument("--end", type=float, default=4.0, help="end time [s]")
@@ -171,6 +209,8 @@ def main():
     a = p.parse_args()
     # (--cell 0 divided by zero; negative sizes wrote scenes that talus refused)
     for option in ("wedge_width", "height", "cell", "end", "frame_interval"):
+        if option == "height" and a.height is None:
+            continue
         if not getattr(a, option) > 0:
             p.error(f"--{option.replace('_', '-')} = {getattr(a, option)} must be positive")
     if not 0 < a.slope < 90:  # (0, 90 and beyond wrote scenes that talus refused)
@@ -179,6 +219,19 @@ def main():
         p.error(f"--separation-volume-ratio = {a.separation_volume_ratio} must be above 1, or 0 (off)")
     if a.particles_per_cell < 1:
         p.error(f"--particles-per-cell = {a.particles_per_cell} must be at least 1")
+    # (each of these wrote a scene: a lower --height was raised without a word, a plane narrower than
+    # the wedge and a wedge beyond the grid's end were refused by talus)
+    if a.width < a.wedge_width - 1e-9:
+        refuse("--width", f"{a.width:g}", f"give at least the wedge's width (--wedge-width {a.wedge_width:g}) in m")
+    if not a.flat_slope and wedge_overhang(a, a.slope) > 0:
+        refuse("--slope", f"{a.slope:g}", f"give more than 0 and at most {steepest_slope(a):g} degrees with these "
+               "lengths: steeper, the wedge's top at the gate lies beyond the end of the runout plane")
+    least = 1.5 * wedge_height(a)
+    if a.height is None:
+        a.height = max(DEFAULT_HEIGHT, least)
+    elif a.height < least - 1e-9:
+        refuse("--height", f"{a.height:g}", f"give at least {math.ceil(least * 1e4) / 1e4:g} m, 1.5 x the wedge's height above the bed "
+               f"at the gate ({wedge_height(a):.4g} m for --slope {a.slope:g}, --wedge-length {a.wedge_length:g})")
     scene = flat_slope(a) if a.flat_slope else build(a)
     # One line per key below the top level keeps the file short and diffable.
     lines = [f'  {json.dumps(k)}: {json.dumps(v)}' for k, v in scene.items()]

@@ -94,6 +94,32 @@ def errors(setup, z, u):
     return u[-1] / a[-1] - 1.0, math.sqrt(np.mean((u - a) ** 2) / np.mean(a ** 2))
 
 
+MARKERS = ["s", "o", "^", "D"]
+
+
+def draw_profiles(ax, setup, results):
+    """The profiles panel: the analytic profile and each run's rows. The u axis starts at 0 unless a
+    row is slower: the lowest row, a quarter cell above the base, carries a FLIP velocity of about
+    -u_a (docs/mu-i.md sec. 8), and an axis cut at 0 hid it."""
+    zf = np.linspace(0.0, setup.h, 200)
+    ax.plot(setup.u(zf), zf / setup.h, "k-", lw=1.4, label="Bagnold profile (GDR MiDi 2004)")
+    for k, r in enumerate(results):
+        ax.plot(r["u"], r["z"] / setup.h, MARKERS[k % 4], ms=4, mfc="none", color=f"C{k}",
+                label=f"talus, {r['cells']} cells over h: surface {100 * r['surface']:+.1f}%, L2 {100 * r['l2']:.1f}%")
+    ax.set_xlabel("velocity along the slope u [m/s]")
+    ax.set_ylabel("z / h")
+    ax.set_ylim(0, 1.05)
+    lowest = min([0.0] + [float(np.min(r["u"])) for r in results])
+    if lowest < 0.0:  # room for the rows below 0, and the line u = 0
+        ax.axvline(0.0, color="0.6", lw=0.6)
+        ax.set_xlim(lowest - 0.03 * (float(setup.u(setup.h)) - lowest), None)
+    else:
+        ax.set_xlim(0, None)
+    ax.legend(loc="upper left", fontsize=7.5)
+    ax.set_title(f"μ(I) layer on a rough incline, θ = {math.degrees(setup.theta):.0f}°, h = {setup.h / setup.m['grain_diameter']:.0f} d",
+                 fontsize=10)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--talus", default=os.path.join(ROOT, "build", "talus"))
@@ -142,22 +168,10 @@ def main():
                                "l2_error": f"{r['l2']:.5f}"} for r in results])
 
     fig, (ax, ax_t) = plt.subplots(1, 2, figsize=(10.5, 4.6), gridspec_kw={"width_ratios": [1, 1.25]})
-    zf = np.linspace(0.0, setup.h, 200)
-    ax.plot(setup.u(zf), zf / setup.h, "k-", lw=1.4, label="Bagnold profile (GDR MiDi 2004)")
-    markers = ["s", "o", "^", "D"]
-    for k, r in enumerate(results):
-        ax.plot(r["u"], r["z"] / setup.h, markers[k % 4], ms=4, mfc="none", color=f"C{k}",
-                label=f"talus, {r['cells']} cells over h: surface {100 * r['surface']:+.1f}%, L2 {100 * r['l2']:.1f}%")
-    ax.set_xlabel("velocity along the slope u [m/s]")
-    ax.set_ylabel("z / h")
-    ax.set_ylim(0, 1.05)
-    ax.set_xlim(0, None)
-    ax.legend(loc="upper left", fontsize=7.5)
-    ax.set_title(f"μ(I) layer on a rough incline, θ = {math.degrees(setup.theta):.0f}°, h = {setup.h / setup.m['grain_diameter']:.0f} d",
-                 fontsize=10)
+    draw_profiles(ax, setup, results)
     for k, r in enumerate(results):
         t = [x[0] for x in r["history"]]
-        ax_t.plot(t, [100 * x[1] for x in r["history"]], "-" + markers[k % 4], ms=3, color=f"C{k}",
+        ax_t.plot(t, [100 * x[1] for x in r["history"]], "-" + MARKERS[k % 4], ms=3, color=f"C{k}",
                   label=f"surface row, {r['cells']} cells")
         ax_t.plot(t, [100 * x[2] for x in r["history"]], ":", color=f"C{k}", label=f"L2, {r['cells']} cells")
     for y in (-3, 3):

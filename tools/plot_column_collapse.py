@@ -4,7 +4,10 @@
 Runs inputs/column_collapse_2d.json with talus (or reads an existing run folder) and writes
   docs/verification/column_collapse_energy.png   energy terms / released potential energy vs time, and
                                                  the budget error's parts (output.energy_gap_terms)
-  docs/verification/column_collapse_deposit.png  initial column and final deposit (x, z)
+  docs/verification/column_collapse_deposit.png  initial column and final deposit (x, z); its title and
+                                                 the last line give the front (the outermost particle
+                                                 centre + half a particle spacing) and the initial
+                                                 half-width (the body's box)
 Usage: /usr/bin/python3 tools/plot_column_collapse.py --talus build/talus [--run-dir DIR]
 """
 import argparse
@@ -24,6 +27,20 @@ from talus_plot import ROOT, read_vtu, run_talus, series_frames  # noqa: E402
 def read_frame_xz(path):
     xyz = read_vtu(path)["points"]
     return xyz[:, 0], xyz[:, 2]
+
+
+def column_extents(scene, x_initial, x_final):
+    """(initial half-width, how it was measured, front, half a particle spacing) along x. The initial
+    half-width is the body's box (max x; the symmetry wall is x = 0), else the outermost particle
+    centre + half a particle spacing; the front is the outermost particle centre + half a particle
+    spacing, the same edge. (Centres alone gave 0.099 m for the 0.1 m column, short by the half spacing.)"""
+    body = (scene.get("bodies") or [{}])[0]
+    half = 0.5 * scene["grid"]["cell_size"] / body.get("particles_per_cell", 2) if "grid" in scene else 0.0
+    if "box" in body:
+        initial, how = float(body["box"]["max"][0]), "the body's box"
+    else:
+        initial, how = float(np.max(x_initial)) + half, "outermost particle centre + half a particle spacing"
+    return initial, how, float(np.max(x_final)) + half, half
 
 
 def main():
@@ -78,17 +95,23 @@ def main():
     frames = series_frames(run)
     x0, z0 = read_frame_xz(frames[0][1])
     x1, z1 = read_frame_xz(frames[-1][1])
+    scene_path = os.path.join(run, "scene.json")  # the scene the run ran (talus writes it)
+    if not os.path.isfile(scene_path):
+        scene_path = os.path.join(ROOT, "inputs", "column_collapse_2d.json")
+    with open(scene_path) as f:
+        half_width, how, front, half = column_extents(json.load(f), x0, x1)
     fig, ax = plt.subplots(figsize=(7, 3.2))
     ax.scatter(x0, z0, s=1, c="0.7", label="initial column")
     ax.scatter(x1, z1, s=1, c="tab:brown", label="deposit")
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("z [m]")
-    ax.set_title(f"Column collapse: runout {x1.max():.3f} m (initial half-width {x0.max():.3f} m)")
+    ax.set_title(f"Column collapse: front {front:.3f} m (initial half-width {half_width:.3f} m)")
     ax.legend(fontsize=8, markerscale=6)
     fig.tight_layout()
     fig.savefig(os.path.join(args.out, "column_collapse_deposit.png"), dpi=120)
-    print(f"runout {x1.max():.4f} m, final height {z1.max():.4f} m")
+    print(f"runout: front {front:.4f} m (the outermost particle centre + half a particle spacing, {half:.5f} m), "
+          f"initial half-width {half_width:.4f} m ({how}); final height {z1.max():.4f} m (the top particle centre)")
 
 
 if __name__ == "__main__":

@@ -4,7 +4,8 @@
 Reads RUN_DIR/runout.csv, runout.json, deposit.csv and scene.json (written by `talus run` for a
 scene with diagnostics.runout) and writes into RUN_DIR (or --out):
   front_tail.png       front, tail and centre of mass along the flume vs time, and the front velocity
-  deposit_profile.png  deposit thickness along the centre line (y = 0) vs s, gate and runout plane marked
+  deposit_profile.png  deposit thickness along the centre line vs s (the rows within one cell of the
+                       mass centre's y), gate and runout plane marked
   deposit_map.png      plan-view thickness map in (s, y)
 Usage: /usr/bin/python3 tools/plot_flume.py runs/denlinger_flume [--out DIR]
 """
@@ -30,6 +31,38 @@ def reference_s(run_dir, runout):
     with open(path) as f:
         r = json.load(f)
     return r["gate_s"], r.get("runout_plane_s")
+
+
+def band_centre(runout, y_values, thickness):
+    """The y the deposit profile is centred on: the mass centre's y at the last row of runout.csv
+    that has one (centre_y; nan once every particle has left), else the deposit's volume-weighted y,
+    else 0. (A band fixed at y = 0 held no deposit in a scene whose grid starts at y = 0.)"""
+    centre_y = runout.get("centre_y")
+    if centre_y is not None:
+        finite = np.asarray(centre_y, dtype=float)
+        finite = finite[np.isfinite(finite)]
+        if finite.size:
+            return float(finite[-1])
+    per_y = thickness.sum(axis=0)
+    return float((per_y * y_values).sum() / per_y.sum()) if per_y.sum() > 0 else 0.0
+
+
+def centre_line_band(y_values, centre):
+    """The raster rows whose centres lie within one cell of y = centre (the nearest row if none), and
+    the cell's width in y."""
+    dy_cell = y_values[1] - y_values[0] if len(y_values) > 1 else 1.0
+    distance = np.abs(y_values - centre)
+    band = distance <= dy_cell * (1 + 1e-9)
+    if not band.any():
+        band = distance == distance.min()
+    return band, dy_cell
+
+
+def band_text(centre, dy_cell, band):
+    """'|y - 0.2| <= 0.04 m (2 rows)'; '|y|' for a centre within round-off of 0."""
+    y = "|y|" if abs(centre) < 1e-6 * dy_cell else f"|y - {centre:.3g}|"
+    rows = int(band.sum())
+    return f"{y} <= {dy_cell:.3g} m ({rows} row{'' if rows == 1 else 's'})"
 
 
 def main():
@@ -81,14 +114,15 @@ def main():
     s_values = np.unique(d["s"])
     y_values = np.unique(d["y"])
     thickness = d["thickness"].reshape(len(s_values), len(y_values))  # rows of constant s
-    # The centre line: the mean of the raster rows whose centres lie within one cell of y = 0.
-    dy_cell = y_values[1] - y_values[0] if len(y_values) > 1 else 1.0
-    band = np.abs(y_values) <= dy_cell * (1 + 1e-9)
-    if not band.any():
-        band = np.abs(y_values) == np.abs(y_values).min()
+    centre = band_centre(runout, y_values, thickness)
+    band, dy_cell = centre_line_band(y_values, centre)
+    profile = thickness[:, band].mean(axis=1)
+    if thickness.any() and not profile.any():
+        print(f"plot_flume.py: warning: the deposit profile's band ({band_text(centre, dy_cell, band)}) holds no "
+              "deposit: deposit_profile.png shows a zero line", file=sys.stderr)
     fig, ax = plt.subplots(figsize=(7, 3.2))
-    ax.plot(s_values, thickness[:, band].mean(axis=1) * 1000, drawstyle="steps-mid",
-            label=f"current volume: mean over |y| <= {dy_cell:.3g} m ({band.sum()} rows)")
+    ax.plot(s_values, profile * 1000, drawstyle="steps-mid",
+            label=f"current volume: mean over {band_text(centre, dy_cell, band)}")
     if "thickness_seeded" in d:  # the same mass at its seeded density (docs/flume.md "The sand loosens")
         seeded = d["thickness_seeded"].reshape(len(s_values), len(y_values))
         ax.plot(s_values, seeded[:, band].mean(axis=1) * 1000, drawstyle="steps-mid", color="C2",

@@ -12,6 +12,7 @@ and prints the measured numbers (docs/verification.md "Terrain").
 Usage: /usr/bin/python3 tools/plot_terrain.py --talus build/talus [--runs runs/terrain] [--reuse]
 """
 import argparse
+import json
 import math
 import os
 import sys
@@ -51,6 +52,39 @@ def centre_track(run_dir):
     return t, c - c[0], f
 
 
+def scene_of(run_dir, name):
+    """The scene a run ran (its scene.json), else the input file."""
+    path = os.path.join(run_dir, "scene.json")
+    if not os.path.isfile(path):
+        path = os.path.join(ROOT, "inputs", "terrain", name + ".json")
+    with open(path) as f:
+        return json.load(f)
+
+
+def rigid_incline(scene, t):
+    """(mu, theta, horizontal travel at t) of a rigid block released from rest on the scene's plane:
+    mu the bed's friction coefficient (z-), theta the terrain's slope, else the tilt of the gravity
+    (flat grid, x along the slope). Eq. 22 while it slides; 0 when it sticks (mu >= tan theta)."""
+    mu = scene["boundaries"]["z-"]["friction_coefficient"]
+    terrain = scene["grid"].get("terrain")
+    if terrain:
+        (x0, z0), (x1, z1) = terrain["points"][:2]
+        theta = math.atan2(abs(z1 - z0), x1 - x0)
+    else:
+        g = scene["gravity"]
+        theta = math.atan2(abs(g[0]), -g[2])
+    if mu >= math.tan(theta):
+        return mu, theta, 0.0
+    return mu, theta, G * (math.sin(theta) - mu * math.cos(theta)) * math.cos(theta) * t ** 2 / 2
+
+
+def rigid_text(scene, t):
+    """The rigid answer a run's line quotes, with the run's own friction coefficient."""
+    mu, theta, travel = rigid_incline(scene, t)
+    state = f" >= tan {math.degrees(theta):.0f}, sticks" if travel == 0.0 else ""
+    return f"rigid mu = {mu:g}{state}: {travel:.4f} m"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--talus", default=os.path.join(ROOT, "build", "talus"))
@@ -82,16 +116,16 @@ def main():
     fig, ax = plt.subplots(figsize=(6.5, 4))
     tr = np.linspace(0, 2.0, 200)
     ax.plot(tr, G * (math.sin(THETA) - mu * math.cos(THETA)) * math.cos(THETA) * tr ** 2 / 2, "k-", lw=3, alpha=0.3,
-            label="rigid block (eq. 22)")
-    rigid = G * (math.sin(THETA) - mu * math.cos(THETA)) * math.cos(THETA) * 1.5 ** 2 / 2
+            label=f"rigid block, mu = {mu} (eq. 22)")
     for name, label, scale, style in (("incline30_coarse", "terrain grid, h = 0.25", 1.0, "o-"),
                                       ("incline30_fine", "terrain grid, h = 0.125", 1.0, "s--"),
                                       ("incline30_flat_rotated_gravity", "flat grid, rotated gravity", math.cos(THETA), "^:"),
                                       ("incline30_stick", "terrain grid, mu = 0.7 (sticks)", 1.0, "x-")):
-        t, c, _ = centre_track(run(args, name))
+        rd = run(args, name)
+        t, c, _ = centre_track(rd)
         ax.plot(t, c[:, 0] * scale, style, ms=3, label=label)
         i = np.argmin(np.abs(t - 1.5))
-        print(f"{name}: horizontal travel at t = {t[i]:.2f} s {c[i, 0] * scale:.4f} m (rigid mu = 0.3: {rigid:.4f} m)")
+        print(f"{name}: horizontal travel at t = {t[i]:.2f} s {c[i, 0] * scale:.4f} m ({rigid_text(scene_of(rd, name), t[i])})")
     finish_axes(ax, "time [s]", "horizontal travel of the centre [m]", "Block on a 30-degree plane from rest", fontsize=8)
     save_figure(fig, os.path.join(args.out, "terrain_incline30.png"), 120)
 
