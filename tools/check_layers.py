@@ -4,14 +4,19 @@ own layer and of the layers below it, never of a layer above it. The order comes
 (TALUS_LAYERS, lowest first), which passes it here; ctest runs this as Layers.NoUpwardIncludes.
 
 A file's layer is its folder: src/<layer>/... or include/talus/<layer>/...; an include names the
-layer of the header it pulls in: "talus/<layer>/...". Exit 1 with one line per offending include.
+layer of the header it pulls in: "talus/<layer>/..." or <talus/<layer>/...>, or a private header of
+src/, "<layer>/..." (when <layer> is one of the layers; "hwy/...", "fmt/..." are not). Exit 1 with
+one line per offending include.
 """
 import argparse
 import pathlib
 import re
 import sys
 
-INCLUDE = re.compile(r'^\s*#\s*include\s*"talus/([a-z_]+)/[^"]+"', re.MULTILINE)
+# "talus/<layer>/..." and <talus/<layer>/...>: the name must be a layer
+INCLUDE = re.compile(r'^\s*#\s*include\s*(?:"talus/([a-z_]+)/[^"]+"|<talus/([a-z_]+)/[^>]+>)', re.MULTILINE)
+# "<name>/...": a private header of src/<name>/ when <name> is a layer (else another library's)
+PRIVATE_INCLUDE = re.compile(r'^\s*#\s*include\s*"([a-z_]+)/[^"]+"', re.MULTILINE)
 
 
 def layer_of(path: pathlib.Path, root: pathlib.Path):
@@ -36,9 +41,11 @@ def violations(root: pathlib.Path, layers):
             found.append(f"{path.relative_to(root)}: folder '{layer}' is not a layer (add it to TALUS_LAYERS)")
             continue
         text = path.read_text(encoding="utf-8")
-        for match in INCLUDE.finditer(text):
-            target = match.group(1)
-            line = text.count("\n", 0, match.start()) + 1
+        matches = [(m.group(1) or m.group(2), m.start()) for m in INCLUDE.finditer(text)]
+        matches += [(m.group(1), m.start()) for m in PRIVATE_INCLUDE.finditer(text)
+                    if m.group(1) in rank and m.group(1) != "talus"]
+        for target, start in sorted(matches, key=lambda t: t[1]):
+            line = text.count("\n", 0, start) + 1
             if target not in rank:
                 found.append(f"{path.relative_to(root)}:{line}: includes talus/{target}/, which is not a layer")
             elif rank[target] > rank[layer]:
