@@ -148,13 +148,13 @@ double BodyMaterials::update_particle(const Body& body, ParticleStore& P, std::s
   const double w_yz = inc.spin[0][k], w_xz = inc.spin[1][k], w_xy = inc.spin[2][k];
   double dissipated = 0.0;
   P.volume[p] *= 1.0 + trace(de);  // Edo & Matsubara 2015, eq. 35: rho_new = rho / (1 + tr d_eps)
-  if (body.model == MaterialModel::LinearElastic) {
-    rotate_objectively(s, w_yz, w_xz, w_xy);  // Jaumann rate, Hughes-Winget
-    body.elastic.add_increment(s, de);        // Edo & Matsubara 2015, eq. 34
-  } else if (body.model == MaterialModel::DruckerPrager) {
-    dissipated = update_drucker_prager(body, P, p, s, de, w_yz, w_xz, w_xy);
-  } else {
-    dissipated = update_mu_i(body, P, p, s, de, w_yz, w_xz, w_xy, dt);
+  switch (body.model) {  // no default: -Wswitch names a model added without its update
+    case MaterialModel::LinearElastic:
+      rotate_objectively(s, w_yz, w_xz, w_xy);  // Jaumann rate, Hughes-Winget
+      body.elastic.add_increment(s, de);        // Edo & Matsubara 2015, eq. 34
+      break;
+    case MaterialModel::DruckerPrager: dissipated = update_drucker_prager(body, P, p, s, de, w_yz, w_xz, w_xy); break;
+    case MaterialModel::MuI: dissipated = update_mu_i(body, P, p, s, de, w_yz, w_xz, w_xy, dt); break;
   }
   for (int c = 0; c < 6; ++c) {
     P.stress[c][p] = s[c];

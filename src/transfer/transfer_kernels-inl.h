@@ -1,6 +1,6 @@
 // The particle-grid transfer kernels: templates over the shape function and the terrain type,
 // compiled once per instruction set. Each shape's file (transfers_<shape>.cpp, through
-// shape_transfers.h) includes this once per Highway target, so the four shapes compile in parallel.
+// shape_kernels_per_target.h) includes this once per Highway target, so the four shapes compile in parallel.
 // The code is plain C++: compiled for AVX2 or AVX-512 the compiler puts the per-particle tables and
 // the factorised sums in wider registers. It keeps every operation and its order (no fused
 // multiply-add, -ffp-contract=off; no reassociation), so every path gives the same bits;

@@ -52,8 +52,9 @@ class Walls {
   /// `mirror(node, mirrored, sign)`: false when the node is no such ghost; else the interior node
   /// and the factor per velocity component. Frictional (unilateral) walls are not mirrored.
   /// The ghost is a slave of its image (u_ghost = sign u_image), so in the Galerkin sense its mass,
-  /// momentum and force belong to the image: fold_ghost_nodes adds them there (sign-weighted)
-  /// before the image's velocity is computed, and mirror_ghost_nodes copies the result back.
+  /// momentum and force belong to the image: the grid's node phases add them there (sign-weighted,
+  /// fold_tile in grid_update.cpp) before the image's velocity is computed, and copy the result back
+  /// (add_node_phase; the ghosts are listed once by GhostMap).
   bool mirror(const std::array<int, 3>& node, std::array<int, 3>& mirrored, std::array<double, 3>& sign) const {
     bool ghost = false;
     mirrored = node;

@@ -29,8 +29,6 @@ class FlumeCoordinates {
   const TerrainProfile& profile() const { return *profile_; }
   double s(double x) const { return profile_ ? profile_->arc_length(x) : x; }
   double x_at(double s) const { return profile_ ? profile_->x_at_arc_length(s) : s; }
-  /// Bed height relative to the flat grid's floor (0 when flat).
-  double bed_height(double x) const { return profile_ ? profile_->height(x) : 0.0; }
   Vec3 tangent(double x) const {
     const double k = profile_ ? profile_->slope(x) : 0.0;
     return Vec3(1.0, 0.0, k) / std::sqrt(1.0 + k * k);

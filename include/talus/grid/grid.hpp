@@ -1,5 +1,6 @@
 #pragma once
-// Grid: structured background grid, uniform spacing h, with node fields in structure-of-arrays form.
+// Grid: structured background grid, uniform spacing h; each node's scattered fields in one record
+// (mass, momentum, force: kNodeRecord doubles), its Lagrangian velocity in another.
 //
 // Index space. The scene's domain [origin, origin + cells*h] is surrounded by kPad ghost cells on
 // every side, so that any shape function's support stays inside the arrays. Node (i, j, k) sits at
@@ -185,7 +186,7 @@ class Grid {
 
   // Node fields, as scattered: mass, momentum m v, force f (views of the node records), and the
   // Lagrangian velocity (its own records). The grid update turns them in place into velocities
-  // (12 doubles a node, not 18), so after it read them through the views below, which name what each
+  // (12 doubles stored a node, 10 used, not 18), so after it read them through the views below, which name what each
   // field holds at that point of the step (grid_update.hpp).
   NodeField mass;
   NodeVectors momentum;
@@ -203,11 +204,11 @@ class Grid {
   const double* lagrangian_records() const { return lagrangian_.data(); }
   double* lagrangian_record(std::size_t n) { return lagrangian_.data() + n * kLagrangianRecord; }
 
-  /// v_i: `momentum` after update_grid, velocities_from_momentum (the remap) or start_velocities' input.
+  /// v_i: `momentum` after the grid update, add_velocities_from_momentum (the remap) or add_start_velocities.
   const NodeVectors& velocity() const { return momentum; }
-  /// v_i^L - v_i, the particle velocity increment: `force` after update_grid.
+  /// v_i^L - v_i, the particle velocity increment: `force` after the grid update.
   const NodeVectors& velocity_change() const { return force; }
-  /// v_i^L = v_i + a_i dt after update_grid.
+  /// v_i^L = v_i + a_i dt after the grid update.
   const NodeVectors& lagrangian_velocity() const { return velocity_l; }
   /// USF / USAVG: the start-of-step velocities start_velocities writes (into `velocity_l`).
   const NodeVectors& start_velocity() const { return velocity_l; }

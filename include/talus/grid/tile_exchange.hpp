@@ -38,7 +38,6 @@ class TileExchange {
   const std::vector<std::uint8_t>& counted() const { return counted_; }
   /// Shared tiles, summed over the peers (a tile shared with two peers counts twice).
   std::size_t shared_tiles() const;
-  std::size_t peer_count() const { return peers_.size(); }
 
  private:
   std::vector<int> peers_;                        // ranks sharing a tile with this one, ascending

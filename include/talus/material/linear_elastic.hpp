@@ -1,6 +1,7 @@
 #pragma once
-// Isotropic linear elasticity in incremental (hypoelastic) form with the Jaumann rate:
-// sigma <- sigma + dW sigma - sigma dW + lambda tr(d_eps) I + 2 G d_eps   (Edo & Matsubara 2015, eq. 34).
+// Isotropic linear elasticity in incremental (hypoelastic) form: d_sigma = D : d_eps =
+// lambda tr(d_eps) I + 2 G d_eps (Edo & Matsubara 2015, eq. 34). The Jaumann rotation of the stress
+// is the material pass's, before this update (tensor.hpp, rotate_objectively: Hughes-Winget).
 #include "talus/core/tensor.hpp"
 
 namespace talus {

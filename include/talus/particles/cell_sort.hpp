@@ -97,9 +97,8 @@ class CellSort {
   double last_serial_seconds() const { return serial_seconds_; }
   int last_parallel_regions() const { return parallel_regions_; }
 
-  /// Whether a particle sorted into block b may sit in cell (i, j, k) without breaking the colouring.
-  bool within_slack(std::size_t b, int i, int j, int k) const { return within_slack_of(block_origin(b), i, j, k); }
-  /// The same with the block's origin (block_origin(b)) computed once for all its particles.
+  /// Whether a particle sorted into the block whose origin is block_origin(b) may sit in cell (i, j, k)
+  /// without breaking the colouring (the origin computed once for all the block's particles).
   bool within_slack_of(const std::array<int, 3>& o, int i, int j, int k) const {
     return i >= o[0] - slack_ && i < o[0] + block_cells_ + slack_ && j >= o[1] - slack_ &&
            j < o[1] + block_cells_ + slack_ && k >= o[2] - slack_ && k < o[2] + block_cells_ + slack_;

@@ -60,7 +60,6 @@ class BodyMaterials {
   /// Whether every body has the same wave-speed rule (the same P-wave modulus and the same cap on
   /// the volume); then `rule` is that rule, for the time step's vectorised scan.
   bool shared_wave_rate_rule(WaveRateRule& rule) const;
-  bool any_plastic() const { return any_plastic_; }
 
  private:
   struct Body {

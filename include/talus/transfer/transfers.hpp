@@ -1,6 +1,8 @@
 #pragma once
 // The particle <-> grid transfers of one step. Each is a template over the shape function and the
-// terrain type (instantiated in transfers.cpp; the kernels are in transfer_kernels-inl.h), so the inner loops have compile-time extents.
+// terrain type, so the inner loops have compile-time extents: the kernels are in transfer_kernels-inl.h,
+// compiled per shape and instruction set in transfers_<shape>.cpp; transfers.cpp picks the
+// instruction set's entry from a table of function pointers.
 //
 //  scatter_to_grid    P2G: nodal mass, momentum and internal force (Edo & Matsubara 2015, eq. 47-49), as 8
 //                     colour passes over blocks: no atomics, same order for any thread count; or, with
