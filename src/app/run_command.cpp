@@ -417,6 +417,9 @@ void add_run_command(CLI::App& app) {
     fmt::print("talus: done: {} steps to t = {:.6g} s{} in {:.2f} s ({:.2f} M particle-updates/s)\n", summary.steps,
                summary.time, taken == summary.steps ? "" : fmt::format(" ({} in this run)", taken), summary.wall_seconds,
                summary.particle_updates / summary.wall_seconds / 1e6);
+    if (solver.stopped_at_max_steps())
+      fmt::print("talus: stopped at time.max_steps = {}, before its end time {:.6g} s\n", solver.scene().max_steps,
+                 solver.scene().end_time);
     if (solver.emptied())
       fmt::print("talus: every particle had left through the open faces at t = {:.6g} s: the run ended there, before "
                  "its end time {:.6g} s\n", summary.time, solver.scene().end_time);

@@ -127,7 +127,10 @@ void RunRecord::end(const Solver& solver, const RunSummary& summary, const RunEn
   end_common(solver, interrupted ? "interrupted" : "completed",
              summary.stopped_at_deadline ? "stopped at its --stop-after time after writing a checkpoint"
              : interrupted ? fmt::format("stopped by signal {} after writing a checkpoint", summary.interrupted_signal)
-                           : "");
+             : solver.stopped_at_max_steps()
+                 ? fmt::format("stopped at time.max_steps = {}, at t = {:.6g} s of time.end = {:.6g} s",
+                               solver.scene().max_steps, solver.time(), solver.scene().end_time)
+                 : "");
   nlohmann::ordered_json& end = record_["end"];
   end["particles"] = counts.particles;
   end["steps_this_part"] = summary.steps - summary.first_step;

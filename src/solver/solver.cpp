@@ -343,6 +343,10 @@ bool Solver::finished() const {
   return time_done || steps_done || emptied_;
 }
 
+bool Solver::stopped_at_max_steps() const {
+  return scene_.max_steps > 0 && step_ >= scene_.max_steps && time_ < scene_.end_time * (1.0 - 1e-12) && !emptied_;
+}
+
 std::optional<WaveRateRule> Solver::lanes_wave_rate_rule() const {
   WaveRateRule rule;
   if (vector_kernels_enabled() && materials_.shared_wave_rate_rule(rule)) return rule;

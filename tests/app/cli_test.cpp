@@ -271,6 +271,23 @@ TEST(Cli, RunRecordNamesTheBuildTheCommandAndTheEnd) {
   const Result again = run("run " + (dir / "short.json").string() + " --out " + out.string() + " --threads 1 --quiet");
   ASSERT_EQ(again.exit_code, 0) << again.output;
   EXPECT_EQ(nlohmann::json::parse(std::ifstream(out / "run.json")).at("threads"), 1);
+  // The budget's gap: a share of the energy available, and both in joules.
+  const nlohmann::json& end = j.at("end");
+  EXPECT_GT(end.at("energy_available_joules").get<double>(), 0.0);
+  EXPECT_DOUBLE_EQ(end.at("energy_budget_gap").get<double>(),
+                   end.at("energy_budget_gap_joules").get<double>() / end.at("energy_available_joules").get<double>());
+  // A run that time.max_steps ends before time.end says so (it was "completed" with no word).
+  nlohmann::json capped = nlohmann::json::parse(std::ifstream(dir / "short.json"));
+  capped["time"]["max_steps"] = 3;
+  std::ofstream(dir / "capped.json") << capped.dump();
+  const Result short_run = run("run " + (dir / "capped.json").string() + " --out " + (dir / "capped").string() +
+                               " --threads 1 --quiet");
+  ASSERT_EQ(short_run.exit_code, 0) << short_run.output;
+  EXPECT_NE(short_run.output.find("talus: stopped at time.max_steps = 3, before its end time 0.02 s"), std::string::npos)
+      << short_run.output;
+  const nlohmann::json c = nlohmann::json::parse(std::ifstream(dir / "capped" / "run.json"));
+  EXPECT_EQ(c.at("status"), "completed");
+  EXPECT_EQ(c.at("message").get<std::string>().rfind("stopped at time.max_steps = 3, at t = ", 0), 0u) << c.at("message");
   fs::remove_all(dir);
 }
 

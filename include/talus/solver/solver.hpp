@@ -1,6 +1,6 @@
 #pragma once
 // Solver: owns the particles, the grid and the time, and advances the scene one step at a time.
-// step() is the one place where the order of the phases is written down (solver.cpp).
+// step_with() is the one place where the order of the phases is written down (solver.cpp).
 #include "talus/boundary/ghost_map.hpp"
 #include "talus/boundary/walls.hpp"
 #include "talus/core/comm.hpp"
@@ -86,6 +86,9 @@ class Solver {
   bool finished() const;
   /// Every particle has left through the open faces (the run ends early, finished()).
   bool emptied() const { return emptied_; }
+  /// Whether time.max_steps ended the run before time.end (a run that stopped there is complete as
+  /// asked, but short of its end time: the run's last lines and run.json say so).
+  bool stopped_at_max_steps() const;
   /// Steps between the scans of every particle field (stability_guards.hpp); a non-finite
   /// velocity or displacement is caught in the step it appears.
   static constexpr int kFieldCheckInterval = 8;
