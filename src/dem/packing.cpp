@@ -85,6 +85,14 @@ PackingGeometry make_packing_geometry(Packing packing, const PackingParameters& 
     geometry.coordination = positive_finite(
         parameters.coordination,
         three_d ? kDefaultRandom3dCoordination : kDefaultRandom2dCoordination, "--coordination");
+    // A rigid packing of frictional grains needs at least d + 1 contacts per grain (isostatic); fewer
+    // (2.5, or 1e-300, which gave kN = 5e307) describes no packing that carries a load.
+    const double fewest = three_d ? 4.0 : 3.0;
+    if (geometry.coordination < fewest) {
+      throw input_error("--coordination = " + number_text(geometry.coordination) + " is below " + number_text(fewest) +
+                        ", the fewest contacts per grain of a rigid " + (three_d ? "3D" : "2D") +
+                        " packing (d + 1, frictional and isostatic)");
+    }
   }
 
   if (is_three_dimensional(packing)) {
