@@ -100,6 +100,11 @@ TEST(SceneJson, SteepOrFinelyDetailedTerrainsAreWarnedAbout) {
   }
   EXPECT_EQ(warned(ripples, 0.3, "more detail than grid.cell_size"), 1);
   EXPECT_EQ(warned(plane(30.0), 0.3, "more detail than grid.cell_size"), 0);
+  // A bed origin off the profile: the bed is not where the profile (and terrain.vtu) says.
+  Scene lowered = incline;
+  lowered.grid.origin[2] = -0.5;
+  EXPECT_EQ(test::warnings_with(lowered, "grid.origin[2] = -0.5 on a terrain grid: the bed"), 1);
+  EXPECT_EQ(test::warnings_with(incline, "grid.origin[2]"), 0);
   for (const char* name : {"denlinger_flume.json", "terrain/slope_to_runout_linear.json", "terrain/incline30_fine.json"})
     EXPECT_EQ(test::warnings_with(read_scene_file(std::string(TALUS_SOURCE_DIR) + "/inputs/" + name), "grid.terrain"), 0)
         << name;
