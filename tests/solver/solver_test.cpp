@@ -276,6 +276,8 @@ TEST(Solver, FrictionWorkClosesTheEnergyBudgetOfASlidingBlock) {
     m += P.mass[p];
   }
   EXPECT_NEAR(x / m - 0.2, 4.0 / (2 * 0.3 * 9.81), 0.05);
+  // Not a target: measured 0.6793 m against 0.6796 m, so a regression far inside 0.05 m shows.
+  EXPECT_NEAR(x / m - 0.2, 4.0 / (2 * 0.3 * 9.81), 0.002);
 }
 
 // The block falls out through the open floor: once the last particle has left, the solver is

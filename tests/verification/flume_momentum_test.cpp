@@ -58,6 +58,7 @@ TEST(FlumeMomentum, SlidingSandAcceleratesAtGSinThetaMinusTanDeltaCosTheta) {
   std::printf("sliding sand: centre-of-mass acceleration %.4f m/s^2, expected %.4f (%+.2f%%)\n", acceleration, expected,
               100.0 * (acceleration / expected - 1.0));
   EXPECT_NEAR(acceleration, expected, 0.05 * expected);  // issue 7: within 5% (measured +0.55%)
+  EXPECT_NEAR(acceleration, expected, 0.015 * expected);  // not a target: a regression bound
   // Mass is conserved and no particle is below the bed.
   const ParticleStore& P = solver.particles();
   double mass = 0.0;
