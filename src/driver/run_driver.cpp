@@ -433,7 +433,9 @@ void RunLoop::write_history_row() {
   history_.write(solver_, e);
   runout_.write(solver_);
   history_schedule_.advance_past(solver_.time());
-  if (comm_.root()) energy_guard_.check(e, solver_.particles(), scene_, solver_.step_count(), solver_.time());
+  const double outflow_gravity = solver_.outflow_gravity();  // (all ranks: a sum over them)
+  if (comm_.root())
+    energy_guard_.check(e, solver_.particles(), scene_, solver_.step_count(), solver_.time(), outflow_gravity);
 }
 
 bool RunLoop::take_snapshot() {
@@ -487,7 +489,8 @@ void RunLoop::finish() {
   summary_.wall_seconds = progress_line_.elapsed();
   recording_.finish(summary_.wall_seconds, frames_.background_seconds());
   summary_.final = solver_.energies();
-  summary_.energy_available = energy_guard_.available();  // (the guard is kept on rank 0, which reports)
+  // (the guard is kept on rank 0, which reports; every rank's summary gets its value)
+  summary_.energy_available = comm_.sum_in_rank_order(comm_.root() ? energy_guard_.available() : 0.0);
   if (scene_.output.energy_gap_terms) summary_.final_gap = solver_.energy_gap_terms();
   summary_.frames_in_series = frames_.listed();
 }

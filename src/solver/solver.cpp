@@ -197,10 +197,10 @@ void Solver::remove_outflow(std::size_t leaving) {
     }
     const ParticleEnergy e = particle_energy(p);
     work_.outflow += e.kinetic + e.strain + e.gravity;
-    if (scene_.output.energy_gap_terms) {
-      gap_.outflow_strain += e.strain;
-      gap_.outflow_gravity += e.gravity;
-    }
+    // Kept whether or not the gap's terms are written: the energy guard counts the potential energy
+    // released by what left (outflow_gravity()).
+    gap_.outflow_strain += e.strain;
+    gap_.outflow_gravity += e.gravity;
     outflow_mass_ += P.mass[p];
     ++outflow_particles_;
   }
@@ -336,6 +336,7 @@ DistributionStats Solver::distribution() const {
 
 std::int64_t Solver::outflow_particles() const { return comm_.sum_in_rank_order(std::vector<std::int64_t>{outflow_particles_})[0]; }
 double Solver::outflow_mass() const { return comm_.sum_in_rank_order(outflow_mass_); }
+double Solver::outflow_gravity() const { return comm_.sum_in_rank_order(gap_.outflow_gravity); }
 
 bool Solver::finished() const {
   const bool time_done = time_ >= scene_.end_time * (1.0 - 1e-12);

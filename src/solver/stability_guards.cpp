@@ -147,8 +147,8 @@ double EnergyGuard::available() const {
 }
 
 void EnergyGuard::check(const EnergyBudget& e, const ParticleStore& P, const Scene& scene, std::int64_t step,
-                        double time) {
-  const double released = initial_.gravity - e.gravity;
+                        double time, double outflow_gravity) {
+  const double released = initial_.gravity - (e.gravity + outflow_gravity);
   if (std::isfinite(released) && released > max_released_) max_released_ = released;
   const double growth = e.total() - initial_.total();
   const double a = available();

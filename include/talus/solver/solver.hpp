@@ -132,6 +132,10 @@ class Solver {
   /// over every rank (collective in a distributed run).
   std::int64_t outflow_particles() const;
   double outflow_mass() const;
+  /// The gravitational term (-m g.x) the particles that left carried out, all ranks: with energies()'s
+  /// `gravity` it is the potential of every particle seeded, so the energy released does not depend on
+  /// where the origin lies (EnergyGuard::check).
+  double outflow_gravity() const;
 
   /// MLS smoothing (Edo & Matsubara 2015, eq. 54): the smoother, or null when the scene does not enable it;
   /// the counts of the last smoothing pass and the particle-passes left unsmoothed by its guard.

@@ -60,7 +60,11 @@ class EnergyGuard {
   EnergyGuard(const Scene& scene, const ParticleStore& particles, const EnergyBudget& initial);
   /// Throws when the budget `e` breaks the bound; otherwise records the released potential energy.
   /// `step` and `time`: those after the step that gave `e`.
-  void check(const EnergyBudget& e, const ParticleStore& particles, const Scene& scene, std::int64_t step, double time);
+  /// `outflow_gravity`: Solver::outflow_gravity(), the potential the particles that left carried out
+  /// (the released energy counts them down to where they left; without it a leaving particle's -m g.x,
+  /// which depends on the origin, counted as released or spent).
+  void check(const EnergyBudget& e, const ParticleStore& particles, const Scene& scene, std::int64_t step, double time,
+             double outflow_gravity = 0.0);
   double available() const;
   /// Guard state to checkpoint: the most potential energy released so far.
   double max_released() const { return max_released_; }
