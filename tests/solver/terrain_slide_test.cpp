@@ -289,6 +289,9 @@ TEST(TerrainSlide, ABlockBetweenSlipWallsOnASlopeSettles) {
     most = std::max(most, solver.energies().strain);
   }
   EXPECT_LT(most, 3.0);  // measured 1.3 J
+  // (The friction ledger ends at -0.39 J here, -0.47 J before the corner booked its friction on the
+  // final velocity: the rest is booked at the bed's other nodes, not understood; docs/theory.md.)
+  std::printf("trench: friction work %.4g J, most strain energy %.4g J\n", solver.energies().friction_work, most);
   const ParticleStore& P = solver.particles();
   for (std::size_t p = 0; p < P.size(); ++p) ASSERT_LE(P.x[0][p], 1.0) << p;  // none pressed into the x+ wall
 }

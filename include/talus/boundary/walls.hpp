@@ -187,6 +187,7 @@ class Walls {
   /// in the budget's gap, see docs/theory.md.)
   double apply(const std::array<int, 3>& node, double v[3], Stage stage, double m = 0.0,
                const double* v_start = nullptr, const double* contact_velocity = nullptr) const {
+    const double v_in[3] = {v[0], v[1], v[2]};
     double friction_work = 0.0;
     for (int d = 0; d < 3; ++d)
       for (int side = 0; side < 2; ++side) {
@@ -196,7 +197,21 @@ class Walls {
       }
     if (!bed_normal_.empty() && active_[2][0] && node[2] <= lower_[2])
       for (int side = 0; side < 2; ++side)
-        if (active_[0][side] && (side == 0 ? node[0] <= lower_[0] : node[0] >= upper_[0])) hold_bed_corner(side, v, node);
+        if (active_[0][side] && (side == 0 ? node[0] <= lower_[0] : node[0] >= upper_[0])) {
+          Vec3 line;
+          const CornerHold hold = hold_bed_corner(side, v, node, line);
+          if (hold == CornerHold::None) continue;
+          // The friction the walls booked acted on a velocity the corner then replaced. What the node
+          // lost along the corner line, the one direction both faces leave free, is the friction's
+          // impulse (the rest are the faces' normal reactions, which do no work); none where a y wall
+          // then stopped the node (its normal reaction). Booked in the grid update only, as friction is.
+          friction_work = 0.0;
+          if (hold == CornerHold::AlongLine && stage == Stage::GridUpdate && v_start) {
+            const double lost = (v[0] - v_in[0]) * line[0] + (v[1] - v_in[1]) * line[1] + (v[2] - v_in[2]) * line[2];
+            const double start = v_start[0] * line[0] + v_start[1] * line[1] + v_start[2] * line[2];
+            friction_work = -m * lost * start;
+          }
+        }
     return friction_work;
   }
 
@@ -209,22 +224,26 @@ class Walls {
   /// any normal velocity; friction: into the wall), the node keeps only its velocity along the corner
   /// line, which both faces allow; then the y walls hold it as before (the bed's normal has no y part,
   /// so they are not disturbed otherwise). The normal impulses this takes do no work.
-  void hold_bed_corner(int side, double v[3], const std::array<int, 3>& node) const {
+  enum class CornerHold { None, AlongLine, Stopped };
+  CornerHold hold_bed_corner(int side, double v[3], const std::array<int, 3>& node, Vec3& line) const {
     const WallType type = specs_[0][side].type;
-    if (type != WallType::Slip && type != WallType::Friction) return;  // fixed: v = 0 already
+    if (type != WallType::Slip && type != WallType::Friction) return CornerHold::None;  // fixed: v = 0 already
     const double into = side == 0 ? -v[0] : v[0];  // > 0: into the x wall
-    if (type == WallType::Slip ? into == 0.0 : into <= 0.0) return;
+    if (type == WallType::Slip ? into == 0.0 : into <= 0.0) return CornerHold::None;
     const Vec3& n = bed_normal_[static_cast<std::size_t>(node[0])];
-    const Vec3 line = Vec3(0.0, -n[2], n[1]).normalized();  // e_x x n: along both faces
+    line = Vec3(0.0, -n[2], n[1]).normalized();  // e_x x n: along both faces
     const double along = v[0] * line[0] + v[1] * line[1] + v[2] * line[2];
     for (int d = 0; d < 3; ++d) v[d] = along * line[d];
     for (int y_side = 0; y_side < 2; ++y_side) {
       if (!active_[1][y_side] || !(y_side == 0 ? node[1] <= lower_[1] : node[1] >= upper_[1])) continue;
       const WallType y_type = specs_[1][y_side].type;
       const double y_into = y_side == 0 ? -v[1] : v[1];
-      if (y_type == WallType::Fixed || y_type == WallType::Slip || (y_type == WallType::Friction && y_into > 0.0))
+      if (y_type == WallType::Fixed || y_type == WallType::Slip || (y_type == WallType::Friction && y_into > 0.0)) {
         v[0] = v[1] = v[2] = 0.0;  // the corner line runs into the y wall: nothing is left
+        return CornerHold::Stopped;
+      }
     }
+    return CornerHold::AlongLine;
   }
 
   double apply_one(int axis, int side, double v[3], Stage stage, double m, const double* v_start,
