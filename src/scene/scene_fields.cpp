@@ -65,9 +65,9 @@ Table<SceneDraft> make_terrain_table() {
           "bed profile z_b(x), piecewise linear, uniform across y; beyond the end points the end segments continue. "
           "With a terrain the third grid coordinate is w = z − z_b(x): `grid.origin[2]` and `grid.size[2]` are in w, "
           "and the `z-` face (w = origin[2], normally 0) is the bed (docs/theory.md \"Terrain-following grid\"). Warned "
-          "about: a segment so steep that courant / cos θ passes 1.5 (the sheared cells no longer bound the step; "
-          "docs/theory.md \"How steep\"), and a profile more than 1% longer over the grid than the chords between its "
-          "node columns (the runout would be measured along a longer bed than the particles slide on)",
+          "about: a chord between two node columns so steep that courant / cos θ passes 1.5 (the sheared cells no longer "
+          "bound the step; docs/theory.md \"How steep\"), a profile more than 1% longer over the whole grid than those "
+          "chords (the runout would be measured along a longer bed than the particles slide on), and grid.origin[2] ≠ 0",
           point_pairs_schema(2),
           [](ObjectReader& r, SceneDraft& d) {
             const Json& points = r.raw("points");

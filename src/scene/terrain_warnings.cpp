@@ -16,20 +16,20 @@ constexpr double kDegrees = 180.0 / std::numbers::pi;
 /// 1.73 that did not (terrain_warnings).
 constexpr double kShearedCourantLimit = 1.5;
 
-/// The steepest straight segment of the profile: the transitions between segments are never
-/// steeper than the segments they join.
+/// The steepest chord of the bed the grid resolves: the profile sampled at the node columns x0 + i h,
+/// i = 0 .. cells (the cells shear with these chords, not with the profile between them, and a
+/// segment of the profile outside the grid shears nothing).
 struct Steepest {
-  double slope = 0.0;  // |dz/dx|
-  int first = 0;       // points[first] to points[first + 1]
+  double slope = 0.0;  // |dz/dx| of the chord
+  double x0 = 0.0;     // the chord's columns
 };
 
-Steepest steepest_segment(const TerrainSpec& terrain) {
+Steepest steepest_chord(const TerrainProfile& profile, const GridGeometry& grid) {
   Steepest s;
-  for (std::size_t i = 0; i + 1 < terrain.points.size(); ++i) {
-    const auto& a = terrain.points[i];
-    const auto& b = terrain.points[i + 1];
-    const double k = std::abs((b[1] - a[1]) / (b[0] - a[0]));
-    if (k > s.slope) s = {k, static_cast<int>(i)};
+  for (int i = 0; i < grid.cells[0]; ++i) {
+    const double a = grid.origin[0] + i * grid.h;
+    const double k = std::abs(profile.height(a + grid.h) - profile.height(a)) / grid.h;
+    if (k > s.slope) s = {k, a};
   }
   return s;
 }
@@ -44,14 +44,16 @@ std::vector<std::string> terrain_warnings(const GridGeometry& grid, double coura
   // block (inputs/terrain/incline30_coarse.json's, mu 0.3) slid down a 78-degree bed (courant 0.3:
   // 1.44) within 0.2% of the rigid block; on an 80-degree bed (1.73) it gained energy and stopped
   // after 32 steps, and a flume at 80 degrees ran to its end 2% further than at courant 0.15.
-  const Steepest steep = steepest_segment(grid.terrain);
+  const TerrainProfile profile(grid.terrain);
+  const Steepest steep = steepest_chord(profile, grid);
   const double cos_theta = 1.0 / std::sqrt(1.0 + steep.slope * steep.slope);
   if (courant / cos_theta > kShearedCourantLimit)
     warnings.push_back(fmt::format(
-        "grid.terrain.points[{}] to points[{}]: the bed slopes at {:.4g} degrees{}; the cells shear with it to {:.3g} h "
-        "across their floors, and solver.courant = {} is {:.3g} times the Courant step of such a cell. Runs at 1.44 held and "
-        "at 1.73 gained energy and stopped (docs/theory.md, \"How steep\"): lower solver.courant to {:.2g} or less",
-        steep.first, steep.first + 1, std::atan(steep.slope) * kDegrees,
+        "grid.terrain: between x = {:.6g} and {:.6g} m the bed the grid resolves (its node columns) slopes at {:.4g} "
+        "degrees{}; the cells shear with it to {:.3g} h across their floors, and solver.courant = {} is {:.3g} times the "
+        "Courant step of such a cell. Runs at 1.44 held and at 1.73 gained energy and stopped (docs/theory.md, \"How "
+        "steep\"): lower solver.courant to {:.2g} or less",
+        steep.x0, steep.x0 + grid.h, std::atan(steep.slope) * kDegrees,
         steep.slope > 57.0 ? " (a no-data value or a step in the profile?)" : "", cos_theta, courant,
         courant / cos_theta, cos_theta));
   // w is measured from the profile and the bed is the z- face at w = origin[2]: any other origin
@@ -65,7 +67,6 @@ std::vector<std::string> terrain_warnings(const GridGeometry& grid, double coura
   // The particles slide on the profile sampled at the node columns (the chords between them); the
   // runout diagnostics measure s along the profile itself. Ripples finer than the cells made the
   // measured runout 18% longer than the resolved bed with the same motion.
-  const TerrainProfile profile(grid.terrain);
   const double x0 = grid.origin[0], h = grid.h;
   double profile_length = 0.0, resolved_length = 0.0;
   for (int i = 0; i < grid.cells[0]; ++i) {

@@ -85,11 +85,13 @@ TEST(SceneJson, SteepOrFinelyDetailedTerrainsAreWarnedAbout) {
   const auto plane = [](double degrees) {
     return std::vector<std::array<double, 2>>{{0.0, 8.0 * std::tan(degrees * M_PI / 180.0)}, {8.0, 0.0}};
   };
-  const std::string steep = "the bed slopes at";
+  const std::string steep = "(its node columns) slopes at";
   EXPECT_EQ(warned(plane(30.0), 0.3, steep), 0);
   EXPECT_EQ(warned(plane(78.0), 0.3, steep), 0);   // courant / cos = 1.44: the block slid as it should
   EXPECT_EQ(warned(plane(80.0), 0.3, steep), 1);   // 1.73: it gained energy and stopped
   EXPECT_EQ(warned(plane(80.0), 0.15, steep), 0);  // 0.86
+  // A cliff outside the grid shears no cell: no warning (the grid spans x = 0 .. 8).
+  EXPECT_EQ(warned({{-5.0, 20.0}, {-4.9, 8.0 * std::tan(M_PI / 6.0)}, {8.0, 0.0}}, 0.3, steep), 0);
   // A no-data value (-9999) in a profile is a step of nearly 90 degrees.
   EXPECT_EQ(warned({{0.0, 2.0}, {4.0, -9999.0}, {4.1, 1.0}, {8.0, 0.0}}, 0.3, "a no-data value or a step"), 1);
   // Ripples of 2 cm every 0.1 m on a 30-degree plane, cell 0.25 m: 18% more bed than the grid resolves.
