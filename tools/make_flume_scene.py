@@ -217,6 +217,8 @@ def main():
         p.error(f"--slope = {a.slope} must be between 0 and 90 degrees")
     if not (a.separation_volume_ratio > 1 or a.separation_volume_ratio == 0):
         p.error(f"--separation-volume-ratio = {a.separation_volume_ratio} must be above 1, or 0 (off)")
+    if a.model == "mu_i" and a.density > a.grain_density:  # (talus refuses a packing denser than its grains)
+        refuse("--density", f"{a.density:g}", f"give at most --grain-density {a.grain_density:g} kg/m^3 for --model mu_i")
     if a.particles_per_cell < 1:
         p.error(f"--particles-per-cell = {a.particles_per_cell} must be at least 1")
     # (each of these wrote a scene: a lower --height was raised without a word, a plane narrower than

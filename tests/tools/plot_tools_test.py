@@ -138,7 +138,8 @@ class FlumeSceneRefusals(unittest.TestCase):
         # --height 0.1 was raised to 0.275 without a word; --slope 89 and --width 0.1 wrote scenes talus refused
         for args, naming in ((["--height", "0.1"], "--height 0.1: give at least 0.2682 m"),
                              (["--slope", "89"], "--slope 89: give more than 0 and at most 81.15 degrees"),
-                             (["--width", "0.1"], "--width 0.1: give at least the wedge's width (--wedge-width 0.2)")):
+                             (["--width", "0.1"], "--width 0.1: give at least the wedge's width (--wedge-width 0.2)"),
+                             (["--model", "mu_i", "--density", "3000"], "--density 3000: give at most --grain-density 2650")):
             code, out, err = tool("make_flume_scene.py", *args)
             self.assertEqual((code, out), (2, ""), err)
             self.assertEqual(len(err.strip().splitlines()), 1, err)

@@ -62,9 +62,11 @@ class WorkRecorder {
       : max_steps_(max_steps), interval_(interval < 1 ? 1 : interval), span_(span) {}
 
   /// The block entries (one block's seconds and particles in one loop, 12 B, and about 40 B more
-  /// while the record is written as JSON) a run's record holds at most: about 200 MB at its end.
-  /// 1000 steps of the default flume hold 1.4 M; a run of 1 M particles reaches the bound at about
-  /// 250 recorded steps and then keeps 80–250, every third one after each thinning.
+  /// while the record is written as JSON) past which a run's record takes no more steps: it holds at
+  /// most this plus one step's entries, about 200 MB at its end. 1000 steps of the default flume hold
+  /// 1.4 M; a run of 1 M particles reaches the bound at about 250 recorded steps and then keeps 80–250,
+  /// every third one after each thinning. (A scene of some 50 M particles, whose one step passes the
+  /// bound, keeps its first recorded step only.)
   static constexpr std::size_t kMaxRunBlockEntries = std::size_t(1) << 22;
 
   /// Called by the solver at the start of each step; true when this step is recorded.
