@@ -10,7 +10,8 @@
 # under the sanitizers, which kept CI near its 30 minutes; shorter tests of the same code run here:
 # TerrainSlide.ThirtyDegreePlaneFine, PicDamping.BitIdenticalForOneAndTwoThreads,
 # MuICollapse.SeparatedParticlesAreStressFree, Solver.BitIdenticalForOneAndTwoThreads(ForEveryShapeAndScheme),
-# MlsSolver.DisabledSmoothingIsTheUnsmoothedSolverBitForBit), and the checks of the tree that are not C++ (Layers.*, SceneSchema.*, Install.*, RunsTable.*: scripts that the
+# MlsSolver.DisabledSmoothingIsTheUnsmoothedSolverBitForBit), and the checks of the tree that are not C++ (Layers.*, SceneSchema.*, Install.*, RunsTable.*,
+# Tools.PlotsShowWhatTheRunsDid: scripts that the
 # Release run covers; this build has no talus program to install), and the distributed runs (Mpi.*: Open MPI's own allocations at start-up trip the
 # leak checker); -O1 keeps the build short, and so does leaving the AVX-512 kernels out
 # (-DTALUS_NO_AVX512=ON: the baseline and AVX2 paths run under the sanitizers; the Release run
@@ -30,4 +31,4 @@ echo "sanitize build: ok (log in build-asan.log)"
 export ASAN_OPTIONS="halt_on_error=1:abort_on_error=1:detect_leaks=1"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
 OMP_WAIT_POLICY=PASSIVE ctest --test-dir build-asan --output-on-failure -j "$jobs" \
-  -E '^(Cli|DemSpringsCli|ElementTestCli|ElasticBenchmarks|Crash|HardCases|Layers|SceneSchema|Install|RunsTable|Mpi)\.|^GranularCollapse\.Column|^MuICollapse\.(Column|RateIndependentLimit)|^TerrainSlide\.(HorizontalPlaneStoppingDistance|BlockCrossesTheTransition|BitIdenticalForOneAndTwoThreadsOnATerrainGrid)|^PicDamping\.TheBudgetCounts|^Solver\.BitIdenticalFor(EitherBlockOrder|OneAndThreeThreadsWithSmallerBlocks)|^MlsSolver\.BitIdenticalForOneAndTwoThreads|^Checkpoint\.Restart|_NOT_BUILT'
+  -E '^(Cli|DemSpringsCli|ElementTestCli|ElasticBenchmarks|Crash|HardCases|Layers|SceneSchema|Install|RunsTable|Mpi)\.|^Tools\.PlotsShowWhatTheRunsDid|^GranularCollapse\.Column|^MuICollapse\.(Column|RateIndependentLimit)|^TerrainSlide\.(HorizontalPlaneStoppingDistance|BlockCrossesTheTransition|BitIdenticalForOneAndTwoThreadsOnATerrainGrid)|^PicDamping\.TheBudgetCounts|^Solver\.BitIdenticalFor(EitherBlockOrder|OneAndThreeThreadsWithSmallerBlocks)|^MlsSolver\.BitIdenticalForOneAndTwoThreads|^Checkpoint\.Restart|_NOT_BUILT'
