@@ -192,12 +192,11 @@ class Walls {
     for (int d = 0; d < 3; ++d)
       for (int side = 0; side < 2; ++side) {
         if (!active_[d][side]) continue;
-        const bool on_face = side == 0 ? node[d] <= lower_[d] : node[d] >= upper_[d];
-        if (on_face) friction_work += apply_one(d, side, v, stage, m, v_start, contact_velocity, node[0]);
+        if (on_face(node, d, side)) friction_work += apply_one(d, side, v, stage, m, v_start, contact_velocity, node[0]);
       }
-    if (!bed_normal_.empty() && active_[2][0] && node[2] <= lower_[2])
+    if (!bed_normal_.empty() && active_[2][0] && on_face(node, 2, 0))
       for (int side = 0; side < 2; ++side)
-        if (active_[0][side] && (side == 0 ? node[0] <= lower_[0] : node[0] >= upper_[0])) {
+        if (active_[0][side] && on_face(node, 0, side)) {
           Vec3 line;
           const CornerHold hold = hold_bed_corner(side, v, node, line);
           if (hold == CornerHold::None) continue;
@@ -216,6 +215,11 @@ class Walls {
   }
 
  private:
+  /// Whether node lies on (or beyond) face (axis, side): the nodes a wall there acts on.
+  bool on_face(const std::array<int, 3>& node, int axis, int side) const {
+    return side == 0 ? node[axis] <= lower_[axis] : node[axis] >= upper_[axis];
+  }
+
   /// A node on the bed of a terrain grid and on an x face. The bed's normal leans along x, so
   /// removing the bed's normal velocity after the x wall's puts an x velocity back, -(v.n) n_x, that
   /// can point into the x wall: an elastic block at rest against a slip x wall at the foot of a 30-degree
@@ -235,7 +239,7 @@ class Walls {
     const double along = v[0] * line[0] + v[1] * line[1] + v[2] * line[2];
     for (int d = 0; d < 3; ++d) v[d] = along * line[d];
     for (int y_side = 0; y_side < 2; ++y_side) {
-      if (!active_[1][y_side] || !(y_side == 0 ? node[1] <= lower_[1] : node[1] >= upper_[1])) continue;
+      if (!active_[1][y_side] || !on_face(node, 1, y_side)) continue;
       const WallType y_type = specs_[1][y_side].type;
       const double y_into = y_side == 0 ? -v[1] : v[1];
       if (y_type == WallType::Fixed || y_type == WallType::Slip || (y_type == WallType::Friction && y_into > 0.0)) {
