@@ -23,11 +23,6 @@ def energy_rows(run):
         return list(csv.DictReader(f))
 
 
-def last_energy_row(run):
-    rows = energy_rows(run)
-    return rows[0], rows[-1]
-
-
 def recorded_closure(run):
     """The energy budget's closure the run itself printed (run.json end.energy_budget_gap), or None.
     energy.csv alone misled: a run resumed into another folder (--out) starts its rows at the
@@ -99,9 +94,10 @@ def main():
             # on the run's own scale where the CSV allows: the initial kinetic and strain energy plus
             # the most potential energy released by the particles still on the grid (the outflow's
             # share is not in the CSV: close to talus's energy available, not equal, when mass left)
-            first, last = last_energy_row(run)
+            energy = energy_rows(run)
+            first, last = energy[0], energy[-1]
             gravity0 = float(first["gravity"])
-            released = max(gravity0 - float(row["gravity"]) for row in energy_rows(run))
+            released = max(gravity0 - float(row["gravity"]) for row in energy)
             scale = float(first["kinetic"]) + float(first["strain"]) + max(released, 0.0)
             closure = (float(last["total"]) - float(first["total"])) / (scale if scale > 0.0 else abs(float(first["total"])))
         particles = particles_in_last_frame(run)

@@ -16,22 +16,30 @@ constexpr double kDegrees = 180.0 / std::numbers::pi;
 /// 1.73 that did not (terrain_warnings).
 constexpr double kShearedCourantLimit = 1.5;
 
-/// The steepest chord of the bed the grid resolves: the profile sampled at the node columns x0 + i h,
-/// i = 0 .. cells (the cells shear with these chords, not with the profile between them, and a
-/// segment of the profile outside the grid shears nothing).
-struct Steepest {
-  double slope = 0.0;  // |dz/dx| of the chord
-  double x0 = 0.0;     // the chord's columns
+/// The bed the grid resolves: the profile sampled at the node columns x0 + i h, i = 0 .. cells, and
+/// the chords between them (the cells shear with these chords, not with the profile between them,
+/// and a segment of the profile outside the grid shears nothing).
+struct ResolvedBed {
+  double steepest_slope = 0.0;  // |dz/dx| of the steepest chord
+  double steepest_x0 = 0.0;     // its first column
+  double chord_length = 0.0;    // the chords' total length over the grid
+  double profile_length = 0.0;  // the profile's arc length over the same columns
 };
 
-Steepest steepest_chord(const TerrainProfile& profile, const GridGeometry& grid) {
-  Steepest s;
+ResolvedBed resolved_bed(const TerrainProfile& profile, const GridGeometry& grid) {
+  ResolvedBed bed;
+  const double h = grid.h;
   for (int i = 0; i < grid.cells[0]; ++i) {
-    const double a = grid.origin[0] + i * grid.h;
-    const double k = std::abs(profile.height(a + grid.h) - profile.height(a)) / grid.h;
-    if (k > s.slope) s = {k, a};
+    const double a = grid.origin[0] + i * h, b = a + h;
+    const double rise = profile.height(b) - profile.height(a);
+    if (std::abs(rise) / h > bed.steepest_slope) {
+      bed.steepest_slope = std::abs(rise) / h;
+      bed.steepest_x0 = a;
+    }
+    bed.chord_length += std::hypot(h, rise);
+    bed.profile_length += profile.arc_length(b) - profile.arc_length(a);
   }
-  return s;
+  return bed;
 }
 
 }  // namespace
@@ -45,16 +53,17 @@ std::vector<std::string> terrain_warnings(const GridGeometry& grid, double coura
   // 1.44) within 0.2% of the rigid block; on an 80-degree bed (1.73) it gained energy and stopped
   // after 32 steps, and a flume at 80 degrees ran to its end 2% further than at courant 0.15.
   const TerrainProfile profile(grid.terrain);
-  const Steepest steep = steepest_chord(profile, grid);
-  const double cos_theta = 1.0 / std::sqrt(1.0 + steep.slope * steep.slope);
+  const ResolvedBed bed = resolved_bed(profile, grid);
+  const double steepest = bed.steepest_slope;
+  const double cos_theta = 1.0 / std::sqrt(1.0 + steepest * steepest);
   if (courant / cos_theta > kShearedCourantLimit)
     warnings.push_back(fmt::format(
         "grid.terrain: between x = {:.6g} and {:.6g} m the bed the grid resolves (its node columns) slopes at {:.4g} "
         "degrees{}; the cells shear with it to {:.3g} h across their floors, and solver.courant = {} is {:.3g} times the "
         "Courant step of such a cell. Runs at 1.44 held and at 1.73 gained energy and stopped (docs/theory.md, \"How "
         "steep\"): lower solver.courant to {:.2g} or less",
-        steep.x0, steep.x0 + grid.h, std::atan(steep.slope) * kDegrees,
-        steep.slope > 57.0 ? " (a no-data value or a step in the profile?)" : "", cos_theta, courant,
+        bed.steepest_x0, bed.steepest_x0 + grid.h, std::atan(steepest) * kDegrees,
+        steepest > 57.0 ? " (a no-data value or a step in the profile?)" : "", cos_theta, courant,
         courant / cos_theta, cos_theta));
   // w is measured from the profile and the bed is the z- face at w = origin[2]: any other origin
   // moves the bed off the profile, while terrain.vtu draws the profile (particles sat 0.16 m below
@@ -67,20 +76,13 @@ std::vector<std::string> terrain_warnings(const GridGeometry& grid, double coura
   // The particles slide on the profile sampled at the node columns (the chords between them); the
   // runout diagnostics measure s along the profile itself. Ripples finer than the cells made the
   // measured runout 18% longer than the resolved bed with the same motion.
-  const double x0 = grid.origin[0], h = grid.h;
-  double profile_length = 0.0, resolved_length = 0.0;
-  for (int i = 0; i < grid.cells[0]; ++i) {
-    const double a = x0 + i * h, b = a + h;
-    profile_length += profile.arc_length(b) - profile.arc_length(a);
-    resolved_length += std::hypot(h, profile.height(b) - profile.height(a));
-  }
-  if (profile_length > 1.01 * resolved_length)
+  if (bed.profile_length > 1.01 * bed.chord_length)
     warnings.push_back(fmt::format(
         "grid.terrain has more detail than grid.cell_size = {} m resolves: over the grid the profile is {:.1f}% longer "
         "than the bed the grid samples at its node columns, on which the particles slide; the runout diagnostics "
         "measure s along the profile, so their distances come out that much longer. Sample the profile no finer "
         "than the cells, or refine the grid",
-        h, 100.0 * (profile_length / resolved_length - 1.0)));
+        grid.h, 100.0 * (bed.profile_length / bed.chord_length - 1.0)));
   return warnings;
 }
 
