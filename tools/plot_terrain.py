@@ -8,6 +8,9 @@ Runs the scenes of inputs/terrain/ with talus (or reuses finished runs under --r
                                                   gravity, mu = 0.7 sticking)
   docs/verification/terrain_slope_to_runout.png   block through a slope-to-runout transition:
                                                   snapshots over the bed and the energy budget
+  docs/verification/terrain_trench.png            block in a trench between two slip x walls on the
+                                                  30-degree bed, and on a flat grid with rotated
+                                                  gravity: strain and kinetic energy against time
 and prints the measured numbers (docs/verification.md "Terrain").
 Usage: /usr/bin/python3 tools/plot_terrain.py --talus build/talus [--runs runs/terrain] [--reuse]
 """
@@ -23,7 +26,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
-from talus_plot import ROOT, finish_axes, read_vtu, run_talus, save_figure, series_frames  # noqa: E402
+from talus_plot import ROOT, finish_axes, read_csv_columns, read_vtu, require_talus, run_talus, save_figure, series_frames  # noqa: E402
+from cli_checks import require_at_least  # noqa: E402
 G = 9.81
 THETA = math.radians(30.0)
 
@@ -95,6 +99,8 @@ def main():
     ap.add_argument("--threads", type=int, default=1, help="threads of each talus run (default 1)")
     ap.add_argument("--out", default=os.path.join(ROOT, "docs", "verification"))
     args = ap.parse_args()
+    require_at_least(1, threads=args.threads)  # talus refused --threads 0 after a traceback
+    require_talus(args.talus)
     os.makedirs(args.out, exist_ok=True)
 
     # 1. horizontal plane, Abe, Johansson & Konagai 2005, eq. 21
@@ -166,6 +172,23 @@ def main():
     a2.legend(loc="lower left", fontsize=8)
     a2.grid(alpha=0.3)
     save_figure(fig, os.path.join(args.out, "terrain_slope_to_runout.png"), 120)
+
+    # 4. a block filling a trench between two slip x walls on the 30-degree bed (docs/theory.md, "Where the
+    # bed meets an x wall"; TerrainSlide.ABlockBetweenSlipWallsOnASlopeSettles), and on a flat grid
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(6.5, 6), sharex=True)
+    for name, label, colour in (("trench_slip_walls", "terrain grid, 30-degree bed", "C0"),
+                                ("trench_slip_walls_flat_rotated_gravity", "flat grid, rotated gravity", "C1")):
+        d = read_csv_columns(os.path.join(run(args, name), "energy.csv"))
+        peak = int(np.argmax(d["strain"]))
+        a1.plot(d["time"], d["strain"], color=colour, lw=1,
+                label=f"{label}: peak {d['strain'][peak]:.2f} J at {d['time'][peak]:.2f} s")
+        a2.plot(d["time"], d["kinetic"], color=colour, lw=1, label=f"{label}: peak {np.max(d['kinetic']):.2f} J")
+        print(f"{name}: peak strain energy {d['strain'][peak]:.4f} J at t = {d['time'][peak]:.3f} s, at the end "
+              f"{d['strain'][-1]:.4f} J; peak kinetic energy {np.max(d['kinetic']):.4f} J; friction work at the end "
+              f"{d['friction_work'][-1]:+.4f} J")
+    finish_axes(a1, None, "strain energy [J]", "Block between slip x walls on a 30-degree bed, mu = 0.3", fontsize=8)
+    finish_axes(a2, "time [s]", "kinetic energy [J]", fontsize=8)
+    save_figure(fig, os.path.join(args.out, "terrain_trench.png"), 120)
 
 
 if __name__ == "__main__":

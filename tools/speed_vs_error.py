@@ -34,6 +34,7 @@ OUT = os.path.join(ROOT, "docs", "verification")
 SHAPES = ["linear", "ugimp", "cpgimp", "bspline2"]
 SCHEMES = ["musl", "usl", "usf", "usavg"]
 MLS_BASES = ["off", "linear", "quadratic", "cubic"]
+MARKERS = {"linear": "o", "ugimp": "s", "cpgimp": "^", "bspline2": "D"}
 E, RHO0, L0 = 1.0e6, 1.0, 50.0
 TIME_KEY = "cpu"  # what the rates and plots use: "cpu" (1 thread) or "wall" (main() sets it)
 
@@ -159,55 +160,107 @@ def energy_drift(res):
     return float(np.max(np.abs(tot - tot[0])) / abs(tot[0])), float((tot[-1] - tot[0]) / abs(tot[0]))
 
 
+def add_time_option(ap):
+    """--wall: what the rates and the plots' time axis use (set_time_key reads it)."""
+    ap.add_argument("--wall", action="store_true",
+                    help="rate and plots from the wall clock (default: the run's CPU time, which a shared machine does "
+                         "not inflate at 1 thread; with more threads CPU time sums the threads, so use --wall there)")
+
+
+def set_time_key(a):
+    """TIME_KEY from --wall and --threads (CPU time sums the threads: more than one takes the wall clock)."""
+    global TIME_KEY
+    TIME_KEY = "wall" if a.wall or a.threads > 1 else "cpu"
+
+
+def run_failed(failed, what):
+    print(f"{what}: run failed", flush=True)
+    failed.append(what)
+
+
+def result_row(bench, shape, scheme, h, ppc, res, error, metric, extra="", mls="off"):
+    """The CSV row of one run (printed as it comes); the rate is per second of TIME_KEY."""
+    ups = res["particles"] * res["steps"] / res[TIME_KEY]
+    print(f"{bench:20s} {shape:8s} {scheme:6s} mls={mls:9s} h={h:<6g} ppc={ppc} err={error:.4g} ({metric}) "
+          f"{res['wall']:.2f} s wall {res['cpu']:.2f} s CPU {ups / 1e6:.2f} M/s {extra}", flush=True)
+    return {"benchmark": bench, "shape": shape, "scheme": scheme, "mls": mls, "cell_size": h, "ppc": ppc,
+            "particles": res["particles"], "steps": res["steps"], "wall_s": round(res["wall"], 4),
+            "cpu_s": round(res["cpu"], 4), "particle_updates_per_s": round(ups), "error": error,
+            "metric": metric, "note": extra}
+
+
+def column_sweep(talus, name, shapes, quick, mls_modes, threads, rows, failed):
+    """The column `name` (inputs/benchmarks/NAME.json) over shape x cell size x particles per cell x MLS
+    (MUSL): a row per run appended to rows, the runs that failed to failed (talus's reason printed)."""
+    base = load(name)
+    b = base["gravity"][0]
+    for shape in shapes:
+        for h in ([2.0, 1.0, 0.5] if quick else [2.0, 1.0, 0.5, 0.25]):
+            for ppc in ([2] if (quick or h != 1.0) else [1, 2, 3]):
+                for mls in mls_modes:
+                    res = run(talus, variant(base, shape, "musl", h, ppc, mls), threads)
+                    if res is None:
+                        run_failed(failed, f"{name} {shape} h={h} ppc={ppc} mls={mls}")
+                        continue
+                    l2, rough = column_metrics(res, b)
+                    rows.append(result_row(name, shape, "musl", h, ppc, res, l2, "L2 stress", f"roughness={rough:.4g}", mls))
+
+
+def plot_error_vs_time(rows, bench, path, threads, mls_modes):
+    """Error against run time of the rows of one benchmark, a marker per shape (cell size and particles
+    per cell written beside the columns' points); nothing when it has no rows."""
+    sel = [r for r in rows if r["benchmark"] == bench]
+    if not sel:
+        return
+    time_col = TIME_KEY + "_s"
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    for shape in SHAPES:
+        for scheme in SCHEMES:
+            for mls in mls_modes:
+                pts = [r for r in sel if r["shape"] == shape and r["scheme"] == scheme and r["mls"] == mls]
+                if not pts:
+                    continue
+                ax.scatter([r[time_col] for r in pts], [max(r["error"], 1e-5) for r in pts],
+                           marker=MARKERS[shape], facecolors="none" if mls != "off" else None,
+                           edgecolors="C3" if mls != "off" else None,
+                           label=f"{shape} {scheme}" + (f" MLS {mls}" if mls != "off" else ""))
+                for r in pts:
+                    if bench.startswith("column"):
+                        ax.annotate(f"h={r['cell_size']:g},{r['ppc']}", (r[time_col], max(r["error"], 1e-5)),
+                                    fontsize=6)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(f"{'wall' if TIME_KEY == 'wall' else 'CPU'} time [s] ({threads} thread{'s' if threads > 1 else ''})")
+    ax.set_ylabel(sel[0]["metric"])
+    ax.set_title(f"{bench}: error vs time")
+    ax.legend(fontsize=7)
+    ax.grid(True, which="both", alpha=0.3)
+    save_figure(fig, path, 110)
+
+
 def main():
     ap = benchmark_parser(__doc__, scratch_when="with --quick")
     ap.add_argument("--quick", action="store_true", help="fewer variants (a smoke test of the driver)")
     ap.add_argument("--mls", default="off", type=lambda t: choices_list("--mls", t, MLS_BASES),
                     help="comma-separated MLS bases for the column and bar runs: off,linear,quadratic,cubic")
-    ap.add_argument("--wall", action="store_true",
-                    help="rate and plots from the wall clock (default: the run's CPU time, which a shared machine does "
-                         "not inflate at 1 thread; with more threads CPU time sums the threads, so use --wall there)")
+    add_time_option(ap)
     a, talus = parse_benchmark_args(ap)
     out = out_folder(a, scratch=a.quick)
     print(f"writing into {out}", flush=True)
-    global TIME_KEY
-    TIME_KEY = "wall" if a.wall or a.threads > 1 else "cpu"
-    time_col = TIME_KEY + "_s"
+    set_time_key(a)
     rows = []
     histories = {}
 
     mls_modes = a.mls
     failed = []
 
-    def run_failed(what):
-        print(f"{what}: run failed", flush=True)
-        failed.append(what)
-
-    def record(bench, shape, scheme, h, ppc, res, error, metric, extra="", mls="off"):
-        ups = res["particles"] * res["steps"] / res[TIME_KEY]
-        rows.append({"benchmark": bench, "shape": shape, "scheme": scheme, "mls": mls, "cell_size": h, "ppc": ppc,
-                     "particles": res["particles"], "steps": res["steps"], "wall_s": round(res["wall"], 4),
-                     "cpu_s": round(res["cpu"], 4), "particle_updates_per_s": round(ups), "error": error,
-                     "metric": metric, "note": extra})
-        print(f"{bench:20s} {shape:8s} {scheme:6s} mls={mls:9s} h={h:<6g} ppc={ppc} err={error:.4g} ({metric}) "
-              f"{res['wall']:.2f} s wall {res['cpu']:.2f} s CPU {ups / 1e6:.2f} M/s {extra}", flush=True)
+    def record(*args, **kwargs):
+        rows.append(result_row(*args, **kwargs))
 
     shapes = SHAPES if not a.quick else ["linear", "cpgimp"]
     # 1. Column, W = 10000 and 12500: shape x cell size x ppc (MUSL).
-    cells = [2.0, 1.0, 0.5] if a.quick else [2.0, 1.0, 0.5, 0.25]
     for name in ["column_w10000", "column_w12500"]:
-        base = load(name)
-        b = base["gravity"][0]
-        for shape in shapes:
-            for h in cells:
-                for ppc in ([2] if (a.quick or h != 1.0) else [1, 2, 3]):
-                    for mls in mls_modes:
-                        res = run(talus, variant(base, shape, "musl", h, ppc, mls), a.threads)
-                        if res is None:
-                            run_failed(f"{name} {shape} h={h} ppc={ppc} mls={mls}")
-                            continue
-                        l2, rough = column_metrics(res, b)
-                        record(name, shape, "musl", h, ppc, res, l2, "L2 stress", f"roughness={rough:.4g}", mls)
+        column_sweep(talus, name, shapes, a.quick, mls_modes, a.threads, rows, failed)
     # 2. Dynamic bar: shape x ppc.
     base = load("dynamic_bar")
     for shape in shapes:
@@ -215,7 +268,7 @@ def main():
             for mls in mls_modes:
                 res = run(talus, variant(base, shape, "musl", None, ppc, mls), a.threads)
                 if res is None:
-                    run_failed(f"dynamic_bar {shape} ppc={ppc} mls={mls}")
+                    run_failed(failed, f"dynamic_bar {shape} ppc={ppc} mls={mls}")
                 else:
                     record("dynamic_bar", shape, "musl", base["grid"]["cell_size"], ppc, res,
                            bar_metrics(res, base["bodies"][0]["velocity"][0]), "|mean/exact - 1|", "", mls)
@@ -227,7 +280,7 @@ def main():
         for shape, scheme in combos:
             res = run(talus, variant(base, shape, scheme), a.threads)
             if res is None:
-                run_failed(f"{name} {shape} {scheme}")
+                run_failed(failed, f"{name} {shape} {scheme}")
                 continue
             worst, final = energy_drift(res)
             histories[(name, shape, scheme)] = res["energy"]
@@ -241,34 +294,8 @@ def main():
     write_csv_rows(os.path.join(out, "speed_vs_error.csv"), rows)
 
     # Plots: error vs time per benchmark.
-    markers = {"linear": "o", "ugimp": "s", "cpgimp": "^", "bspline2": "D"}
     for bench in ["column_w10000", "column_w12500", "dynamic_bar", "block_between_walls", "elastic_free_fall"]:
-        sel = [r for r in rows if r["benchmark"] == bench]
-        if not sel:
-            continue
-        fig, ax = plt.subplots(figsize=(6, 4.2))
-        for shape in SHAPES:
-            for scheme in SCHEMES:
-                for mls in mls_modes:
-                    pts = [r for r in sel if r["shape"] == shape and r["scheme"] == scheme and r["mls"] == mls]
-                    if not pts:
-                        continue
-                    ax.scatter([r[time_col] for r in pts], [max(r["error"], 1e-5) for r in pts],
-                               marker=markers[shape], facecolors="none" if mls != "off" else None,
-                               edgecolors="C3" if mls != "off" else None,
-                               label=f"{shape} {scheme}" + (f" MLS {mls}" if mls != "off" else ""))
-                    for r in pts:
-                        if bench.startswith("column"):
-                            ax.annotate(f"h={r['cell_size']:g},{r['ppc']}", (r[time_col], max(r["error"], 1e-5)),
-                                        fontsize=6)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel(f"{'wall' if TIME_KEY == 'wall' else 'CPU'} time [s] ({a.threads} thread{'s' if a.threads > 1 else ''})")
-        ax.set_ylabel(sel[0]["metric"])
-        ax.set_title(f"{bench}: error vs time")
-        ax.legend(fontsize=7)
-        ax.grid(True, which="both", alpha=0.3)
-        save_figure(fig, os.path.join(out, f"{bench}_error_vs_time.png"), 110)
+        plot_error_vs_time(rows, bench, os.path.join(out, f"{bench}_error_vs_time.png"), a.threads, mls_modes)
 
     # Convergence of the column error with cell size (ppc 2).
     conv = []
@@ -282,7 +309,7 @@ def main():
             rate = np.polyfit(np.log(hs), np.log(es), 1)[0]
             conv.append({"shape": shape, "rate": round(float(rate), 3),
                          **{f"L2_h{h:g}": round(float(e), 6) for h, e in zip(hs, es)}})
-            ax.loglog(hs, es, marker=markers[shape], label=f"{shape} (rate {rate:.2f})")
+            ax.loglog(hs, es, marker=MARKERS[shape], label=f"{shape} (rate {rate:.2f})")
     ax.set_xlabel("cell size h")
     ax.set_ylabel("relative L2 stress error")
     ax.set_title("column W = 10000: convergence")
