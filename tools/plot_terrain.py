@@ -6,6 +6,9 @@ Runs the scenes of inputs/terrain/ with talus (or reuses finished runs under --r
   docs/verification/terrain_incline30.png         horizontal travel on a 30-degree plane vs eq. 22
                                                   (terrain grid coarse/fine, flat grid with rotated
                                                   gravity, mu = 0.7 sticking)
+  docs/verification/terrain_incline30_near_threshold.png  mu = 0.55 on 30 degrees (just below tan 30),
+                                                  gravity ramped: travel at h = 0.25 and 0.125 against
+                                                  the ramped rigid block, and the effective friction
   docs/verification/terrain_slope_to_runout.png   block through a slope-to-runout transition:
                                                   snapshots over the bed and the energy budget
   docs/verification/terrain_trench.png            block in a trench between two slip x walls on the
@@ -38,6 +41,44 @@ def run(args, name):
         run_talus(args.talus, "run", os.path.join(ROOT, "inputs", "terrain", name + ".json"), "--out", out,
                   threads=args.threads)
     return out
+
+
+def run_refined(args, name, h):
+    """The scene inputs/terrain/NAME.json at cell size h (one cell across, as the input): written
+    under --runs as NAME_h<h>.json and run (or reused)."""
+    tag = f"{name}_h{h:g}"
+    out = os.path.join(args.runs, tag)
+    if not (args.reuse and os.path.exists(os.path.join(out, "energy.csv"))):
+        with open(os.path.join(ROOT, "inputs", "terrain", name + ".json")) as f:
+            scene = json.load(f)
+        scene["name"] = tag
+        scene["grid"]["cell_size"] = h
+        scene["grid"]["size"][1] = h
+        for body in scene["bodies"]:
+            body["box"]["max"][1] = h
+        os.makedirs(args.runs, exist_ok=True)
+        path = os.path.join(args.runs, tag + ".json")
+        with open(path, "w") as f:
+            json.dump(scene, f, indent=2)
+        run_talus(args.talus, "run", path, "--out", out, threads=args.threads)
+    return out
+
+
+def ramped_rigid_travel(mu, theta, ramp, t):
+    """Along-slope travel of a rigid block released from rest when gravity grows linearly to g over
+    `ramp` seconds (solver.gravity_ramp_time) and tan theta > mu: a(t) = g(t) (sin - mu cos) from t = 0,
+    so s = a t^3 / (6 ramp) during the ramp and a ((t - ramp/2)^2 / 2 + ramp^2 / 24) after it."""
+    a = G * (math.sin(theta) - mu * math.cos(theta))
+    t = np.asarray(t, dtype=float)
+    if ramp <= 0.0:
+        return a * t ** 2 / 2
+    return a * np.where(t < ramp, t ** 3 / (6 * ramp), (t - ramp / 2) ** 2 / 2 + ramp ** 2 / 24)
+
+
+def effective_mu(travel, theta, ramp, t):
+    """The friction coefficient with which the ramped rigid block travels `travel` (along the slope) in t."""
+    per_acceleration = ramped_rigid_travel(0.0, theta, ramp, t) / (G * math.sin(theta))  # travel / a
+    return math.tan(theta) - travel / per_acceleration / (G * math.cos(theta))
 
 
 def frames(run_dir):
@@ -134,6 +175,29 @@ def main():
         print(f"{name}: horizontal travel at t = {t[i]:.2f} s {c[i, 0] * scale:.4f} m ({rigid_text(scene_of(rd, name), t[i])})")
     finish_axes(ax, "time [s]", "horizontal travel of the centre [m]", "Block on a 30-degree plane from rest", fontsize=8)
     save_figure(fig, os.path.join(args.out, "terrain_incline30.png"), 120)
+
+    # 2b. near the sliding threshold: mu = 0.55 < tan 30 = 0.577, gravity ramped over 0.5 s
+    name = "incline30_near_threshold"
+    with open(os.path.join(ROOT, "inputs", "terrain", name + ".json")) as f:
+        near = json.load(f)
+    mu_near, ramp = near["boundaries"]["z-"]["friction_coefficient"], near["solver"]["gravity_ramp_time"]
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    tr = np.linspace(0, near["time"]["end"], 200)
+    for m, style in ((mu_near, "k-"), (mu_near - 0.01, "k--"), (mu_near - 0.02, "k:")):
+        ax.plot(tr, ramped_rigid_travel(m, THETA, ramp, tr) * math.cos(THETA), style, lw=2 if m == mu_near else 1,
+                alpha=0.4, label=f"rigid block, mu = {m:.2f}, gravity ramped")
+    for h, style in ((0.25, "o-"), (0.125, "s-")):
+        rd = run(args, name) if h == near["grid"]["cell_size"] else run_refined(args, name, h)
+        t, c, _ = centre_track(rd)
+        mu_eff = effective_mu(c[-1, 0] / math.cos(THETA), THETA, ramp, t[-1])
+        ax.plot(t, c[:, 0], style, ms=3, label=f"MPM, h = {h}: mu_eff = {mu_eff:.4f}")
+        rigid = ramped_rigid_travel(mu_near, THETA, ramp, t[-1]) * math.cos(THETA)
+        print(f"{name}, h = {h}: horizontal travel at t = {t[-1]:.2f} s {c[-1, 0]:.4f} m, ramped rigid block "
+              f"{rigid:.4f} m ({100 * (c[-1, 0] / rigid - 1):+.1f}%): effective mu {mu_eff:.4f} "
+              f"({mu_eff - mu_near:+.4f})")
+    finish_axes(ax, "time [s]", "horizontal travel of the centre [m]",
+                f"Near the threshold: mu = {mu_near} on 30 degrees (tan 30 = 0.577)", fontsize=8)
+    save_figure(fig, os.path.join(args.out, "terrain_incline30_near_threshold.png"), 120)
 
     # 3. slope to runout through a circular transition
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 7))

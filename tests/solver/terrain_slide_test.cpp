@@ -204,6 +204,46 @@ TEST(TerrainSlide, FlatGridWithRotatedGravityAgrees) {
   EXPECT_NEAR(terrain / flat, 1.0, 0.002);  // not a target: measured -0.02%, a regression bound
 }
 
+// Near the sliding threshold (docs/verification.md "Near the sliding threshold"): with gravity ramped
+// linearly to g over T, a rigid block with tan theta > mu slides from t = 0 at a(t) = g(t) (sin - mu cos),
+// so after the ramp s = a ((t - T/2)^2 / 2 + T^2 / 24) along the slope. The friction coefficient with
+// which the rigid block would travel as far as the elastic one, minus mu: the figure of merit, since near
+// the threshold a(mu) is small and 0.01 in mu is 37% of it at mu = 0.55.
+double effective_friction_error(double h, double mu) {
+  const double ramp = 0.5, end = 2.0;
+  SlideSetup s;
+  s.h = h;
+  s.terrain = plane(kTheta);
+  s.mu = mu;
+  s.end = end;
+  s.box = fmt::format(R"("min": [1, 0, 0], "max": [2, {}, 1], "frame": "terrain")", h);
+  Scene scene = slide_scene(s);
+  scene.gravity_ramp_time = ramp;
+  Solver solver(scene);
+  const double x0 = centre(solver.particles())[0];
+  while (!solver.finished()) solver.step();
+  const double along = (centre(solver.particles())[0] - x0) / std::cos(kTheta);
+  const double a = along / ((end - ramp / 2) * (end - ramp / 2) / 2 + ramp * ramp / 24);
+  const double mu_eff = std::tan(kTheta) - a / (kG * std::cos(kTheta));
+  const double rigid = kG * (std::sin(kTheta) - mu * std::cos(kTheta)) *
+                       ((end - ramp / 2) * (end - ramp / 2) / 2 + ramp * ramp / 24);
+  std::printf("30-degree terrain plane, mu = %.2f, h = %.3f, gravity ramped over %.1f s: travel along the slope "
+              "%.4f m, rigid %.4f m (%+.1f%%): effective mu %.4f (%+.4f)\n",
+              mu, h, ramp, along, rigid, 100.0 * (along / rigid - 1.0), mu_eff, mu_eff - mu);
+  return mu_eff - mu;
+}
+
+// The elastic block slides further than the rigid one when mu is high: at mu = 0.55 its effective
+// friction is 0.0068 lower at h = 0.25 (+25% travel), and the deficit grows as the grid is refined
+// (0.020 at h = 0.125, 0.046 at 0.0625, 0.21 at 0.03125; measured, not tests). At mu = 0.45 it is
+// 1.5e-4. Bounds: the measured values, not targets (the deficit is not explained away: docs/verification.md).
+TEST(TerrainSlide, NearTheSlidingThresholdTheFrictionDeficitIsBounded) {
+  const double low = effective_friction_error(0.25, 0.45);
+  EXPECT_LT(std::abs(low), 1.0e-3);   // measured -1.5e-4
+  const double near = effective_friction_error(0.25, 0.55);
+  EXPECT_LT(std::abs(near), 0.01);    // measured -0.0068 (courant 0.2-0.35: -0.0057 to -0.0070)
+}
+
 }  // namespace
 }  // namespace terrain_slide_test
 }  // namespace talus

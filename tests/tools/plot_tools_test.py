@@ -131,6 +131,20 @@ class TerrainRigidAnswers(unittest.TestCase):
             self.assertEqual(plot_terrain.rigid_text(scene(f"inputs/terrain/{name}.json"), 1.5),
                              "rigid mu = 0.3: 2.2957 m", name)
 
+    def test_the_ramped_rigid_block_and_its_effective_friction(self):
+        # gravity ramped over T: s = a t^3 / (6 T) during the ramp, a ((t - T/2)^2 / 2 + T^2 / 24) after;
+        # effective_mu inverts it
+        import math
+        import plot_terrain
+        theta = math.radians(30.0)
+        a = 9.81 * (math.sin(theta) - 0.55 * math.cos(theta))
+        self.assertAlmostEqual(float(plot_terrain.ramped_rigid_travel(0.55, theta, 0.5, 0.25)), a * 0.25 ** 3 / 3.0, 12)
+        self.assertAlmostEqual(float(plot_terrain.ramped_rigid_travel(0.55, theta, 0.5, 2.0)), a * (1.75 ** 2 / 2 + 0.25 / 24), 12)
+        self.assertAlmostEqual(float(plot_terrain.ramped_rigid_travel(0.55, theta, 0.0, 2.0)), a * 2.0, 12)
+        for mu in (0.45, 0.55):
+            travel = float(plot_terrain.ramped_rigid_travel(mu, theta, 0.5, 2.0))
+            self.assertAlmostEqual(plot_terrain.effective_mu(travel, theta, 0.5, 2.0), mu, 12)
+
 
 
 class FlumeSceneRefusals(unittest.TestCase):
