@@ -182,7 +182,9 @@ class Walls {
   /// GridUpdate returns the work dissipated by friction on a node of mass `m` whose velocity at the start of
   /// the step was `v_start`: -J_t . v_start,t with J_t = m dv_t the friction impulse. (The start
   /// velocity is a momentum average and stays bounded; the trial velocity of a nearly empty node
-  /// does not, which would make a mean of the two meaningless.)
+  /// does not, which would make a mean of the two meaningless.) Where the node sticks, J_t is a static
+  /// reaction and v_start no slip, so the term is an O(dt) error of either sign there: -0.39 J in a
+  /// sloshing block whose bed sticks (docs/theory.md, "Negative friction work where the bed sticks").
   /// (A rigid wall's normal impulse does no work; the energy a no-rebound impact removes shows up
   /// in the budget's gap, see docs/theory.md.)
   double apply(const std::array<int, 3>& node, double v[3], Stage stage, double m = 0.0,
