@@ -238,7 +238,7 @@ def main():
     save_figure(fig, os.path.join(args.out, "terrain_slope_to_runout.png"), 120)
 
     # 4. a block filling a trench between two slip x walls on the 30-degree bed (docs/theory.md, "Where the
-    # bed meets an x wall"; TerrainSlide.ABlockBetweenSlipWallsOnASlopeSettles), and on a flat grid
+    # bed meets an x wall"; TerrainSlide.ABlockBetweenSlipWallsOnASlopeStaysBounded), and on a flat grid
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(6.5, 6), sharex=True)
     for name, label, colour in (("trench_slip_walls", "terrain grid, 30-degree bed", "C0"),
                                 ("trench_slip_walls_flat_rotated_gravity", "flat grid, rotated gravity", "C1")):

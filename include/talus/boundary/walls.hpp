@@ -183,8 +183,10 @@ class Walls {
   /// the step was `v_start`: -J_t . v_start,t with J_t = m dv_t the friction impulse. (The start
   /// velocity is a momentum average and stays bounded; the trial velocity of a nearly empty node
   /// does not, which would make a mean of the two meaningless.) Where the node sticks, J_t is a static
-  /// reaction and v_start no slip, so the term is an O(dt) error of either sign there: -0.39 J in a
-  /// sloshing block whose bed sticks (docs/theory.md, "Negative friction work where the bed sticks").
+  /// reaction and v_start no slip, so the term is O(dt) and of either sign there: -0.39 J in a
+  /// sloshing block whose bed sticks. Under FLIP it is also, to first order, the energy the impulse
+  /// gives the particles (sum_p m_p v_p . N dv = m dv . v_start): a negative value is energy fed into
+  /// the motion (docs/theory.md, "Negative friction work where the bed sticks").
   /// (A rigid wall's normal impulse does no work; the energy a no-rebound impact removes shows up
   /// in the budget's gap, see docs/theory.md.)
   double apply(const std::array<int, 3>& node, double v[3], Stage stage, double m = 0.0,
