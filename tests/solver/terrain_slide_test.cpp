@@ -67,15 +67,20 @@ std::string plane(double theta) {
   return fmt::format(R"({{ "points": [[0, {}], [8, 0]] }})", 8.0 * std::tan(theta));
 }
 
-// Horizontal displacement of the block's centre after `end` on the 30-degree terrain plane.
-double incline_travel(double h, double mu, double end, double* normal_drift = nullptr) {
+// The 1 m block on the 30-degree terrain plane, one cell across, friction mu, until `end`.
+SlideSetup incline_setup(double h, double mu, double end) {
   SlideSetup s;
   s.h = h;
   s.terrain = plane(kTheta);
   s.mu = mu;
   s.end = end;
   s.box = fmt::format(R"("min": [1, 0, 0], "max": [2, {}, 1], "frame": "terrain")", h);
-  Solver solver(slide_scene(s));
+  return s;
+}
+
+// Horizontal displacement of the block's centre after `end` on the 30-degree terrain plane.
+double incline_travel(double h, double mu, double end, double* normal_drift = nullptr) {
+  Solver solver(slide_scene(incline_setup(h, mu, end)));
   const Vec3 c0 = centre(solver.particles());
   while (!solver.finished()) solver.step();
   const Vec3 c1 = centre(solver.particles());
@@ -211,13 +216,7 @@ TEST(TerrainSlide, FlatGridWithRotatedGravityAgrees) {
 // the threshold a(mu) is small and 0.01 in mu is 37% of it at mu = 0.55.
 double effective_friction_error(double h, double mu) {
   const double ramp = 0.5, end = 2.0;
-  SlideSetup s;
-  s.h = h;
-  s.terrain = plane(kTheta);
-  s.mu = mu;
-  s.end = end;
-  s.box = fmt::format(R"("min": [1, 0, 0], "max": [2, {}, 1], "frame": "terrain")", h);
-  Scene scene = slide_scene(s);
+  Scene scene = slide_scene(incline_setup(h, mu, end));
   scene.gravity_ramp_time = ramp;
   Solver solver(scene);
   const double x0 = centre(solver.particles())[0];
