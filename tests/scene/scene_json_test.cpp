@@ -113,12 +113,15 @@ TEST(SceneJson, SteepOrFinelyDetailedTerrainsAreWarnedAbout) {
 }
 
 // An undamped elastic body on a high-friction face is warned about (docs/verification.md, "Near the
-// sliding threshold"); damped, on a low-friction face, or a granular body is not.
+// sliding threshold"); with the PIC share measured to cure it, on a low-friction face, or a granular
+// body it is not.
 TEST(SceneJson, AnUndampedElasticBodyOnAHighFrictionBedIsWarnedAbout) {
   const auto shipped = [](const char* name) { return read_scene_file(std::string(TALUS_SOURCE_DIR) + "/inputs/" + name); };
   const std::string warning = "bodies[0] (\"block\") is linear_elastic on the friction face z- (friction_coefficient 0.55)";
   Scene near = shipped("terrain/incline30_near_threshold.json");
   EXPECT_EQ(test::warnings_with(near, warning), 1);
+  near.pic_fraction = 0.01;  // a share smaller than the one measured to cure it
+  EXPECT_EQ(test::warnings_with(near, "with solver.pic_fraction = 0.01: near its sliding threshold"), 1);
   near.pic_fraction = 0.05;
   EXPECT_EQ(test::warnings_with(near, "is linear_elastic on the friction face"), 0);
   EXPECT_EQ(test::warnings_with(shipped("terrain/incline30_coarse.json"), "is linear_elastic on the friction face"), 0);  // mu 0.3
