@@ -149,9 +149,17 @@ class ObjectReader {
     const bool ok = std::isfinite(v) && (open_lo ? v > lo : v >= lo) && (open_hi ? v < hi : v <= hi);
     // young = 1e308 was refused as "outside (0, inf)": say which limit it broke.
     const bool beyond = std::isfinite(v) && ((v > hi && hi >= kUnbounded) || (v < lo && lo <= -kUnbounded));
-    if (!ok)
-      throw input_error(fmt::format("{} = {} is outside the allowed range {}{}", path, v, range,
-                                    beyond ? " (magnitudes above 1e30 are refused)" : ""));
+    if (!ok && beyond) {
+      // the range with its unbounded ends written as the 1e30 they are (young = 1e31 read as "outside
+      // (0, inf)", which it is not)
+      const bool no_lo = lo <= -kUnbounded, no_hi = hi >= kUnbounded;
+      const std::string shown =
+          fmt::format("{}{}, {}{}", no_lo || !open_lo ? "[" : "(", no_lo ? -kUnbounded : lo, no_hi ? kUnbounded : hi,
+                      no_hi || !open_hi ? "]" : ")");
+      throw input_error(fmt::format("{} = {} is outside the allowed range {} (magnitudes above 1e30 are refused)",
+                                    path, v, shown));
+    }
+    if (!ok) throw input_error(fmt::format("{} = {} is outside the allowed range {}", path, v, range));
     return v;
   }
 

@@ -74,9 +74,9 @@ TEST(BadInput, EveryMistakeNamesTheKeyPathInOneLine) {
        "bodies[0].velocity[0] = 1e+300 is outside the allowed range"},
       // the message says which limit a number broke, and shows it as written
       {"beyond 1e30", "\"young\": 1.0e6", "\"young\": 1e308",
-       "materials.rubber.young = 1e+308 is outside the allowed range (0, inf) (magnitudes above 1e30 are refused)"},
+       "materials.rubber.young = 1e+308 is outside the allowed range (0, 1e+30] (magnitudes above 1e30 are refused)"},
       {"vector beyond 1e30", "\"material\": \"rubber\",", "\"material\": \"rubber\", \"velocity\": [0, 0, -1e308],",
-       "bodies[0].velocity[2] = -1e+308 is outside the allowed range (-inf, inf) (magnitudes above 1e30 are refused)"},
+       "bodies[0].velocity[2] = -1e+308 is outside the allowed range [-1e+30, 1e+30] (magnitudes above 1e30 are refused)"},
       {"integer past 2^64", "\"courant\": 0.3", "\"courant\": 0.3, \"max_steps\": 18446744073709551615",
        "time.max_steps = 18446744073709551615 is outside the allowed range"},
       // the name is a folder under runs/ whose files a run replaces and clears
