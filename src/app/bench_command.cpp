@@ -190,6 +190,21 @@ void refuse_unavailable(const BenchOptions& o) {
         throw input_error(fmt::format("{}{}{}: the update scene times the constitutive update alone, with no grid, "
                                       "smoother or work record, on the wall clock; leave {} out",
                                       option, value.empty() ? "" : " ", value, option));
+  // The smoother's options without --mls benchmarked the step without smoothing, under a header that
+  // said so but with an exit status that did not (a user who forgot --mls got the wrong method's numbers).
+  if (o.scene != "update" && o.mls == "off") {
+    const std::array<std::tuple<const char*, std::string, bool>, 3> smoother_options = {
+        std::tuple{"--mls-radius", fmt::format("{}", o.mls_radius), o.mls_radius != defaults.mls_radius},
+        std::tuple{"--mls-variant", o.mls_variant, o.mls_variant != defaults.mls_variant},
+        std::tuple{"--mls-reuse-strain", fmt::format("{}", o.mls_reuse_strain), o.mls_reuse_strain != defaults.mls_reuse_strain}};
+    for (const auto& [option, value, given] : smoother_options)
+      if (given)
+        throw input_error(fmt::format("{} {} needs --mls linear, quadratic or cubic (smoothing is off without it)",
+                                      option, value));
+  }
+  if (o.mls_variant != "reused" && o.mls_reuse_strain != defaults.mls_reuse_strain)
+    throw input_error(fmt::format("--mls-reuse-strain {} needs --mls-variant reused (the {} fit does not reuse)",
+                                  o.mls_reuse_strain, o.mls_variant));
 }
 
 /// The shear scene: the block scene's sand put into steady simple shear at its yield stress, so that

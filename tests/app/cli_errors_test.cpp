@@ -66,6 +66,10 @@ TEST_F(CliErrors, BenchNumberOptionsRefuseNonFiniteValuesAndNonNumbersNamingTheR
   expect_error_line(run("bench --scene update --material dp --record-work w.json"), "--record-work w.json" + no_grid + "--record-work out");
   expect_error_line(run("bench --scene update --material dp --stream"), "--stream" + no_grid + "--stream out");
   expect_error_line(run("bench --scene update --material dp --cpu-time"), "--cpu-time" + no_grid + "--cpu-time out");
+  // without --mls the smoother's options benchmarked the step without smoothing, exit 0
+  expect_error_line(run("bench --mls-variant cell"), "--mls-variant cell needs --mls linear, quadratic or cubic (smoothing is off without it)");
+  expect_error_line(run("bench --mls-radius 3"), "--mls-radius 3 needs --mls linear, quadratic or cubic (smoothing is off without it)");
+  expect_error_line(run("bench --mls linear --mls-reuse-strain 0.5"), "--mls-reuse-strain 0.5 needs --mls-variant reused (the particle fit does not reuse)");
   // CLI11 said "--threads: At Most 1 required but received 2"
   expect_error_line(run("bench --threads 1 --threads 2"), "--threads is given 2 times; give it once (see talus bench --help)");
   // an option that only shapes another one, given without it, was ignored without a word
