@@ -222,7 +222,7 @@ ElementTestRequest parse_element_test_request(const std::string& text, const std
 
 ElementTestRequest read_element_test_request(const std::string& path) {
   const auto text = read_text_file(path);
-  if (!text) throw io_error(fmt::format("cannot read spec file {}", path));
+  if (!text) throw io_error(fmt::format("cannot read spec file {}{}", path, why_unreadable(path)));
   return parse_element_test_request(*text, path);
 }
 
@@ -235,7 +235,7 @@ ElementTestSpec parse_element_test(const std::string& text, const std::string& s
 
 ElementTestSpec read_element_test_file(const std::string& path) {
   const auto text = read_text_file(path);
-  if (!text) throw io_error(fmt::format("cannot read spec file {}", path));
+  if (!text) throw io_error(fmt::format("cannot read spec file {}{}", path, why_unreadable(path)));
   return parse_element_test(*text, path);
 }
 

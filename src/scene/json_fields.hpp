@@ -183,6 +183,16 @@ void with_key_path(const std::string& prefix, Check&& check) {
   }
 }
 
+/// Why read_text_file found nothing at `path`, for the caller's message: ": it is a folder, not a
+/// file", ": no such file", or "" (then the system refused it; `talus check inputs` said only "cannot
+/// open scene file inputs").
+inline std::string why_unreadable(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) return ": it is a folder, not a file";
+  if (!std::filesystem::exists(path, ec) && !ec) return ": no such file";
+  return "";
+}
+
 /// The whole text of a file; nothing when it cannot be opened (the caller names the file's role).
 /// The whole file, or nothing when it cannot be read (a folder cannot: reading one gave an empty text
 /// and a puzzling "unexpected end of input").

@@ -105,7 +105,7 @@ double particle_count_bound(const Scene& s) {
 
 Scene read_scene_file(const std::string& path) {
   const auto text = scene_detail::read_text_file(path);
-  if (!text) throw input_error(fmt::format("cannot open scene file {}", path));
+  if (!text) throw input_error(fmt::format("cannot open scene file {}{}", path, scene_detail::why_unreadable(path)));
   return parse_scene(*text, path);
 }
 
