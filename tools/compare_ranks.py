@@ -8,7 +8,8 @@ distance beyond the gate; runout.json), the final energy ledger and how well it 
 the particles left in the last frame plus those that left through open faces (mass conservation),
 and the wall time. The rank count, the particles that left and the wall time come from the run's
 record (run.json; of a resumed run, its last part's wall time), or from a `talus.log` with talus's
-end-of-run lines in a folder written before talus kept that record.
+end-of-run lines in a folder written before talus kept that record. Runs whose scene.json differs
+from the first's, or that ended at another time (runout.json), are refused in one line.
 """
 import argparse
 import csv
@@ -31,6 +32,25 @@ def recorded_closure(run):
         return float(json.loads((run / "run.json").read_text())["end"]["energy_budget_gap"])
     except (OSError, ValueError, KeyError, TypeError):
         return None
+
+
+def same_scene(runs):
+    """Refuse runs that are not of one scene to one time: the table's differences would then be those
+    of the scenes (a 960-particle wedge read as "-66% beyond the gate vs 1 rank")."""
+    first = runs[0]
+    scene0 = json.loads((first / "scene.json").read_text()) if (first / "scene.json").is_file() else None
+    time0 = json.loads((first / "runout.json").read_text()).get("time")
+    for run in runs[1:]:
+        if scene0 is not None and (run / "scene.json").is_file():
+            scene = json.loads((run / "scene.json").read_text())
+            differ = sorted(k for k in set(scene0) | set(scene) if scene0.get(k) != scene.get(k))
+            if differ:
+                sys.exit(f"compare_ranks.py: {run} is not a run of {first}'s scene (scene.json differs in "
+                         f"{', '.join(differ)}): compare runs of one scene")
+        time = json.loads((run / "runout.json").read_text()).get("time")
+        if time != time0:
+            sys.exit(f"compare_ranks.py: {run} ended at t = {time} s, {first} at t = {time0} s: compare runs that "
+                     "ended at the same time (a stopped run: resume it first)")
 
 
 def particles_in_last_frame(run):
@@ -85,6 +105,7 @@ def main():
         for needed in ("runout.json", "energy.csv"):
             if not (run / needed).is_file():
                 sys.exit(f"compare_ranks.py: {run / needed} not found: give run folders of a scene with diagnostics.runout")
+    same_scene(args.runs)
     ref = None
     rows = []
     for run in args.runs:

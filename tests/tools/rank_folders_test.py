@@ -71,6 +71,32 @@ class RankFolders(unittest.TestCase):
             self.assertIsNotNone(row["wall"])
         self.assertEqual(rows[0]["kept_plus_out"], rows[1]["kept_plus_out"])
 
+    def test_compare_ranks_refuses_runs_of_another_scene_or_time(self):
+        other = os.path.join(self.work, "other")
+        shutil.copytree(self.two, other)
+        scene_path = os.path.join(other, "scene.json")
+        with open(scene_path) as f:
+            scene = json.load(f)
+        scene["time"]["end"] = 0.2
+        with open(scene_path, "w") as f:
+            json.dump(scene, f)
+        tool = [sys.executable, os.path.join(ROOT, "tools", "compare_ranks.py")]
+        r = subprocess.run(tool + [self.one, other], capture_output=True, text=True)
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("is not a run of", r.stderr)
+        self.assertIn("scene.json differs in time", r.stderr)
+        shutil.copy(os.path.join(self.two, "scene.json"), scene_path)  # the same scene, stopped earlier
+        runout_path = os.path.join(other, "runout.json")
+        with open(runout_path) as f:
+            runout = json.load(f)
+        runout["time"] = 0.2
+        with open(runout_path, "w") as f:
+            json.dump(runout, f)
+        r = subprocess.run(tool + [self.one, other], capture_output=True, text=True)
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("ended at t = 0.2 s", r.stderr)
+        shutil.rmtree(other)
+
 
 if __name__ == "__main__":
     if len(sys.argv) < 3:
