@@ -571,13 +571,15 @@ void run_bench(const BenchOptions& o) {
 
   const std::string workers =
       world.distributed() ? fmt::format("{} ranks x {} thread{}", world.size(), threads, threads == 1 ? "" : "s")
-                          : fmt::format("{} threads", threads);
-  fmt::print("talus bench: {} scene, {} particles, {} shape, {} scheme, {} material, MLS {}, {}, {} kernels, {} steps\n",
+                          : fmt::format("{} thread{}", threads, threads == 1 ? "" : "s");
+  fmt::print("talus bench: {} scene, {} particles, {} shape, {} scheme, {} material, MLS {}, {}, {} kernels, {} step{}\n",
              o.scene, n, o.shape, o.scheme, o.material,
              o.mls == "off" ? o.mls
                             : fmt::format("{} ({} fit, radius {} cells)", o.mls, o.mls_variant, o.mls_radius),
-             workers, active_isa(), o.steps);
-  fmt::print("  {:.3f} M particle-updates/s ({:.3f} s{})\n", rate / 1e6, wall_max, o.cpu_time ? " of CPU time" : "");
+             workers, active_isa(), o.steps, o.steps == 1 ? "" : "s");
+  // (the phase times below are totals over the timed steps too; a reader took them for one step's)
+  fmt::print("  {:.3f} M particle-updates/s ({:.3f} s{} over the {} timed step{}; the phases below are totals over "
+             "them)\n", rate / 1e6, wall_max, o.cpu_time ? " of CPU time" : "", o.steps, o.steps == 1 ? "" : "s");
   if (o.cpu_time && threads > 1)  // (a 2-thread run printed a third of its wall-clock rate, without a word)
     fmt::print("  note: --cpu-time sums the CPU time of the {} threads: the rate is per second of one core, not of the "
                "wall clock\n", threads);
@@ -608,7 +610,7 @@ void run_bench(const BenchOptions& o) {
                solver.smoothing_fits() - fits_before, o.steps, double(solver.mls_weight_bytes()) / n);
   if (o.stream)
     fmt::print("  STREAM triad: {:.2f} GB/s at {}{}\n", stream / 1e9, world.distributed() ? "all ranks, " : "",
-               world.distributed() ? workers : fmt::format("{} threads", threads));
+               workers);
   fmt::print("  memory: {:.0f} B/particle peak RSS, {:.0f} B/particle above the {:.1f} MB the process held before the scene "
              "({:.0f} B/particle in particle fields), grid {:.1f} MB active{}\n",
              double(rss) / n, double(rss - std::min(rss, rss_start)) / n, rss_start / 1e6, field_bytes / n, double(grid_bytes) / 1e6,
