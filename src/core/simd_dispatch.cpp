@@ -67,7 +67,7 @@ void select_isa(std::string_view name, std::string_view source) {
     }
   std::vector<std::string> allowed = available_isas();
   allowed.insert(allowed.begin(), "auto");
-  throw input_error(std::string(source) + " = '" + std::string(name) + "' is not available on this CPU and build; allowed: " +
+  throw input_error(std::string(source) + " = '" + std::string(name) + "' is not a vector path this CPU and build run (unknown, or not supported here); allowed: " +
                     joined(allowed));
 }
 
