@@ -75,7 +75,7 @@ CLI::Option* check_duration(CLI::Option* option) {
       [name](std::string& text) {
         const std::optional<double> seconds = parse_duration(text);
         if (!seconds)
-          throw input_error(fmt::format("{} = {} is not a duration; give e.g. 3h50m, 90m, 1.5h, 5400s or 5400 (seconds)",
+          throw input_error(fmt::format("{} = {} is not a positive duration in h, m and s; give e.g. 3h50m, 90m, 1.5h, 5400s or 5400 (seconds)",
                                         name, text));
         // (no batch job runs a year; past about 2.5 million hours the deadline's nanoseconds overflowed,
         // and the run stopped at its first step)

@@ -89,7 +89,7 @@ TEST_F(CliErrors, StopAfterTakesTheDurationsOfABatchJobAndRefusesTheRest) {
   for (const char* refused : {"3h50", "2m3h", "1e3", "-5", "0", "0s", "nan", "inf", "h", "5 m", "1h1h"})
     expect_error_line(run(std::string("run missing.json --stop-after '") + refused + "'"),
                       std::string("--stop-after = ") + refused +
-                          " is not a duration; give e.g. 3h50m, 90m, 1.5h, 5400s or 5400 (seconds)");
+                          " is not a positive duration in h, m and s; give e.g. 3h50m, 90m, 1.5h, 5400s or 5400 (seconds)");
   // (3000000h overflowed the deadline's clock, and the run stopped at its first step with exit 75)
   expect_error_line(run("run missing.json --stop-after 8760h"), "cannot open scene file missing.json: no such file");
   for (const char* refused : {"8760h1s", "3000000h", "99999999999999999999s"})
