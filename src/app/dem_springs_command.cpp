@@ -2,6 +2,7 @@
 // docs/dem.md). Prints one JSON object; a continuum the packing cannot represent is refused with
 // exit code 2 and one line, never answered with a negative spring.
 #include "commands.hpp"
+#include "option_checks.hpp"
 #include "talus/core/error.hpp"
 #include "talus/dem/contact_calibration.hpp"
 #include "talus/dem/number_text.hpp"
@@ -110,20 +111,20 @@ void add_dem_springs_command(CLI::App& app) {
       "              (defaults: --density-ratio 0.64, --coordination 6)\n"
       "Poisson's ratios above the packing's limit need kT < 0 (unstable in dynamic DEM) and are refused\n"
       "with exit code 2. Details, derivations and verification: docs/dem.md.");
-  command->add_option("--E", options->young, "Young's modulus E in Pa (give this or --G)");
-  command->add_option("--G", options->shear, "shear modulus G in Pa (give this or --E)")
+  check_number(command->add_option("--E", options->young, "Young's modulus E in Pa (give this or --G)"));
+  check_number(command->add_option("--G", options->shear, "shear modulus G in Pa (give this or --E)"))
       ->excludes("--E");
-  command->add_option("--nu", options->poisson, "Poisson's ratio of the material")->required();
+  check_number(command->add_option("--nu", options->poisson, "Poisson's ratio of the material"))->required();
   command->add_option("--packing", options->packing, "hex | hex-locked | square | random2d | random3d")
       ->required();
   command->add_flag("--plane-stress", options->plane_stress,
                     "2D only: represent a plane-stress continuum (nu is read as nu/(1+nu); nu <= 1/3)");
-  command->add_option("--density-ratio", options->parameters.density_ratio,
-                      "random packings: solid fraction gamma/rho (bulk over particle density), 0 < value < 1");
-  command->add_option("--coordination", options->parameters.coordination,
-                      "random packings: mean number of contacts per particle Z");
-  command->add_option("--radius", options->parameters.radius,
-                      "random3d: particle radius a in m (3D springs scale with a)");
+  check_number(command->add_option("--density-ratio", options->parameters.density_ratio,
+                      "random packings: solid fraction gamma/rho (bulk over particle density), 0 < value < 1"));
+  check_number(command->add_option("--coordination", options->parameters.coordination,
+                      "random packings: mean number of contacts per particle Z"));
+  check_number(command->add_option("--radius", options->parameters.radius,
+                      "random3d: particle radius a in m (3D springs scale with a)"));
   command->callback([options] { fmt::print("{}\n", compute_dem_springs(*options).dump(2)); });
 }
 

@@ -35,6 +35,19 @@ CLI::Option* check_range(CLI::Option* option, T lo, T hi, const std::string& sho
       shown.empty() ? range : shown));
 }
 
+/// Refuses text that is no number, in the words of check_range, for an option whose range a later
+/// check gives (dem-springs' --E said CLI11's "Could not convert: --E = abc").
+inline CLI::Option* check_number(CLI::Option* option) {
+  const std::string name = option->get_name();
+  return option->check(CLI::Validator(
+      [name](std::string& text) {
+        double value = 0.0;
+        if (!CLI::detail::lexical_cast(text, value)) throw input_error(fmt::format("{} = {} is not a number", name, text));
+        return std::string();
+      },
+      ""));
+}
+
 /// Refuses an empty value (an unset shell variable, `--restart "$CKPT"`), which would otherwise mean
 /// "not given" or "the current folder" without a word. `instead` says what to do, e.g. "leave --out
 /// out for runs/<scene name>".

@@ -138,6 +138,9 @@ TEST_F(CliErrors, ParseErrorsAreOneLineWithWhereToReadMore) {
   expect_error_line(run("check --threads 1 scene.json"), "talus check has no option --threads (see talus check --help)");
   expect_error_line(run("dem-springs --E 1 --G 1 --nu 0 --packing hex"),
                     "--E excludes --G (see talus dem-springs --help)");
+  // CLI11 said "Could not convert: --E = abc"
+  expect_error_line(run("dem-springs --E abc --nu 0.2 --packing hex"), "--E = abc is not a number");
+  expect_error_line(run("dem-springs --E 1e6 --nu x --packing hex"), "--nu = x is not a number");
   // element-test specs have no Markdown table: the flag was ignored and the scene table printed
   expect_error_line(run("schema --markdown --element-test"), "--markdown excludes --element-test (see talus schema --help)");
   // help and version are no errors
