@@ -78,6 +78,14 @@ TEST_F(MuICli, BadElementTestParameterExitsTwoNamingTheKey) {
   EXPECT_EQ(r1.err, "talus: error: path.inertial_number.count = 1 gives one inertial number, but min = 0.001 and max = 1 "
                     "differ; give max = min, or a count of 2 or more\n");
   EXPECT_FALSE(fs::exists(dir_ / "x.csv"));
+  // max below min: "max = 0.001 is outside the allowed range [0.01, inf)" hid where 0.01 came from
+  const fs::path reversed = write("reversed.json", R"({"material": {"model": "mu_i", "young": 1e7, "poisson": 0.3},
+      "path": {"type": "mu_i_shear", "pressure": 1e3, "inertial_number": {"min": 0.01, "max": 0.001, "count": 3}}})");
+  const Result r2 = run("element-test \"" + reversed.string() + "\" --out \"" + (dir_ / "x.csv").string() + "\"");
+  EXPECT_EQ(r2.exit_code, 2);
+  EXPECT_EQ(r2.err, "talus: error: path.inertial_number.max = 0.001 is below path.inertial_number.min = 0.01: give "
+                    "max >= min\n");
+  EXPECT_FALSE(fs::exists(dir_ / "x.csv"));
 }
 
 // A spec whose total shear strain is below the elastic approach to mu(I_max) p (p = 100 MPa with the
