@@ -34,6 +34,7 @@
 #include <tuple>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace talus::app {
 
@@ -176,32 +177,34 @@ void refuse_unavailable(const BenchOptions& o) {
   // grid's, the smoother's and the measurements' options were ignored without a word (a scaling
   // study with --record-work then found no record).
   const BenchOptions defaults;
-  if (o.scene == "update")
-    for (const auto& [option, value, given] :
-         {std::tuple{"--shape", o.shape, o.shape != defaults.shape}, std::tuple{"--scheme", o.scheme, o.scheme != defaults.scheme},
-          std::tuple{"--mls", o.mls, o.mls != defaults.mls}, std::tuple{"--scatter", o.scatter, o.scatter != defaults.scatter},
-          std::tuple{"--block-cells", std::to_string(o.block_cells), o.block_cells != defaults.block_cells},
-          std::tuple{"--mls-radius", fmt::format("{}", o.mls_radius), o.mls_radius != defaults.mls_radius},
-          std::tuple{"--mls-variant", o.mls_variant, o.mls_variant != defaults.mls_variant},
-          std::tuple{"--mls-reuse-strain", fmt::format("{}", o.mls_reuse_strain), o.mls_reuse_strain != defaults.mls_reuse_strain},
-          std::tuple{"--record-work", o.record_path, !o.record_path.empty()},
-          std::tuple{"--stream", std::string(), o.stream}, std::tuple{"--cpu-time", std::string(), o.cpu_time}})
+  // (option, its value as given, whether it was given)
+  using Given = std::tuple<const char*, std::string, bool>;
+  const std::vector<Given> smoother_options = {
+      {"--mls-radius", fmt::format("{}", o.mls_radius), o.mls_radius != defaults.mls_radius},
+      {"--mls-variant", o.mls_variant, o.mls_variant != defaults.mls_variant},
+      {"--mls-reuse-strain", fmt::format("{}", o.mls_reuse_strain), o.mls_reuse_strain != defaults.mls_reuse_strain}};
+  if (o.scene == "update") {
+    std::vector<Given> ignored = {
+        {"--shape", o.shape, o.shape != defaults.shape}, {"--scheme", o.scheme, o.scheme != defaults.scheme},
+        {"--mls", o.mls, o.mls != defaults.mls}, {"--scatter", o.scatter, o.scatter != defaults.scatter},
+        {"--block-cells", std::to_string(o.block_cells), o.block_cells != defaults.block_cells}};
+    ignored.insert(ignored.end(), smoother_options.begin(), smoother_options.end());
+    ignored.insert(ignored.end(), {{"--record-work", o.record_path, !o.record_path.empty()},
+                                   {"--stream", std::string(), o.stream},
+                                   {"--cpu-time", std::string(), o.cpu_time}});
+    for (const auto& [option, value, given] : ignored)
       if (given)
         throw input_error(fmt::format("{}{}{}: the update scene times the constitutive update alone, with no grid, "
                                       "smoother or work record, on the wall clock; leave {} out",
                                       option, value.empty() ? "" : " ", value, option));
+  }
   // The smoother's options without --mls benchmarked the step without smoothing, under a header that
   // said so but with an exit status that did not (a user who forgot --mls got the wrong method's numbers).
-  if (o.scene != "update" && o.mls == "off") {
-    const std::array<std::tuple<const char*, std::string, bool>, 3> smoother_options = {
-        std::tuple{"--mls-radius", fmt::format("{}", o.mls_radius), o.mls_radius != defaults.mls_radius},
-        std::tuple{"--mls-variant", o.mls_variant, o.mls_variant != defaults.mls_variant},
-        std::tuple{"--mls-reuse-strain", fmt::format("{}", o.mls_reuse_strain), o.mls_reuse_strain != defaults.mls_reuse_strain}};
+  if (o.mls == "off")
     for (const auto& [option, value, given] : smoother_options)
       if (given)
         throw input_error(fmt::format("{} {} needs --mls linear, quadratic or cubic (smoothing is off without it)",
                                       option, value));
-  }
   if (o.mls_variant != "reused" && o.mls_reuse_strain != defaults.mls_reuse_strain)
     throw input_error(fmt::format("--mls-reuse-strain {} needs --mls-variant reused (the {} fit does not reuse)",
                                   o.mls_reuse_strain, o.mls_variant));

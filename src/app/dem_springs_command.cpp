@@ -120,11 +120,11 @@ void add_dem_springs_command(CLI::App& app) {
   command->add_flag("--plane-stress", options->plane_stress,
                     "2D only: represent a plane-stress continuum (nu is read as nu/(1+nu); nu <= 1/3)");
   check_number(command->add_option("--density-ratio", options->parameters.density_ratio,
-                      "random packings: solid fraction gamma/rho (bulk over particle density), 0 < value < 1"));
+                                   "random packings: solid fraction gamma/rho (bulk over particle density), 0 < value < 1"));
   check_number(command->add_option("--coordination", options->parameters.coordination,
-                      "random packings: mean number of contacts per particle Z"));
+                                   "random packings: mean number of contacts per particle Z"));
   check_number(command->add_option("--radius", options->parameters.radius,
-                      "random3d: particle radius a in m (3D springs scale with a)"));
+                                   "random3d: particle radius a in m (3D springs scale with a)"));
   command->callback([options] { fmt::print("{}\n", compute_dem_springs(*options).dump(2)); });
 }
 

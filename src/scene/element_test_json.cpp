@@ -87,9 +87,9 @@ Field<MuIShearSpec> inertial_number_field() {
         ObjectReader range = r.object("inertial_number");
         const double lo = range.number("min", 0.0, kHuge, true);
         // (its lower limit is min: "max = 0.001 is outside [0.01, inf)" did not say where 0.01 came from)
-        if (range.has("max") && range.raw("max").is_number() && range.raw("max").get<double>() < lo)
+        if (const Json max = range.has("max") ? range.raw("max") : Json(); max.is_number() && max.get<double>() < lo)
           throw input_error(fmt::format("{} = {} is below {} = {}: give max >= min", range.key_path("max"),
-                                        range.raw("max").get<double>(), range.key_path("min"), lo));
+                                        max.get<double>(), range.key_path("min"), lo));
         const double hi = range.number("max", lo, kHuge);
         const int n = range.integer("count", 1, 100000);
         // (one value from a range was min, with max ignored without a word)

@@ -134,12 +134,15 @@ class ObjectReader {
   /// An end at this magnitude or beyond is unbounded; values beyond it are refused all the same.
   static constexpr double kUnbounded = 1e30;
 
-  /// The interval as messages write it; an end at 1e30 or beyond is unbounded: (0, inf).
-  static std::string interval(double lo, double hi, bool open_lo, bool open_hi) {
-    constexpr double unbounded = kUnbounded;
-    const bool no_lo = lo <= -unbounded, no_hi = hi >= unbounded;
-    return fmt::format("{}{}, {}{}", open_lo || no_lo ? "(" : "[", no_lo ? std::string("-inf") : fmt::format("{}", lo),
-                       no_hi ? std::string("inf") : fmt::format("{}", hi), open_hi || no_hi ? ")" : "]");
+  /// The interval as messages write it; an end at 1e30 or beyond is unbounded: (0, inf), or with
+  /// `as_limits` the limit it still is: (0, 1e+30] (for a value beyond it).
+  static std::string interval(double lo, double hi, bool open_lo, bool open_hi, bool as_limits = false) {
+    const bool no_lo = lo <= -kUnbounded, no_hi = hi >= kUnbounded;
+    const auto end = [as_limits](bool unbounded, double value, double limit, const char* infinity) {
+      return !unbounded ? fmt::format("{}", value) : as_limits ? fmt::format("{}", limit) : std::string(infinity);
+    };
+    return fmt::format("{}{}, {}{}", open_lo || (no_lo && !as_limits) ? "(" : "[", end(no_lo, lo, -kUnbounded, "-inf"),
+                       end(no_hi, hi, kUnbounded, "inf"), open_hi || (no_hi && !as_limits) ? ")" : "]");
   }
 
   static double check_number(const Json& j, const std::string& path, double lo, double hi, bool open_lo, bool open_hi) {
@@ -149,16 +152,10 @@ class ObjectReader {
     const bool ok = std::isfinite(v) && (open_lo ? v > lo : v >= lo) && (open_hi ? v < hi : v <= hi);
     // young = 1e308 was refused as "outside (0, inf)": say which limit it broke.
     const bool beyond = std::isfinite(v) && ((v > hi && hi >= kUnbounded) || (v < lo && lo <= -kUnbounded));
-    if (!ok && beyond) {
-      // the range with its unbounded ends written as the 1e30 they are (young = 1e31 read as "outside
-      // (0, inf)", which it is not)
-      const bool no_lo = lo <= -kUnbounded, no_hi = hi >= kUnbounded;
-      const std::string shown =
-          fmt::format("{}{}, {}{}", no_lo || !open_lo ? "[" : "(", no_lo ? -kUnbounded : lo, no_hi ? kUnbounded : hi,
-                      no_hi || !open_hi ? "]" : ")");
+    // (with its unbounded ends written as the 1e30 they are: young = 1e31 read as "outside (0, inf)")
+    if (!ok && beyond)
       throw input_error(fmt::format("{} = {} is outside the allowed range {} (magnitudes above 1e30 are refused)",
-                                    path, v, shown));
-    }
+                                    path, v, interval(lo, hi, open_lo, open_hi, true)));
     if (!ok) throw input_error(fmt::format("{} = {} is outside the allowed range {}", path, v, range));
     return v;
   }
