@@ -27,6 +27,21 @@ std::string parse_error_line(CLI::App& app, const CLI::ParseError& e) {
   const std::vector<CLI::App*> given = app.get_subcommands();  // require_subcommand(1): at most one
   if (!given.empty()) {
     const std::string name = given.front()->get_name();
+    // An option before the command (`talus --threads 2 run scene.json`): CLI11 left it to the
+    // program and listed its words backwards ("not expected: 2 --threads"), or reported a later
+    // error (`talus --bogus check` said "scene is required"). Every option belongs to a command.
+    for (const std::string& word : app.remaining())
+      if (word.rfind('-', 0) == 0 && word.size() > 1) {
+        const std::string option = word.substr(0, word.find('='));
+        bool known = false;
+        try {
+          known = given.front()->get_option_no_throw(option) != nullptr;
+        } catch (const CLI::Error&) {  // (a word CLI11 cannot take for an option name)
+        }
+        return known ? fmt::format("{} goes after the command: talus {} {} ... (see talus {} --help)", option, name,
+                                   option, name)
+                     : fmt::format("talus {} has no option {} (see talus {} --help)", name, option, name);
+      }
     // CLI11 lists every word it could not place ("not expected: scene.json --threads"), the scene
     // file among them when an unknown option swallowed its place: name the unknown option first.
     if (dynamic_cast<const CLI::ExtrasError*>(&e))
