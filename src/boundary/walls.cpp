@@ -25,4 +25,9 @@ const char* to_string(WallType type) {
   return "?";
 }
 
+const char* face_name(int axis, int side) {
+  static const char* const names[3][2] = {{"x-", "x+"}, {"y-", "y+"}, {"z-", "z+"}};
+  return names[axis][side];
+}
+
 }  // namespace talus

@@ -178,12 +178,12 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
       const MaterialSpec& material = scene.materials[static_cast<std::size_t>(body.material)];
       if (material.model != MaterialModel::LinearElastic) continue;
       double mu = 0.0;
-      std::string face;
+      const char* face = "";
       for (int d = 0; d < 3; ++d)
         for (int side = 0; side < 2; ++side)
           if (scene.walls[d][side].type == WallType::Friction && scene.walls[d][side].friction_coefficient > mu) {
             mu = scene.walls[d][side].friction_coefficient;
-            face = fmt::format("{}{}", "xyz"[d], side == 0 ? '-' : '+');
+            face = face_name(d, side);
           }
       if (mu < kElasticFrictionWarning) continue;
       warnings.push_back(fmt::format(

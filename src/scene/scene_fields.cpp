@@ -19,8 +19,6 @@ namespace talus::scene_detail {
 
 namespace {
 
-const char* const kFaceNames[3][2] = {{"x-", "x+"}, {"y-", "y+"}, {"z-", "z+"}};
-
 /// The words of a choice: each value's to_string (scene.hpp), so an enum's names are written once.
 template <class E>
 std::vector<std::pair<std::string, E>> named(std::initializer_list<E> values) {
@@ -656,11 +654,11 @@ void check_periodic_faces(ObjectReader& r, SceneDraft& d) {
   for (int a = 0; a < 3; ++a) {
     const bool lower = s.walls[a][0].type == WallType::Periodic, upper = s.walls[a][1].type == WallType::Periodic;
     if (!lower && !upper) continue;
-    const char* face = kFaceNames[a][lower ? 0 : 1];
+    const char* face = face_name(a, lower ? 0 : 1);
     const std::string at = r.key_path(face);
     if (a == 2) throw input_error(fmt::format("{} = \"periodic\": only the x and y faces can be periodic", at));
     if (lower != upper) {
-      const char* other = kFaceNames[a][lower ? 1 : 0];
+      const char* other = face_name(a, lower ? 1 : 0);
       throw input_error(fmt::format("{} = \"{}\": must be \"periodic\" like {} (periodic faces come in pairs)",
                                     r.key_path(other), to_string(s.walls[a][lower ? 1 : 0].type), at));
     }
@@ -707,18 +705,18 @@ Table<SceneDraft> make_boundaries_table() {
   for (int a = 0; a < 3; ++a)
     for (int side = 0; side < 2; ++side) {
       auto f = custom<SceneDraft>(
-          kFaceNames[a][side], "string or object", "`\"slip\"`", "see below", "faces `x-`, `x+`, `y-`, `y+`, `z-`, `z+`",
+          face_name(a, side), "string or object", "`\"slip\"`", "see below", "faces `x-`, `x+`, `y-`, `y+`, `z-`, `z+`",
           wall_schema,
           [a, side](ObjectReader& r, SceneDraft& d) {
-            const char* face = kFaceNames[a][side];
+            const char* face = face_name(a, side);
             if (r.has(face)) d.scene.walls[a][side] = read_wall(r.raw(face), r.key_path(face));
           },
           [a, side](const SceneDraft& d, Json& j) {
             const WallSpec& w = d.scene.walls[a][side];
             if (w.type == WallType::Friction)
-              j[kFaceNames[a][side]] = {{"type", "friction"}, {"friction_coefficient", w.friction_coefficient}};
+              j[face_name(a, side)] = {{"type", "friction"}, {"friction_coefficient", w.friction_coefficient}};
             else
-              j[kFaceNames[a][side]] = to_string(w.type);
+              j[face_name(a, side)] = to_string(w.type);
           });
       f.info.doc_key = "<face>";
       f.info.row = a == 0 && side == 0;  // one docs row for the six faces

@@ -14,4 +14,7 @@ struct WallSpec {
 
 const char* to_string(WallType type);
 
+/// The scene's name of the face walls[axis][side]: "x-", "x+", ..., "z+" (side 0 is the lower face).
+const char* face_name(int axis, int side);
+
 }  // namespace talus
