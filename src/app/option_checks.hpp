@@ -13,6 +13,17 @@
 
 namespace talus::app {
 
+/// The number `text` holds, or the one-line refusal in the scene's words: "--E = abc is not a number",
+/// with "; allowed [lo, hi]" when the range is known.
+template <typename T>
+T option_number(const std::string& name, const std::string& text, const std::string& allowed = {}) {
+  T value{};
+  if (!CLI::detail::lexical_cast(text, value))
+    throw input_error(fmt::format("{} = {} is not {}{}", name, text, std::is_integral_v<T> ? "an integer" : "a number",
+                                  allowed.empty() ? "" : "; allowed " + allowed));
+  return value;
+}
+
 /// Limits a number option to [lo, hi], in place of CLI::Range, which lets NaN through (every comparison
 /// with NaN is false) and calls text that is no number "not in range". The message reads as the
 /// scene's do: "--mls-radius = nan is outside [0.5, 8]", "--threads = abc is not an integer". It is
@@ -25,10 +36,7 @@ CLI::Option* check_range(CLI::Option* option, T lo, T hi, const std::string& sho
   const std::string name = option->get_name(), range = fmt::format("[{}, {}]", lo, hi);
   return option->check(CLI::Validator(
       [name, range, lo, hi](std::string& text) {
-        T value{};
-        if (!CLI::detail::lexical_cast(text, value))
-          throw input_error(fmt::format("{} = {} is not {}; allowed {}", name, text,
-                                        std::is_integral_v<T> ? "an integer" : "a number", range));
+        const T value = option_number<T>(name, text, range);
         if (!(value >= lo && value <= hi)) throw input_error(fmt::format("{} = {} is outside {}", name, text, range));
         return std::string();
       },
@@ -41,8 +49,7 @@ inline CLI::Option* check_number(CLI::Option* option) {
   const std::string name = option->get_name();
   return option->check(CLI::Validator(
       [name](std::string& text) {
-        double value = 0.0;
-        if (!CLI::detail::lexical_cast(text, value)) throw input_error(fmt::format("{} = {} is not a number", name, text));
+        option_number<double>(name, text);
         return std::string();
       },
       ""));
