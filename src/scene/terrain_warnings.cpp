@@ -4,8 +4,10 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <string>
 
 namespace talus {
 
@@ -21,20 +23,24 @@ constexpr double kShearedCourantLimit = 1.5;
 /// and a segment of the profile outside the grid shears nothing).
 struct ResolvedBed {
   double steepest_slope = 0.0;  // |dz/dx| of the steepest chord
-  double steepest_x0 = 0.0;     // its first column
+  double steep_from = 0.0;      // the first column of the first chord steeper than the slope asked about
+  double steep_to = 0.0;        // the last column of the last such chord
   double chord_length = 0.0;    // the chords' total length over the grid
   double profile_length = 0.0;  // the profile's arc length over the same columns
 };
 
-ResolvedBed resolved_bed(const TerrainProfile& profile, const GridGeometry& grid) {
+ResolvedBed resolved_bed(const TerrainProfile& profile, const GridGeometry& grid, double steep_slope) {
   ResolvedBed bed;
   const double h = grid.h;
+  bool steep_seen = false;
   for (int i = 0; i < grid.cells[0]; ++i) {
     const double a = grid.origin[0] + i * h, b = a + h;
     const double rise = profile.height(b) - profile.height(a);
-    if (std::abs(rise) / h > bed.steepest_slope) {
-      bed.steepest_slope = std::abs(rise) / h;
-      bed.steepest_x0 = a;
+    bed.steepest_slope = std::max(bed.steepest_slope, std::abs(rise) / h);
+    if (std::abs(rise) / h > steep_slope) {
+      if (!steep_seen) bed.steep_from = a;
+      steep_seen = true;
+      bed.steep_to = b;
     }
     bed.chord_length += std::hypot(h, rise);
     bed.profile_length += profile.arc_length(b) - profile.arc_length(a);
@@ -48,23 +54,46 @@ std::vector<std::string> terrain_warnings(const GridGeometry& grid, double coura
   std::vector<std::string> warnings;
   if (!grid.has_terrain()) return warnings;
   // The cells shear with the bed: across its floor a cell is h cos(theta) high, and the step that
-  // h bounds at solver.courant is courant / cos(theta) of the step the sheared cell bounds. An elastic
+  // h bounds at time.courant is courant / cos(theta) of the step the sheared cell bounds. An elastic
   // block (inputs/terrain/incline30_coarse.json's, mu 0.3) slid down a 78-degree bed (courant 0.3:
   // 1.44) within 0.2% of the rigid block; on an 80-degree bed (1.73) it gained energy and stopped
   // after 32 steps, and a flume at 80 degrees ran to its end 2% further than at courant 0.15.
   const TerrainProfile profile(grid.terrain);
-  const ResolvedBed bed = resolved_bed(profile, grid);
+  // the slope above which courant / cos(theta) passes the limit (none when courant alone is past it)
+  const double ratio = kShearedCourantLimit / courant;
+  const double steep_slope = ratio > 1.0 ? std::sqrt(ratio * ratio - 1.0) : 0.0;
+  const ResolvedBed bed = resolved_bed(profile, grid, steep_slope);
   const double steepest = bed.steepest_slope;
   const double cos_theta = 1.0 / std::sqrt(1.0 + steepest * steepest);
-  if (courant / cos_theta > kShearedCourantLimit)
+  // A spike between the node columns (a no-data value of -9999 at one point) is no steep chord, but
+  // its two flanks are: name the point, which the runout's s along the profile then includes.
+  constexpr double kStepSlope = 57.0;  // 89 degrees
+  std::string step_point;
+  const auto& points = grid.terrain.points;
+  const double x_end = grid.origin[0] + grid.cells[0] * grid.h;
+  for (std::size_t k = 0; k + 1 < points.size() && step_point.empty(); ++k)
+    if (points[k + 1][0] > grid.origin[0] && points[k][0] < x_end &&
+        std::abs(points[k + 1][1] - points[k][1]) > kStepSlope * (points[k + 1][0] - points[k][0]))
+      step_point = fmt::format("grid.terrain.points[{}] to [{}], ({:.6g}, {:.6g}) to ({:.6g}, {:.6g})", k, k + 1,
+                               points[k][0], points[k][1], points[k + 1][0], points[k + 1][1]);
+  if (courant / cos_theta > kShearedCourantLimit) {
+    // a value that keeps courant / cos(theta) at 1 or less: cos(theta) rounded down to 2 digits
+    const double digit = std::pow(10.0, std::floor(std::log10(cos_theta)) - 1.0);
     warnings.push_back(fmt::format(
-        "grid.terrain: between x = {:.6g} and {:.6g} m the bed the grid resolves (its node columns) slopes at {:.4g} "
-        "degrees{}; the cells shear with it to {:.3g} h across their floors, and solver.courant = {} is {:.3g} times the "
-        "Courant step of such a cell. Runs at 1.44 held and at 1.73 gained energy and stopped (docs/theory.md, \"How "
-        "steep\"): lower solver.courant to {:.2g} or less",
-        bed.steepest_x0, bed.steepest_x0 + grid.h, std::atan(steepest) * kDegrees,
-        steepest > 57.0 ? " (a no-data value or a step in the profile?)" : "", cos_theta, courant,
-        courant / cos_theta, cos_theta));
+        "grid.terrain: between x = {:.6g} and {:.6g} m the bed the grid resolves (its node columns) slopes at up to "
+        "{:.4g} degrees{}; the cells shear with it to {:.3g} h across their floors, and time.courant = {} is {:.3g} "
+        "times the Courant step of such a cell. Runs at 1.44 held and at 1.73 gained energy and stopped "
+        "(docs/theory.md, \"How steep\"): lower time.courant to {:.2g} or less",
+        bed.steep_from, bed.steep_to, std::atan(steepest) * kDegrees,
+        steepest > kStepSlope ? " (a no-data value or a step in the profile?)" : "", cos_theta, courant,
+        courant / cos_theta, std::floor(cos_theta / digit) * digit));
+  }
+  if (!step_point.empty() && steepest <= kStepSlope)
+    warnings.push_back(fmt::format(
+        "{}: the profile rises or falls at more than 89 degrees between the grid's node columns (a no-data value or "
+        "a step in the profile?); the particles slide on the bed sampled at the columns, but the runout diagnostics "
+        "measure s along the whole profile",
+        step_point));
   // w is measured from the profile and the bed is the z- face at w = origin[2]: any other origin
   // moves the bed off the profile, while terrain.vtu draws the profile (particles sat 0.16 m below
   // the drawn bed with origin[2] = -0.5).

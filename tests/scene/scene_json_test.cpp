@@ -90,10 +90,25 @@ TEST(SceneJson, SteepOrFinelyDetailedTerrainsAreWarnedAbout) {
   EXPECT_EQ(warned(plane(78.0), 0.3, steep), 0);   // courant / cos = 1.44: the block slid as it should
   EXPECT_EQ(warned(plane(80.0), 0.3, steep), 1);   // 1.73: it gained energy and stopped
   EXPECT_EQ(warned(plane(80.0), 0.15, steep), 0);  // 0.86
+  // It names the key there is (it said solver.courant), the whole steep stretch (it named one chord),
+  // and a courant that does keep the ratio at 1 (it said 0.2 for cos = 0.196: 1.02).
+  EXPECT_EQ(warned(plane(80.0), 0.3, "between x = 0 and 8 m"), 1);
+  EXPECT_EQ(warned(plane(80.0), 0.3, "time.courant = 0.3 is 1.73 times"), 1);
+  EXPECT_EQ(warned(plane(80.0), 0.3, "lower time.courant to 0.17 or less"), 1);  // cos 80 degrees = 0.174
+  EXPECT_EQ(warned(plane(79.0), 0.3, "lower time.courant to 0.19 or less"), 1);  // cos 79 degrees = 0.191
+  EXPECT_EQ(warned({{0.0, 16.0}, {2.0, 0.0}, {8.0, 0.0}}, 0.3, "between x = 0 and 2 m"), 1);  // 83 degrees, then flat
   // A cliff outside the grid shears no cell: no warning (the grid spans x = 0 .. 8).
   EXPECT_EQ(warned({{-5.0, 20.0}, {-4.9, 8.0 * std::tan(M_PI / 6.0)}, {8.0, 0.0}}, 0.3, steep), 0);
   // A no-data value (-9999) in a profile is a step of nearly 90 degrees.
   EXPECT_EQ(warned({{0.0, 2.0}, {4.0, -9999.0}, {4.1, 1.0}, {8.0, 0.0}}, 0.3, "a no-data value or a step"), 1);
+  // Between two node columns (4 and 4.25 m) it shears no cell, but the runout's s runs over it
+  // (it was warned about only as "more detail", 232052% longer).
+  const auto on_plane = [](double x) { return (8.0 - x) * std::tan(M_PI / 6.0); };
+  const std::vector<std::array<double, 2>> spike{{0.0, on_plane(0.0)}, {4.0, on_plane(4.0)}, {4.1, -9999.0}, {4.2, on_plane(4.2)}, {8.0, 0.0}};
+  EXPECT_EQ(warned(spike, 0.3, "grid.terrain.points[1] to [2], (4, 2.3094) to (4.1, -9999): the profile rises or falls at "
+                               "more than 89 degrees between the grid's node columns (a no-data value or a step"), 1);
+  EXPECT_EQ(warned(spike, 0.3, steep), 0);
+  EXPECT_EQ(warned(plane(80.0), 0.3, "between the grid's node columns"), 0);
   // Ripples of 2 cm every 0.1 m on a 30-degree plane, cell 0.25 m: 18% more bed than the grid resolves.
   std::vector<std::array<double, 2>> ripples;
   for (int i = 0; i <= 320; ++i) {
