@@ -127,11 +127,23 @@ Field<S> number(std::string key, At at, Range range, std::string doc, FieldOptio
   add_range(schema, range);
   if (!o.required) schema["default"] = fallback;
   Field<S> f{make_info(key, "number", number_text(fallback), range_text(range), std::move(doc), schema, o), {}, {}};
-  const Range read_range = o.domain_checked ? Range::any() : range;
-  f.read = [key, at, read_range, required = o.required](ObjectReader& r, S& s) {
+  f.read = [key, at, range, domain_checked = o.domain_checked, required = o.required](ObjectReader& r, S& s) {
     double& v = at(s);
-    v = required ? r.number(key, read_range.lo, read_range.hi, read_range.open_lo, read_range.open_hi)
-                 : r.number_or(key, v, read_range.lo, read_range.hi, read_range.open_lo, read_range.open_hi);
+    const auto read = [&](const Range& within) {
+      v = required ? r.number(key, within.lo, within.hi, within.open_lo, within.open_hi)
+                   : r.number_or(key, v, within.lo, within.hi, within.open_lo, within.open_hi);
+    };
+    if (!domain_checked) return read(range);
+    try {
+      read(Range::any());
+    } catch (const Error& e) {
+      // No number, or one past 1e30: refused here, but with the key's own range (friction_angle =
+      // 1e31 was "outside [-1e+30, 1e+30]", though only (0, 90) is allowed). Inside any(), the
+      // owning layer checks it.
+      if (e.kind() != Error::Kind::Input) throw;
+      read(range);
+      throw;
+    }
   };
   f.write = [key, at](const S& s, Json& j) { j[key] = at(s); };
   return f;

@@ -75,6 +75,11 @@ TEST(BadInput, EveryMistakeNamesTheKeyPathInOneLine) {
       // the message says which limit a number broke, and shows it as written
       {"beyond 1e30", "\"young\": 1.0e6", "\"young\": 1e308",
        "materials.rubber.young = 1e+308 is outside the allowed range (0, 1e+30] (magnitudes above 1e30 are refused)"},
+      // a key whose range its material checks: the key's own range, not the reader's [-1e30, 1e30]
+      {"angle beyond 1e30", "\"friction_angle\": 30.0", "\"friction_angle\": 1e31",
+       "materials.sand.friction_angle = 1e+31 is outside the allowed range (0, 90)"},
+      {"angle not a number", "\"friction_angle\": 30.0", "\"friction_angle\": \"30\"",
+       "materials.sand.friction_angle must be a number in (0, 90), got \"30\""},
       {"vector beyond 1e30", "\"material\": \"rubber\",", "\"material\": \"rubber\", \"velocity\": [0, 0, -1e308],",
        "bodies[0].velocity[2] = -1e+308 is outside the allowed range [-1e+30, 1e+30] (magnitudes above 1e30 are refused)"},
       {"integer past 2^64", "\"courant\": 0.3", "\"courant\": 0.3, \"max_steps\": 18446744073709551615",
