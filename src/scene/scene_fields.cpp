@@ -537,6 +537,11 @@ Table<BodyDraft> make_prism_table() {
             if (pts.size() > 10000)
               throw input_error(fmt::format("{} has {} points; at most 10000", points_path, pts.size()));
             b.prism.points = read_point_pairs(pts, points_path);
+            // GIS tools write a ring closed by its first point: the polygon closes itself here
+            if (b.prism.points.front() == b.prism.points.back())
+              throw input_error(fmt::format("{}: the last point, [{}], repeats the first; leave it out (the polygon "
+                                            "closes itself from the last point to the first)",
+                                            points_path, fmt::format("{}, {}", b.prism.points.back()[0], b.prism.points.back()[1])));
             const auto crossing = polygon_crossing_edges(b.prism.points);
             if (crossing[0] >= 0)
               throw input_error(fmt::format(
