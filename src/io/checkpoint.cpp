@@ -332,8 +332,12 @@ Checkpoint read_checkpoint(const std::string& path, const Comm& comm) {
     c.solver.time = read_attribute<double>(s, "time");
     c.solver.step = read_attribute<std::int64_t>(s, "step");
     c.solver.last_dt = read_attribute<double>(s, "last_dt");
+    // (gravity_ramp is absent in checkpoints written before 2026-12-07: 0, as for a run without a ramp)
+    const auto absent_before_ramp_term = [](const H5::H5Object& o, const std::string& name) {
+      return name.ends_with("gravity_ramp") && !o.attrExists(name);
+    };
     EnergyBudget::for_each_term(c.solver.work, [&](const char* name, double& value, bool accumulated) {
-      if (accumulated) value = read_attribute<double>(s, name);
+      if (accumulated && !absent_before_ramp_term(s, name)) value = read_attribute<double>(s, name);
     });
     c.solver.outflow_mass = read_attribute<double>(s, "outflow_mass");
     c.solver.outflow_particles = read_attribute<std::int64_t>(s, "outflow_particles");
@@ -405,7 +409,8 @@ Checkpoint read_checkpoint(const std::string& path, const Comm& comm) {
     c.run.next_history = read_attribute<double>(r, "next_history");
     c.run.next_checkpoint = read_attribute<double>(r, "next_checkpoint");
     EnergyBudget::for_each_term(c.run.initial, [&](const char* name, double& value, bool) {
-      value = read_attribute<double>(r, (std::string("initial_") + name).c_str());
+      const std::string attribute = std::string("initial_") + name;
+      if (!absent_before_ramp_term(r, attribute)) value = read_attribute<double>(r, attribute.c_str());
     });
     c.run.energy_max_released = read_attribute<double>(r, "energy_max_released");
     // absent in checkpoints written before 2026-12-06 and in scenes without runout diagnostics

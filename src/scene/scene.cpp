@@ -159,6 +159,13 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
         "(grid.cell_size = {} m) under gravity: the materials' wave speed is too slow to bound the step, and the run "
         "will likely stop in its first steps; check the materials' young and density",
         first_step, fall_one_cell, scene.grid.h));
+  // A ramp past the end runs the whole scene under part of its gravity (a ramp meant for the
+  // column benchmark's quasi-static loading, copied into a runout scene, say).
+  if (scene.gravity_ramp_time > scene.end_time)
+    warnings.push_back(fmt::format(
+        "solver.gravity_ramp_time = {} s is longer than time.end = {} s: gravity never reaches its full value (at the "
+        "end it is {:.3g}% of it)",
+        scene.gravity_ramp_time, scene.end_time, 100.0 * scene.end_time / scene.gravity_ramp_time));
   // The runout is measured at each history row, and with no interval that is every step: a sort of
   // every particle by arc length (and under mpirun a gather of them all to rank 0) each step, which
   // made a 244 k-particle flume's run half again as long on one rank (every shipped scene sets it).

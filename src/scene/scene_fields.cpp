@@ -297,8 +297,8 @@ Table<SceneDraft> make_solver_table() {
                          "round-off. block_buffers does not support periodic boundaries"),
       number<SceneDraft>("gravity_ramp_time", TALUS_AT(scene.gravity_ramp_time), {0.0, kHuge},
                          "gravity grows linearly from 0 to its full value over this time (0: applied at once); for "
-                         "quasi-static loading such as the column benchmark. While it ramps, the energy budget's "
-                         "gravitational term (computed with the full g) does not balance",
+                         "quasi-static loading such as the column benchmark. The energy budget's gravity term is the "
+                         "full g's potential; the part of it the ramp withholds is its own term, gravity_ramp",
                          {.unit = "s"}),
       number<SceneDraft>("pic_fraction", TALUS_AT(scene.pic_fraction), {0.0, 1.0},
                          "the PIC share β of the G2P velocity update, v_p = (1 − β)(v_p + Σ N Δv) + β Σ N v^L (0: pure "

@@ -422,6 +422,12 @@ void Solver::step() {
     throw instability_error(fmt::format("{}: time step {} is not positive and finite", step_started(step_, time_), dt));
   const double remaining = scene_.end_time - time_;
   if (dt > remaining) dt = remaining;
+  // While gravity ramps, the step's gravity is the share `ramp` of the full g whose potential the
+  // ledger counts: book the rest of the potential it releases (EnergyBudget::gravity_ramp). Two
+  // sums over the particles a step, and only while it ramps. (In a distributed run a particle that
+  // migrates in the sort leaves one rank's sum for another's; over the ranks that cancels.)
+  const double ramp = gravity_ramp_factor(time_ + 0.5 * dt);
+  const double potential_before = ramp < 1.0 ? potential_energy() : 0.0;
   // The shape function and the terrain type are chosen here, once per step; the kernels below are
   // compiled for each pair, so a flat grid runs the FlatTerrain code with nothing extra.
   if (grid_.has_terrain())
@@ -429,6 +435,7 @@ void Solver::step() {
   else
     step_with_shape<FlatTerrain>(dt);
   if (scene_.grid.has_periodic_axes()) recorded(recording(), RegionSchedule::Static, "wrap", particles_.size(), 1, [&] { wrap_periodic(); });
+  if (ramp < 1.0) work_.gravity_ramp += (1.0 - ramp) * (potential_before - potential_energy());
   // G2P flagged these while it computed the displacements and the new positions; the scans that
   // name the particle (CFL guard) or remove the leaving ones run only when flagged.
   if (large_displacement_) check_step_displacement(particles_, displacement(), scene_, step_, time_);  // stability_guards.hpp
@@ -628,9 +635,22 @@ void Solver::step_with(double dt) {
 
 void Solver::check_particles() const { check_particle_fields(particles_, scene_, step_ - 1, time_ - last_dt_); }
 
+double Solver::gravity_ramp_factor(double t) const {
+  return scene_.gravity_ramp_time <= 0.0 || t >= scene_.gravity_ramp_time ? 1.0 : t / scene_.gravity_ramp_time;
+}
+
 Vec3 Solver::gravity_at(double t) const {
-  if (scene_.gravity_ramp_time <= 0.0 || t >= scene_.gravity_ramp_time) return scene_.gravity;
-  return scene_.gravity * (t / scene_.gravity_ramp_time);
+  const double factor = gravity_ramp_factor(t);
+  return factor == 1.0 ? scene_.gravity : scene_.gravity * factor;
+}
+
+double Solver::potential_energy() const {
+  const ParticleStore& P = particles_;
+  const Vec3& g = scene_.gravity;
+  const auto sum = deterministic_sum<1>(P.size(), [&](std::size_t p, std::array<double, 1>& acc) {
+    acc[0] -= P.mass[p] * (g[0] * P.x[0][p] + g[1] * P.x[1][p] + g[2] * P.x[2][p]);
+  });
+  return sum[0] + periodic_gravity_shift_;  // the unwrapped positions' potential, as energies() counts it
 }
 
 void Solver::move_particles() {

@@ -148,7 +148,8 @@ double EnergyGuard::available() const {
 
 void EnergyGuard::check(const EnergyBudget& e, const ParticleStore& P, const Scene& scene, std::int64_t step,
                         double time, double outflow_gravity) {
-  const double released = initial_.gravity - (e.gravity + outflow_gravity);
+  // (less what a gravity ramp withheld, EnergyBudget::gravity_ramp: that part did no work)
+  const double released = initial_.gravity - (e.gravity + outflow_gravity) - (e.gravity_ramp - initial_.gravity_ramp);
   if (std::isfinite(released) && released > max_released_) max_released_ = released;
   const double growth = e.total() - initial_.total();
   const double a = available();

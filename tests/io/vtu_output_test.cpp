@@ -151,7 +151,7 @@ TEST(VtuOutput, RunWritesSeriesIndexSceneAndHistory) {
   std::ifstream csv(dir / "energy.csv");
   std::string header;
   std::getline(csv, header);
-  EXPECT_EQ(header, "time,step,dt,kinetic,strain,gravity,friction_work,plastic_work,outflow,damping,total");
+  EXPECT_EQ(header, "time,step,dt,kinetic,strain,gravity,friction_work,plastic_work,outflow,damping,gravity_ramp,total");
   int rows = 0;
   for (std::string line; std::getline(csv, line);) ++rows;
   EXPECT_EQ(rows, summary.steps + 1);

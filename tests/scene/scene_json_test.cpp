@@ -143,6 +143,16 @@ TEST(SceneJson, AnUndampedElasticBodyOnAHighFrictionBedIsWarnedAbout) {
   EXPECT_EQ(test::warnings_with(shipped("benchmarks/sand_slide_near_threshold.json"), "on the friction face"), 0);  // sand
 }
 
+// A gravity ramp longer than the run: the whole scene ran under part of its gravity without a word.
+TEST(SceneJson, AGravityRampLongerThanTheRunIsWarnedAbout) {
+  Scene scene = parse_scene(kMinimal, "t");
+  scene.gravity_ramp_time = 4.0 * scene.end_time;
+  EXPECT_EQ(test::warnings_with(scene, "is longer than time.end"), 1);
+  EXPECT_EQ(test::warnings_with(scene, "gravity never reaches its full value (at the end it is 25% of it)"), 1);
+  scene.gravity_ramp_time = scene.end_time;
+  EXPECT_EQ(test::warnings_with(scene, "gravity_ramp_time"), 0);
+}
+
 // Two boxes sharing a volume seed it twice: warned about; boxes that only touch are not.
 TEST(SceneJson, OverlappingBoxesAreWarnedAbout) {
   const auto warnings_of = [](const std::string& second_box) {

@@ -3,7 +3,8 @@
 // checkpoint, the energy guard, the run summary and the columns of energy.csv all go through
 // EnergyBudget::for_each_term, so a new term is one member and one line there.
 //
-//   kinetic + strain + gravity + friction_work + plastic_work + outflow + damping = initial total
+//   kinetic + strain + gravity + friction_work + plastic_work + outflow + damping + gravity_ramp
+//     = initial total
 //
 // For a conservative continuum the total stays at its initial value; its drift measures the
 // scheme's numerical dissipation or gain (and the energy lost in no-rebound impacts on walls, which
@@ -20,6 +21,10 @@ struct EnergyBudget {
   double plastic_work = 0.0;    // dissipated by the material (plastic work, separation)
   double outflow = 0.0;         // energy (kinetic + strain + gravity) carried out through open faces
   double damping = 0.0;         // kinetic energy removed by the PIC share of G2P (solver.pic_fraction)
+  /// While gravity ramps (solver.gravity_ramp_time), `gravity` (the full g's potential) falls faster
+  /// than the ramped gravity works: the potential released that it did not turn into work, (1 - t /
+  /// ramp time) of each step's release. Zero without a ramp and constant after it.
+  double gravity_ramp = 0.0;
 
   /// Sum of every term, in ledger order.
   double total() const {
@@ -40,6 +45,7 @@ struct EnergyBudget {
     f("plastic_work", e.plastic_work, true);
     f("outflow", e.outflow, true);
     f("damping", e.damping, true);
+    f("gravity_ramp", e.gravity_ramp, true);
   }
 };
 
@@ -53,7 +59,8 @@ struct EnergyBudget {
 /// the kinetic energy of the particles removed at open faces), so
 ///   total - initial total = (strain change + outflow_strain + plastic_work - grid_stress_work)
 ///                         + (friction_work - grid_wall_work)
-///                         + (gravity change + outflow_gravity + grid_gravity_work) - transfer_loss
+///                         + (gravity change + gravity_ramp + outflow_gravity + grid_gravity_work)
+///                         - transfer_loss
 /// to round-off (outflow_strain, outflow_gravity: the stored and potential energy the removed
 /// particles took with them, parts of the ledger's `outflow`, which the strain and gravity changes
 /// miss).
@@ -85,7 +92,7 @@ struct EnergyGapTerms {
 struct EnergyGapParts {
   double stress = 0.0;    // strain change + outflow_strain + plastic_work - grid_stress_work
   double walls = 0.0;     // friction_work - grid_wall_work
-  double gravity = 0.0;   // gravity change + outflow_gravity + grid_gravity_work
+  double gravity = 0.0;   // gravity change + gravity_ramp + outflow_gravity + grid_gravity_work
   double transfer = 0.0;  // -transfer_loss
   double sum() const { return stress + walls + gravity + transfer; }
 };
@@ -94,7 +101,8 @@ inline EnergyGapParts energy_gap_parts(const EnergyBudget& initial, const Energy
   return {.stress = now.strain - initial.strain + t.outflow_strain + now.plastic_work - initial.plastic_work -
                     t.grid_stress_work,
           .walls = now.friction_work - initial.friction_work - t.grid_wall_work,
-          .gravity = now.gravity - initial.gravity + t.outflow_gravity + t.grid_gravity_work,
+          .gravity = now.gravity - initial.gravity + now.gravity_ramp - initial.gravity_ramp + t.outflow_gravity +
+                     t.grid_gravity_work,
           .transfer = -t.transfer_loss};
 }
 

@@ -218,6 +218,10 @@ class Solver {
   std::array<std::span<double>, 3> displacement();
   /// The body force at time t: scene gravity, ramped over scene.gravity_ramp_time.
   Vec3 gravity_at(double t) const;
+  /// The share of scene gravity at time t: t / gravity_ramp_time while it ramps, else 1.
+  double gravity_ramp_factor(double t) const;
+  /// -sum m g.x over this rank's particles, with the full g (the ledger's `gravity`); thread-independent.
+  double potential_energy() const;
   void sort_particles();
   /// sort_particles(), recorded for the work record as its parallel loops (a static region) and its
   /// serial bookkeeping.

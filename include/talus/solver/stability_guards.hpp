@@ -53,7 +53,8 @@ void check_step_displacement(const ParticleStore& particles, const std::array<st
 /// i.e. when the scheme created more energy than the factor times all the energy the system ever
 /// had to spend (the initial kinetic and strain energy plus the potential energy released so far;
 /// the last term, the work of lifting the whole mass a thousandth of a cell, keeps A positive for
-/// a body that starts at rest).
+/// a body that starts at rest). While gravity ramps, the potential it withheld (gravity_ramp) is
+/// not counted as released: gravity(s) there stands for gravity(s) + gravity_ramp(s).
 class EnergyGuard {
  public:
   EnergyGuard() = default;
