@@ -385,6 +385,43 @@ class UnfinishedRuns(unittest.TestCase):
         self.assertTrue(os.path.isfile(os.path.join(self.work, "bagnold_profile.png")))
 
 
+class MlsPlotsAllOrNothing(unittest.TestCase):
+    def test_bad_values_are_refused_before_any_run(self):
+        work = tempfile.mkdtemp(prefix="talus_plot_mls_")
+        try:
+            for args, naming in ((["--variants", "particle,cel"], "--variants particle,cel: cel is not one of particle, cell, reused"),
+                                 (["--radius", "9"], "--radius 9: give 0.5 to 8"),
+                                 (["--reuse-strain", "2"], "--reuse-strain 2: give 0 to 1"),
+                                 (["--basis", "quartic"], "argument --basis: invalid choice: 'quartic'")):
+                code, out, err = tool("plot_mls.py", "--talus", TALUS, "--out", os.path.join(work, "out"), *args)
+                self.assertEqual((code, out), (2, ""), err)
+                self.assertIn(naming, err)
+                self.assertFalse(os.path.exists(os.path.join(work, "out")))
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+
+    def test_a_failed_run_writes_nothing(self):
+        # the runs that succeeded were written, a --tag's into docs/verification beside the shipped files
+        work = tempfile.mkdtemp(prefix="talus_plot_mls_")
+        try:
+            wrapper = os.path.join(work, "talus")  # talus, but every run with MLS fails as talus does
+            with open(wrapper, "w") as f:
+                f.write("#!/usr/bin/python3\nimport os, sys\n"
+                        "if sys.argv[1] == 'run' and 'smoothing' in open(sys.argv[2]).read():\n"
+                        "    sys.exit('talus: solver.smoothing: refused for this test')\n"
+                        f"os.execv({os.path.abspath(TALUS)!r}, [{os.path.abspath(TALUS)!r}] + sys.argv[1:])\n")
+            os.chmod(wrapper, 0o755)
+            out = os.path.join(work, "out")
+            code, text, err = tool("plot_mls.py", "--talus", wrapper, "--skip-walls", "--tag", "_t", "--out", out)
+            self.assertEqual(code, 1, err)
+            self.assertRegex(text, r"column linear +off +L2")  # the runs without MLS ran
+            self.assertIn("talus: solver.smoothing: refused for this test", err)
+            self.assertIn("plot_mls.py: 6 of 12 runs failed (the first: column linear cubic); nothing written into", err)
+            self.assertEqual(os.listdir(out), [])
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+
+
 class ColumnCollapseTitle(unittest.TestCase):
     def test_the_title_names_the_runs_material(self):
         # it said "Drucker-Prager phi = 30 deg" for every run, mu(I) ones too
