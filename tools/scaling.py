@@ -37,7 +37,7 @@ import sys
 import tempfile
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 # from cli_checks, not talus_plot: talus_plot imports numpy, which this tool does not need
-from cli_checks import refuse, require_at_least, require_talus, run_or_stop  # noqa: E402
+from cli_checks import output_folder, refuse, require_at_least, require_talus, run_or_stop  # noqa: E402
 import scaling_model  # noqa: E402
 
 
@@ -122,7 +122,7 @@ def main():
                                  "model needs: use talus bench --scene update --threads T directly")
     require_talus(a.talus)
     wait_policy = apply_wait_policy(a.wait_policy)
-    os.makedirs(a.out, exist_ok=True)
+    output_folder("--out", a.out)  # (a file of that name was a traceback)
     counts = thread_counts(a.max_threads)
     record_path = os.path.join(a.out, a.name + "_record.json")
     record_t_path = os.path.join(a.out, a.name + "_record_t.json")

@@ -422,6 +422,84 @@ class MlsPlotsAllOrNothing(unittest.TestCase):
             shutil.rmtree(work, ignore_errors=True)
 
 
+class OneLineErrors(unittest.TestCase):
+    """What was a traceback: a failed talus run, an output path that is a file or has no folder, an
+    unknown plot format, a CSV of another kind, a runout.csv without rows."""
+
+    def setUp(self):
+        self.work = tempfile.mkdtemp(prefix="talus_one_line_")
+
+    def tearDown(self):
+        shutil.rmtree(self.work, ignore_errors=True)
+
+    def assertOneLine(self, result, code, text):
+        self.assertEqual((result[0], result[1]), (code, ""), result[2])
+        self.assertEqual(len(result[2].strip().splitlines()), 1, result[2])
+        self.assertIn(text, result[2])
+
+    def test_a_failed_talus_run_is_its_last_line_or_the_signal(self):
+        from talus_plot import talus_failure
+        r = subprocess.CompletedProcess(["talus"], 2, "", "talus: scene.json:\ntalus: time.end: give more than 0\n")
+        self.assertEqual(talus_failure(["talus", "run", "s.json"], r),
+                         "talus run s.json failed (exit 2): talus: time.end: give more than 0")
+        r = subprocess.CompletedProcess(["talus"], 130, "talus: stopped by signal 2 at step 9, t = 0.1 s; checkpoint c.h5\n"
+                                        "talus: resume with: ...\n", "")
+        self.assertIn("failed (exit 130): talus: stopped by signal 2 at step 9", talus_failure(["talus"], r))
+        for code, text in ((-9, "stopped by signal 9"), (143, "stopped by signal 15"), (1, "no message")):
+            self.assertIn(f"(exit {code}): {text}", talus_failure(["talus"], subprocess.CompletedProcess([], code, "", "")))
+        # a script ends on it with one line (talus_plot.main_guard), not a traceback
+        killed = os.path.join(self.work, "talus")
+        with open(killed, "w") as f:
+            f.write("#!/usr/bin/python3\nimport os\nos.kill(os.getpid(), 9)\n")
+        os.chmod(killed, 0o755)
+        self.assertOneLine(tool("plot_terrain.py", "--talus", killed, "--runs", self.work, "--out", os.path.join(self.work, "out")),
+                           1, "failed (exit -9): stopped by signal 9")
+
+    def test_output_paths_that_cannot_be_written_are_refused_before_the_work(self):
+        run = os.path.join(self.work, "run")
+        os.makedirs(run)
+        with open(os.path.join(run, "scene.json"), "w") as f:
+            json.dump({"name": "x"}, f)
+        with open(os.path.join(run, "runout.csv"), "w") as f:
+            f.write("time,front,tail,s_max,centre_s,centre_y,centre_velocity_s,front_velocity\n0,1,0,1,0.5,0,0,0\n")
+        a_file = os.path.join(run, "run.json")
+        with open(a_file, "w") as f:
+            f.write("{}")
+        self.assertOneLine(tool("plot_flume.py", run, "--out", a_file), 1, f"--out {a_file}: is a file, not a folder")
+        self.assertOneLine(tool("scaling.py", "--talus", TALUS, "--out", a_file), 1, f"--out {a_file}: is a file, not a folder")
+        self.assertOneLine(tool("plot_node_scaling.py", os.path.join(ROOT, "docs", "performance", "node16_2026-12-04"),
+                                "--out", os.path.join(self.work, "nodir", "x.png")), 1, "/nodir does not exist")
+        self.assertOneLine(tool("plot_mu_i.py", "--talus", TALUS, "--out", os.path.join(self.work, "x.foo")), 2,
+                           "x.foo: give a name ending in one of ")
+        self.assertOneLine(tool("plot_mu_i.py", "--talus", TALUS, "--out", os.path.join(a_file, "x.png")), 1,
+                           "is a file, not a folder")
+        self.assertEqual(os.listdir(self.work), ["run"])
+        self.assertEqual(sorted(os.listdir(run)), ["run.json", "runout.csv", "scene.json"])
+
+    def test_inputs_of_another_kind_are_refused(self):
+        with open(os.path.join(self.work, "energy.csv"), "w") as f:
+            f.write("time,kinetic\n0,1\n")
+        self.assertOneLine(tool("plot_mu_i.py", "--no-run", "--csv", os.path.join(self.work, "energy.csv"),
+                                "--out", os.path.join(self.work, "mu.png")), 1, "energy.csv: no column I: give the CSV of talus element-test")
+        with open(os.path.join(self.work, "scene.json"), "w") as f:
+            json.dump({"name": "x"}, f)
+        with open(os.path.join(self.work, "runout.csv"), "w") as f:  # a run stopped before its first row
+            f.write("time,front,tail,s_max,centre_s,centre_y,centre_velocity_s,front_velocity\n")
+        self.assertOneLine(tool("plot_flume.py", self.work), 1, "runout.csv holds no rows: nothing to plot")
+        self.assertFalse(os.path.exists(os.path.join(self.work, "mu.png")))
+
+
+class FlumeLegend(unittest.TestCase):
+    def test_the_front_and_tail_are_labelled_with_the_runs_quantiles(self):
+        # "front (99.5% mass quantile)" was written whatever diagnostics.runout said
+        import plot_flume
+        self.assertEqual(plot_flume.quantile_labels({}), ("front (99.5% mass quantile)", "tail (0.5% mass quantile)"))
+        s = {"diagnostics": {"runout": {"front_quantile": 0.99, "tail_quantile": 0.01}}}
+        self.assertEqual(plot_flume.quantile_labels(s), ("front (99% mass quantile)", "tail (1% mass quantile)"))
+        s = {"diagnostics": {"runout": {"front_quantile": 0.9}}}
+        self.assertEqual(plot_flume.quantile_labels(s), ("front (90% mass quantile)", "tail (0.5% mass quantile)"))
+
+
 class ColumnCollapseTitle(unittest.TestCase):
     def test_the_title_names_the_runs_material(self):
         # it said "Drucker-Prager phi = 30 deg" for every run, mu(I) ones too
