@@ -500,6 +500,32 @@ class FlumeLegend(unittest.TestCase):
         self.assertEqual(plot_flume.quantile_labels(s), ("front (90% mass quantile)", "tail (0.5% mass quantile)"))
 
 
+class CompareRanksHeaders(unittest.TestCase):
+    def test_the_markdown_headers_name_the_first_runs_ranks(self):
+        # "vs 1 rank" whatever the first run's rank count
+        work = tempfile.mkdtemp(prefix="talus_compare_ranks_")
+        try:
+            s = scene("inputs/elastic_block_slide.json")
+            s["time"]["end"] = 0.01
+            s["diagnostics"] = {"runout": {"deposit_cell": 0.04}}
+            path, one, two = (os.path.join(work, n) for n in ("block.json", "one", "two"))
+            with open(path, "w") as f:
+                json.dump(s, f)
+            subprocess.run([TALUS, "run", path, "--out", one, "--threads", "1", "--quiet"], check=True, timeout=120)
+            shutil.copytree(one, two)
+            with open(os.path.join(two, "run.json")) as f:
+                record = json.load(f)
+            with open(os.path.join(two, "run.json"), "w") as f:  # as a 2-rank run records itself
+                json.dump(dict(record, ranks=2), f)
+            code, out, err = tool("compare_ranks.py", two, one, "--markdown")
+            self.assertEqual(code, 0, err)
+            self.assertIn("| front vs 2 ranks | beyond gate vs 2 ranks | tail vs 2 ranks |", out.splitlines()[0])
+            code, out, err = tool("compare_ranks.py", one, two, "--markdown")
+            self.assertIn("| front vs 1 rank | beyond gate vs 1 rank | tail vs 1 rank |", out.splitlines()[0])
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+
+
 class ColumnCollapseTitle(unittest.TestCase):
     def test_the_title_names_the_runs_material(self):
         # it said "Drucker-Prager phi = 30 deg" for every run, mu(I) ones too
