@@ -179,6 +179,38 @@ class FlumeSceneRefusals(unittest.TestCase):
             self.assertEqual(out, f.read())
 
 
+    def test_values_out_of_range_are_refused_by_the_generators_option(self):
+        # --bed-friction 95 wrote a negative friction_coefficient, --end inf "Infinity", --aspect inf an OverflowError
+        for name, args, naming in (
+                ("make_flume_scene.py", ["--bed-friction", "95"], "--bed-friction 95: give 0 to 89.42 degrees"),
+                ("make_flume_scene.py", ["--wedge-length", "-0.1"], "--wedge-length -0.1: give more than 0 m"),
+                ("make_flume_scene.py", ["--headroom", "-1"], "--headroom -1: give 0 or more"),
+                ("make_flume_scene.py", ["--end", "inf"], "--end inf: give a finite number"),
+                ("make_collapse_scene.py", ["--model", "dp", "--aspect", "inf"], "--aspect inf: give a finite number")):
+            code, out, err = tool(name, *args)
+            self.assertEqual((code, out), (2, ""), err)
+            self.assertEqual(err.strip(), f"{name}: {naming}" + (" (its tangent, the bed's friction_coefficient, at most 100)"
+                                                                if "bed" in naming else ""))
+        code, out, err = tool("make_flume_scene.py", "--frame-interval", "0")  # talus: the first and last frame
+        self.assertEqual(code, 0, err)
+        self.assertEqual(json.loads(out)["output"]["frame_interval"], 0.0)
+
+    def test_the_shipped_scenes_are_the_generators_output_byte_for_byte(self):
+        # each names its command line in its comment
+        import glob
+        import shlex
+        made = 0
+        for path in sorted(glob.glob(os.path.join(ROOT, "inputs", "**", "*.json"), recursive=True)):
+            with open(path) as f:
+                text = f.read()
+            comment = json.loads(text).get("comment", "")
+            for name in ("make_flume_scene.py", "make_collapse_scene.py"):
+                if comment.startswith(f"written by tools/{name}"):
+                    code, out, err = tool(name, *shlex.split(comment[len(f"written by tools/{name}"):]))
+                    self.assertEqual((code, out), (0, text), f"{path}: {err}")
+                    made += 1
+        self.assertGreaterEqual(made, 7)
+
 
 class ColumnCollapseExtents(unittest.TestCase):
     def test_the_initial_half_width_is_the_box_and_the_front_its_particle_edge(self):
