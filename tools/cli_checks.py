@@ -37,6 +37,19 @@ def require_folders(**outputs):
             sys.exit(f"{os.path.basename(sys.argv[0])}: {_option(option)} {path}: is a folder; give a file name")
 
 
+def output_folder(option, path):
+    """Create the output folder `path` (with its parents), or stop with one line when it is a file or
+    cannot be made (a parent that is a file, no permission): os.makedirs raised a traceback, in some
+    scripts only after the work. Call it before the work. Returns path."""
+    if os.path.exists(path) and not os.path.isdir(path):
+        sys.exit(f"{os.path.basename(sys.argv[0])}: {option} {path}: is a file, not a folder")
+    try:
+        os.makedirs(path, exist_ok=True)
+    except OSError as e:
+        sys.exit(f"{os.path.basename(sys.argv[0])}: {option} {path}: cannot create the folder ({e.strerror})")
+    return path
+
+
 def require_inputs(**inputs):
     """Stop with one line when an input file given does not exist or is a folder (`option=path`; an
     empty path is no input), before any work (a missing file was a traceback)."""

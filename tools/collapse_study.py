@@ -9,7 +9,8 @@ Drucker-Prager and mu(I), two resolutions, against the laws of Lube et al. 2005.
 
 Scenes come from tools/make_collapse_scene.py (its defaults are the study's parameters,
 docs/verification.md "Planar column collapse"). Each run goes to RUNS/<model>_a<a>_n<cells>; a run
-whose folder holds runout.json and the same scene is reused, not run again. Runs go `--jobs` at a
+that completed (its run.json says so) with the same scene is reused, not run again; one stopped early
+(Ctrl-C, --stop-after) is run again. Runs go `--jobs` at a
 time, each on `--threads` threads.
 
 Measured per run (L0 = the column's length, the gate at x = L0):
@@ -39,7 +40,8 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, make_collapse_scene
 import make_collapse_scene  # noqa: E402
-from talus_plot import ROOT, read_csv_columns, read_vtu, save_figure, series_frames, write_csv_rows  # noqa: E402
+from talus_plot import (ROOT, TalusError, main_guard, read_csv_columns, read_vtu, run_finished, run_status,  # noqa: E402
+                        save_figure, series_frames, talus_failure, write_csv_rows)
 
 MODELS = {"dp": "Drucker-Prager", "mu_i": "mu(I)"}
 
@@ -76,8 +78,11 @@ def run_one(talus, scene, run_dir, threads, lock=None):
     text = json.dumps(scene, indent=1)
     done = os.path.join(run_dir, "runout.json")
     same = lambda s: {k: v for k, v in s.items() if k != "comment"}  # the comment names the command line
-    if os.path.exists(done) and os.path.exists(path) and same(json.load(open(path))) == same(scene):
-        return "reused"
+    # (runout.json alone was taken for done: a Ctrl-C'd run writes it too, and was measured)
+    if run_finished(run_dir) and os.path.exists(path):
+        with open(path) as f:
+            if same(json.load(f)) == same(scene):
+                return "reused"
     with open(path, "w") as f:
         f.write(text)
     if os.path.exists(done):
@@ -87,7 +92,7 @@ def run_one(talus, scene, run_dir, threads, lock=None):
         cmd = ["flock", "-s", lock, *cmd]
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
-        raise RuntimeError(f"{run_dir}: talus failed ({r.returncode}): {r.stderr.strip()}")
+        raise TalusError(f"{run_dir}: {talus_failure(cmd, r)}")
     return "ran"
 
 
@@ -202,7 +207,10 @@ def main():
                 print(f"{k[5]}: {f.result()}", flush=True)
     rows = []
     for model, a, c, scene, o, run_dir in cases:
-        if not os.path.exists(os.path.join(run_dir, "runout.json")):
+        if not run_finished(run_dir):  # (with --no-run: missing, or stopped early)
+            if run_status(run_dir):
+                print(f"{run_dir}: not measured: the run did not complete (run.json says "
+                      f"'{run_status(run_dir)}')", file=sys.stderr)
             continue
         m = measure(run_dir, o)
         ref = float(lube_runout(a))
@@ -234,4 +242,4 @@ def main():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main_guard(main))

@@ -19,7 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
-from talus_plot import ROOT, finish_axes, read_csv_columns, run_flume, save_figure, write_csv_rows  # noqa: E402
+from talus_plot import ROOT, finish_axes, main_guard, read_csv_columns, run_flume, save_figure, value_at, write_csv_rows  # noqa: E402
 
 MODELS = {"drucker_prager": "Drucker-Prager, phi = 40 deg", "mu_i": "mu(I), mu_s = tan 40 deg"}
 
@@ -30,6 +30,14 @@ def centre_line(run_dir, cell):
     near = np.abs(d["y"]) <= cell
     s = np.unique(d["s"][near])
     return s, np.array([d["thickness"][near & (d["s"] == v)].mean() for v in s])
+
+
+def front_at(runout, t, run_dir):
+    """The front at time t; one line when the run's history does not reach t (np.interp clamped it)."""
+    try:
+        return value_at(runout["time"], runout["front"], t, run_dir)
+    except ValueError as e:
+        sys.exit(f"flume_models.py: {e}: nothing written")
 
 
 def main():
@@ -51,7 +59,7 @@ def main():
         released = energy["gravity"][0] - energy["gravity"][-1]
         row = {"model": model, "cell_size": a.cell,
                "wall_seconds": wall,
-               "front_from_gate_t1": round(float(np.interp(1.0, runout["time"], runout["front"])) - result["gate_s"], 4),
+               "front_from_gate_t1": round(front_at(runout, 1.0, run_dir) - result["gate_s"], 4),
                "runout_from_gate": round(result["from_gate"], 4),
                "onto_runout_plane": round(result["beyond_runout_plane"], 4),
                "tail_s": round(result["tail"], 4),
@@ -81,4 +89,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    main_guard(main)

@@ -2,7 +2,7 @@
 """Resolution study of the sand flume (docs/flume.md "Resolution study").
 
 For each cell size, writes the flume scene with tools/make_flume_scene.py (the defaults otherwise),
-runs it with `talus run` (skipped when RUNS/flume_hNNNN/runout.json exists, unless --rerun), and
+runs it with `talus run` (skipped when RUNS/flume_hNNNN holds a completed run, unless --rerun), and
 collects the front at three times, the final runout, the share of the mass that left over the open
 sides, the final kinetic energy over its peak and the run time. Writes
     docs/flume/resolution.csv      one row per cell size
@@ -17,10 +17,9 @@ import sys
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
-from talus_plot import finish_axes, run_flume, save_figure, write_csv_rows  # noqa: E402
+from talus_plot import finish_axes, main_guard, run_flume, save_figure, value_at, write_csv_rows  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TIMES = (0.5, 1.0, 2.0)  # [s] front positions compared between resolutions
@@ -41,7 +40,10 @@ def main():
         name = f"flume_h{round(h * 1e4):04d}"
         run_dir, runout, energy, result, wall = run_flume(a.talus, a.runs, name, h, a.threads, rerun=a.rerun)
         histories[h] = runout
-        fronts = [float(np.interp(t, runout["time"], runout["front"])) - result["gate_s"] for t in TIMES]
+        try:  # (a run that ended before a time gave its last front there, clamped)
+            fronts = [value_at(runout["time"], runout["front"], t, run_dir) - result["gate_s"] for t in TIMES]
+        except ValueError as e:
+            sys.exit(f"flume_resolution.py: {e}: nothing written")
         mass0 = runout["mass"][0]
         kinetic = energy["kinetic"]
         row = {"cell_size": h, "wall_seconds": wall,
@@ -64,4 +66,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    main_guard(main)

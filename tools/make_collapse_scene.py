@@ -28,7 +28,11 @@ rise of Jop, Forterre & Pouliquen 2006), d = 0.5 mm, quartz grains 2650 kg/m^3.
 import argparse
 import json
 import math
+import os
 import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for cli_checks, next to this script
+from cli_checks import refuse  # noqa: E402
 
 G = 9.81
 
@@ -116,6 +120,9 @@ def parser():
 def main():
     p = parser()
     o = p.parse_args()
+    for option, value in vars(o).items():  # (--aspect inf was an OverflowError; inf elsewhere wrote "Infinity")
+        if isinstance(value, float) and not math.isfinite(value):
+            refuse(f"--{option.replace('_', '-')}", value, "give a finite number")
     for option in ("aspect", "length", "density", "young_ratio", "end_factor"):  # (negative ones wrote refused scenes)
         if not getattr(o, option) > 0:
             p.error(f"--{option.replace('_', '-')} = {getattr(o, option)} must be positive")

@@ -207,12 +207,28 @@ def main():
                    help="no terrain: the slope alone in bed-aligned coordinates with gravity tilted (runs without "
                         "the terrain grid; for timing and checks)")
     a = p.parse_args()
+    for option, value in vars(a).items():  # (--end inf wrote "Infinity", which is no JSON)
+        if isinstance(value, float) and not math.isfinite(value):
+            refuse(f"--{option.replace('_', '-')}", value, "give a finite number")
     # (--cell 0 divided by zero; negative sizes wrote scenes that talus refused)
-    for option in ("wedge_width", "height", "cell", "end", "frame_interval"):
+    for option in ("wedge_width", "height", "cell", "end"):
         if option == "height" and a.height is None:
             continue
         if not getattr(a, option) > 0:
             p.error(f"--{option.replace('_', '-')} = {getattr(a, option)} must be positive")
+    for option in ("wedge_length", "slope_length", "runout_length"):  # (-0.1 wrote a wedge talus refused)
+        if not getattr(a, option) > 0:
+            refuse(f"--{option.replace('_', '-')}", f"{getattr(a, option):g}", "give more than 0 m")
+    for option in ("headroom", "radius", "frame_interval"):  # frame_interval 0: the first and last frame (talus)
+        if getattr(a, option) < 0:
+            refuse(f"--{option.replace('_', '-')}", f"{getattr(a, option):g}", "give 0 or more")
+    if not 0 < a.friction < 90:
+        refuse("--friction", f"{a.friction:g}", "give more than 0 and less than 90 degrees")
+    # the bed's friction_coefficient is tan(--bed-friction), which talus takes in [0, 100] (95 gave a negative one)
+    steepest = math.floor(math.degrees(math.atan(100.0)) * 100) / 100
+    if not 0 <= a.bed_friction <= steepest:
+        refuse("--bed-friction", f"{a.bed_friction:g}", f"give 0 to {steepest:g} degrees (its tangent, the bed's "
+               "friction_coefficient, at most 100)")
     if not 0 < a.slope < 90:  # (0, 90 and beyond wrote scenes that talus refused)
         p.error(f"--slope = {a.slope} must be between 0 and 90 degrees")
     if not (a.separation_volume_ratio > 1 or a.separation_volume_ratio == 0):

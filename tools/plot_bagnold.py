@@ -25,7 +25,9 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from talus_plot import ROOT, read_vtu, require_folders, run_talus, series_frames, write_csv_rows  # noqa: E402
+from talus_plot import (ROOT, main_guard, read_vtu, require_finished, require_folders, run_talus,  # noqa: E402
+                        series_frames, write_csv_rows)
+from cli_checks import require_at_least  # noqa: E402
 
 import matplotlib  # noqa: E402
 
@@ -131,6 +133,9 @@ def main():
                     f"{' '.join(map(str, STUDY_CELLS))}, in --work otherwise)")
     ap.add_argument("--csv", help="the table (default: bagnold_profile.csv beside the default plot)")
     args = ap.parse_args()
+    for n in args.cells:  # (0 divided by zero; -2 wrote a scene talus refused, after a traceback)
+        require_at_least(1, cells=n)
+    require_at_least(1, threads=args.threads)
     folder = os.path.join(ROOT, "docs", "verification") if args.cells == STUDY_CELLS else args.work
     args.out = args.out or os.path.join(folder, "bagnold_profile.png")
     args.csv = args.csv or os.path.join(folder, "bagnold_profile.csv")
@@ -150,6 +155,8 @@ def main():
             run_talus(args.talus, "run", path, "--out", out, threads=args.threads)
         if not os.path.isfile(os.path.join(out, "particles.pvd")):
             sys.exit(f"plot_bagnold.py: {out} holds no run: run it without --no-run first")
+        # (an interrupted run's last frame is no steady state; a run this script made has completed)
+        require_finished(out, hint="run it without --no-run")
         times, frames = zip(*series_frames(out))
         if len(frames) < 2:  # (was an IndexError)
             sys.exit(f"plot_bagnold.py: {out} holds {len(frames)} frames: run it without --no-run first")
@@ -160,9 +167,10 @@ def main():
         z, u = rows(frames[-1], n, setup.h)
         surface, l2 = errors(setup, z, u)
         results.append({"cells": n, "z": z, "u": u, "history": history, "surface": surface, "l2": l2})
+        change = (f"; surface change over the last frame interval {100 * (history[-1][1] - history[-2][1]):+.3f}%"
+                  if len(history) > 1 else "")  # (2 frames, the first and the last: was an IndexError)
         print(f"{n} cells over h: surface row {u[-1]:.4f} m/s against {setup.u(z[-1]):.4f} "
-              f"({100 * surface:+.2f}%), L2 {100 * l2:.2f}%; surface change over the last frame interval "
-              f"{100 * (history[-1][1] - history[-2][1]):+.3f}%")
+              f"({100 * surface:+.2f}%), L2 {100 * l2:.2f}%{change}")
 
     write_csv_rows(args.csv, [{"cells_over_depth": r["cells"], "surface_row_error": f"{r['surface']:+.5f}",
                                "l2_error": f"{r['l2']:.5f}"} for r in results])
@@ -192,4 +200,4 @@ def main():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main_guard(main))

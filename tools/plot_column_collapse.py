@@ -12,6 +12,7 @@ Usage: /usr/bin/python3 tools/plot_column_collapse.py --talus build/talus [--run
 """
 import argparse
 import json
+import math
 import os
 import sys
 
@@ -21,7 +22,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
-from talus_plot import ROOT, read_vtu, run_talus, series_frames  # noqa: E402
+from talus_plot import ROOT, main_guard, read_vtu, require_finished, run_talus, series_frames  # noqa: E402
+
+MU_S = 0.3818628674187188  # mu(I)'s default mu_s (tan 20.9 deg, docs/scene-reference.md)
 
 
 def read_frame_xz(path):
@@ -43,6 +46,20 @@ def column_extents(scene, x_initial, x_final):
     return initial, how, float(np.max(x_final)) + half, half
 
 
+def material_text(scene):
+    """The material of the scene's first body for the title, as "Drucker-Prager phi = 30 deg" or
+    "mu(I) mu_s = 0.38 (20.9 deg)" (the title said Drucker-Prager phi = 30 deg for every run)."""
+    body = (scene.get("bodies") or [{}])[0]
+    m = scene.get("materials", {}).get(body.get("material"), {})
+    model = m.get("model", "linear_elastic")
+    if model == "drucker_prager":
+        return f"Drucker-Prager phi = {m['friction_angle']:g} deg"
+    if model == "mu_i":
+        mu_s = m.get("mu_s", MU_S)
+        return f"mu(I) mu_s = {mu_s:.3g} ({math.degrees(math.atan(mu_s)):.1f} deg)"
+    return model.replace("_", " ")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--talus", default=os.path.join(ROOT, "build", "talus"))
@@ -53,6 +70,8 @@ def main():
     if args.run_dir and not os.path.isfile(os.path.join(run, "energy.csv")):
         sys.exit(f"plot_column_collapse.py: --run-dir {run}: no energy.csv there: give the folder of a talus run")
     # (a flume's run was plotted as a collapse, with a "runout" that was the flume's x extent)
+    if args.run_dir:  # (a Ctrl-C'd run was plotted as the collapse)
+        require_finished(run, "--run-dir")
     if args.run_dir and os.path.isfile(os.path.join(run, "scene.json")):
         with open(os.path.join(run, "scene.json")) as f:
             grid = json.load(f).get("grid", {})
@@ -63,6 +82,18 @@ def main():
         run_talus(args.talus, "run", os.path.join(ROOT, "inputs", "column_collapse_2d.json"), "--out", run, quiet=False)
     d = np.genfromtxt(os.path.join(run, "energy.csv"), delimiter=",", names=True)
     released = d["gravity"][0] - d["gravity"][-1]
+    # Every term is shown over the potential energy released: a block sent sliding on a level floor
+    # released next to none, or less than none, and was shown "friction -1053.7". A collapse starts at
+    # rest; refused unless the fall gave at least a tenth of the energy the run started with.
+    initial = d["kinetic"][0] + d["strain"][0]
+    if not (released > 0 and released >= 0.1 * initial):
+        sys.exit(f"plot_column_collapse.py: {run}: the run released {released:.4g} J of potential energy, "
+                 f"against {initial:.4g} J of kinetic and strain energy at the start: not a collapse")
+    scene_path = os.path.join(run, "scene.json")  # the scene the run ran (talus writes it)
+    if not os.path.isfile(scene_path):
+        scene_path = os.path.join(ROOT, "inputs", "column_collapse_2d.json")
+    with open(scene_path) as f:
+        scene = json.load(f)
     t = d["time"]
     e0 = d["total"][0]
     fig, ax = plt.subplots(figsize=(10, 4.2))
@@ -82,7 +113,7 @@ def main():
                 label="  of it: walls x 100")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("energy / released potential energy")
-    ax.set_title("Column collapse, Drucker-Prager phi = 30 deg: energy budget")
+    ax.set_title(f"Column collapse, {material_text(scene)}: energy budget")
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.grid(alpha=0.3)
     os.makedirs(args.out, exist_ok=True)
@@ -95,11 +126,7 @@ def main():
     frames = series_frames(run)
     x0, z0 = read_frame_xz(frames[0][1])
     x1, z1 = read_frame_xz(frames[-1][1])
-    scene_path = os.path.join(run, "scene.json")  # the scene the run ran (talus writes it)
-    if not os.path.isfile(scene_path):
-        scene_path = os.path.join(ROOT, "inputs", "column_collapse_2d.json")
-    with open(scene_path) as f:
-        half_width, how, front, half = column_extents(json.load(f), x0, x1)
+    half_width, how, front, half = column_extents(scene, x0, x1)
     fig, ax = plt.subplots(figsize=(7, 3.2))
     ax.scatter(x0, z0, s=1, c="0.7", label="initial column")
     ax.scatter(x1, z1, s=1, c="tab:brown", label="deposit")
@@ -115,4 +142,4 @@ def main():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main_guard(main))

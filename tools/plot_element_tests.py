@@ -27,7 +27,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
-from talus_plot import ROOT, run_talus  # noqa: E402
+from talus_plot import ROOT, main_guard, run_talus  # noqa: E402
 
 
 def cone(fit, angle_deg, cohesion):
@@ -189,4 +189,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    main_guard(main)

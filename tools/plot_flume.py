@@ -21,6 +21,9 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
 from talus_plot import read_csv_columns  # noqa: E402
+from cli_checks import output_folder  # noqa: E402
+
+QUANTILES = {"front_quantile": 0.995, "tail_quantile": 0.005}  # diagnostics.runout's defaults (docs/scene-reference.md)
 
 
 def reference_s(run_dir, runout):
@@ -31,6 +34,14 @@ def reference_s(run_dir, runout):
     with open(path) as f:
         r = json.load(f)
     return r["gate_s"], r.get("runout_plane_s")
+
+
+def quantile_labels(scene):
+    """The legend's words for the front and the tail: the mass quantiles the run measured them at
+    (diagnostics.runout.front_quantile, tail_quantile; the legend said 99.5% and 0.5% whatever they were)."""
+    runout = dict(QUANTILES, **scene.get("diagnostics", {}).get("runout", {}))
+    return (f"front ({100 * runout['front_quantile']:g}% mass quantile)",
+            f"tail ({100 * runout['tail_quantile']:g}% mass quantile)")
 
 
 def band_centre(runout, y_values, thickness):
@@ -75,9 +86,10 @@ def main():
         if not os.path.isfile(os.path.join(a.run_dir, needed)):
             sys.exit(f"plot_flume.py: {os.path.join(a.run_dir, needed)} not found: give the folder of a run of a scene "
                      "with diagnostics.runout (talus run SCENE --out DIR)")
-    out = a.out or a.run_dir
-    os.makedirs(out, exist_ok=True)
     runout = read_csv_columns(os.path.join(a.run_dir, "runout.csv"))
+    if not runout:  # (a run stopped before its first row: was KeyError 'front')
+        sys.exit(f"plot_flume.py: {os.path.join(a.run_dir, 'runout.csv')} holds no rows: nothing to plot")
+    out = output_folder("--out", a.out) if a.out else a.run_dir
     with open(os.path.join(a.run_dir, "scene.json")) as f:
         scene = json.load(f)
     gate, plane = reference_s(a.run_dir, runout)
@@ -87,9 +99,10 @@ def main():
 
     t = runout["time"]
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 6.5), sharex=True)
-    ax1.plot(t, runout["front"], label="front (99.5% mass quantile)")
+    front_label, tail_label = quantile_labels(scene)
+    ax1.plot(t, runout["front"], label=front_label)
     ax1.plot(t, runout["centre_s"], label="centre of mass")
-    ax1.plot(t, runout["tail"], label="tail (0.5% mass quantile)")
+    ax1.plot(t, runout["tail"], label=tail_label)
     ax1.plot(t, runout["s_max"], ":", color="grey", lw=0.8, label="foremost particle")
     ax1.axhline(gate, color="k", lw=0.6, ls="--", label="gate")
     if plane is not None:

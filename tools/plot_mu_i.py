@@ -20,12 +20,14 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from cli_checks import require_inputs, require_talus  # noqa: E402
+from cli_checks import output_folder, refuse, require_inputs, require_talus  # noqa: E402
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
+COLUMNS = ("I", "tau_over_p", "relative_error")  # of the element test's CSV
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SPEC = os.path.join(ROOT, "inputs", "element_tests", "mu_i_simple_shear.json")
@@ -48,6 +50,13 @@ def main():
         if not args.csv:
             ap.error("--no-run plots the CSV of an earlier run: give it with --csv")
         require_inputs(csv=args.csv)
+    # The plot's name and folder, checked before the run (an unknown extension was a traceback from savefig)
+    out = args.out if os.path.splitext(args.out)[1] else args.out + ".png"  # what matplotlib writes
+    formats = plt.figure().canvas.get_supported_filetypes()
+    plt.close("all")
+    if os.path.splitext(out)[1][1:].lower() not in formats:
+        refuse("--out", args.out, f"give a name ending in one of .{', .'.join(sorted(formats))}")
+    output_folder("--out", os.path.dirname(os.path.abspath(out)))
     csv_path = args.csv or os.path.join(tempfile.mkdtemp(prefix="talus_mu_i_"), "mu_i_simple_shear.csv")
     if not args.no_run:
         require_talus(args.talus)  # was a subprocess traceback
@@ -56,7 +65,12 @@ def main():
     with open(SPEC) as f:
         m = json.load(f)["material"]
     with open(csv_path, newline="") as f:
-        rows = list(csv.DictReader(f))
+        reader = csv.DictReader(f)
+        rows = list(reader)
+    missing = [c for c in COLUMNS if c not in (reader.fieldnames or [])]
+    if missing or not rows:  # (another CSV was a KeyError 'I')
+        what = f"no column {missing[0]}" if missing else "no rows"
+        sys.exit(f"plot_mu_i.py: --csv {csv_path}: {what}: give the CSV of talus element-test {os.path.relpath(SPEC, ROOT)}")
     i = [float(r["I"]) for r in rows]
     ratio = [float(r["tau_over_p"]) for r in rows]
     err = [max(abs(float(r["relative_error"])), 1e-17) for r in rows]
@@ -84,8 +98,6 @@ def main():
                 color="0.4")
     ax_err.legend(loc="upper left")
     fig.tight_layout()
-    out = args.out if os.path.splitext(args.out)[1] else args.out + ".png"  # what matplotlib writes
-    os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
     fig.savefig(out, dpi=110)
     print(f"wrote {out}; largest relative error {max(err):.2e}")
     return 0

@@ -19,6 +19,9 @@ import os
 import re
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for cli_checks, next to this script
+from cli_checks import require_folders  # noqa: E402
+
 RUNS_LINE = re.compile(r"^\s*(\d+) threads\s+best\s+([0-9.]+) M/s\s+speed-up\s+([0-9.]+)\s+model\s+([0-9.]+)\s+with c\s+([0-9.]+)")
 RUNS_HEAD = re.compile(r"^(\S+) \((\d+) particles, to ([0-9.]+) s\): c\((\d+)\) = ([0-9.]+)")
 BENCH_LINE = re.compile(r"^(strong|weak)\s+threads=\s*(\d+)\s+particles=\s*(\d+)\s+([0-9.]+) M/s")
@@ -55,6 +58,7 @@ def main():
     ap.add_argument("dir", nargs="?", default="docs/performance/node16_2026-12-04")
     ap.add_argument("--out")
     a = ap.parse_args()
+    require_folders(out=a.out)  # (a missing folder was a traceback from savefig, after the plotting)
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

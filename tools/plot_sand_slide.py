@@ -24,7 +24,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
-from talus_plot import ROOT, finish_axes, read_csv_columns, require_talus, run_talus, save_figure  # noqa: E402
+from talus_plot import ROOT, finish_axes, main_guard, read_csv_columns, require_talus, run_talus, save_figure  # noqa: E402
 from cli_checks import require_at_least  # noqa: E402
 
 SCENES = ("sand_slide_incline", "sand_slide_near_threshold")
@@ -80,4 +80,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    main_guard(main)

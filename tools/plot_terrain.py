@@ -29,7 +29,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
-from talus_plot import ROOT, finish_axes, read_csv_columns, read_vtu, require_talus, run_talus, save_figure, series_frames  # noqa: E402
+from talus_plot import (ROOT, finish_axes, main_guard, read_csv_columns, read_vtu, require_talus, run_finished,  # noqa: E402
+                        run_talus, save_figure, series_frames)
 from cli_checks import require_at_least  # noqa: E402
 G = 9.81
 THETA = math.radians(30.0)
@@ -37,7 +38,8 @@ THETA = math.radians(30.0)
 
 def run(args, name):
     out = os.path.join(args.runs, name)
-    if not (args.reuse and os.path.exists(os.path.join(out, "energy.csv"))):
+    # reused only when it completed (an interrupted run has an energy.csv too: run.json says how it ended)
+    if not (args.reuse and run_finished(out)):
         run_talus(args.talus, "run", os.path.join(ROOT, "inputs", "terrain", name + ".json"), "--out", out,
                   threads=args.threads)
     return out
@@ -48,7 +50,7 @@ def run_refined(args, name, h):
     under --runs as NAME_h<h>.json and run (or reused)."""
     tag = f"{name}_h{h:g}"
     out = os.path.join(args.runs, tag)
-    if not (args.reuse and os.path.exists(os.path.join(out, "energy.csv"))):
+    if not (args.reuse and run_finished(out)):
         with open(os.path.join(ROOT, "inputs", "terrain", name + ".json")) as f:
             scene = json.load(f)
         scene["name"] = tag
@@ -134,7 +136,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--talus", default=os.path.join(ROOT, "build", "talus"))
     ap.add_argument("--runs", default=os.path.join(ROOT, "runs", "terrain"))
-    ap.add_argument("--reuse", action="store_true", help="reuse finished runs under --runs")
+    ap.add_argument("--reuse", action="store_true", help="reuse finished runs under --runs (a run that did not "
+                    "complete is run again)")
     # (without it each run took every core: these 128-512-particle scenes then wait at the barriers,
     # and on a busy 2-core machine the nine runs took minutes instead of seconds)
     ap.add_argument("--threads", type=int, default=1, help="threads of each talus run (default 1)")
@@ -256,4 +259,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    main_guard(main)

@@ -10,7 +10,8 @@ Default: runs/. One row a run, oldest first: the folder, scene, status, commit, 
 vector path, steps, simulated time reached of the end time, wall seconds, million particle-updates
 per second and the energy budget's gap (completed runs), and for a run that did not complete its
 message. A run still going (or killed) shows the step and time it last recorded. A resumed run
-counts its earlier parts (`parts`). Exit status 1 when no record is found,
+counts its earlier parts (`parts`): its steps and wall seconds are all the parts' (a killed part
+recorded no wall time and adds none), its rate is the last part's (as talus's closing line). Exit status 1 when no record is found,
 or when a run's status is not "completed" (so that a sweep's script can stop on it); a folder
 that does not exist is one line and exit 2.
 Only the standard library.
@@ -57,6 +58,10 @@ def row(path, base):
         end = r["progress"]
     rate = end.get("particle_updates_per_second")
     gap = end.get("energy_budget_gap")
+    # steps count from the start of the whole run, wall_seconds only this part's: a resumed run's
+    # earlier parts add theirs (the column read as the whole run's time, with the whole run's steps)
+    parts = [*r.get("earlier_parts", []), r]
+    walls = [p["wall_seconds"] for p in parts if isinstance(p.get("wall_seconds"), (int, float))]
     return {
         "run": run,
         "scene": r.get("scene", {}).get("name", ""),
@@ -67,10 +72,10 @@ def row(path, base):
         "steps": end.get("step", start.get("step", "")),
         "time": end.get("time", start.get("time", "")),
         "end_time": r.get("end_time", ""),
-        "wall_seconds": r.get("wall_seconds", ""),
+        "wall_seconds": sum(walls) if walls else "",
         "m_updates_per_s": rate / 1e6 if rate is not None else "",
         "energy_gap": gap if gap is not None else "",
-        "parts": 1 + len(r.get("earlier_parts", [])),
+        "parts": len(parts),
         "started": r.get("started", ""),
         "message": r.get("message", ""),
     }
@@ -98,8 +103,9 @@ def print_table(rows):
 
 
 def main():
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
+    summary, _, details = __doc__.partition("\n\n")  # (the epilog was the whole text: --help said the first paragraph twice)
+    p = argparse.ArgumentParser(description=summary, formatter_class=argparse.RawDescriptionHelpFormatter,
+                                epilog=details)
     p.add_argument("folders", nargs="*", default=["runs"], metavar="FOLDER")
     p.add_argument("--csv", metavar="FILE", help="also write the table as CSV (every column, the message too)")
     a = p.parse_args()

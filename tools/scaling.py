@@ -37,8 +37,10 @@ import sys
 import tempfile
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 # from cli_checks, not talus_plot: talus_plot imports numpy, which this tool does not need
-from cli_checks import refuse, require_at_least, require_talus, run_or_stop  # noqa: E402
+from cli_checks import output_folder, refuse, require_at_least, require_talus, run_or_stop  # noqa: E402
 import scaling_model  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def thread_counts(max_threads):
@@ -102,11 +104,13 @@ def model_speedups(record_path, counts, contention_by_threads=None):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--talus", default="build/talus")
+    # the defaults from the repository root, as speed_vs_error.py's (they were from the current folder)
+    ap.add_argument("--talus", default=os.path.join(ROOT, "build", "talus"))
     ap.add_argument("--particles", type=int, default=1000000)
     ap.add_argument("--steps", type=int, default=10)
     ap.add_argument("--max-threads", type=int, default=os.cpu_count())
-    ap.add_argument("--out", default="docs/performance")
+    ap.add_argument("--out", default=os.path.join(ROOT, "docs", "performance"), help="folder of the outputs "
+                    "(default: docs/performance)")
     ap.add_argument("--name", default="scaling", help="file stem of the CSV, JSON and PNG")
     ap.add_argument("--repeat", type=int, default=1, help="runs per point (the best is kept; all are in the JSON)")
     add_wait_policy_argument(ap)
@@ -122,7 +126,7 @@ def main():
                                  "model needs: use talus bench --scene update --threads T directly")
     require_talus(a.talus)
     wait_policy = apply_wait_policy(a.wait_policy)
-    os.makedirs(a.out, exist_ok=True)
+    output_folder("--out", a.out)  # (a file of that name was a traceback)
     counts = thread_counts(a.max_threads)
     record_path = os.path.join(a.out, a.name + "_record.json")
     record_t_path = os.path.join(a.out, a.name + "_record_t.json")

@@ -39,8 +39,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, next to this script
-from talus_plot import (finish_axes, read_csv_columns, read_vtu, run_talus, save_figure, series_frames,  # noqa: E402
-                        write_csv_rows)
+from talus_plot import (finish_axes, main_guard, read_csv_columns, read_vtu, run_talus, save_figure,  # noqa: E402
+                        series_frames, write_csv_rows)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RATIOS = [1.5, 1.2, 1.1, 1.05, 1.02]
@@ -183,4 +183,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    main_guard(main)

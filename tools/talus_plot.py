@@ -55,10 +55,71 @@ def series_frames(run_dir):
     return frames
 
 
+def run_status(run_dir):
+    """The status a run's record (run.json) gives: "completed", "interrupted", "unstable", "failed",
+    "running" (a killed run), or None when there is no readable record."""
+    try:
+        with open(os.path.join(run_dir, "run.json")) as f:
+            return json.load(f).get("status")
+    except (OSError, ValueError, AttributeError):
+        return None
+
+
+def run_finished(run_dir):
+    """Whether the run in run_dir ran to its end. A run stopped by --stop-after, Ctrl-C or SIGTERM
+    writes runout.json, energy.csv and its frames too, so their presence does not say it finished:
+    a reused interrupted flume gave a front clamped at its last row for later times."""
+    return run_status(run_dir) == "completed"
+
+
+def require_finished(run_dir, option=None, hint="resume it (talus run SCENE --restart DIR/checkpoint.h5) or run it again"):
+    """Stop with one line unless the run in run_dir completed (`option`, e.g. "--run-dir", names where
+    the folder came from; `hint` says what to do). Returns run_dir."""
+    if not run_finished(run_dir):
+        status = run_status(run_dir)
+        why = f"its run.json says '{status}'" if status else "no readable run.json there"
+        where = f"{option} {run_dir}" if option else run_dir
+        sys.exit(f"{os.path.basename(sys.argv[0])}: {where}: the run did not complete ({why}): {hint}")
+    return run_dir
+
+
+class TalusError(RuntimeError):
+    """A talus run or command that failed; its message is one line (see main_guard)."""
+
+
+def talus_failure(cmd, r):
+    """One line for a talus process r that failed: its last line on stderr, else how it stopped (a run
+    stopped by a signal says so on stdout, or the process ended by one has no words at all: the
+    message was "talus failed (130): ")."""
+    said = (r.stderr or "").strip().splitlines()
+    stopped = [line for line in (r.stdout or "").splitlines() if "stopped by signal" in line]
+    if r.returncode < 0:
+        why = f"stopped by signal {-r.returncode}"
+    elif said:
+        why = said[-1].strip()
+    elif stopped:
+        why = stopped[-1].strip()
+    elif r.returncode > 128:
+        why = f"stopped by signal {r.returncode - 128}"
+    else:
+        why = "no message"
+    return f"{' '.join(map(str, cmd))} failed (exit {r.returncode}): {why}"
+
+
+def main_guard(main):
+    """Run a script's main(); a failed talus run (TalusError) ends it with one line and exit 1 instead
+    of a traceback. Other exceptions are bugs and keep their traceback. Returns main's exit status."""
+    try:
+        return main()
+    except TalusError as e:
+        sys.exit(f"{os.path.basename(sys.argv[0])}: {e}")
+
+
 def run_talus(talus, *args, threads=None, quiet=True, capture=False, check=True):
     """Run the talus program (`talus run SCENE --out DIR`, `talus element-test ...`): the arguments
     as given, then --threads and --quiet for `run` when asked. Returns the CompletedProcess; with
-    check, a failure raises with talus's own one-line error. capture keeps stdout and stderr."""
+    check, a failure raises TalusError with talus's own one-line error (see talus_failure). capture
+    keeps stdout and stderr."""
     require_talus(talus)
     cmd = [talus, *map(str, args)]
     if args and args[0] == "run":
@@ -68,7 +129,7 @@ def run_talus(talus, *args, threads=None, quiet=True, capture=False, check=True)
             cmd.append("--quiet")
     r = subprocess.run(cmd, capture_output=True, text=True)
     if check and r.returncode != 0:
-        raise RuntimeError(f"{' '.join(cmd)} failed ({r.returncode}): {r.stderr.strip() or r.stdout.strip()}")
+        raise TalusError(talus_failure(cmd, r))
     if not capture and r.stdout and not quiet:
         print(r.stdout, end="")
     return r
@@ -76,11 +137,12 @@ def run_talus(talus, *args, threads=None, quiet=True, capture=False, check=True)
 
 def run_flume(talus, runs, name, cell, threads=1, scene_args=(), rerun=False):
     """The flume scene of tools/make_flume_scene.py at cell size `cell` (extra generator arguments in
-    scene_args), run into runs/name unless a finished run is there (or rerun). Returns
+    scene_args), run into runs/name unless a finished run is there (or rerun): one that did not
+    complete (run.json, see run_finished) is run again, as a missing one. Returns
     (run_dir, runout columns, energy columns, runout.json, wall seconds or None)."""
     run_dir = os.path.join(runs, name)
     wall_path = os.path.join(run_dir, "wall_seconds.txt")
-    if rerun or not os.path.exists(os.path.join(run_dir, "runout.json")):
+    if rerun or not run_finished(run_dir) or not os.path.exists(os.path.join(run_dir, "runout.json")):
         os.makedirs(runs, exist_ok=True)
         scene = os.path.join(runs, name + ".json")
         with open(scene, "w") as f:
@@ -92,9 +154,23 @@ def run_flume(talus, runs, name, cell, threads=1, scene_args=(), rerun=False):
             f.write(f"{time.perf_counter() - t0:.1f}\n")
     with open(os.path.join(run_dir, "runout.json")) as f:
         result = json.load(f)
-    wall = float(open(wall_path).read()) if os.path.exists(wall_path) else None
+    wall = None
+    if os.path.exists(wall_path):
+        with open(wall_path) as f:
+            wall = float(f.read())
     return (run_dir, read_csv_columns(os.path.join(run_dir, "runout.csv")),
             read_csv_columns(os.path.join(run_dir, "energy.csv")), result, wall)
+
+
+def value_at(times, values, t, what="the run"):
+    """values (a history over times) at time t, interpolated; a time outside the history is refused
+    (ValueError) rather than clamped: np.interp gave a run stopped at 0.8 s the front of 0.8 s for
+    t = 1 and 2 s."""
+    times = np.asarray(times)
+    if len(times) == 0 or not times[0] <= t <= times[-1] * (1 + 1e-9):
+        span = f"{times[0]:g} to {times[-1]:g} s" if len(times) else "no rows"
+        raise ValueError(f"{what} has no value at t = {t:g} s (its history runs {span})")
+    return float(np.interp(t, times, values))
 
 
 def read_csv_columns(path):

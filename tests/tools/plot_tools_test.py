@@ -179,6 +179,38 @@ class FlumeSceneRefusals(unittest.TestCase):
             self.assertEqual(out, f.read())
 
 
+    def test_values_out_of_range_are_refused_by_the_generators_option(self):
+        # --bed-friction 95 wrote a negative friction_coefficient, --end inf "Infinity", --aspect inf an OverflowError
+        for name, args, naming in (
+                ("make_flume_scene.py", ["--bed-friction", "95"], "--bed-friction 95: give 0 to 89.42 degrees"),
+                ("make_flume_scene.py", ["--wedge-length", "-0.1"], "--wedge-length -0.1: give more than 0 m"),
+                ("make_flume_scene.py", ["--headroom", "-1"], "--headroom -1: give 0 or more"),
+                ("make_flume_scene.py", ["--end", "inf"], "--end inf: give a finite number"),
+                ("make_collapse_scene.py", ["--model", "dp", "--aspect", "inf"], "--aspect inf: give a finite number")):
+            code, out, err = tool(name, *args)
+            self.assertEqual((code, out), (2, ""), err)
+            self.assertEqual(err.strip(), f"{name}: {naming}" + (" (its tangent, the bed's friction_coefficient, at most 100)"
+                                                                if "bed" in naming else ""))
+        code, out, err = tool("make_flume_scene.py", "--frame-interval", "0")  # talus: the first and last frame
+        self.assertEqual(code, 0, err)
+        self.assertEqual(json.loads(out)["output"]["frame_interval"], 0.0)
+
+    def test_the_shipped_scenes_are_the_generators_output_byte_for_byte(self):
+        # each names its command line in its comment
+        import glob
+        import shlex
+        made = 0
+        for path in sorted(glob.glob(os.path.join(ROOT, "inputs", "**", "*.json"), recursive=True)):
+            with open(path) as f:
+                text = f.read()
+            comment = json.loads(text).get("comment", "")
+            for name in ("make_flume_scene.py", "make_collapse_scene.py"):
+                if comment.startswith(f"written by tools/{name}"):
+                    code, out, err = tool(name, *shlex.split(comment[len(f"written by tools/{name}"):]))
+                    self.assertEqual((code, out), (0, text), f"{path}: {err}")
+                    made += 1
+        self.assertGreaterEqual(made, 7)
+
 
 class ColumnCollapseExtents(unittest.TestCase):
     def test_the_initial_half_width_is_the_box_and_the_front_its_particle_edge(self):
@@ -208,6 +240,334 @@ class ColumnCollapseExtents(unittest.TestCase):
         width, how, front, half = plot_column_collapse.column_extents(s, centres, centres + 0.2)
         self.assertAlmostEqual(width, 0.1, places=12)
         self.assertEqual((how, half), ("outermost particle centre + half a particle spacing", 0.00125))
+
+
+# A stand-in for `talus run SCENE --out DIR`: notes the folder in CALLS beside itself, and writes a
+# completed run's record and the flume's runout files, their rows up to FAKE_END (default the scene's end).
+FAKE_TALUS = """#!/usr/bin/python3
+import json, os, sys
+args = sys.argv[1:]
+out = args[args.index("--out") + 1]
+with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "calls"), "a") as f:
+    f.write(out + "\\n")
+with open(args[1]) as f:
+    end = float(os.environ.get("FAKE_END", json.load(f)["time"]["end"]))
+os.makedirs(out, exist_ok=True)
+times = [end * k / 10 for k in range(11)]
+with open(os.path.join(out, "runout.csv"), "w") as f:
+    f.write("time,front,tail,mass\\n" + "".join(f"{t},{1 + t},{t / 2},1\\n" for t in times))
+with open(os.path.join(out, "energy.csv"), "w") as f:
+    f.write("time,step,kinetic,total\\n" + "".join(f"{t},{k},{10 - k},10\\n" for k, t in enumerate(times)))
+with open(os.path.join(out, "runout.json"), "w") as f:
+    json.dump({"gate_s": 1.0, "from_gate": end, "beyond_runout_plane": None}, f)
+with open(os.path.join(out, "run.json"), "w") as f:
+    json.dump({"status": "completed"}, f)
+"""
+
+
+def fake_talus(folder):
+    path = os.path.join(folder, "talus")
+    with open(path, "w") as f:
+        f.write(FAKE_TALUS)
+    os.chmod(path, 0o755)
+    return path
+
+
+def calls(fake):
+    path = os.path.join(os.path.dirname(fake), "calls")
+    if not os.path.exists(path):
+        return []
+    with open(path) as f:
+        return f.read().split()
+
+
+def write_record(run_dir, status):
+    os.makedirs(run_dir, exist_ok=True)
+    with open(os.path.join(run_dir, "run.json"), "w") as f:
+        json.dump({"status": status, "message": ""}, f)
+
+
+class UnfinishedRuns(unittest.TestCase):
+    """A run stopped by --stop-after, Ctrl-C or SIGTERM writes runout.json, energy.csv and frames too:
+    only run.json's status says it completed. Reusing scripts measured such runs (a clamped front)."""
+
+    def setUp(self):
+        self.work = tempfile.mkdtemp(prefix="talus_unfinished_")
+
+    def tearDown(self):
+        shutil.rmtree(self.work, ignore_errors=True)
+
+    def test_only_a_completed_record_is_a_finished_run(self):
+        import talus_plot
+        for status, finished in (("completed", True), ("interrupted", False), ("running", False),
+                                 ("unstable", False), ("failed", False)):
+            run = os.path.join(self.work, status)
+            write_record(run, status)
+            self.assertEqual(talus_plot.run_finished(run), finished, status)
+        self.assertFalse(talus_plot.run_finished(os.path.join(self.work, "none")))  # no record
+        with self.assertRaises(SystemExit) as e:
+            talus_plot.require_finished(os.path.join(self.work, "interrupted"), "--run-dir")
+        self.assertIn("--run-dir", str(e.exception.code))
+        self.assertIn("the run did not complete (its run.json says 'interrupted')", str(e.exception.code))
+        self.assertEqual(talus_plot.require_finished(os.path.join(self.work, "completed")),
+                         os.path.join(self.work, "completed"))
+
+    def test_a_value_after_the_end_of_a_history_is_refused_not_clamped(self):
+        from talus_plot import value_at
+        self.assertAlmostEqual(value_at([0.0, 0.8], [1.0, 2.6], 0.4), 1.8)
+        self.assertEqual(value_at([0.0, 0.8], [1.0, 2.6], 0.8), 2.6)
+        with self.assertRaisesRegex(ValueError, r"run has no value at t = 2 s \(its history runs 0 to 0.8 s\)"):
+            value_at([0.0, 0.8], [1.0, 2.6], 2.0, "run")
+
+    def test_run_flume_runs_an_interrupted_run_again_and_reuses_a_completed_one(self):
+        import talus_plot
+        fake = fake_talus(self.work)
+        runs = os.path.join(self.work, "runs")
+        run = os.path.join(runs, "flume")
+        write_record(run, "interrupted")
+        for name in ("runout.json", "runout.csv", "energy.csv"):  # as --stop-after leaves them
+            with open(os.path.join(run, name), "w") as f:
+                f.write("{}" if name.endswith("json") else "time,front\n0,1\n")
+        result = talus_plot.run_flume(fake, runs, "flume", 0.05)
+        self.assertEqual(calls(fake), [run])
+        self.assertEqual(result[1]["time"][-1], 4.0)  # the rerun's rows, to the scene's end
+        talus_plot.run_flume(fake, runs, "flume", 0.05)
+        self.assertEqual(calls(fake), [run])  # completed now: reused
+
+    def test_flume_resolution_refuses_a_front_at_a_time_the_run_did_not_reach(self):
+        fake = fake_talus(self.work)
+        out = os.path.join(self.work, "out")
+        r = subprocess.run([sys.executable, os.path.join(TOOLS, "flume_resolution.py"), "--talus", fake, "--cells", "0.05",
+                            "--runs", os.path.join(self.work, "runs"), "--out", out], capture_output=True, text=True,
+                           timeout=60, env=dict(os.environ, FAKE_END="1.5"))
+        self.assertEqual(r.returncode, 1, r.stderr)
+        self.assertEqual(len(r.stderr.strip().splitlines()), 1, r.stderr)
+        self.assertIn("has no value at t = 2 s (its history runs 0 to 1.5 s): nothing written", r.stderr)
+        self.assertEqual(os.listdir(out), [])
+
+    def test_collapse_study_runs_an_interrupted_run_again(self):
+        import collapse_study
+        fake = fake_talus(self.work)
+        scene, o = collapse_study.scene_for("dp", 0.5, 10, [])
+        run = os.path.join(self.work, "dp_a0.5_n10")
+        self.assertEqual(collapse_study.run_one(fake, scene, run, 1), "ran")
+        write_record(run, "interrupted")  # Ctrl-C'd: runout.json and the same scene are there
+        self.assertEqual(collapse_study.run_one(fake, scene, run, 1), "ran")
+        self.assertEqual(collapse_study.run_one(fake, scene, run, 1), "reused")
+        self.assertEqual(calls(fake), [run, run])
+
+    def test_plot_terrain_reuses_only_a_completed_run(self):
+        import argparse
+        import plot_terrain
+        fake = fake_talus(self.work)
+        args = argparse.Namespace(talus=fake, runs=self.work, reuse=True, threads=1)
+        run = os.path.join(self.work, "horizontal_plane_coarse")
+        write_record(run, "interrupted")
+        with open(os.path.join(run, "energy.csv"), "w") as f:
+            f.write("time,total\n0,1\n")
+        self.assertEqual(plot_terrain.run(args, "horizontal_plane_coarse"), run)
+        self.assertEqual(plot_terrain.run(args, "horizontal_plane_coarse"), run)
+        self.assertEqual(calls(fake), [run])  # run again once, then reused
+
+    def test_plot_column_collapse_refuses_an_unfinished_run_and_a_run_that_released_nothing(self):
+        run, out = os.path.join(self.work, "run"), os.path.join(self.work, "plots")
+        write_record(run, "interrupted")
+        with open(os.path.join(run, "energy.csv"), "w") as f:  # the elastic block sent along a level floor
+            f.write("time,kinetic,strain,gravity,friction_work,plastic_work,total\n"
+                    "0,16,0,7.848,0,0,23.848\n1,0.2,0.01,7.85,15.8,0,23.86\n")
+        code, out_text, err = tool("plot_column_collapse.py", "--run-dir", run, "--out", out)
+        self.assertEqual((code, out_text), (1, ""), err)
+        self.assertIn(f"--run-dir {run}: the run did not complete (its run.json says 'interrupted')", err)
+        write_record(run, "completed")
+        code, out_text, err = tool("plot_column_collapse.py", "--run-dir", run, "--out", out)
+        self.assertEqual((code, out_text), (1, ""), err)
+        self.assertEqual(len(err.strip().splitlines()), 1, err)
+        self.assertIn("released -0.002 J of potential energy, against 16 J of kinetic and strain energy at the "
+                      "start: not a collapse", err)
+        self.assertFalse(os.path.exists(out))
+
+    def test_plot_bagnold_no_run_refuses_an_unfinished_run(self):
+        run = os.path.join(self.work, "n16")
+        write_record(run, "interrupted")
+        with open(os.path.join(run, "particles.pvd"), "w") as f:
+            f.write('<VTKFile type="Collection"><Collection></Collection></VTKFile>')
+        code, out, err = tool("plot_bagnold.py", "--no-run", "--work", self.work)
+        self.assertEqual((code, out), (1, ""), err)
+        self.assertIn(f"{run}: the run did not complete (its run.json says 'interrupted'): run it without --no-run", err)
+        for args, naming in ((["--cells", "0"], "--cells 0: give 1 or more"), (["--cells", "-2"], "--cells -2: give 1 or more"),
+                             (["--threads", "0"], "--threads 0: give 1 or more")):
+            code, out, err = tool("plot_bagnold.py", "--no-run", "--work", self.work, *args)
+            self.assertEqual((code, out), (2, ""), err)
+            self.assertEqual(err.strip(), f"plot_bagnold.py: {naming}")
+
+    def test_plot_bagnold_plots_a_run_of_two_frames(self):
+        # the first and the last frame (frame_interval 0): the surface change over the last interval was an IndexError
+        import plot_bagnold
+        s = plot_bagnold.scene_at(scene("inputs/inclined_flow_bagnold.json"), 4)
+        s["time"]["end"] = 0.02
+        s["output"]["frame_interval"] = 0.0
+        path, run = os.path.join(self.work, "n4.json"), os.path.join(self.work, "n4")
+        with open(path, "w") as f:
+            json.dump(s, f)
+        subprocess.run([TALUS, "run", path, "--out", run, "--threads", "1", "--quiet"], check=True, timeout=120)
+        code, out, err = tool("plot_bagnold.py", "--no-run", "--cells", "4", "--work", self.work)
+        self.assertEqual(code, 0, err)
+        self.assertIn("4 cells over h: surface row", out)
+        self.assertNotIn("surface change", out)
+        self.assertTrue(os.path.isfile(os.path.join(self.work, "bagnold_profile.png")))
+
+
+class MlsPlotsAllOrNothing(unittest.TestCase):
+    def test_bad_values_are_refused_before_any_run(self):
+        work = tempfile.mkdtemp(prefix="talus_plot_mls_")
+        try:
+            for args, naming in ((["--variants", "particle,cel"], "--variants particle,cel: cel is not one of particle, cell, reused"),
+                                 (["--radius", "9"], "--radius 9: give 0.5 to 8"),
+                                 (["--reuse-strain", "2"], "--reuse-strain 2: give 0 to 1"),
+                                 (["--basis", "quartic"], "argument --basis: invalid choice: 'quartic'")):
+                code, out, err = tool("plot_mls.py", "--talus", TALUS, "--out", os.path.join(work, "out"), *args)
+                self.assertEqual((code, out), (2, ""), err)
+                self.assertIn(naming, err)
+                self.assertFalse(os.path.exists(os.path.join(work, "out")))
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+
+    def test_a_failed_run_writes_nothing(self):
+        # the runs that succeeded were written, a --tag's into docs/verification beside the shipped files
+        work = tempfile.mkdtemp(prefix="talus_plot_mls_")
+        try:
+            wrapper = os.path.join(work, "talus")  # talus, but every run with MLS fails as talus does
+            with open(wrapper, "w") as f:
+                f.write("#!/usr/bin/python3\nimport os, sys\n"
+                        "if sys.argv[1] == 'run' and 'smoothing' in open(sys.argv[2]).read():\n"
+                        "    sys.exit('talus: solver.smoothing: refused for this test')\n"
+                        f"os.execv({os.path.abspath(TALUS)!r}, [{os.path.abspath(TALUS)!r}] + sys.argv[1:])\n")
+            os.chmod(wrapper, 0o755)
+            out = os.path.join(work, "out")
+            code, text, err = tool("plot_mls.py", "--talus", wrapper, "--skip-walls", "--tag", "_t", "--out", out)
+            self.assertEqual(code, 1, err)
+            self.assertRegex(text, r"column linear +off +L2")  # the runs without MLS ran
+            self.assertIn("talus: solver.smoothing: refused for this test", err)
+            self.assertIn("plot_mls.py: 6 of 12 runs failed (the first: column linear cubic); nothing written into", err)
+            self.assertEqual(os.listdir(out), [])
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+
+
+class OneLineErrors(unittest.TestCase):
+    """What was a traceback: a failed talus run, an output path that is a file or has no folder, an
+    unknown plot format, a CSV of another kind, a runout.csv without rows."""
+
+    def setUp(self):
+        self.work = tempfile.mkdtemp(prefix="talus_one_line_")
+
+    def tearDown(self):
+        shutil.rmtree(self.work, ignore_errors=True)
+
+    def assertOneLine(self, result, code, text):
+        self.assertEqual((result[0], result[1]), (code, ""), result[2])
+        self.assertEqual(len(result[2].strip().splitlines()), 1, result[2])
+        self.assertIn(text, result[2])
+
+    def test_a_failed_talus_run_is_its_last_line_or_the_signal(self):
+        from talus_plot import talus_failure
+        r = subprocess.CompletedProcess(["talus"], 2, "", "talus: scene.json:\ntalus: time.end: give more than 0\n")
+        self.assertEqual(talus_failure(["talus", "run", "s.json"], r),
+                         "talus run s.json failed (exit 2): talus: time.end: give more than 0")
+        r = subprocess.CompletedProcess(["talus"], 130, "talus: stopped by signal 2 at step 9, t = 0.1 s; checkpoint c.h5\n"
+                                        "talus: resume with: ...\n", "")
+        self.assertIn("failed (exit 130): talus: stopped by signal 2 at step 9", talus_failure(["talus"], r))
+        for code, text in ((-9, "stopped by signal 9"), (143, "stopped by signal 15"), (1, "no message")):
+            self.assertIn(f"(exit {code}): {text}", talus_failure(["talus"], subprocess.CompletedProcess([], code, "", "")))
+        # a script ends on it with one line (talus_plot.main_guard), not a traceback
+        killed = os.path.join(self.work, "talus")
+        with open(killed, "w") as f:
+            f.write("#!/usr/bin/python3\nimport os\nos.kill(os.getpid(), 9)\n")
+        os.chmod(killed, 0o755)
+        self.assertOneLine(tool("plot_terrain.py", "--talus", killed, "--runs", self.work, "--out", os.path.join(self.work, "out")),
+                           1, "failed (exit -9): stopped by signal 9")
+
+    def test_output_paths_that_cannot_be_written_are_refused_before_the_work(self):
+        run = os.path.join(self.work, "run")
+        os.makedirs(run)
+        with open(os.path.join(run, "scene.json"), "w") as f:
+            json.dump({"name": "x"}, f)
+        with open(os.path.join(run, "runout.csv"), "w") as f:
+            f.write("time,front,tail,s_max,centre_s,centre_y,centre_velocity_s,front_velocity\n0,1,0,1,0.5,0,0,0\n")
+        a_file = os.path.join(run, "run.json")
+        with open(a_file, "w") as f:
+            f.write("{}")
+        self.assertOneLine(tool("plot_flume.py", run, "--out", a_file), 1, f"--out {a_file}: is a file, not a folder")
+        self.assertOneLine(tool("scaling.py", "--talus", TALUS, "--out", a_file), 1, f"--out {a_file}: is a file, not a folder")
+        self.assertOneLine(tool("plot_node_scaling.py", os.path.join(ROOT, "docs", "performance", "node16_2026-12-04"),
+                                "--out", os.path.join(self.work, "nodir", "x.png")), 1, "/nodir does not exist")
+        self.assertOneLine(tool("plot_mu_i.py", "--talus", TALUS, "--out", os.path.join(self.work, "x.foo")), 2,
+                           "x.foo: give a name ending in one of ")
+        self.assertOneLine(tool("plot_mu_i.py", "--talus", TALUS, "--out", os.path.join(a_file, "x.png")), 1,
+                           "is a file, not a folder")
+        self.assertEqual(os.listdir(self.work), ["run"])
+        self.assertEqual(sorted(os.listdir(run)), ["run.json", "runout.csv", "scene.json"])
+
+    def test_inputs_of_another_kind_are_refused(self):
+        with open(os.path.join(self.work, "energy.csv"), "w") as f:
+            f.write("time,kinetic\n0,1\n")
+        self.assertOneLine(tool("plot_mu_i.py", "--no-run", "--csv", os.path.join(self.work, "energy.csv"),
+                                "--out", os.path.join(self.work, "mu.png")), 1, "energy.csv: no column I: give the CSV of talus element-test")
+        with open(os.path.join(self.work, "scene.json"), "w") as f:
+            json.dump({"name": "x"}, f)
+        with open(os.path.join(self.work, "runout.csv"), "w") as f:  # a run stopped before its first row
+            f.write("time,front,tail,s_max,centre_s,centre_y,centre_velocity_s,front_velocity\n")
+        self.assertOneLine(tool("plot_flume.py", self.work), 1, "runout.csv holds no rows: nothing to plot")
+        self.assertFalse(os.path.exists(os.path.join(self.work, "mu.png")))
+
+
+class FlumeLegend(unittest.TestCase):
+    def test_the_front_and_tail_are_labelled_with_the_runs_quantiles(self):
+        # "front (99.5% mass quantile)" was written whatever diagnostics.runout said
+        import plot_flume
+        self.assertEqual(plot_flume.quantile_labels({}), ("front (99.5% mass quantile)", "tail (0.5% mass quantile)"))
+        s = {"diagnostics": {"runout": {"front_quantile": 0.99, "tail_quantile": 0.01}}}
+        self.assertEqual(plot_flume.quantile_labels(s), ("front (99% mass quantile)", "tail (1% mass quantile)"))
+        s = {"diagnostics": {"runout": {"front_quantile": 0.9}}}
+        self.assertEqual(plot_flume.quantile_labels(s), ("front (90% mass quantile)", "tail (0.5% mass quantile)"))
+
+
+class CompareRanksHeaders(unittest.TestCase):
+    def test_the_markdown_headers_name_the_first_runs_ranks(self):
+        # "vs 1 rank" whatever the first run's rank count
+        work = tempfile.mkdtemp(prefix="talus_compare_ranks_")
+        try:
+            s = scene("inputs/elastic_block_slide.json")
+            s["time"]["end"] = 0.01
+            s["diagnostics"] = {"runout": {"deposit_cell": 0.04}}
+            path, one, two = (os.path.join(work, n) for n in ("block.json", "one", "two"))
+            with open(path, "w") as f:
+                json.dump(s, f)
+            subprocess.run([TALUS, "run", path, "--out", one, "--threads", "1", "--quiet"], check=True, timeout=120)
+            shutil.copytree(one, two)
+            with open(os.path.join(two, "run.json")) as f:
+                record = json.load(f)
+            with open(os.path.join(two, "run.json"), "w") as f:  # as a 2-rank run records itself
+                json.dump(dict(record, ranks=2), f)
+            code, out, err = tool("compare_ranks.py", two, one, "--markdown")
+            self.assertEqual(code, 0, err)
+            self.assertIn("| front vs 2 ranks | beyond gate vs 2 ranks | tail vs 2 ranks |", out.splitlines()[0])
+            code, out, err = tool("compare_ranks.py", one, two, "--markdown")
+            self.assertIn("| front vs 1 rank | beyond gate vs 1 rank | tail vs 1 rank |", out.splitlines()[0])
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+
+
+class ColumnCollapseTitle(unittest.TestCase):
+    def test_the_title_names_the_runs_material(self):
+        # it said "Drucker-Prager phi = 30 deg" for every run, mu(I) ones too
+        import plot_column_collapse
+        s = scene("inputs/column_collapse_2d.json")
+        self.assertEqual(plot_column_collapse.material_text(s), "Drucker-Prager phi = 30 deg")
+        s["materials"]["sand"] = {"model": "mu_i", "density": 1600.0, "mu_s": 0.7}
+        self.assertEqual(plot_column_collapse.material_text(s), "mu(I) mu_s = 0.7 (35.0 deg)")
+        del s["materials"]["sand"]["mu_s"]  # talus's default, tan 20.9 deg
+        self.assertEqual(plot_column_collapse.material_text(s), "mu(I) mu_s = 0.382 (20.9 deg)")
 
 
 if __name__ == "__main__":

@@ -85,6 +85,28 @@ class RunsTable(unittest.TestCase):
         self.assertEqual(float(rows[0]["wall_seconds"]), self.record["wall_seconds"])
         self.assertEqual(float(rows[0]["energy_gap"]), self.record["end"]["energy_budget_gap"])
 
+    def test_a_resumed_run_counts_the_wall_seconds_of_every_part(self):
+        # steps counted every part, wall_seconds the last part's alone
+        run = os.path.join(self.work, "resumed")
+        os.makedirs(run, exist_ok=True)
+        killed = {k: v for k, v in self.record.items() if k not in ("end", "wall_seconds")}
+        earlier = [dict(self.record, status="interrupted", wall_seconds=2.5), dict(killed, status="ended_unrecorded")]
+        with open(os.path.join(run, "run.json"), "w") as f:
+            json.dump(dict(self.record, earlier_parts=earlier), f)
+        out_csv = os.path.join(self.work, "resumed.csv")
+        code, out, err = table(run, "--csv", out_csv)
+        self.assertEqual(code, 0, out + err)
+        with open(out_csv) as f:
+            r = next(csv.DictReader(f))
+        self.assertEqual(r["parts"], "3")
+        self.assertAlmostEqual(float(r["wall_seconds"]), self.record["wall_seconds"] + 2.5, places=9)
+
+    def test_help_says_each_paragraph_once(self):
+        code, out, err = table("--help")
+        self.assertEqual(code, 0, err)
+        self.assertEqual(out.count("A table of talus runs"), 1, out)
+        self.assertIn("Only the standard library.", out)
+
     def test_no_record_and_no_folder_are_one_line(self):
         code, out, err = table(self.work + "/nothing_here")
         self.assertEqual((code, err.count("\n")), (2, 1), err)
