@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace talus {
 
@@ -105,6 +106,40 @@ class BodyCandidates {
     }
   }
 
+  /// The points of this body that `other` holds as well, which seeding makes twice (each body seeds
+  /// its own), and the box around them (particle positions). Both bodies are extrusions along y, so
+  /// one plane of y that both hold settles it in the x-z plane; the count is that plane's times this
+  /// body's planes of y inside the other's range.
+  struct SharedPoints {
+    std::size_t count = 0;
+    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  };
+  SharedPoints points_also_in(const BodyCandidates& other) const {
+    SharedPoints shared;
+    std::size_t shared_ys = 0;
+    for (double y : ys_)
+      if (y >= other.body_.box_min[1] && y < other.body_.box_max[1]) {
+        ++shared_ys;
+        shared.lo[1] = std::min(shared.lo[1], y);
+        shared.hi[1] = std::max(shared.hi[1], y);
+      }
+    if (shared_ys == 0) return {};
+    for (double px : xs_) {
+      if (px < other.body_.box_min[0] || px >= other.body_.box_max[0]) continue;
+      const double zb = terrain_ ? bed_.height(px) : 0.0;
+      for (double third : third_) {
+        const Vec3 point(px, shared.lo[1], terrain_ ? third + zb : third);
+        if (!inside(px, point[1], third, zb) || !other.holds(point)) continue;
+        shared.count += shared_ys;
+        for (int d : {0, 2}) {
+          shared.lo[d] = std::min(shared.lo[d], point[d]);
+          shared.hi[d] = std::max(shared.hi[d], point[d]);
+        }
+      }
+    }
+    return shared.count > 0 ? shared : SharedPoints{};
+  }
+
   /// The number of points the body holds. Throws the input errors of a body that reaches above a
   /// terrain grid or holds no particle, naming the body by its label.
   std::size_t count() const {
@@ -134,6 +169,16 @@ class BodyCandidates {
   }
 
  private:
+  /// Whether the body would keep a point at the physical position p (x, y and z), were it one of its
+  /// candidates: the test below, with the ranges the candidates' lattice stands for.
+  bool holds(const Vec3& p) const {
+    if (!terrain_) return body_contains(body_, p);
+    const double w = p[2] - bed_.height(p[0]);
+    if (w < grid_.origin[2] || w >= w_top_) return false;  // outside the grid's w column: never seeded
+    if (body_.frame != BoxFrame::Terrain) return body_contains(body_, p);
+    return body_contains(body_, Vec3(p[0], p[1], w));  // a terrain-frame box reads its third axis as w
+  }
+
   // Whether a candidate lies in the body (the box's x and y ranges are those of xs and ys): a
   // terrain-frame box by its w range, a box off a terrain grid always, any other body by its own
   // inside test at (x, y, z).
@@ -199,6 +244,21 @@ std::vector<std::string> seeding_warnings(const GridGeometry& grid, const std::v
           "its particles are not seeded (raise it, or seed a layer on the bed with box.frame = \"terrain\")",
           name_of(label, b), bodies[b].name, 100.0 * below / (below + kept)));
   }
+  // Two bodies that share a volume both seed it: twice the mass there, and with the same particles
+  // per cell the particles sit on top of each other. Any shapes and frames (a prism over a box, a
+  // physical box over a terrain-frame one were not checked before 2026-12-07).
+  for (std::size_t a = 0; a < bodies.size(); ++a)
+    for (std::size_t b = a + 1; b < bodies.size(); ++b) {
+      const BodyCandidates first(grid, bodies[a], name_of(label, a), bed), second(grid, bodies[b], name_of(label, b), bed);
+      const auto shared = first.points_also_in(second);
+      if (shared.count == 0) continue;
+      warnings.push_back(fmt::format(
+          "{} (\"{}\") and {} (\"{}\") overlap: {} of the {} particles of {} (in [{:.6g}, {:.6g}, {:.6g}] - "
+          "[{:.6g}, {:.6g}, {:.6g}]) lie inside {} as well, and both seed particles there (twice the mass)",
+          name_of(label, a), bodies[a].name, name_of(label, b), bodies[b].name, shared.count, first.count(),
+          name_of(label, a), shared.lo[0], shared.lo[1], shared.lo[2], shared.hi[0], shared.hi[1], shared.hi[2],
+          name_of(label, b)));
+    }
   return warnings;
 }
 

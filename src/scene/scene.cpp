@@ -128,20 +128,6 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
         radius, kMlsStableRadiusFactor));
   for (std::string& w : seeding_warnings(scene.grid, scene.bodies, body_label(scene))) warnings.push_back(std::move(w));
   for (std::string& w : terrain_warnings(scene.grid, scene.courant)) warnings.push_back(std::move(w));
-  // Two boxes that share a volume seed it twice: twice the mass there, particles on top of each other.
-  // (Prisms are left out: their bounding boxes may overlap where the prisms do not.)
-  for (std::size_t a = 0; a < scene.bodies.size(); ++a)
-    for (std::size_t b = a + 1; b < scene.bodies.size(); ++b) {
-      const BodySpec& p = scene.bodies[a];
-      const BodySpec& q = scene.bodies[b];
-      if (p.shape != BodyShapeKind::Box || q.shape != BodyShapeKind::Box || p.frame != q.frame) continue;
-      const Vec3 lo = p.box_min.cwiseMax(q.box_min), hi = p.box_max.cwiseMin(q.box_max);
-      if ((hi - lo).minCoeff() > 0.0)
-        warnings.push_back(fmt::format(
-            "bodies[{}] (\"{}\") and bodies[{}] (\"{}\") overlap in [{}, {}, {}] - [{}, {}, {}]: both seed "
-            "particles there (twice the mass)",
-            a, p.name, b, q.name, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]));
-    }
   // A stiff material or a fine grid can ask for more steps than any run will take: say so before it starts.
   const double dt = scene.initial_time_step(), steps = scene.end_time / dt;
   if (steps > 1e8)

@@ -165,6 +165,35 @@ TEST(SceneJson, OverlappingBoxesAreWarnedAbout) {
   EXPECT_EQ(warnings_of(R"({ "min": [0.5, 0.2, 0.2], "max": [0.8, 0.5, 0.5] })"), 0);  // touching
 }
 
+// The same for a prism over a box, and for a physical box over a terrain-frame one: both seeded the
+// shared volume twice without a word (only two boxes in one frame were checked).
+TEST(SceneJson, OverlappingBodiesOfAnyShapeOrFrameAreWarnedAbout) {
+  const auto with_prism = [](const std::string& points) {
+    return parse_scene(replace_once(kMinimal, "\"max\": [0.5, 0.5, 0.5] } } ]",
+                                    "\"max\": [0.5, 0.5, 0.5] } }, { \"name\": \"w\", \"material\": \"m\", \"prism\": "
+                                    "{ \"points\": " + points + ", \"y\": [0.2, 0.5] } } ]"),
+                       "t");
+  };
+  // the prism covers x in [0.4, 0.8): a third of the box's 6 x 6 x 6 particles
+  EXPECT_EQ(test::warnings_with(with_prism("[[0.4, 0.2], [0.8, 0.2], [0.8, 0.5], [0.4, 0.5]]"),
+                                "bodies[0] (\"b\") and bodies[1].prism (\"w\") overlap: 72 of the 216 particles of "
+                                "bodies[0] (in [0.425, 0.225, 0.225] - [0.475, 0.475, 0.475]) lie inside bodies[1].prism"),
+            1);
+  EXPECT_EQ(test::warnings_with(with_prism("[[0.5, 0.2], [0.8, 0.2], [0.8, 0.5], [0.5, 0.5]]"), "overlap"), 0);  // touching
+  // On a terrain grid: a physical box laid into the terrain-frame block (w in [0, 1] over x in [1, 2])
+  Scene terrain = read_scene_file(std::string(TALUS_SOURCE_DIR) + "/inputs/terrain/incline30_coarse.json");
+  BodySpec physical = terrain.bodies.front();
+  physical.name = "over";
+  physical.frame = BoxFrame::Physical;
+  physical.box_min = Vec3(1.0, 0.0, 3.9);
+  physical.box_max = Vec3(2.0, 0.25, 4.3);
+  terrain.bodies.push_back(physical);
+  EXPECT_EQ(test::warnings_with(terrain, "bodies[0] (\"block\") and bodies[1] (\"over\") overlap"), 1);
+  terrain.bodies.back().box_min[2] = 5.1;  // above the block (its top, 1 m over the bed, is at most 5.04 m)
+  terrain.bodies.back().box_max[2] = 5.3;
+  EXPECT_EQ(test::warnings_with(terrain, "overlap"), 0);
+}
+
 // A μ(I) packing denser than its grains (solid fraction above 1) is no packing: refused.
 TEST(SceneJson, MuIPackingDenserThanItsGrainsIsRefused) {
   const std::string mu_i = replace_once(kMinimal, "\"poisson\": 0.3", "\"poisson\": 0.3, \"model\": \"mu_i\", \"grain_density\": 2450");
