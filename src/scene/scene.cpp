@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace talus {
 
@@ -128,6 +129,29 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
         radius, kMlsStableRadiusFactor));
   for (std::string& w : seeding_warnings(scene.grid, scene.bodies, body_label(scene))) warnings.push_back(std::move(w));
   for (std::string& w : terrain_warnings(scene.grid, scene.courant)) warnings.push_back(std::move(w));
+  // Units written wrong pass every range: a friction coefficient written as an angle in degrees (29
+  // for tan 29 degrees), a friction angle written in radians (0.61 for 35 degrees). Warned about
+  // where the value is far outside what granular matter shows.
+  constexpr double kLikelyDegrees = 2.0;                 // a coefficient tan 63.4 degrees and up
+  constexpr double kLikelyRadians = std::numbers::pi / 2;  // an angle of 1.57 degrees and less
+  for (int d = 0; d < 3; ++d)
+    for (int side = 0; side < 2; ++side)
+      if (const WallSpec& w = scene.walls[d][side]; w.type == WallType::Friction && w.friction_coefficient >= kLikelyDegrees)
+        warnings.push_back(fmt::format(
+            "boundaries.{}.friction_coefficient = {} is tan {:.1f} degrees: a coefficient, not an angle in degrees?",
+            face_name(d, side), w.friction_coefficient, std::atan(w.friction_coefficient) * 180.0 / std::numbers::pi));
+  for (const MaterialSpec& m : scene.materials) {
+    if (m.model == MaterialModel::DruckerPrager && m.drucker_prager.friction_angle_deg <= kLikelyRadians)
+      warnings.push_back(fmt::format(
+          "materials.{}.friction_angle = {} degrees: an angle in degrees, not radians? ({} rad is {:.3g} degrees)",
+          m.name, m.drucker_prager.friction_angle_deg, m.drucker_prager.friction_angle_deg,
+          m.drucker_prager.friction_angle_deg * 180.0 / std::numbers::pi));
+    if (m.model == MaterialModel::MuI && m.mu_i.mu_2 >= kLikelyDegrees)
+      warnings.push_back(fmt::format(
+          "materials.{}.mu_2 = {} (mu_s = {}) is tan {:.1f} degrees: mu_s and mu_2 are friction coefficients (tan of "
+          "the angle), not angles in degrees?",
+          m.name, m.mu_i.mu_2, m.mu_i.mu_s, std::atan(m.mu_i.mu_2) * 180.0 / std::numbers::pi));
+  }
   // A stiff material or a fine grid can ask for more steps than any run will take: say so before it starts.
   const double dt = scene.initial_time_step(), steps = scene.end_time / dt;
   if (steps > 1e8)

@@ -5,6 +5,7 @@
 #include "talus/scene/scene_json.hpp"
 #include "talus/solver/solver.hpp"
 
+#include <fmt/core.h>
 #include <gtest/gtest.h>
 
 #include <array>
@@ -192,6 +193,35 @@ TEST(SceneJson, OverlappingBodiesOfAnyShapeOrFrameAreWarnedAbout) {
   terrain.bodies.back().box_min[2] = 5.1;  // above the block (its top, 1 m over the bed, is at most 5.04 m)
   terrain.bodies.back().box_max[2] = 5.3;
   EXPECT_EQ(test::warnings_with(terrain, "overlap"), 0);
+}
+
+// Units written wrong pass every range: warned about where the value is far from granular matter's.
+TEST(SceneJson, ValuesThatLookLikeTheWrongUnitAreWarnedAbout) {
+  const auto warned = [](const std::string& from, const std::string& to, const std::string& what) {
+    return test::warnings_with(parse_scene(replace_once(kMinimal, from, to), "t"), what);
+  };
+  const std::string friction_face = R"("bodies": [)";
+  const auto face = [&](double mu) {
+    return fmt::format(R"("boundaries": {{ "z-": {{ "type": "friction", "friction_coefficient": {} }} }}, "bodies": [)", mu);
+  };
+  EXPECT_EQ(warned(friction_face, face(29), "boundaries.z-.friction_coefficient = 29 is tan 88.0 degrees: a coefficient, "
+                                            "not an angle in degrees?"), 1);
+  EXPECT_EQ(warned(friction_face, face(0.58), "not an angle in degrees"), 0);
+  const auto dp = [](double phi) {
+    return fmt::format(R"("poisson": 0.3, "model": "drucker_prager", "friction_angle": {})", phi);
+  };
+  EXPECT_EQ(warned("\"poisson\": 0.3", dp(0.61), "materials.m.friction_angle = 0.61 degrees: an angle in degrees, not "
+                                                 "radians? (0.61 rad is 35 degrees)"), 1);
+  EXPECT_EQ(warned("\"poisson\": 0.3", dp(35), "friction_angle"), 0);
+  const auto mu_i = [](double mu_s, double mu_2) {
+    return fmt::format(R"("poisson": 0.3, "model": "mu_i", "mu_s": {}, "mu_2": {}, "grain_density": 2450)", mu_s, mu_2);
+  };
+  EXPECT_EQ(warned("\"poisson\": 0.3", mu_i(35, 40), "materials.m.mu_2 = 40 (mu_s = 35) is tan 88.6 degrees"), 1);
+  EXPECT_EQ(warned("\"poisson\": 0.3", mu_i(0.38, 0.64), "mu_2"), 0);
+  // mu_s = 35 with the default mu_2 was refused as mu_2's fault alone
+  EXPECT_NE(error_of(replace_once(kMinimal, "\"poisson\": 0.3", R"("poisson": 0.3, "model": "mu_i", "mu_s": 35)"))
+                .find("mu_s and mu_2 are friction coefficients (tan of the angle), not angles in degrees"),
+            std::string::npos);
 }
 
 // A μ(I) packing denser than its grains (solid fraction above 1) is no packing: refused.
