@@ -321,8 +321,7 @@ TEST(Cli, BenchWritesTheJsonContract) {
   const fs::path update_json = dir / "update.json";
   const Result update = run("bench --scene update --material dp --particles 2000 --threads 1 --steps 2 --json " + update_json.string());
   EXPECT_EQ(update.exit_code, 0) << update.output;
-  std::ifstream update_in(update_json);
-  const nlohmann::json u = nlohmann::json::parse(update_in);
+  const nlohmann::json u = nlohmann::json::parse(std::ifstream(update_json));
   EXPECT_EQ(u["scene"], "update");
   EXPECT_GT(u["particle_updates_per_second"].get<double>(), 0.0) << u.dump();
   EXPECT_EQ(r.output.find("ranks"), std::string::npos) << r.output;  // the text is as before MPI
