@@ -117,8 +117,13 @@ DepositRaster measure_deposit(const ParticleStore& P, const FlumeCoordinates& c,
   return r;
 }
 
-RunoutMonitor::RunoutMonitor(const RunoutSpec& spec, FlumeCoordinates coordinates)
-    : spec_(spec), coordinates_(std::move(coordinates)) {}
+RunoutGrid runout_grid_of(const Scene& scene) {
+  const GridGeometry& g = scene.grid;
+  return RunoutGrid{g.origin[0], g.origin[0] + g.cells[0] * g.h, g.h};
+}
+
+RunoutMonitor::RunoutMonitor(const RunoutSpec& spec, FlumeCoordinates coordinates, RunoutGrid grid)
+    : spec_(spec), coordinates_(std::move(coordinates)), grid_(grid) {}
 
 RunoutSample RunoutMonitor::sample(const ParticleStore& particles, double time, std::int64_t step) {
   RunoutSample s = measure_runout(particles, coordinates_, spec_.front_quantile, spec_.tail_quantile);
@@ -149,6 +154,7 @@ RunoutResult RunoutMonitor::result() const {
   r.gate_from_scene = spec_.has_gate;
   r.gate_s = spec_.has_gate ? coordinates_.s(spec_.gate_x) : first_->front;
   r.from_gate = r.front - r.gate_s;
+  r.front_at_grid_end = coordinates_.x_at(r.front) >= grid_.x1 - grid_.h;
   std::optional<double> plane_x;
   if (spec_.has_runout_plane)
     plane_x = spec_.runout_plane_x;

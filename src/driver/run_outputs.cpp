@@ -208,7 +208,7 @@ RunoutFiles::RunoutFiles(const Scene& scene, const fs::path& dir, std::optional<
                          const Comm& comm, const fs::path& resume_dir, const std::string& saved_first_row)
     : scene_(scene), dir_(dir), comm_(comm) {
   if (!scene.runout.enabled) return;
-  monitor_.emplace(scene.runout, flume_coordinates_of(scene));
+  monitor_.emplace(scene.runout, flume_coordinates_of(scene), runout_grid_of(scene));
   history_path_ = (dir / "runout.csv").string();
   if (!comm_.root()) return;  // rank 0 measures and writes
   if (resume_step) {
@@ -276,8 +276,20 @@ RunoutFiles::Outcome RunoutFiles::finish(Solver& solver) const {
   const bool completed = solver.finished();
   const ParticleStore none;
   const AllParticles all(completed ? comm_ : Comm(), completed ? solver.particles() : none);
+  const double left = solver.outflow_mass(), left_x_plus = solver.outflow_mass_x_plus();  // (collective)
   if (!comm_.root() || !monitor_->has_samples()) return out;
   out.result = monitor_->result();
+  // The front and tail are quantiles of the mass still in the grid: say how much had left, and
+  // whether more left ahead of the front (x+) than the front quantile leaves there, so that the
+  // whole flow's front lay beyond the grid (a slide run off the grid's end gave the grid's end as
+  // its front, 1.5 m "beyond the gate", with 91% of its mass gone and not a word).
+  RunoutResult& r = *out.result;
+  const double total = monitor_->last().mass + left;
+  if (total > 0.0) {
+    r.outflow_mass_share = left / total;
+    r.outflow_mass_share_x_plus = left_x_plus / total;
+  }
+  r.limited_by_outflow = r.outflow_mass_share_x_plus > 1.0 - scene_.runout.front_quantile;
   out.summary_path = (dir_ / "runout.json").string();
   write_file_atomically(out.summary_path, runout_result_json(*out.result) + "\n");
   if (!completed) return out;  // the deposit of a completed run (not of one stopped by a signal)

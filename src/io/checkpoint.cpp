@@ -174,6 +174,7 @@ void for_each_rank_scalar(State& s, F&& f) {
     if (accumulated) f(name, value, true);
   });
   f("outflow_mass", s.outflow_mass, true);
+  f("outflow_mass_x_plus", s.outflow_mass_x_plus, false);
   f("periodic_gravity_shift", s.periodic_gravity_shift, true);
   EnergyGapTerms::for_each_term(s.gap, [&](const char* name, auto& value) { f(name, value, false); });
 }
@@ -235,6 +236,7 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
         if (accumulated) write_attribute(s, name, value);
       });
       write_attribute(s, "outflow_mass", state.outflow_mass);
+      write_attribute(s, "outflow_mass_x_plus", state.outflow_mass_x_plus);
       write_attribute(s, "outflow_particles", state.outflow_particles);
       write_attribute(s, "steps_since_sort", static_cast<std::int32_t>(state.steps_since_sort));
       write_attribute(s, "sorts", state.sorts);
@@ -336,6 +338,8 @@ Checkpoint read_checkpoint(const std::string& path, const Comm& comm) {
       if (accumulated) value = read_attribute<double>(s, name);
     });
     c.solver.outflow_mass = read_attribute<double>(s, "outflow_mass");
+    // absent in checkpoints written before it was kept: counted from the restart
+    if (s.attrExists("outflow_mass_x_plus")) c.solver.outflow_mass_x_plus = read_attribute<double>(s, "outflow_mass_x_plus");
     c.solver.outflow_particles = read_attribute<std::int64_t>(s, "outflow_particles");
     c.solver.steps_since_sort = read_attribute<std::int32_t>(s, "steps_since_sort");
     c.solver.sorts = read_attribute<std::int64_t>(s, "sorts");
@@ -503,7 +507,7 @@ void restore_particles(Solver& solver, ParticleStore P, const Checkpoint& c) {
     EnergyBudget::for_each_term(state.work, [](const char*, double& value, bool accumulated) {
       if (accumulated) value = 0.0;
     });
-    state.outflow_mass = state.periodic_gravity_shift = 0.0;
+    state.outflow_mass = state.outflow_mass_x_plus = state.periodic_gravity_shift = 0.0;
     state.gap = EnergyGapTerms{};
     state.outflow_particles = 0;
   }

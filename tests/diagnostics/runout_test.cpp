@@ -330,6 +330,9 @@ TEST(RunoutOutput, RunWritesRunoutHistoryAndDeposit) {
     EXPECT_TRUE(j.at("gate_from_scene").get<bool>());
     EXPECT_EQ(j.at("beyond_runout_plane").get<double>(), *summary.runout->beyond_runout_plane);
     EXPECT_TRUE(j.at("all_left_time").is_null());
+    EXPECT_EQ(j.at("outflow_mass_share").get<double>(), 0.0);  // nothing left: the open z+ is far above
+    EXPECT_FALSE(j.at("limited_by_outflow").get<bool>());
+    EXPECT_FALSE(j.at("front_at_grid_end").get<bool>());
   }
   // deposit.csv: one row per raster cell (20 x 1 cells of 0.02 m); the volume matches the particles'.
   std::ifstream dep(dir / "deposit.csv");
@@ -421,6 +424,78 @@ TEST(RunoutOutput, RestartIntoAnotherFolderMeasuresFromTheSameGate) {
   ASSERT_GE(reference.size(), rows.size());
   EXPECT_EQ(reference.substr(reference.size() - rows.size()), rows);
   EXPECT_EQ(read_text(dir / "first" / "runout.csv"), reference);  // the checkpoint's folder is read, not changed
+  fs::remove_all(dir);
+}
+
+// Mass that leaves through the open faces is not in the front and tail quantiles. A block thrown
+// off the grid's x+ end gave the grid's end as its front, with most of its mass gone and nothing in
+// runout.json to say so. Now runout.json says what share left, through x+ (ahead of the front) and in
+// all, and flags the front as limited by outflow; the share through x+ travels in the checkpoint.
+const char* kOutflowScene = R"({
+    "name": "outflow", "grid": { "origin": [0, 0, 0], "size": [0.4, 0.1, 0.1], "cell_size": 0.02 },
+    "time": { "end": 0.01 },
+    "materials": { "sand": { "model": "drucker_prager", "density": 1600, "young": 2e6, "poisson": 0.3,
+                             "friction_angle": 40, "cohesion": 10 } },
+    "bodies": [ { "name": "ahead", "material": "sand", "velocity": [12, 0, 0],
+                  "box": { "min": [0.26, 0, 0], "max": [0.36, 0.04, 0.04] } },
+                { "name": "side", "material": "sand", "velocity": [0, 3, 0],
+                  "box": { "min": [0.04, 0.04, 0], "max": [0.12, 0.08, 0.04] } } ],
+    "boundaries": { "x+": "open", "y+": "open", "z+": "open" },
+    "output": { "history_interval": 0.0025, "checkpoint_interval": 0.005 },
+    "diagnostics": { "runout": { "gate_x": 0.1 } } })";
+
+TEST(RunoutOutput, MassLeftThroughTheOpenFacesIsSaidAndTheFrontFlagged) {
+  const fs::path dir = temp_dir("runout_outflow");
+  RunOptions options;
+  options.out_dir = (dir / "both").string();
+  options.progress = false;
+  options.handle_signals = false;
+  auto result_of = [](const fs::path& folder) {
+    std::ifstream in(folder / "runout.json");
+    return nlohmann::json::parse(in);
+  };
+  {
+    Solver solver(parse_scene(kOutflowScene, "outflow"));
+    run_scene(solver, options);
+    double in_grid = 0.0;
+    for (double m : solver.particles().mass) in_grid += m;
+    const double total = in_grid + solver.outflow_mass();
+    const nlohmann::json j = result_of(dir / "both");
+    // most of the block thrown at x+ left through it, and some of the other through y+
+    EXPECT_GT(solver.outflow_mass_x_plus(), 0.3 * total);
+    EXPECT_LT(solver.outflow_mass_x_plus(), solver.outflow_mass());
+    EXPECT_NEAR(j.at("outflow_mass_share").get<double>(), solver.outflow_mass() / total, 1e-12);
+    EXPECT_NEAR(j.at("outflow_mass_share_x_plus").get<double>(), solver.outflow_mass_x_plus() / total, 1e-12);
+    EXPECT_TRUE(j.at("limited_by_outflow").get<bool>());
+    EXPECT_TRUE(j.at("front_at_grid_end").get<bool>());
+  }
+  {
+    // Resumed from its checkpoint (t = 0.005 s, after some of the block had left): the same result,
+    // so the share through x+ before the checkpoint was kept.
+    const std::string checkpoint_path = (dir / "both" / "checkpoint.h5").string();
+    const Checkpoint checkpoint = read_checkpoint(checkpoint_path);
+    ASSERT_GT(checkpoint.solver.outflow_mass_x_plus, 0.0);
+    Solver resumed(parse_scene(kOutflowScene, "outflow"));
+    restore_checkpoint(resumed, checkpoint, checkpoint_path);
+    const std::string whole = read_text(dir / "both" / "runout.json");
+    RunOptions again = options;
+    again.resume = &checkpoint.run;
+    run_scene(resumed, again);
+    EXPECT_EQ(read_text(dir / "both" / "runout.json"), whole);
+  }
+  {
+    // Only the block that leaves sideways: the share is said, but the front is not limited by it.
+    Scene scene = parse_scene(kOutflowScene, "outflow");
+    scene.bodies.erase(scene.bodies.begin());
+    Solver solver(scene);
+    options.out_dir = (dir / "side").string();
+    run_scene(solver, options);
+    const nlohmann::json j = result_of(dir / "side");
+    EXPECT_GT(j.at("outflow_mass_share").get<double>(), 0.05);
+    EXPECT_EQ(j.at("outflow_mass_share_x_plus").get<double>(), 0.0);
+    EXPECT_FALSE(j.at("limited_by_outflow").get<bool>());
+    EXPECT_FALSE(j.at("front_at_grid_end").get<bool>());
+  }
   fs::remove_all(dir);
 }
 

@@ -13,6 +13,7 @@
 #include "talus/particles/particle_store.hpp"
 #include "talus/scene/scene.hpp"
 
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -75,13 +76,32 @@ struct RunoutResult {
   /// Every particle had left through the open faces by this time: the front and tail above are those
   /// of the last sample that still had particles.
   std::optional<double> all_left_time;
+  /// The front lies within one cell of the grid's downslope end (x+): the flow ran to the end of the
+  /// grid, and the front says where the grid ends, not where the flow would stop.
+  bool front_at_grid_end = false;
+  // What left through the open faces by the end of the run (RunoutFiles::finish sets them): the front
+  // and tail are quantiles of the mass still in the grid.
+  double outflow_mass_share = 0.0;         // of the run's mass, through any open face
+  double outflow_mass_share_x_plus = 0.0;  // through the x+ face: ahead of the front
+  /// More mass left through x+ than the front quantile leaves ahead of the front (share_x_plus >
+  /// 1 - front_quantile): the whole flow's front lay beyond the grid, and the front is not its runout.
+  bool limited_by_outflow = false;
 };
+
+/// The grid along x: the runout plane's default must lie in it, and a front within one cell of its
+/// end is flagged. The default is unbounded (a monitor without a grid: the tests').
+struct RunoutGrid {
+  double x0 = -std::numeric_limits<double>::infinity();
+  double x1 = std::numeric_limits<double>::infinity();
+  double h = 0.0;
+};
+RunoutGrid runout_grid_of(const Scene& scene);
 
 /// Samples the run on the history schedule and keeps the first and the previous sample (the
 /// reference front and the front velocity).
 class RunoutMonitor {
  public:
-  RunoutMonitor(const RunoutSpec& spec, FlumeCoordinates coordinates);
+  RunoutMonitor(const RunoutSpec& spec, FlumeCoordinates coordinates, RunoutGrid grid = {});
   const FlumeCoordinates& coordinates() const { return coordinates_; }
   /// Measure the particles at (time, step); fills front_velocity from the previous sample.
   RunoutSample sample(const ParticleStore& particles, double time, std::int64_t step);
@@ -96,6 +116,7 @@ class RunoutMonitor {
  private:
   RunoutSpec spec_;
   FlumeCoordinates coordinates_;
+  RunoutGrid grid_;
   std::optional<RunoutSample> first_, last_;
   std::optional<RunoutSample> last_with_particles_;
 };

@@ -8,7 +8,7 @@
 //   /scene_json            the resolved scene (scene_to_json), as bytes
 //   /solver                attributes time, step, last_dt, the accumulated terms of the energy
 //                          ledger by name (friction_work, plastic_work, outflow, damping;
-//                          solver/energy_budget.hpp), outflow_mass, outflow_particles,
+//                          solver/energy_budget.hpp), outflow_mass, outflow_mass_x_plus, outflow_particles,
 //                          steps_since_sort, sorts, needs_sort
 //   /solver/sort_cell0..2  int32 per particle: the cell each particle was sorted into
 //   /particles/<name>      one dataset per allocated particle array, named by
