@@ -133,6 +133,15 @@ std::vector<T> read_array_part(const H5::Group& group, const std::string& name, 
   return data;
 }
 
+/// A JSON value on one short line: numbers as the shortest text that reads back (2, not 2.0), and
+/// anything longer than 40 characters cut with "...".
+std::string short_json(const nlohmann::json& value) {
+  std::string text = value.is_number_float() ? fmt::format("{}", value.get<double>()) : value.dump(-1, ' ', true);
+  constexpr std::size_t kMost = 40;
+  if (text.size() > kMost) text = text.substr(0, kMost - 3) + "...";
+  return text;
+}
+
 std::string first_difference(const nlohmann::json& saved, const nlohmann::json& current) {
   const nlohmann::json patch = nlohmann::json::diff(saved, current);
   if (patch.empty()) return "";
@@ -147,9 +156,19 @@ std::string first_difference(const nlohmann::json& saved, const nlohmann::json& 
     }
   }
   const std::string kind = op->value("op", std::string());
+  const std::string path = op->value("path", std::string("/"));
+  // The two values, short: which key differs said too little to find the edit ("/time/end (differs)").
+  auto value_at = [&](const nlohmann::json& scene) -> std::string {
+    try {
+      return short_json(scene.at(nlohmann::json::json_pointer(path)));
+    } catch (const nlohmann::json::exception&) {
+      return "?";
+    }
+  };
   // (JSON Patch's words, from the checkpoint's scene to this one: "remove" read like an instruction)
-  const char* what = kind == "add" ? "only in this scene" : kind == "remove" ? "only in the checkpoint's scene" : "differs";
-  return fmt::format("{} ({})", op->value("path", std::string("/")), what);
+  if (kind == "add") return fmt::format("{}: only in this scene, {}", path, value_at(current));
+  if (kind == "remove") return fmt::format("{}: only in the checkpoint's scene, {}", path, value_at(saved));
+  return fmt::format("{}: checkpoint {}, this scene {}", path, value_at(saved), value_at(current));
 }
 
 }  // namespace
