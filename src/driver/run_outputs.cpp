@@ -137,6 +137,36 @@ std::size_t cut_csv(const fs::path& path, const std::string& header, Keep keep) 
 
 }  // namespace
 
+namespace {
+
+/// `relative` taken from `base`, without the trailing separator that "." leaves ("a/." is "a/").
+fs::path folder_from(const fs::path& base, const std::string& relative) {
+  fs::path folder = (base / relative).lexically_normal();
+  if (!folder.has_filename() && folder.has_relative_path()) folder = folder.parent_path();
+  return folder;
+}
+
+}  // namespace
+
+fs::path frame_folder(const RunProgress& progress, std::size_t index, const fs::path& dir) {
+  fs::path folder = dir;
+  for (const auto& [first, path] : progress.frame_folders)
+    if (first <= index) folder = folder_from(dir, path);
+  return folder;
+}
+
+void record_frame_folder(RunProgress& progress, const fs::path& dir, const fs::path& resume_dir) {
+  const fs::path here = folder_from(fs::absolute(dir), ".");
+  if (!resume_dir.empty()) {
+    // the earlier parts' folders, now relative to this one (those of a checkpoint that did not
+    // keep them: its own folder)
+    const fs::path there = folder_from(fs::absolute(resume_dir), ".");
+    if (progress.frame_folders.empty()) progress.frame_folders.emplace_back(0, ".");
+    for (auto& [first, path] : progress.frame_folders) path = folder_from(there, path).lexically_relative(here).string();
+  }
+  progress.frame_folders.emplace_back(progress.frame_times.size(), ".");
+}
+
 std::string frame_name(std::size_t index, bool distributed) {
   return fmt::format("frames/particles_{:06}.{}", index, distributed ? "pvtu" : "vtu");
 }
@@ -317,12 +347,21 @@ FrameSeries::FrameSeries(const fs::path& dir, bool compress, RunProgress& progre
   // The index lists the checkpoint's earlier frames that are in this folder. A run resumed into
   // another folder (--restart with --out) has none of them there: listing them anyway gave a .pvd that
   // ParaView cannot open. Their indices stay taken, so the new frames do not reuse the names.
+  // A frame written in another folder (a part resumed elsewhere, which the checkpoint records) is
+  // not missing when it is there: resumed a second time, in the folder of a run resumed with --out,
+  // the run warned that the series had gaps where the frames were in the first part's folder.
   std::vector<std::pair<double, std::string>> entries;
   for (std::size_t i = 0; i < progress.frame_times.size(); ++i) {
     std::string name = kept_frame_name(dir, i, comm.distributed());
     std::error_code ec;
-    if (fs::exists(dir / name, ec)) entries.emplace_back(progress.frame_times[i], std::move(name));
-    else ++missing_kept_frames_;
+    const fs::path written_in = frame_folder(progress, i, dir);
+    if (fs::exists(dir / name, ec)) {
+      entries.emplace_back(progress.frame_times[i], std::move(name));
+    } else if (same_file(written_in, dir) || !fs::exists(written_in / kept_frame_name(written_in, i, comm.distributed()), ec)) {
+      ++missing_kept_frames_;
+      if (std::find(missing_from_.begin(), missing_from_.end(), written_in / "frames") == missing_from_.end())
+        missing_from_.push_back(written_in / "frames");
+    }
   }
   kept_frames_ = entries.size();
   if (!entries.empty()) {

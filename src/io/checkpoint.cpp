@@ -299,6 +299,7 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
       });
       write_attribute(r, "energy_max_released", run.energy_max_released);
       if (!run.runout_first_row.empty()) write_attribute(r, "runout_first_row", run.runout_first_row);
+      if (!run.frame_folders.empty()) write_attribute(r, "frame_folders", nlohmann::json(run.frame_folders).dump());
       write_array(r, "frame_times", run.frame_times);
       write_array(r, "frame_steps", run.frame_steps);
       file.close();
@@ -433,6 +434,14 @@ Checkpoint read_checkpoint(const std::string& path, const Comm& comm) {
     c.run.energy_max_released = read_attribute<double>(r, "energy_max_released");
     // absent in checkpoints written before 2026-12-06 and in scenes without runout diagnostics
     if (r.attrExists("runout_first_row")) c.run.runout_first_row = read_string_attribute(r, "runout_first_row");
+    // absent in checkpoints written before it was kept; one that does not parse is as good as absent
+    // (it only says where the earlier frames are)
+    if (r.attrExists("frame_folders")) try {
+        c.run.frame_folders = nlohmann::json::parse(read_string_attribute(r, "frame_folders"))
+                                  .get<std::vector<std::pair<std::size_t, std::string>>>();
+      } catch (const nlohmann::json::exception&) {
+        c.run.frame_folders.clear();
+      }
     c.run.frame_times = read_array<double>(r, "frame_times");
     c.run.frame_steps = read_array<std::int64_t>(r, "frame_steps");
     check_scalars(c, path);
