@@ -155,11 +155,13 @@ RunoutResult RunoutMonitor::result() const {
   r.gate_s = spec_.has_gate ? coordinates_.s(spec_.gate_x) : first_->front;
   r.from_gate = r.front - r.gate_s;
   r.front_at_grid_end = coordinates_.x_at(r.front) >= grid_.x1 - grid_.h;
+  // The default is left out when it lies outside the grid, as a runout_plane_x there is refused (a
+  // grid cut short of the terrain's last transition was "3.1 m short of the runout plane").
   std::optional<double> plane_x;
   if (spec_.has_runout_plane)
     plane_x = spec_.runout_plane_x;
-  else
-    plane_x = coordinates_.last_segment_start();
+  else if (const auto start = coordinates_.last_segment_start(); start && *start >= grid_.x0 && *start <= grid_.x1)
+    plane_x = start;
   if (plane_x) {
     r.runout_plane_s = coordinates_.s(*plane_x);
     r.beyond_runout_plane = r.front - *r.runout_plane_s;

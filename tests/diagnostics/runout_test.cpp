@@ -156,6 +156,22 @@ TEST(Runout, RunoutPlaneStartsWhereTheTransitionEnds) {
   // A sharp kink: the vertex itself. Flat: unknown.
   EXPECT_DOUBLE_EQ(*FlumeCoordinates(TerrainProfile(flume_terrain(31.4, 0.0))).last_segment_start(), 1.0);
   EXPECT_FALSE(FlumeCoordinates().last_segment_start().has_value());
+  // The default outside the grid along x is left out (a runout_plane_x there is refused): measured
+  // from it, a grid cut short of the transition was "3.1 m short of the runout plane".
+  RunoutSpec spec;
+  spec.enabled = true;
+  const auto plane_of = [&](RunoutGrid grid) {
+    RunoutMonitor monitor(spec, c, grid);
+    monitor.sample(uniform_strip(100, 0.8), 0.0, 0);
+    return monitor.result().runout_plane_s;
+  };
+  ASSERT_TRUE(plane_of(RunoutGrid{0.0, 2.5, 0.05}).has_value());
+  EXPECT_NEAR(*plane_of(RunoutGrid{0.0, 2.5, 0.05}), c.s(x), 1e-12);
+  EXPECT_FALSE(plane_of(RunoutGrid{0.0, 1.0, 0.05}).has_value());
+  EXPECT_FALSE(plane_of(RunoutGrid{100.0, 108.0, 0.05}).has_value());
+  spec.has_runout_plane = true;  // given: as given
+  spec.runout_plane_x = 0.5;
+  EXPECT_NEAR(*plane_of(RunoutGrid{0.0, 1.0, 0.05}), c.s(0.5), 1e-12);
 }
 
 TEST(Runout, MonitorDifferencesTheFrontAndMeasuresFromTheGate) {

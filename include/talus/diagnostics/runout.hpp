@@ -71,7 +71,7 @@ struct RunoutResult {
   double gate_s = 0.0;                    // s of the gate (scene gate_x, else the initial front)
   bool gate_from_scene = false;
   double from_gate = 0.0;                 // front - gate_s
-  std::optional<double> runout_plane_s;   // s where the runout plane starts
+  std::optional<double> runout_plane_s;   // s where the runout plane starts (none: no plane in the grid)
   std::optional<double> beyond_runout_plane;  // front - runout_plane_s
   /// Every particle had left through the open faces by this time: the front and tail above are those
   /// of the last sample that still had particles.
