@@ -9,8 +9,8 @@ Drucker-Prager and mu(I), two resolutions, against the laws of Lube et al. 2005.
 
 Scenes come from tools/make_collapse_scene.py (its defaults are the study's parameters,
 docs/verification.md "Planar column collapse"). Each run goes to RUNS/<model>_a<a>_n<cells>; a run
-whose folder holds runout.json and the same scene is reused, not run again. Runs go `--jobs` at a
-time, each on `--threads` threads.
+whose folder holds a completed runout.json and the same scene is reused, not run again. Runs go
+`--jobs` at a time, each on `--threads` threads.
 
 Measured per run (L0 = the column's length, the gate at x = L0):
   runout      dL/L0 = (front - L0)/L0 with front = the 0.995 mass quantile of x at the end
@@ -39,7 +39,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for talus_plot, make_collapse_scene
 import make_collapse_scene  # noqa: E402
-from talus_plot import ROOT, read_csv_columns, read_vtu, save_figure, series_frames, write_csv_rows  # noqa: E402
+from talus_plot import ROOT, completed_run, read_csv_columns, read_vtu, save_figure, series_frames, write_csv_rows  # noqa: E402
 
 MODELS = {"dp": "Drucker-Prager", "mu_i": "mu(I)"}
 
@@ -76,7 +76,7 @@ def run_one(talus, scene, run_dir, threads, lock=None):
     text = json.dumps(scene, indent=1)
     done = os.path.join(run_dir, "runout.json")
     same = lambda s: {k: v for k, v in s.items() if k != "comment"}  # the comment names the command line
-    if os.path.exists(done) and os.path.exists(path) and same(json.load(open(path))) == same(scene):
+    if completed_run(run_dir) and os.path.exists(path) and same(json.load(open(path))) == same(scene):
         return "reused"
     with open(path, "w") as f:
         f.write(text)
@@ -202,7 +202,7 @@ def main():
                 print(f"{k[5]}: {f.result()}", flush=True)
     rows = []
     for model, a, c, scene, o, run_dir in cases:
-        if not os.path.exists(os.path.join(run_dir, "runout.json")):
+        if not completed_run(run_dir):
             continue
         m = measure(run_dir, o)
         ref = float(lube_runout(a))

@@ -2,9 +2,9 @@
 """Resolution study of the sand flume (docs/flume.md "Resolution study").
 
 For each cell size, writes the flume scene with tools/make_flume_scene.py (the defaults otherwise),
-runs it with `talus run` (skipped when RUNS/flume_hNNNN/runout.json exists, unless --rerun), and
-collects the front at three times, the final runout, the share of the mass that left over the open
-sides, the final kinetic energy over its peak and the run time. Writes
+runs it with `talus run` (skipped when RUNS/flume_hNNNN/runout.json says the run completed, unless
+--rerun), and collects the front at three times, the final runout, the share of the mass that left
+over the open sides, the final kinetic energy over its peak and the run time. Writes
     docs/flume/resolution.csv      one row per cell size
     docs/flume/resolution.png      front vs time for every cell size
 Usage: /usr/bin/python3 tools/flume_resolution.py [--talus build/talus] [--cells 0.02 0.0125 0.01]

@@ -74,13 +74,23 @@ def run_talus(talus, *args, threads=None, quiet=True, capture=False, check=True)
     return r
 
 
+def completed_run(run_dir):
+    """Whether run_dir holds a run that completed: its runout.json says so (one of an interrupted or
+    unstable run is written too; those of earlier builds carry no status and count)."""
+    path = os.path.join(run_dir, "runout.json")
+    if not os.path.exists(path):
+        return False
+    with open(path) as f:
+        return json.load(f).get("status", "completed") == "completed"
+
+
 def run_flume(talus, runs, name, cell, threads=1, scene_args=(), rerun=False):
     """The flume scene of tools/make_flume_scene.py at cell size `cell` (extra generator arguments in
     scene_args), run into runs/name unless a finished run is there (or rerun). Returns
     (run_dir, runout columns, energy columns, runout.json, wall seconds or None)."""
     run_dir = os.path.join(runs, name)
     wall_path = os.path.join(run_dir, "wall_seconds.txt")
-    if rerun or not os.path.exists(os.path.join(run_dir, "runout.json")):
+    if rerun or not completed_run(run_dir):
         os.makedirs(runs, exist_ok=True)
         scene = os.path.join(runs, name + ".json")
         with open(scene, "w") as f:

@@ -125,11 +125,16 @@ RunoutGrid runout_grid_of(const Scene& scene) {
 RunoutMonitor::RunoutMonitor(const RunoutSpec& spec, FlumeCoordinates coordinates, RunoutGrid grid)
     : spec_(spec), coordinates_(std::move(coordinates)), grid_(grid) {}
 
-RunoutSample RunoutMonitor::sample(const ParticleStore& particles, double time, std::int64_t step) {
+RunoutSample RunoutMonitor::measure(const ParticleStore& particles, double time, std::int64_t step) const {
   RunoutSample s = measure_runout(particles, coordinates_, spec_.front_quantile, spec_.tail_quantile);
   s.time = time;
   s.step = step;
   if (last_ && time > last_->time) s.front_velocity = (s.front - last_->front) / (time - last_->time);
+  return s;
+}
+
+RunoutSample RunoutMonitor::sample(const ParticleStore& particles, double time, std::int64_t step) {
+  const RunoutSample s = measure(particles, time, step);
   if (!first_) first_ = s;
   last_ = s;
   if (s.mass > 0.0) last_with_particles_ = s;
@@ -142,13 +147,15 @@ void RunoutMonitor::resume(const RunoutSample& first, const RunoutSample& last) 
   if (last.mass > 0.0) last_with_particles_ = last;
 }
 
-RunoutResult RunoutMonitor::result() const {
+RunoutResult RunoutMonitor::result(const RunoutSample* now) const {
   RunoutResult r;
   if (!last_) return r;
-  const bool all_left = !(last_->mass > 0.0) && last_with_particles_;
-  const RunoutSample& measured = all_left ? *last_with_particles_ : *last_;
-  if (all_left) r.all_left_time = last_->time;
+  const RunoutSample& latest = now ? *now : *last_;
+  const bool all_left = !(latest.mass > 0.0) && last_with_particles_;
+  const RunoutSample& measured = all_left ? *last_with_particles_ : latest;
+  if (all_left) r.all_left_time = latest.time;
   r.time = measured.time;
+  r.step = measured.step;
   r.front = measured.front;
   r.tail = measured.tail;
   r.gate_from_scene = spec_.has_gate;

@@ -472,6 +472,8 @@ void RunLoop::fail(const Error& e) {
         ++summary_.frames;
       }
       write_checkpoint();
+      // its runout too, marked unstable (an unstable run wrote no runout.json)
+      runout_.finish(solver_, "unstable");
       message += fmt::format(" | last good state ({}) written to {} and checkpoint.h5",
                              step_ended(solver_.step_count(), solver_.time()), frame);
     }
@@ -484,7 +486,9 @@ void RunLoop::fail(const Error& e) {
 void RunLoop::finish() {
   frames_.complete(solver_);  // the last frame on disk and in the .pvd before the run reports it
   history_.flush();
-  const RunoutFiles::Outcome runout = runout_.finish(solver_);
+  // (run.json's words: the run ends as `talus run` records it)
+  const bool stopped = summary_.interrupted_signal != 0 || summary_.stopped_at_deadline;
+  const RunoutFiles::Outcome runout = runout_.finish(solver_, stopped ? "interrupted" : "completed");
   summary_.runout = runout.result;
   summary_.runout_summary_path = runout.summary_path;
   summary_.deposit_path = runout.deposit_path;

@@ -299,22 +299,28 @@ void RunoutFiles::write(const Solver& solver) {
   file_.flush();
 }
 
-RunoutFiles::Outcome RunoutFiles::finish(Solver& solver) const {
+RunoutFiles::Outcome RunoutFiles::finish(Solver& solver, const std::string& status) const {
   Outcome out;
   if (!monitor_) return out;
-  // the deposit needs every particle on rank 0 (collective: every rank takes part)
-  const bool completed = solver.finished();
-  const ParticleStore none;
-  const AllParticles all(completed ? comm_ : Comm(), completed ? solver.particles() : none);
+  // every particle on rank 0: the deposit, and the state where a run stopped between history rows
+  // (collective: every rank takes part)
+  const AllParticles all(comm_, solver.particles());
   const double left = solver.outflow_mass(), left_x_plus = solver.outflow_mass_x_plus();  // (collective)
   if (!comm_.root() || !monitor_->has_samples()) return out;
-  out.result = monitor_->result();
+  // A run stopped by a signal, --stop-after or an instability: its state where it stopped, which the
+  // last history row is not (runout.json gave the row before the stop, and nothing said it was not
+  // the end). A completed run's last row is of its last step.
+  std::optional<RunoutSample> now;
+  if (monitor_->last().step != solver.step_count()) now = monitor_->measure(all.get(), solver.time(), solver.step_count());
+  out.result = monitor_->result(now ? &*now : nullptr);
+  RunoutResult& r = *out.result;
+  r.status = status;
+  r.final = status == "completed" && !solver.stopped_at_max_steps() && !solver.emptied();
   // The front and tail are quantiles of the mass still in the grid: say how much had left, and
   // whether more left ahead of the front (x+) than the front quantile leaves there, so that the
   // whole flow's front lay beyond the grid (a slide run off the grid's end gave the grid's end as
   // its front, 1.5 m "beyond the gate", with 91% of its mass gone and not a word).
-  RunoutResult& r = *out.result;
-  const double total = monitor_->last().mass + left;
+  const double total = (now ? *now : monitor_->last()).mass + left;
   if (total > 0.0) {
     r.outflow_mass_share = left / total;
     r.outflow_mass_share_x_plus = left_x_plus / total;
@@ -322,7 +328,9 @@ RunoutFiles::Outcome RunoutFiles::finish(Solver& solver) const {
   r.limited_by_outflow = r.outflow_mass_share_x_plus > 1.0 - scene_.runout.front_quantile;
   out.summary_path = (dir_ / "runout.json").string();
   write_file_atomically(out.summary_path, runout_result_json(*out.result) + "\n");
-  if (!completed) return out;  // the deposit of a completed run (not of one stopped by a signal)
+  // The deposit of a completed run: at its end time, at time.max_steps or once every particle left
+  // (run.json's "completed"); not of one stopped before it completed.
+  if (status != "completed") return out;
   ScopedPhase timer(solver.phase_times(), Phase::Output);
   const FlumeCoordinates& c = monitor_->coordinates();
   const GridGeometry& g = scene_.grid;

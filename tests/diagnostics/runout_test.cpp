@@ -19,6 +19,7 @@
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridReader.h>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -401,6 +402,84 @@ TEST(RunoutOutput, RestartContinuesTheHistoryBitForBit) {
   // the last row before the checkpoint), and the runout is measured from the same gate.
   EXPECT_EQ(read_text(dir / "runout.csv"), reference);
   EXPECT_EQ(read_text(dir / "runout.json"), reference_result);
+  fs::remove_all(dir);
+}
+
+// runout.json says how the run ended and which state it describes: a run stopped between history
+// rows gave the row before the stop, and nothing said that it was not the end; an unstable run wrote
+// none; one stopped at time.max_steps is completed (as run.json says) with its deposit, but not final.
+TEST(RunoutOutput, TheResultSaysHowTheRunEndedAndTheStateItDescribes) {
+  const Scene scene = parse_scene(kSlideScene, "slide");
+  const fs::path dir = temp_dir("runout_status");
+  RunOptions options;
+  options.progress = false;
+  options.handle_signals = false;
+  auto result_of = [](const fs::path& folder) {
+    std::ifstream in(folder / "runout.json");
+    return nlohmann::json::parse(in);
+  };
+  options.out_dir = (dir / "whole").string();
+  RunSummary whole;
+  {
+    Solver solver(scene);
+    whole = run_scene(solver, options);
+  }
+  nlohmann::json j = result_of(dir / "whole");
+  EXPECT_EQ(j.at("status"), "completed");
+  EXPECT_TRUE(j.at("final").get<bool>());
+  EXPECT_EQ(j.at("step").get<std::int64_t>(), whole.steps);
+  {
+    // --stop-after at once: stopped after the first step, with the last history row at t = 0
+    Solver solver(scene);
+    options.out_dir = (dir / "stopped").string();
+    options.deadline = std::chrono::steady_clock::now();
+    const RunSummary stopped = run_scene(solver, options);
+    options.deadline.reset();
+    ASSERT_TRUE(stopped.stopped_at_deadline);
+    j = result_of(dir / "stopped");
+    EXPECT_EQ(j.at("status"), "interrupted");
+    EXPECT_FALSE(j.at("final").get<bool>());
+    EXPECT_EQ(j.at("step").get<std::int64_t>(), 1);
+    EXPECT_EQ(j.at("time").get<double>(), solver.time());  // where it stopped, not the row at t = 0
+    EXPECT_GT(solver.time(), 0.0);
+    EXPECT_EQ(j.at("front").get<double>(), stopped.runout->front);
+    EXPECT_FALSE(fs::exists(dir / "stopped" / "deposit.csv"));
+    // resumed to the end: the uninterrupted run's result, to the bit
+    const std::string checkpoint_path = (dir / "stopped" / "checkpoint.h5").string();
+    const Checkpoint checkpoint = read_checkpoint(checkpoint_path);
+    Solver resumed(scene);
+    restore_checkpoint(resumed, checkpoint, checkpoint_path);
+    options.resume = &checkpoint.run;
+    run_scene(resumed, options);
+    options.resume = nullptr;
+    EXPECT_EQ(read_text(dir / "stopped" / "runout.json"), read_text(dir / "whole" / "runout.json"));
+  }
+  {
+    Scene capped = scene;
+    capped.max_steps = 5;
+    Solver solver(capped);
+    options.out_dir = (dir / "capped").string();
+    run_scene(solver, options);
+    j = result_of(dir / "capped");
+    EXPECT_EQ(j.at("status"), "completed");
+    EXPECT_FALSE(j.at("final").get<bool>());
+    EXPECT_EQ(j.at("step").get<std::int64_t>(), 5);
+    EXPECT_TRUE(fs::exists(dir / "capped" / "deposit.csv"));
+  }
+  {
+    // a CFL breach in the first step: the last good state is the start, and its runout is written
+    Scene fast = scene;
+    fast.bodies[0].velocity = Vec3(200.0, 0.0, 0.0);
+    fast.guards.max_step_displacement = 0.1;
+    Solver solver(fast);
+    options.out_dir = (dir / "unstable").string();
+    EXPECT_THROW(run_scene(solver, options), Error);
+    j = result_of(dir / "unstable");
+    EXPECT_EQ(j.at("status"), "unstable");
+    EXPECT_FALSE(j.at("final").get<bool>());
+    EXPECT_EQ(j.at("step").get<std::int64_t>(), 0);
+    EXPECT_EQ(j.at("time").get<double>(), 0.0);
+  }
   fs::remove_all(dir);
 }
 

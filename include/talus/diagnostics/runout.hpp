@@ -15,6 +15,7 @@
 
 #include <limits>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace talus {
@@ -66,7 +67,13 @@ DepositRaster measure_deposit(const ParticleStore& particles, const FlumeCoordin
 /// The final runout: the front at the end of the run, measured from the gate and from the start of
 /// the runout plane (where known).
 struct RunoutResult {
+  // How the run ended (RunoutFiles::finish sets them): run.json's status (completed, interrupted,
+  // unstable), and final only when it reached time.end. An interrupted run's result is its state
+  // where it stopped; a resumed run writes its own.
+  std::string status = "completed";
+  bool final = false;
   double time = 0.0;                      // of the sample the front and tail are from
+  std::int64_t step = 0;                  // of that sample
   double front = 0.0, tail = 0.0;
   double gate_s = 0.0;                    // s of the gate (scene gate_x, else the initial front)
   bool gate_from_scene = false;
@@ -110,8 +117,12 @@ class RunoutMonitor {
   bool has_samples() const { return first_.has_value(); }
   const RunoutSample& first() const { return *first_; }
   const RunoutSample& last() const { return *last_; }
-  /// The runout after the last sample (after the last one with particles, once every particle has left).
-  RunoutResult result() const;
+  /// A sample of the particles at (time, step) that is not kept (the state where a run stopped
+  /// between history rows: runout.csv, which a restart continues, does not hold it).
+  RunoutSample measure(const ParticleStore& particles, double time, std::int64_t step) const;
+  /// The runout after the last sample, or after `now` (a later one, from measure()); after the last
+  /// one with particles, once every particle has left.
+  RunoutResult result(const RunoutSample* now = nullptr) const;
 
  private:
   RunoutSpec spec_;

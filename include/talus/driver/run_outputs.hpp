@@ -108,11 +108,11 @@ class RunoutFiles {
   struct Outcome {
     std::optional<RunoutResult> result;
     std::string summary_path;  // runout.json
-    std::string deposit_path;  // deposit.csv (empty unless the run reached its end)
+    std::string deposit_path;  // deposit.csv (empty unless the run completed)
   };
-  /// runout.json (the front after the last step), and deposit.csv when the run reached its end
-  /// (collective; the outcome is rank 0's).
-  Outcome finish(Solver& solver) const;
+  /// runout.json (the front after the last step, with `status`: run.json's completed, interrupted or
+  /// unstable), and deposit.csv when the run completed (collective; the outcome is rank 0's).
+  Outcome finish(Solver& solver, const std::string& status) const;
   const std::string& history_path() const { return history_path_; }
 
  private:
