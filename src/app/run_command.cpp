@@ -93,7 +93,7 @@ void print_scene_summary(const Scene& s, const MemoryEstimate& memory, const Mac
 }
 
 // The end-of-run lines of a scene with runout diagnostics (docs/flume.md).
-void print_runout(const RunoutResult& r, const RunSummary& summary) {
+void print_runout(const RunoutResult& r, const RunSummary& summary, const RunoutSpec& spec) {
   const std::string front =
       r.all_left_time ? fmt::format("every particle had left the grid by t = {:.6g} s; the last front measured (t = {:.6g} s) was",
                                     *r.all_left_time, r.time)
@@ -107,6 +107,22 @@ void print_runout(const RunoutResult& r, const RunSummary& summary) {
                beyond < 0.0 ? "short of" : "onto", *r.runout_plane_s);
   }
   fmt::print("; tail at s = {:.4f} m\n", r.tail);
+  // What left through open faces is not in the quantiles: the runout of what stayed in the grid.
+  if (r.outflow_mass_share > 0.0 && !r.limited_by_outflow)
+    fmt::print("talus: runout: front and tail of the mass still in the grid: {:.2f}% left through open faces ({:.2f}% "
+               "through x+)\n",
+               100.0 * r.outflow_mass_share, 100.0 * r.outflow_mass_share_x_plus);
+  std::fflush(stdout);  // (the warnings below follow the line they qualify, also in a log of both)
+  if (r.limited_by_outflow)
+    fmt::print(stderr, "talus: warning: runout limited by outflow: {:.2f}% of the mass left through the open face x+, "
+               "ahead of the front (more than the {:.2g}% the front quantile leaves ahead of it; {:.2f}% left in all): "
+               "the front and tail are quantiles of the mass still in the grid and the flow's front lay beyond the "
+               "grid; extend the grid along x\n",
+               100.0 * r.outflow_mass_share_x_plus, 100.0 * (1.0 - spec.front_quantile),
+               100.0 * r.outflow_mass_share);
+  else if (r.front_at_grid_end)
+    fmt::print(stderr, "talus: warning: runout: the front is within one cell of the grid's end along x: the flow ran to "
+               "the end of the grid and may have run farther; extend the grid along x\n");
   fmt::print("talus: runout history: {}; result: {}{}\n", summary.runout_path, summary.runout_summary_path,
              summary.deposit_path.empty() ? "" : "; deposit thickness: " + summary.deposit_path);
 }
@@ -463,7 +479,7 @@ void add_run_command(CLI::App& app) {
     fmt::print("talus: ParaView series: {} ({} frame{}{}); energy history: {}/energy.csv; run record: {}/run.json\n",
                summary.pvd_path, summary.frames_in_series, summary.frames_in_series == 1 ? "" : "s", written, dir, dir);
     if (!summary.terrain_path.empty()) fmt::print("talus: terrain surface: {} (open it with the series)\n", summary.terrain_path);
-    if (summary.runout) print_runout(*summary.runout, summary);
+    if (summary.runout) print_runout(*summary.runout, summary, solver.scene().runout);
   });
 }
 

@@ -117,14 +117,24 @@ DepositRaster measure_deposit(const ParticleStore& P, const FlumeCoordinates& c,
   return r;
 }
 
-RunoutMonitor::RunoutMonitor(const RunoutSpec& spec, FlumeCoordinates coordinates)
-    : spec_(spec), coordinates_(std::move(coordinates)) {}
+RunoutGrid runout_grid_of(const Scene& scene) {
+  const GridGeometry& g = scene.grid;
+  return RunoutGrid{g.origin[0], g.origin[0] + g.cells[0] * g.h, g.h};
+}
 
-RunoutSample RunoutMonitor::sample(const ParticleStore& particles, double time, std::int64_t step) {
+RunoutMonitor::RunoutMonitor(const RunoutSpec& spec, FlumeCoordinates coordinates, RunoutGrid grid)
+    : spec_(spec), coordinates_(std::move(coordinates)), grid_(grid) {}
+
+RunoutSample RunoutMonitor::measure(const ParticleStore& particles, double time, std::int64_t step) const {
   RunoutSample s = measure_runout(particles, coordinates_, spec_.front_quantile, spec_.tail_quantile);
   s.time = time;
   s.step = step;
   if (last_ && time > last_->time) s.front_velocity = (s.front - last_->front) / (time - last_->time);
+  return s;
+}
+
+RunoutSample RunoutMonitor::sample(const ParticleStore& particles, double time, std::int64_t step) {
+  const RunoutSample s = measure(particles, time, step);
   if (!first_) first_ = s;
   last_ = s;
   if (s.mass > 0.0) last_with_particles_ = s;
@@ -137,23 +147,28 @@ void RunoutMonitor::resume(const RunoutSample& first, const RunoutSample& last) 
   if (last.mass > 0.0) last_with_particles_ = last;
 }
 
-RunoutResult RunoutMonitor::result() const {
+RunoutResult RunoutMonitor::result(const RunoutSample* now) const {
   RunoutResult r;
   if (!last_) return r;
-  const bool all_left = !(last_->mass > 0.0) && last_with_particles_;
-  const RunoutSample& measured = all_left ? *last_with_particles_ : *last_;
-  if (all_left) r.all_left_time = last_->time;
+  const RunoutSample& latest = now ? *now : *last_;
+  const bool all_left = !(latest.mass > 0.0) && last_with_particles_;
+  const RunoutSample& measured = all_left ? *last_with_particles_ : latest;
+  if (all_left) r.all_left_time = latest.time;
   r.time = measured.time;
+  r.step = measured.step;
   r.front = measured.front;
   r.tail = measured.tail;
   r.gate_from_scene = spec_.has_gate;
   r.gate_s = spec_.has_gate ? coordinates_.s(spec_.gate_x) : first_->front;
   r.from_gate = r.front - r.gate_s;
+  r.front_at_grid_end = coordinates_.x_at(r.front) >= grid_.x1 - grid_.h;
+  // The default is left out when it lies outside the grid, as a runout_plane_x there is refused (a
+  // grid cut short of the terrain's last transition was "3.1 m short of the runout plane").
   std::optional<double> plane_x;
   if (spec_.has_runout_plane)
     plane_x = spec_.runout_plane_x;
-  else
-    plane_x = coordinates_.last_segment_start();
+  else if (const auto start = coordinates_.last_segment_start(); start && *start >= grid_.x0 && *start <= grid_.x1)
+    plane_x = start;
   if (plane_x) {
     r.runout_plane_s = coordinates_.s(*plane_x);
     r.beyond_runout_plane = r.front - *r.runout_plane_s;

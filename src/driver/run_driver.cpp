@@ -225,7 +225,7 @@ class RunLoop {
       : solver_(solver), scene_(solver.scene()), comm_(solver.comm()), dir_(options.out_dir),
         resuming_(options.resume != nullptr),
         resumed_in_place_(resuming_ && (options.resume_dir.empty() || same_file(options.resume_dir, options.out_dir))),
-        progress_(resuming_ ? *options.resume : RunProgress{}),
+        progress_(resuming_ ? *options.resume : RunProgress{}), resume_dir_(options.resume_dir),
         history_(dir_, resume_step(), comm_.root(), scene_.output.energy_gap_terms), runout_(scene_, dir_, resume_step(), comm_, options.resume_dir, progress_.runout_first_row),
         frames_(dir_, scene_.output.compress, progress_, comm_, options.frames_in_background), checkpoint_(dir_),
         history_schedule_{scene_.output.history_interval, progress_.next_history},
@@ -269,6 +269,7 @@ class RunLoop {
   bool resuming_;
   bool resumed_in_place_;  // resuming in the checkpoint's own folder, which holds the outputs before it
   RunProgress progress_;
+  fs::path resume_dir_;
   EnergyHistory history_;
   RunoutFiles runout_;
   FrameSeries frames_;
@@ -335,6 +336,7 @@ RunSummary RunLoop::run() {
 
 void RunLoop::start() {
   summary_.first_step = solver_.step_count();
+  if (!resumed_in_place_) record_frame_folder(progress_, dir_, resuming_ ? resume_dir_ : fs::path());
   if (comm_.root()) write_file_atomically((dir_ / "scene.json").string(), scene_file_json(scene_).dump(2) + "\n");
   summary_.pvd_path = frames_.pvd_path();
   summary_.checkpoint_path = checkpoint_.path();
@@ -355,10 +357,13 @@ void RunLoop::start() {
     // lost: the restart goes on, but says what its outputs lack. (Into another folder the frames and
     // rows before the checkpoint stay where they are: nothing is missing. The test was "a frame is
     // kept", so a folder that had lost every frame and its history said nothing.)
-    if (comm_.root() && resumed_in_place_ && frames_.missing_kept_frames() > 0)
+    if (comm_.root() && resumed_in_place_ && frames_.missing_kept_frames() > 0) {
+      std::string folders;
+      for (const fs::path& f : frames_.missing_from()) folders += (folders.empty() ? "" : ", ") + f.string();
       fmt::print(stderr, "talus: warning: {} of the {} frames the checkpoint lists are missing from {}: the series has "
-                 "gaps there\n", frames_.missing_kept_frames(), frames_.kept_frames() + frames_.missing_kept_frames(),
-                 (dir_ / "frames").string());
+                 "gaps there\n",
+                 frames_.missing_kept_frames(), progress_.frame_times.size(), folders);
+    }
     if (comm_.root() && resumed_in_place_ && history_.kept_rows() == 0)
       fmt::print(stderr, "talus: warning: {} held no row up to the checkpoint's step {}: the energy history starts at "
                  "the restart\n", (dir_ / "energy.csv").string(), solver_.step_count());
@@ -467,6 +472,8 @@ void RunLoop::fail(const Error& e) {
         ++summary_.frames;
       }
       write_checkpoint();
+      // its runout too, marked unstable (an unstable run wrote no runout.json)
+      runout_.finish(solver_, "unstable");
       message += fmt::format(" | last good state ({}) written to {} and checkpoint.h5",
                              step_ended(solver_.step_count(), solver_.time()), frame);
     }
@@ -479,7 +486,9 @@ void RunLoop::fail(const Error& e) {
 void RunLoop::finish() {
   frames_.complete(solver_);  // the last frame on disk and in the .pvd before the run reports it
   history_.flush();
-  const RunoutFiles::Outcome runout = runout_.finish(solver_);
+  // (run.json's words: the run ends as `talus run` records it)
+  const bool stopped = summary_.interrupted_signal != 0 || summary_.stopped_at_deadline;
+  const RunoutFiles::Outcome runout = runout_.finish(solver_, stopped ? "interrupted" : "completed");
   summary_.runout = runout.result;
   summary_.runout_summary_path = runout.summary_path;
   summary_.deposit_path = runout.deposit_path;

@@ -137,6 +137,36 @@ std::size_t cut_csv(const fs::path& path, const std::string& header, Keep keep) 
 
 }  // namespace
 
+namespace {
+
+/// `relative` taken from `base`, without the trailing separator that "." leaves ("a/." is "a/").
+fs::path folder_from(const fs::path& base, const std::string& relative) {
+  fs::path folder = (base / relative).lexically_normal();
+  if (!folder.has_filename() && folder.has_relative_path()) folder = folder.parent_path();
+  return folder;
+}
+
+}  // namespace
+
+fs::path frame_folder(const RunProgress& progress, std::size_t index, const fs::path& dir) {
+  fs::path folder = dir;
+  for (const auto& [first, path] : progress.frame_folders)
+    if (first <= index) folder = folder_from(dir, path);
+  return folder;
+}
+
+void record_frame_folder(RunProgress& progress, const fs::path& dir, const fs::path& resume_dir) {
+  const fs::path here = folder_from(fs::absolute(dir), ".");
+  if (!resume_dir.empty()) {
+    // the earlier parts' folders, now relative to this one (those of a checkpoint that did not
+    // keep them: its own folder)
+    const fs::path there = folder_from(fs::absolute(resume_dir), ".");
+    if (progress.frame_folders.empty()) progress.frame_folders.emplace_back(0, ".");
+    for (auto& [first, path] : progress.frame_folders) path = folder_from(there, path).lexically_relative(here).string();
+  }
+  progress.frame_folders.emplace_back(progress.frame_times.size(), ".");
+}
+
 std::string frame_name(std::size_t index, bool distributed) {
   return fmt::format("frames/particles_{:06}.{}", index, distributed ? "pvtu" : "vtu");
 }
@@ -208,7 +238,7 @@ RunoutFiles::RunoutFiles(const Scene& scene, const fs::path& dir, std::optional<
                          const Comm& comm, const fs::path& resume_dir, const std::string& saved_first_row)
     : scene_(scene), dir_(dir), comm_(comm) {
   if (!scene.runout.enabled) return;
-  monitor_.emplace(scene.runout, flume_coordinates_of(scene));
+  monitor_.emplace(scene.runout, flume_coordinates_of(scene), runout_grid_of(scene));
   history_path_ = (dir / "runout.csv").string();
   if (!comm_.root()) return;  // rank 0 measures and writes
   if (resume_step) {
@@ -269,18 +299,38 @@ void RunoutFiles::write(const Solver& solver) {
   file_.flush();
 }
 
-RunoutFiles::Outcome RunoutFiles::finish(Solver& solver) const {
+RunoutFiles::Outcome RunoutFiles::finish(Solver& solver, const std::string& status) const {
   Outcome out;
   if (!monitor_) return out;
-  // the deposit needs every particle on rank 0 (collective: every rank takes part)
-  const bool completed = solver.finished();
-  const ParticleStore none;
-  const AllParticles all(completed ? comm_ : Comm(), completed ? solver.particles() : none);
+  // every particle on rank 0: the deposit, and the state where a run stopped between history rows
+  // (collective: every rank takes part)
+  const AllParticles all(comm_, solver.particles());
+  const double left = solver.outflow_mass(), left_x_plus = solver.outflow_mass_x_plus();  // (collective)
   if (!comm_.root() || !monitor_->has_samples()) return out;
-  out.result = monitor_->result();
+  // A run stopped by a signal, --stop-after or an instability: its state where it stopped, which the
+  // last history row is not (runout.json gave the row before the stop, and nothing said it was not
+  // the end). A completed run's last row is of its last step.
+  std::optional<RunoutSample> now;
+  if (monitor_->last().step != solver.step_count()) now = monitor_->measure(all.get(), solver.time(), solver.step_count());
+  out.result = monitor_->result(now ? &*now : nullptr);
+  RunoutResult& r = *out.result;
+  r.status = status;
+  r.final = status == "completed" && !solver.stopped_at_max_steps() && !solver.emptied();
+  // The front and tail are quantiles of the mass still in the grid: say how much had left, and
+  // whether more left ahead of the front (x+) than the front quantile leaves there, so that the
+  // whole flow's front lay beyond the grid (a slide run off the grid's end gave the grid's end as
+  // its front, 1.5 m "beyond the gate", with 91% of its mass gone and not a word).
+  const double total = (now ? *now : monitor_->last()).mass + left;
+  if (total > 0.0) {
+    r.outflow_mass_share = left / total;
+    r.outflow_mass_share_x_plus = left_x_plus / total;
+  }
+  r.limited_by_outflow = r.outflow_mass_share_x_plus > 1.0 - scene_.runout.front_quantile;
   out.summary_path = (dir_ / "runout.json").string();
   write_file_atomically(out.summary_path, runout_result_json(*out.result) + "\n");
-  if (!completed) return out;  // the deposit of a completed run (not of one stopped by a signal)
+  // The deposit of a completed run: at its end time, at time.max_steps or once every particle left
+  // (run.json's "completed"); not of one stopped before it completed.
+  if (status != "completed") return out;
   ScopedPhase timer(solver.phase_times(), Phase::Output);
   const FlumeCoordinates& c = monitor_->coordinates();
   const GridGeometry& g = scene_.grid;
@@ -305,12 +355,21 @@ FrameSeries::FrameSeries(const fs::path& dir, bool compress, RunProgress& progre
   // The index lists the checkpoint's earlier frames that are in this folder. A run resumed into
   // another folder (--restart with --out) has none of them there: listing them anyway gave a .pvd that
   // ParaView cannot open. Their indices stay taken, so the new frames do not reuse the names.
+  // A frame written in another folder (a part resumed elsewhere, which the checkpoint records) is
+  // not missing when it is there: resumed a second time, in the folder of a run resumed with --out,
+  // the run warned that the series had gaps where the frames were in the first part's folder.
   std::vector<std::pair<double, std::string>> entries;
   for (std::size_t i = 0; i < progress.frame_times.size(); ++i) {
     std::string name = kept_frame_name(dir, i, comm.distributed());
     std::error_code ec;
-    if (fs::exists(dir / name, ec)) entries.emplace_back(progress.frame_times[i], std::move(name));
-    else ++missing_kept_frames_;
+    const fs::path written_in = frame_folder(progress, i, dir);
+    if (fs::exists(dir / name, ec)) {
+      entries.emplace_back(progress.frame_times[i], std::move(name));
+    } else if (same_file(written_in, dir) || !fs::exists(written_in / kept_frame_name(written_in, i, comm.distributed()), ec)) {
+      ++missing_kept_frames_;
+      if (std::find(missing_from_.begin(), missing_from_.end(), written_in / "frames") == missing_from_.end())
+        missing_from_.push_back(written_in / "frames");
+    }
   }
   kept_frames_ = entries.size();
   if (!entries.empty()) {

@@ -143,6 +143,21 @@ double TerrainProfile::x_at_arc_length(double s) const {
   return it->x_at(s - it->s0);
 }
 
+std::optional<double> TerrainProfile::last_segment_start() const {
+  const std::size_t n = spec_.points.size();
+  if (n < 3) return std::nullopt;
+  const auto& a = spec_.points[n - 3];
+  const auto& v = spec_.points[n - 2];  // the last interior vertex
+  const auto& b = spec_.points[n - 1];
+  const double r = spec_.radii.empty() ? 0.0 : spec_.radii[n - 2];
+  const double in = std::atan2(v[1] - a[1], v[0] - a[0]);
+  const double out = std::atan2(b[1] - v[1], b[0] - v[0]);
+  // A fillet of radius r tangent to both segments touches them at the distance r tan(|turn| / 2)
+  // from the vertex (the tangent length of a circular curve).
+  const double tangent_length = r * std::tan(0.5 * std::abs(out - in));
+  return v[0] + tangent_length * std::cos(out);
+}
+
 std::array<double, 2> TerrainProfile::height_range(double x0, double x1) const {
   double lo = std::min(height(x0), height(x1)), hi = std::max(height(x0), height(x1));
   for (const Piece& p : pieces_) {

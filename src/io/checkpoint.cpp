@@ -133,6 +133,15 @@ std::vector<T> read_array_part(const H5::Group& group, const std::string& name, 
   return data;
 }
 
+/// A JSON value on one short line: numbers as the shortest text that reads back (2, not 2.0), and
+/// anything longer than 40 characters cut with "...".
+std::string short_json(const nlohmann::json& value) {
+  std::string text = value.is_number_float() ? fmt::format("{}", value.get<double>()) : value.dump(-1, ' ', true);
+  constexpr std::size_t kMost = 40;
+  if (text.size() > kMost) text = text.substr(0, kMost - 3) + "...";
+  return text;
+}
+
 std::string first_difference(const nlohmann::json& saved, const nlohmann::json& current) {
   const nlohmann::json patch = nlohmann::json::diff(saved, current);
   if (patch.empty()) return "";
@@ -147,9 +156,19 @@ std::string first_difference(const nlohmann::json& saved, const nlohmann::json& 
     }
   }
   const std::string kind = op->value("op", std::string());
+  const std::string path = op->value("path", std::string("/"));
+  // The two values, short: which key differs said too little to find the edit ("/time/end (differs)").
+  auto value_at = [&](const nlohmann::json& scene) -> std::string {
+    try {
+      return short_json(scene.at(nlohmann::json::json_pointer(path)));
+    } catch (const nlohmann::json::exception&) {
+      return "?";
+    }
+  };
   // (JSON Patch's words, from the checkpoint's scene to this one: "remove" read like an instruction)
-  const char* what = kind == "add" ? "only in this scene" : kind == "remove" ? "only in the checkpoint's scene" : "differs";
-  return fmt::format("{} ({})", op->value("path", std::string("/")), what);
+  if (kind == "add") return fmt::format("{}: only in this scene, {}", path, value_at(current));
+  if (kind == "remove") return fmt::format("{}: only in the checkpoint's scene, {}", path, value_at(saved));
+  return fmt::format("{}: checkpoint {}, this scene {}", path, value_at(saved), value_at(current));
 }
 
 }  // namespace
@@ -174,6 +193,7 @@ void for_each_rank_scalar(State& s, F&& f) {
     if (accumulated) f(name, value, true);
   });
   f("outflow_mass", s.outflow_mass, true);
+  f("outflow_mass_x_plus", s.outflow_mass_x_plus, false);
   f("periodic_gravity_shift", s.periodic_gravity_shift, true);
   EnergyGapTerms::for_each_term(s.gap, [&](const char* name, auto& value) { f(name, value, false); });
 }
@@ -235,6 +255,7 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
         if (accumulated) write_attribute(s, name, value);
       });
       write_attribute(s, "outflow_mass", state.outflow_mass);
+      write_attribute(s, "outflow_mass_x_plus", state.outflow_mass_x_plus);
       write_attribute(s, "outflow_particles", state.outflow_particles);
       write_attribute(s, "steps_since_sort", static_cast<std::int32_t>(state.steps_since_sort));
       write_attribute(s, "sorts", state.sorts);
@@ -278,6 +299,7 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
       });
       write_attribute(r, "energy_max_released", run.energy_max_released);
       if (!run.runout_first_row.empty()) write_attribute(r, "runout_first_row", run.runout_first_row);
+      if (!run.frame_folders.empty()) write_attribute(r, "frame_folders", nlohmann::json(run.frame_folders).dump());
       write_array(r, "frame_times", run.frame_times);
       write_array(r, "frame_steps", run.frame_steps);
       file.close();
@@ -340,6 +362,8 @@ Checkpoint read_checkpoint(const std::string& path, const Comm& comm) {
       if (accumulated && !absent_before_ramp_term(s, name)) value = read_attribute<double>(s, name);
     });
     c.solver.outflow_mass = read_attribute<double>(s, "outflow_mass");
+    // absent in checkpoints written before it was kept: counted from the restart
+    if (s.attrExists("outflow_mass_x_plus")) c.solver.outflow_mass_x_plus = read_attribute<double>(s, "outflow_mass_x_plus");
     c.solver.outflow_particles = read_attribute<std::int64_t>(s, "outflow_particles");
     c.solver.steps_since_sort = read_attribute<std::int32_t>(s, "steps_since_sort");
     c.solver.sorts = read_attribute<std::int64_t>(s, "sorts");
@@ -415,6 +439,14 @@ Checkpoint read_checkpoint(const std::string& path, const Comm& comm) {
     c.run.energy_max_released = read_attribute<double>(r, "energy_max_released");
     // absent in checkpoints written before 2026-12-06 and in scenes without runout diagnostics
     if (r.attrExists("runout_first_row")) c.run.runout_first_row = read_string_attribute(r, "runout_first_row");
+    // absent in checkpoints written before it was kept; one that does not parse is as good as absent
+    // (it only says where the earlier frames are)
+    if (r.attrExists("frame_folders")) try {
+        c.run.frame_folders = nlohmann::json::parse(read_string_attribute(r, "frame_folders"))
+                                  .get<std::vector<std::pair<std::size_t, std::string>>>();
+      } catch (const nlohmann::json::exception&) {
+        c.run.frame_folders.clear();
+      }
     c.run.frame_times = read_array<double>(r, "frame_times");
     c.run.frame_steps = read_array<std::int64_t>(r, "frame_steps");
     check_scalars(c, path);
@@ -508,7 +540,7 @@ void restore_particles(Solver& solver, ParticleStore P, const Checkpoint& c) {
     EnergyBudget::for_each_term(state.work, [](const char*, double& value, bool accumulated) {
       if (accumulated) value = 0.0;
     });
-    state.outflow_mass = state.periodic_gravity_shift = 0.0;
+    state.outflow_mass = state.outflow_mass_x_plus = state.periodic_gravity_shift = 0.0;
     state.gap = EnergyGapTerms{};
     state.outflow_particles = 0;
   }

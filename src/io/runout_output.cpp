@@ -62,11 +62,16 @@ std::string runout_result_json(const RunoutResult& r) {
   // (17 digits, as runout.csv: the value read back is the one computed)
   auto number = [](double v) { return fmt::format("{:.17g}", v); };
   auto optional = [&](const std::optional<double>& v) { return v ? number(*v) : std::string("null"); };
+  auto boolean = [](bool b) { return b ? "true" : "false"; };
   return fmt::format(
-      "{{\"time\": {}, \"front\": {}, \"tail\": {}, \"gate_s\": {}, \"gate_from_scene\": {}, \"from_gate\": {}, "
-      "\"runout_plane_s\": {}, \"beyond_runout_plane\": {}, \"all_left_time\": {}}}",
-      number(r.time), number(r.front), number(r.tail), number(r.gate_s), r.gate_from_scene ? "true" : "false",
-      number(r.from_gate), optional(r.runout_plane_s), optional(r.beyond_runout_plane), optional(r.all_left_time));
+      "{{\"status\": \"{}\", \"final\": {}, \"time\": {}, \"step\": {}, \"front\": {}, \"tail\": {}, "
+      "\"gate_s\": {}, \"gate_from_scene\": {}, \"from_gate\": {}, \"runout_plane_s\": {}, "
+      "\"beyond_runout_plane\": {}, \"all_left_time\": {}, \"outflow_mass_share\": {}, "
+      "\"outflow_mass_share_x_plus\": {}, \"limited_by_outflow\": {}, \"front_at_grid_end\": {}}}",
+      r.status, boolean(r.final), number(r.time), r.step, number(r.front), number(r.tail), number(r.gate_s),
+      boolean(r.gate_from_scene), number(r.from_gate), optional(r.runout_plane_s), optional(r.beyond_runout_plane),
+      optional(r.all_left_time), number(r.outflow_mass_share), number(r.outflow_mass_share_x_plus),
+      boolean(r.limited_by_outflow), boolean(r.front_at_grid_end));
 }
 
 void write_deposit_csv(const std::string& path, const DepositRaster& raster, const FlumeCoordinates& c) {

@@ -1,5 +1,6 @@
 #include "talus/scene/scene.hpp"
 
+#include "talus/grid/terrain_profile.hpp"
 #include "talus/particles/cell_sort.hpp"
 #include "talus/particles/seeding.hpp"
 #include "talus/shape/bspline.hpp"
@@ -183,6 +184,20 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
     warnings.push_back(
         "diagnostics.runout with output.history_interval = 0 measures the runout every step (a sort of every particle, "
         "and under mpirun a gather of them all to rank 0): set output.history_interval (the flumes in inputs/: 0.01 s)");
+  // The runout plane's default is where the terrain's last straight segment starts; outside the grid
+  // the runout was measured from it all the same ("3.1 m short of the runout plane"), where a
+  // runout_plane_x given there is refused. The run leaves it out (RunoutMonitor::result).
+  if (scene.runout.enabled && !scene.runout.has_runout_plane && scene.grid.has_terrain()) {
+    const GridGeometry& g = scene.grid;
+    const double x0 = g.origin[0], x1 = x0 + g.cells[0] * g.h;
+    const std::optional<double> plane = TerrainProfile(g.terrain).last_segment_start();
+    if (plane && !(*plane >= x0 && *plane <= x1))
+      warnings.push_back(fmt::format(
+          "diagnostics.runout.runout_plane_x: its default, the end of the terrain's last transition (x = {:.6g} m), "
+          "lies outside the grid along x, [{:.12g}, {:.12g}]: the runout is reported without a runout plane; set "
+          "runout_plane_x inside the grid to measure from one",
+          *plane, x0, x1));
+  }
   // An undamped elastic body on a Coulomb face with high friction vibrates, and the vibration makes
   // parts of its base stick or slip backwards: near the sliding threshold (mu = 0.55 on 30 degrees) the
   // effective friction was 0.007 to 0.2 below mu, more on finer grids; at mu = 0.45 up to 0.013, at 0.3

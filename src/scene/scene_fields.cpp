@@ -65,7 +65,9 @@ Table<SceneDraft> make_terrain_table() {
           "and the `z-` face (w = origin[2], normally 0) is the bed (docs/theory.md \"Terrain-following grid\"). Warned "
           "about: a chord between two node columns so steep that courant / cos θ passes 1.5 (the sheared cells no longer "
           "bound the step; docs/theory.md \"How steep\"), a profile more than 1% longer over the whole grid than those "
-          "chords (the runout would be measured along a longer bed than the particles slide on), and grid.origin[2] ≠ 0",
+          "chords (the runout would be measured along a longer bed than the particles slide on), grid.origin[2] ≠ 0, "
+          "and points that stop more than a cell short of either end of the grid along x (the bed there is the end "
+          "segment continued)",
           point_pairs_schema(2),
           [](ObjectReader& r, SceneDraft& d) {
             const Json& points = r.raw("points");
@@ -794,7 +796,7 @@ Table<SceneDraft> make_runout_table() {
       present_number("gate_x", &RunoutSpec::gate_x, &RunoutSpec::has_gate, "the initial front",
                      "x of the gate; the runout is measured from it"),
       present_number("runout_plane_x", &RunoutSpec::runout_plane_x, &RunoutSpec::has_runout_plane,
-                     "the end of the terrain's last transition", "x where the runout plane starts"),
+                     "the end of the terrain's last transition (none outside the grid)", "x where the runout plane starts"),
       custom<SceneDraft>(
           "deposit_cell", "number [m]", "`grid.cell_size`", "> 0, at most 1e7 raster cells",
           "cell of the deposit thickness raster in (s, y)", {{"type", "number"}, {"exclusiveMinimum", 0}},

@@ -102,6 +102,21 @@ std::vector<std::string> terrain_warnings(const GridGeometry& grid, double coura
         "grid.origin[2] = {} on a terrain grid: the bed (the z- face, w = origin[2]) lies {} m {} the profile of "
         "grid.terrain.points, which terrain.vtu draws; give the bed's heights in the points and origin[2] = 0",
         grid.origin[2], std::abs(grid.origin[2]), grid.origin[2] < 0.0 ? "below" : "above"));
+  // Outside its points the profile continues its end segments straight: a grid beyond them (an origin
+  // in other coordinates than the points', a profile cut short) got a bed nobody gave, without a word.
+  // (Up to a cell is the rounding of grid.size to whole cells.)
+  const double x0 = grid.origin[0], x1 = x0 + grid.cells[0] * grid.h;
+  const double first = grid.terrain.points.front()[0], last = grid.terrain.points.back()[0];
+  const double before = first - x0, after = x1 - last;
+  if (before > grid.h || after > grid.h)
+    warnings.push_back(fmt::format(
+        "grid.terrain.points cover x = [{:.6g}, {:.6g}] m and the grid x = [{:.6g}, {:.6g}] m: the bed continues the "
+        "end segments straight over {}, where no point gives it; extend the points over the grid (or check "
+        "grid.origin)",
+        first, last, x0, x1,
+        before > grid.h && after > grid.h ? fmt::format("{:.6g} m before the first point and {:.6g} m after the last", before, after)
+        : before > grid.h                 ? fmt::format("{:.6g} m before the first point", before)
+                                          : fmt::format("{:.6g} m after the last point", after)));
   // The particles slide on the profile sampled at the node columns (the chords between them); the
   // runout diagnostics measure s along the profile itself. Ripples finer than the cells made the
   // measured runout 18% longer than the resolved bed with the same motion.

@@ -202,6 +202,8 @@ void Solver::remove_outflow(std::size_t leaving) {
     gap_.outflow_strain += e.strain;
     gap_.outflow_gravity += e.gravity;
     outflow_mass_ += P.mass[p];
+    // (a particle past x+ and another face at once counts as x+: it is ahead of the front either way)
+    if (gather_limits_.open[0][1] && P.x[0][p] > gather_limits_.hi[0]) outflow_mass_x_plus_ += P.mass[p];
     ++outflow_particles_;
   }
   P.permute(kept, scratch_, 0);  // the step's displacement is spent: the scratch is free
@@ -336,6 +338,7 @@ DistributionStats Solver::distribution() const {
 
 std::int64_t Solver::outflow_particles() const { return comm_.sum_in_rank_order(std::vector<std::int64_t>{outflow_particles_})[0]; }
 double Solver::outflow_mass() const { return comm_.sum_in_rank_order(outflow_mass_); }
+double Solver::outflow_mass_x_plus() const { return comm_.sum_in_rank_order(outflow_mass_x_plus_); }
 double Solver::outflow_gravity() const { return comm_.sum_in_rank_order(gap_.outflow_gravity); }
 
 bool Solver::finished() const {
@@ -915,6 +918,7 @@ SolverState Solver::state() const {
   s.work = work_;
   s.gap = gap_;
   s.outflow_mass = outflow_mass_;
+  s.outflow_mass_x_plus = outflow_mass_x_plus_;
   s.outflow_particles = outflow_particles_;
   s.steps_since_sort = steps_since_sort_;
   s.sorts = sorts_;
@@ -1021,6 +1025,7 @@ void Solver::restore_counters(const SolverState& s) {
   work_ = s.work;
   gap_ = s.gap;
   outflow_mass_ = s.outflow_mass;
+  outflow_mass_x_plus_ = s.outflow_mass_x_plus;
   outflow_particles_ = s.outflow_particles;
   steps_since_sort_ = s.steps_since_sort;
   sorts_ = s.sorts;

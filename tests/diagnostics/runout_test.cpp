@@ -19,6 +19,7 @@
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridReader.h>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -156,6 +157,22 @@ TEST(Runout, RunoutPlaneStartsWhereTheTransitionEnds) {
   // A sharp kink: the vertex itself. Flat: unknown.
   EXPECT_DOUBLE_EQ(*FlumeCoordinates(TerrainProfile(flume_terrain(31.4, 0.0))).last_segment_start(), 1.0);
   EXPECT_FALSE(FlumeCoordinates().last_segment_start().has_value());
+  // The default outside the grid along x is left out (a runout_plane_x there is refused): measured
+  // from it, a grid cut short of the transition was "3.1 m short of the runout plane".
+  RunoutSpec spec;
+  spec.enabled = true;
+  const auto plane_of = [&](RunoutGrid grid) {
+    RunoutMonitor monitor(spec, c, grid);
+    monitor.sample(uniform_strip(100, 0.8), 0.0, 0);
+    return monitor.result().runout_plane_s;
+  };
+  ASSERT_TRUE(plane_of(RunoutGrid{0.0, 2.5, 0.05}).has_value());
+  EXPECT_NEAR(*plane_of(RunoutGrid{0.0, 2.5, 0.05}), c.s(x), 1e-12);
+  EXPECT_FALSE(plane_of(RunoutGrid{0.0, 1.0, 0.05}).has_value());
+  EXPECT_FALSE(plane_of(RunoutGrid{100.0, 108.0, 0.05}).has_value());
+  spec.has_runout_plane = true;  // given: as given
+  spec.runout_plane_x = 0.5;
+  EXPECT_NEAR(*plane_of(RunoutGrid{0.0, 1.0, 0.05}), c.s(0.5), 1e-12);
 }
 
 TEST(Runout, MonitorDifferencesTheFrontAndMeasuresFromTheGate) {
@@ -330,6 +347,9 @@ TEST(RunoutOutput, RunWritesRunoutHistoryAndDeposit) {
     EXPECT_TRUE(j.at("gate_from_scene").get<bool>());
     EXPECT_EQ(j.at("beyond_runout_plane").get<double>(), *summary.runout->beyond_runout_plane);
     EXPECT_TRUE(j.at("all_left_time").is_null());
+    EXPECT_EQ(j.at("outflow_mass_share").get<double>(), 0.0);  // nothing left: the open z+ is far above
+    EXPECT_FALSE(j.at("limited_by_outflow").get<bool>());
+    EXPECT_FALSE(j.at("front_at_grid_end").get<bool>());
   }
   // deposit.csv: one row per raster cell (20 x 1 cells of 0.02 m); the volume matches the particles'.
   std::ifstream dep(dir / "deposit.csv");
@@ -385,6 +405,84 @@ TEST(RunoutOutput, RestartContinuesTheHistoryBitForBit) {
   fs::remove_all(dir);
 }
 
+// runout.json says how the run ended and which state it describes: a run stopped between history
+// rows gave the row before the stop, and nothing said that it was not the end; an unstable run wrote
+// none; one stopped at time.max_steps is completed (as run.json says) with its deposit, but not final.
+TEST(RunoutOutput, TheResultSaysHowTheRunEndedAndTheStateItDescribes) {
+  const Scene scene = parse_scene(kSlideScene, "slide");
+  const fs::path dir = temp_dir("runout_status");
+  RunOptions options;
+  options.progress = false;
+  options.handle_signals = false;
+  auto result_of = [](const fs::path& folder) {
+    std::ifstream in(folder / "runout.json");
+    return nlohmann::json::parse(in);
+  };
+  options.out_dir = (dir / "whole").string();
+  RunSummary whole;
+  {
+    Solver solver(scene);
+    whole = run_scene(solver, options);
+  }
+  nlohmann::json j = result_of(dir / "whole");
+  EXPECT_EQ(j.at("status"), "completed");
+  EXPECT_TRUE(j.at("final").get<bool>());
+  EXPECT_EQ(j.at("step").get<std::int64_t>(), whole.steps);
+  {
+    // --stop-after at once: stopped after the first step, with the last history row at t = 0
+    Solver solver(scene);
+    options.out_dir = (dir / "stopped").string();
+    options.deadline = std::chrono::steady_clock::now();
+    const RunSummary stopped = run_scene(solver, options);
+    options.deadline.reset();
+    ASSERT_TRUE(stopped.stopped_at_deadline);
+    j = result_of(dir / "stopped");
+    EXPECT_EQ(j.at("status"), "interrupted");
+    EXPECT_FALSE(j.at("final").get<bool>());
+    EXPECT_EQ(j.at("step").get<std::int64_t>(), 1);
+    EXPECT_EQ(j.at("time").get<double>(), solver.time());  // where it stopped, not the row at t = 0
+    EXPECT_GT(solver.time(), 0.0);
+    EXPECT_EQ(j.at("front").get<double>(), stopped.runout->front);
+    EXPECT_FALSE(fs::exists(dir / "stopped" / "deposit.csv"));
+    // resumed to the end: the uninterrupted run's result, to the bit
+    const std::string checkpoint_path = (dir / "stopped" / "checkpoint.h5").string();
+    const Checkpoint checkpoint = read_checkpoint(checkpoint_path);
+    Solver resumed(scene);
+    restore_checkpoint(resumed, checkpoint, checkpoint_path);
+    options.resume = &checkpoint.run;
+    run_scene(resumed, options);
+    options.resume = nullptr;
+    EXPECT_EQ(read_text(dir / "stopped" / "runout.json"), read_text(dir / "whole" / "runout.json"));
+  }
+  {
+    Scene capped = scene;
+    capped.max_steps = 5;
+    Solver solver(capped);
+    options.out_dir = (dir / "capped").string();
+    run_scene(solver, options);
+    j = result_of(dir / "capped");
+    EXPECT_EQ(j.at("status"), "completed");
+    EXPECT_FALSE(j.at("final").get<bool>());
+    EXPECT_EQ(j.at("step").get<std::int64_t>(), 5);
+    EXPECT_TRUE(fs::exists(dir / "capped" / "deposit.csv"));
+  }
+  {
+    // a CFL breach in the first step: the last good state is the start, and its runout is written
+    Scene fast = scene;
+    fast.bodies[0].velocity = Vec3(200.0, 0.0, 0.0);
+    fast.guards.max_step_displacement = 0.1;
+    Solver solver(fast);
+    options.out_dir = (dir / "unstable").string();
+    EXPECT_THROW(run_scene(solver, options), Error);
+    j = result_of(dir / "unstable");
+    EXPECT_EQ(j.at("status"), "unstable");
+    EXPECT_FALSE(j.at("final").get<bool>());
+    EXPECT_EQ(j.at("step").get<std::int64_t>(), 0);
+    EXPECT_EQ(j.at("time").get<double>(), 0.0);
+  }
+  fs::remove_all(dir);
+}
+
 // talus run --restart DIR/checkpoint.h5 --out OTHER: the rows before the checkpoint stay in DIR.
 // The monitor lost them: the default gate became the front at the checkpoint (18% short on a
 // flume) and the first row's front velocity was 0.
@@ -421,6 +519,78 @@ TEST(RunoutOutput, RestartIntoAnotherFolderMeasuresFromTheSameGate) {
   ASSERT_GE(reference.size(), rows.size());
   EXPECT_EQ(reference.substr(reference.size() - rows.size()), rows);
   EXPECT_EQ(read_text(dir / "first" / "runout.csv"), reference);  // the checkpoint's folder is read, not changed
+  fs::remove_all(dir);
+}
+
+// Mass that leaves through the open faces is not in the front and tail quantiles. A block thrown
+// off the grid's x+ end gave the grid's end as its front, with most of its mass gone and nothing in
+// runout.json to say so. Now runout.json says what share left, through x+ (ahead of the front) and in
+// all, and flags the front as limited by outflow; the share through x+ travels in the checkpoint.
+const char* kOutflowScene = R"({
+    "name": "outflow", "grid": { "origin": [0, 0, 0], "size": [0.4, 0.1, 0.1], "cell_size": 0.02 },
+    "time": { "end": 0.01 },
+    "materials": { "sand": { "model": "drucker_prager", "density": 1600, "young": 2e6, "poisson": 0.3,
+                             "friction_angle": 40, "cohesion": 10 } },
+    "bodies": [ { "name": "ahead", "material": "sand", "velocity": [12, 0, 0],
+                  "box": { "min": [0.26, 0, 0], "max": [0.36, 0.04, 0.04] } },
+                { "name": "side", "material": "sand", "velocity": [0, 3, 0],
+                  "box": { "min": [0.04, 0.04, 0], "max": [0.12, 0.08, 0.04] } } ],
+    "boundaries": { "x+": "open", "y+": "open", "z+": "open" },
+    "output": { "history_interval": 0.0025, "checkpoint_interval": 0.005 },
+    "diagnostics": { "runout": { "gate_x": 0.1 } } })";
+
+TEST(RunoutOutput, MassLeftThroughTheOpenFacesIsSaidAndTheFrontFlagged) {
+  const fs::path dir = temp_dir("runout_outflow");
+  RunOptions options;
+  options.out_dir = (dir / "both").string();
+  options.progress = false;
+  options.handle_signals = false;
+  auto result_of = [](const fs::path& folder) {
+    std::ifstream in(folder / "runout.json");
+    return nlohmann::json::parse(in);
+  };
+  {
+    Solver solver(parse_scene(kOutflowScene, "outflow"));
+    run_scene(solver, options);
+    double in_grid = 0.0;
+    for (double m : solver.particles().mass) in_grid += m;
+    const double total = in_grid + solver.outflow_mass();
+    const nlohmann::json j = result_of(dir / "both");
+    // most of the block thrown at x+ left through it, and some of the other through y+
+    EXPECT_GT(solver.outflow_mass_x_plus(), 0.3 * total);
+    EXPECT_LT(solver.outflow_mass_x_plus(), solver.outflow_mass());
+    EXPECT_NEAR(j.at("outflow_mass_share").get<double>(), solver.outflow_mass() / total, 1e-12);
+    EXPECT_NEAR(j.at("outflow_mass_share_x_plus").get<double>(), solver.outflow_mass_x_plus() / total, 1e-12);
+    EXPECT_TRUE(j.at("limited_by_outflow").get<bool>());
+    EXPECT_TRUE(j.at("front_at_grid_end").get<bool>());
+  }
+  {
+    // Resumed from its checkpoint (t = 0.005 s, after some of the block had left): the same result,
+    // so the share through x+ before the checkpoint was kept.
+    const std::string checkpoint_path = (dir / "both" / "checkpoint.h5").string();
+    const Checkpoint checkpoint = read_checkpoint(checkpoint_path);
+    ASSERT_GT(checkpoint.solver.outflow_mass_x_plus, 0.0);
+    Solver resumed(parse_scene(kOutflowScene, "outflow"));
+    restore_checkpoint(resumed, checkpoint, checkpoint_path);
+    const std::string whole = read_text(dir / "both" / "runout.json");
+    RunOptions again = options;
+    again.resume = &checkpoint.run;
+    run_scene(resumed, again);
+    EXPECT_EQ(read_text(dir / "both" / "runout.json"), whole);
+  }
+  {
+    // Only the block that leaves sideways: the share is said, but the front is not limited by it.
+    Scene scene = parse_scene(kOutflowScene, "outflow");
+    scene.bodies.erase(scene.bodies.begin());
+    Solver solver(scene);
+    options.out_dir = (dir / "side").string();
+    run_scene(solver, options);
+    const nlohmann::json j = result_of(dir / "side");
+    EXPECT_GT(j.at("outflow_mass_share").get<double>(), 0.05);
+    EXPECT_EQ(j.at("outflow_mass_share_x_plus").get<double>(), 0.0);
+    EXPECT_FALSE(j.at("limited_by_outflow").get<bool>());
+    EXPECT_FALSE(j.at("front_at_grid_end").get<bool>());
+  }
   fs::remove_all(dir);
 }
 

@@ -318,7 +318,15 @@ TEST(Checkpoint, RefusesAnotherSceneAnotherVersionAndBadFiles) {
   other.end_time = 0.06;
   EXPECT_EQ(restore_error(other, path, &msg), Error::Kind::Input);
   EXPECT_NE(msg.find("belongs to another scene"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("/time/end"), std::string::npos) << msg;
+  // the two values, which "/time/end (differs)" did not give
+  EXPECT_NE(msg.find("first difference at /time/end: checkpoint 0.05, this scene 0.06"), std::string::npos) << msg;
+  EXPECT_EQ(msg.find('\n'), std::string::npos);
+  // a long value is cut short, on the same line
+  other = scene;
+  other.description = std::string(200, 'a') + "\nb";
+  EXPECT_EQ(restore_error(other, path, &msg), Error::Kind::Input);
+  EXPECT_NE(msg.find("/description: checkpoint \"\", this scene \"" + std::string(36, 'a') + "..."), std::string::npos) << msg;
+  EXPECT_EQ(msg.find(std::string(37, 'a')), std::string::npos) << msg;
   EXPECT_EQ(msg.find('\n'), std::string::npos);
 
   EXPECT_EQ(restore_error(scene, (dir / "missing.h5").string(), &msg), Error::Kind::Input);

@@ -405,6 +405,43 @@ TEST(Crash, ResumingADamagedOwnFolderSaysWhatItsOutputsLack) {
   EXPECT_NE(all_text.find(" held no row up to the checkpoint's step "), std::string::npos) << all_text;
 }
 
+// A run resumed into another folder (--restart ... --out B) writes its frames in B; the earlier ones
+// stay in the first part's folder A. Resumed again, in B, the run counted A's frames as missing from
+// B and warned that the series had gaps. The checkpoint now says where each frame was written: no
+// warning while they are there, and the folder they are missing from when they are not.
+TEST(Crash, ResumingAgainInTheFolderOfAResumeElsewhereFindsTheEarlierFrames) {
+  const fs::path root = test::temp_dir("resume_twice");
+  std::ofstream(root / "scene.json") << test::small_slide_json(0.1, 0.02);
+  const std::string scene = (root / "scene.json").string();
+  // A: stopped after its first step (frame 0 only); B: the rest, with periodic checkpoints
+  const auto [stopped, stopped_text] = run_captured("run " + scene + " --out " + (root / "a").string() +
+                                                    " --quiet --threads 1 --stop-after 0.001s");
+  ASSERT_EQ(stopped, 75) << stopped_text;
+  const auto [resumed, resumed_text] = run_captured("run " + scene + " --restart " + (root / "a" / "checkpoint.h5").string() +
+                                                    " --out " + (root / "b").string() + " --quiet --threads 1");
+  ASSERT_EQ(resumed, 0) << resumed_text;
+  ASSERT_TRUE(fs::exists(root / "b" / "checkpoint.h5"));
+  const Checkpoint b = read_checkpoint((root / "b" / "checkpoint.h5").string());
+  ASSERT_GE(b.run.frame_times.size(), 3u);
+  EXPECT_EQ(b.run.frame_folders, (std::vector<std::pair<std::size_t, std::string>>{{0, "../a"}, {1, "."}}));
+  EXPECT_FALSE(fs::exists(root / "b" / "frames" / "particles_000000.vtu"));  // frame 0 is A's
+  fs::copy(root / "b", root / "b_copy", fs::copy_options::recursive);
+  const auto [again, again_text] = run_captured("run " + scene + " --restart " + (root / "b" / "checkpoint.h5").string() +
+                                                " --quiet --threads 1");
+  EXPECT_EQ(again, 0) << again_text;
+  EXPECT_EQ(again_text.find("missing"), std::string::npos) << again_text;
+  // A's frame gone: said, naming A's frames folder
+  fs::remove(root / "a" / "frames" / "particles_000000.vtu");
+  const auto [gap, gap_text] = run_captured("run " + scene + " --restart " + (root / "b_copy" / "checkpoint.h5").string() +
+                                            " --quiet --threads 1");
+  EXPECT_EQ(gap, 0) << gap_text;
+  EXPECT_NE(gap_text.find(fmt::format("1 of the {} frames the checkpoint lists are missing from {}: the series has gaps",
+                                      b.run.frame_times.size(), (root / "a" / "frames").string())),
+            std::string::npos)
+      << gap_text;
+  fs::remove_all(root);
+}
+
 // Without diagnostics.runout.gate_x the runout is measured from the initial front, runout.csv's
 // first row: a resume whose folder lacks it (a resume of a resume into another folder, or here a
 // runout.csv removed) measured it from the front at the restart, 22% short on a terrain slide,

@@ -128,6 +128,41 @@ TEST(SceneJson, SteepOrFinelyDetailedTerrainsAreWarnedAbout) {
         << name;
 }
 
+// A profile whose points do not reach over the grid is continued straight beyond them, silently; and
+// the runout plane's default (the end of the last transition) outside the grid was used all the
+// same, where a runout_plane_x there is refused. Both are warned about; the shipped scenes are not.
+TEST(SceneJson, ATerrainShortOfTheGridAndARunoutPlaneOutsideItAreWarnedAbout) {
+  Scene slope = read_scene_file(std::string(TALUS_SOURCE_DIR) + "/inputs/terrain/incline30_coarse.json");  // x = 0 .. 8, h = 0.25
+  slope.grid.terrain.points = {{0.0, 2.3094}, {4.0, 0.0}, {8.0, 0.0}};
+  slope.grid.terrain.radii = {0.0, 1.0, 0.0};
+  slope.runout = RunoutSpec{};
+  slope.runout.enabled = true;
+  const std::string short_of = "grid.terrain.points cover x = ";
+  EXPECT_EQ(test::warnings_with(slope, short_of), 0);
+  Scene s = slope;
+  s.grid.terrain.points = {{0.0, 2.3094}, {4.0, 0.0}, {6.0, 0.0}};
+  EXPECT_EQ(test::warnings_with(s, "grid.terrain.points cover x = [0, 6] m and the grid x = [0, 8] m: the bed continues "
+                                   "the end segments straight over 2 m after the last point"), 1);
+  s.grid.terrain.points = {{0.5, 2.0207}, {4.0, 0.0}, {7.8, 0.0}};  // within a cell at the end: rounding
+  EXPECT_EQ(test::warnings_with(s, "over 0.5 m before the first point, where"), 1);
+  s = slope;
+  s.grid.origin[0] = 100.0;  // the points in other coordinates than the grid's
+  EXPECT_EQ(test::warnings_with(s, "over 100 m after the last point"), 1);
+  // The runout plane's default starts at x = 4 + 1 m tan(30 deg / 2) = 4.27 m: outside a grid cut to 3 m.
+  const std::string no_plane = "diagnostics.runout.runout_plane_x: its default, the end of the terrain's last transition "
+                               "(x = 4.26795 m), lies outside the grid along x, [0, 3]";
+  EXPECT_EQ(test::warnings_with(slope, "diagnostics.runout.runout_plane_x"), 0);
+  s = slope;
+  s.grid.cells[0] = 12;
+  EXPECT_EQ(test::warnings_with(s, no_plane), 1);
+  s.runout.has_runout_plane = true;  // given (inside the grid): nothing to warn about
+  s.runout.runout_plane_x = 2.0;
+  EXPECT_EQ(test::warnings_with(s, "diagnostics.runout.runout_plane_x"), 0);
+  for (const char* name : {"denlinger_flume.json", "denlinger_flume_abe2005.json", "terrain/slope_to_runout_linear.json"})
+    EXPECT_EQ(test::warnings_with(read_scene_file(std::string(TALUS_SOURCE_DIR) + "/inputs/" + name), "runout_plane_x"), 0)
+        << name;
+}
+
 // An undamped elastic body on a high-friction face is warned about (docs/verification.md, "Near the
 // sliding threshold"); with the PIC share measured to cure it, on a low-friction face, or a granular
 // body it is not.

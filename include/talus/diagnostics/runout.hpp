@@ -13,7 +13,9 @@
 #include "talus/particles/particle_store.hpp"
 #include "talus/scene/scene.hpp"
 
+#include <limits>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace talus {
@@ -65,23 +67,48 @@ DepositRaster measure_deposit(const ParticleStore& particles, const FlumeCoordin
 /// The final runout: the front at the end of the run, measured from the gate and from the start of
 /// the runout plane (where known).
 struct RunoutResult {
+  // How the run ended (RunoutFiles::finish sets them): run.json's status (completed, interrupted,
+  // unstable), and final only when it reached time.end. An interrupted run's result is its state
+  // where it stopped; a resumed run writes its own.
+  std::string status = "completed";
+  bool final = false;
   double time = 0.0;                      // of the sample the front and tail are from
+  std::int64_t step = 0;                  // of that sample
   double front = 0.0, tail = 0.0;
   double gate_s = 0.0;                    // s of the gate (scene gate_x, else the initial front)
   bool gate_from_scene = false;
   double from_gate = 0.0;                 // front - gate_s
-  std::optional<double> runout_plane_s;   // s where the runout plane starts
+  std::optional<double> runout_plane_s;   // s where the runout plane starts (none: no plane in the grid)
   std::optional<double> beyond_runout_plane;  // front - runout_plane_s
   /// Every particle had left through the open faces by this time: the front and tail above are those
   /// of the last sample that still had particles.
   std::optional<double> all_left_time;
+  /// The front lies within one cell of the grid's downslope end (x+): the flow ran to the end of the
+  /// grid, and the front says where the grid ends, not where the flow would stop.
+  bool front_at_grid_end = false;
+  // What left through the open faces by the end of the run (RunoutFiles::finish sets them): the front
+  // and tail are quantiles of the mass still in the grid.
+  double outflow_mass_share = 0.0;         // of the run's mass, through any open face
+  double outflow_mass_share_x_plus = 0.0;  // through the x+ face: ahead of the front
+  /// More mass left through x+ than the front quantile leaves ahead of the front (share_x_plus >
+  /// 1 - front_quantile): the whole flow's front lay beyond the grid, and the front is not its runout.
+  bool limited_by_outflow = false;
 };
+
+/// The grid along x: the runout plane's default must lie in it, and a front within one cell of its
+/// end is flagged. The default is unbounded (a monitor without a grid: the tests').
+struct RunoutGrid {
+  double x0 = -std::numeric_limits<double>::infinity();
+  double x1 = std::numeric_limits<double>::infinity();
+  double h = 0.0;
+};
+RunoutGrid runout_grid_of(const Scene& scene);
 
 /// Samples the run on the history schedule and keeps the first and the previous sample (the
 /// reference front and the front velocity).
 class RunoutMonitor {
  public:
-  RunoutMonitor(const RunoutSpec& spec, FlumeCoordinates coordinates);
+  RunoutMonitor(const RunoutSpec& spec, FlumeCoordinates coordinates, RunoutGrid grid = {});
   const FlumeCoordinates& coordinates() const { return coordinates_; }
   /// Measure the particles at (time, step); fills front_velocity from the previous sample.
   RunoutSample sample(const ParticleStore& particles, double time, std::int64_t step);
@@ -90,12 +117,17 @@ class RunoutMonitor {
   bool has_samples() const { return first_.has_value(); }
   const RunoutSample& first() const { return *first_; }
   const RunoutSample& last() const { return *last_; }
-  /// The runout after the last sample (after the last one with particles, once every particle has left).
-  RunoutResult result() const;
+  /// A sample of the particles at (time, step) that is not kept (the state where a run stopped
+  /// between history rows: runout.csv, which a restart continues, does not hold it).
+  RunoutSample measure(const ParticleStore& particles, double time, std::int64_t step) const;
+  /// The runout after the last sample, or after `now` (a later one, from measure()); after the last
+  /// one with particles, once every particle has left.
+  RunoutResult result(const RunoutSample* now = nullptr) const;
 
  private:
   RunoutSpec spec_;
   FlumeCoordinates coordinates_;
+  RunoutGrid grid_;
   std::optional<RunoutSample> first_, last_;
   std::optional<RunoutSample> last_with_particles_;
 };

@@ -108,11 +108,11 @@ class RunoutFiles {
   struct Outcome {
     std::optional<RunoutResult> result;
     std::string summary_path;  // runout.json
-    std::string deposit_path;  // deposit.csv (empty unless the run reached its end)
+    std::string deposit_path;  // deposit.csv (empty unless the run completed)
   };
-  /// runout.json (the front after the last step), and deposit.csv when the run reached its end
-  /// (collective; the outcome is rank 0's).
-  Outcome finish(Solver& solver) const;
+  /// runout.json (the front after the last step, with `status`: run.json's completed, interrupted or
+  /// unstable), and deposit.csv when the run completed (collective; the outcome is rank 0's).
+  Outcome finish(Solver& solver, const std::string& status) const;
   const std::string& history_path() const { return history_path_; }
 
  private:
@@ -166,7 +166,10 @@ class FrameSeries {
   /// A resumed series: the checkpoint's earlier frames found in the folder, and those it lists that
   /// are not there (a folder of the run's own with frames deleted: the series has gaps).
   std::size_t kept_frames() const { return kept_frames_; }
+  /// Those found neither here nor in the folder they were written in (RunProgress::frame_folders),
+  /// and the frames folders they are missing from.
   std::size_t missing_kept_frames() const { return missing_kept_frames_; }
+  const std::vector<std::filesystem::path>& missing_from() const { return missing_from_; }
   /// The seconds the writer's thread spent on the frames completed so far, in the background (0
   /// without background writes: the run loop waited for them). The work recorder's run total.
   double background_seconds() const { return background_seconds_; }
@@ -178,6 +181,7 @@ class FrameSeries {
   std::filesystem::path dir_;
   bool kept_frames_in_older_order_ = false;
   std::size_t kept_frames_ = 0, missing_kept_frames_ = 0;
+  std::vector<std::filesystem::path> missing_from_;
   bool compress_;
   bool background_;
   RunProgress& progress_;
@@ -211,6 +215,15 @@ class CheckpointFile {
 /// output.frame_interval, and the last at the end (2 with no interval). Fewer when max_steps or an
 /// emptied grid ends it early.
 std::size_t frames_of_run(const Scene& scene);
+
+/// The folder frame i of a run was written in (RunProgress::frame_folders, relative to the run's
+/// folder `dir`); `dir` when the checkpoint does not say.
+std::filesystem::path frame_folder(const RunProgress& progress, std::size_t index, const std::filesystem::path& dir);
+/// Record that the frames from the next one on are written in `dir`: a fresh run (no resume_dir)
+/// writes all of them there; a run resumed from a checkpoint in another folder `resume_dir` keeps
+/// the earlier frames' folders, rebased to `dir`. (A run resumed in place keeps the checkpoint's.)
+void record_frame_folder(RunProgress& progress, const std::filesystem::path& dir,
+                         const std::filesystem::path& resume_dir);
 
 /// The name of frame i: frames/particles_<i:06>.vtu, or, for a distributed run, the summary of its
 /// pieces frames/particles_<i:06>.pvtu.

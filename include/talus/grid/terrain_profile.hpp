@@ -16,6 +16,7 @@
 #include "talus/core/types.hpp"
 
 #include <array>
+#include <optional>
 #include <vector>
 
 namespace talus {
@@ -40,6 +41,10 @@ class TerrainProfile {
   double x_at_arc_length(double s) const;
   /// x of the interior vertices that have no circular transition.
   const std::vector<double>& kinks() const { return kinks_; }
+  /// x where the last straight segment begins: the end of the last transition (the tangent point of
+  /// its fillet), or the last interior vertex when it is a sharp kink. For a flume that is the start
+  /// of the runout plane. Empty for a one-segment profile.
+  std::optional<double> last_segment_start() const;
   /// The lowest and highest bed height over [x0, x1].
   std::array<double, 2> height_range(double x0, double x1) const;
   const TerrainSpec& spec() const { return spec_; }

@@ -8,7 +8,7 @@
 //   /scene_json            the resolved scene (scene_to_json), as bytes
 //   /solver                attributes time, step, last_dt, the accumulated terms of the energy
 //                          ledger by name (friction_work, plastic_work, outflow, damping;
-//                          solver/energy_budget.hpp), outflow_mass, outflow_particles,
+//                          solver/energy_budget.hpp), outflow_mass, outflow_mass_x_plus, outflow_particles,
 //                          steps_since_sort, sorts, needs_sort
 //   /solver/sort_cell0..2  int32 per particle: the cell each particle was sorted into
 //   /particles/<name>      one dataset per allocated particle array, named by
@@ -20,7 +20,8 @@
 //                          `slab_first_columns`, the slab bounds (docs/architecture.md)
 //   /run                   attributes next_frame, next_history, next_checkpoint, the initial energy
 //                          budget (initial_<term> for every ledger term), energy_max_released; datasets
-//                          frame_times, frame_steps (the frames written so far)
+//                          frame_times, frame_steps (the frames written so far); attributes
+//                          runout_first_row, frame_folders (JSON [[first frame, folder], ...])
 // The solver uses no random numbers, so there is no RNG state to save.
 #include "talus/particles/particle_store.hpp"
 #include "talus/scene/scene.hpp"
@@ -29,6 +30,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace talus {
@@ -46,6 +48,12 @@ struct RunProgress {
   /// when the scene sets none. Kept here because a folder may lack the rows of the run's start (a
   /// resume of a resume into another folder). Empty when the scene has no runout diagnostics.
   std::string runout_first_row;
+  /// Where the frames were written: (first frame index, folder relative to the checkpoint's own
+  /// folder), in frame order (relative, so that a run folder moved as a whole still finds them). A run
+  /// resumed into another folder (--restart with --out) writes its frames there while the earlier
+  /// ones stay where they were, so a later restart in that folder finds only its own. Empty in
+  /// checkpoints written before it was kept (every frame then counts as the checkpoint folder's).
+  std::vector<std::pair<std::size_t, std::string>> frame_folders;
 };
 
 struct Checkpoint {

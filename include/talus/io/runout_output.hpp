@@ -15,9 +15,11 @@ std::string runout_csv_row(const RunoutSample& sample);
 /// The inverse of runout_csv_row (a restart reads its history back); empty for a malformed row.
 std::optional<RunoutSample> parse_runout_csv_row(const std::string& row);
 
-/// The runout result as a JSON object (runout.json): time (of the front), front, tail, gate_s,
+/// The runout result as a JSON object (runout.json): status (run.json's), final (the run reached
+/// time.end), time and step (of the front), front, tail, gate_s,
 /// gate_from_scene, from_gate, and runout_plane_s, beyond_runout_plane where known, all_left_time
-/// once every particle has left through the open faces (null otherwise).
+/// once every particle has left through the open faces (null otherwise), outflow_mass_share,
+/// outflow_mass_share_x_plus, limited_by_outflow, front_at_grid_end.
 std::string runout_result_json(const RunoutResult& result);
 
 /// s,y,x,thickness: one row per raster cell (cell centres), s fastest-varying last (rows of constant s).

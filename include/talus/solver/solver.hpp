@@ -39,6 +39,7 @@ struct SolverState {
   EnergyBudget work;                    // the accumulated terms (kinetic, strain, gravity stay 0)
   EnergyGapTerms gap;                   // output.energy_gap_terms: accumulated (zero when off)
   double outflow_mass = 0.0;            // [kg] of the particles removed at open faces
+  double outflow_mass_x_plus = 0.0;     // [kg] the part of it that left through the x+ face (downslope)
   std::int64_t outflow_particles = 0;
   int steps_since_sort = 0;
   std::int64_t sorts = 0;
@@ -132,6 +133,9 @@ class Solver {
   /// over every rank (collective in a distributed run).
   std::int64_t outflow_particles() const;
   double outflow_mass() const;
+  /// The part of outflow_mass() that left through the x+ face: ahead of the flow's front, which the
+  /// runout diagnostics then cannot see (collective in a distributed run).
+  double outflow_mass_x_plus() const;
   /// The gravitational term (-m g.x) the particles that left carried out, all ranks: with energies()'s
   /// `gravity` it is the potential of every particle seeded, so the energy released does not depend on
   /// where the origin lies (EnergyGuard::check).
@@ -286,6 +290,7 @@ class Solver {
   std::vector<double> block_increment_kinetic_;
   void add_tile_gap_terms();
   double outflow_mass_ = 0.0;
+  double outflow_mass_x_plus_ = 0.0;     // SolverState::outflow_mass_x_plus
   double periodic_gravity_shift_ = 0.0;  // SolverState::periodic_gravity_shift
   std::int64_t outflow_particles_ = 0;
   std::int64_t seeded_particles_ = 0;
