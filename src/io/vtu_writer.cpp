@@ -289,7 +289,25 @@ void write_vtu_atomically(vtkUnstructuredGrid* grid, const std::string& path, bo
   rename_into_place(tmp, path);
 }
 
-void write_file_atomically(const std::string& path, const std::string& text) {
+void write_file_atomically(const std::string& given_path, const std::string& text) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  // A device, a FIFO or a socket (`-o /dev/null`, `-o /dev/stdout`, a named pipe) is written
+  // through: the rename replaced it with a regular file, and as root that was /dev/null for the
+  // whole machine. Through a symbolic link the file it names is replaced, and the link kept.
+  const fs::file_status target = fs::status(given_path, ec);
+  if (fs::exists(target) && !fs::is_regular_file(target) && !fs::is_directory(target)) {
+    errno = 0;
+    std::ofstream out(given_path, std::ios::binary);
+    out << text;
+    out.flush();
+    if (!out)
+      throw io_error(fmt::format("cannot write {}{}", given_path, errno ? std::string(": ") + std::strerror(errno) : ""));
+    return;
+  }
+  const std::string path = fs::is_symlink(fs::symlink_status(given_path, ec)) && fs::exists(target)
+                               ? fs::canonical(given_path, ec).string()
+                               : given_path;
   // (the process's own temporary name: two ranks that write one file at once, as a distributed
   // run's ranks that fail together write run.json, each rename a whole file)
   const std::string tmp = path + "." + std::to_string(::getpid()) + ".tmp";

@@ -5,6 +5,7 @@
 #include "talus/core/tensor.hpp"
 
 #include <Eigen/Dense>
+#include <fmt/core.h>
 
 #include <algorithm>
 #include <array>
@@ -55,6 +56,24 @@ Control control_for(const ElementTestSpec& spec) {
       break;
   }
   return c;
+}
+
+/// The held strain increments that keep the held stresses where they are if the increment is
+/// elastic (isotropic: sigma = lambda tr(eps) I + 2 G eps, tensor shears), given the driven one.
+SmallVector elastic_held_strains(const Control& control, const Sym6& d_eps, const DruckerPragerParameters& material) {
+  const double e = material.young, nu = material.poisson;
+  const double shear = e / (2.0 * (1.0 + nu)), lame = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+  const auto stiffness = [&](int i, int j) {  // d sigma_i / d eps_j
+    return (i < 3 && j < 3 ? lame : 0.0) + (i == j ? 2.0 * shear : 0.0);
+  };
+  const int m = control.held_count;
+  SmallMatrix held(m, m);
+  SmallVector load(m);
+  for (int a = 0; a < m; ++a) {
+    for (int b = 0; b < m; ++b) held(a, b) = stiffness(control.held[a], control.held[b]);
+    load[a] = -stiffness(control.held[a], control.driven) * d_eps[control.driven];
+  }
+  return held.fullPivLu().solve(load);
 }
 
 }  // namespace
@@ -133,38 +152,51 @@ std::vector<ElementTestPoint> run_element_test(const ElementTestSpec& spec) {
                     spec.material.young * std::abs(d_eps[control.driven])});
       const double tolerance = 1e-12 * scale;
       SmallVector residual;
-      evaluate(unknown, residual);
-      int iteration = 0;
-      while (m > 0 && residual.cwiseAbs().maxCoeff() > tolerance) {
-        if (++iteration > 50)
-          throw instability_error("element test: mixed control did not converge at increment " +
-                                  std::to_string(step) + " (held-stress residual " +
-                                  std::to_string(residual.cwiseAbs().maxCoeff()) + " Pa)");
-        // Algorithmic tangent d sigma_held / d eps_held by forward differences of update().
-        const double h = 1e-7 * std::max({std::abs(d_eps[control.driven]),
-                                          unknown.cwiseAbs().maxCoeff(), 1e-12});
-        SmallMatrix jacobian(m, m);
-        SmallVector shifted_residual;
-        for (int j = 0; j < m; ++j) {
-          SmallVector u = unknown;
-          u[j] += h;
-          evaluate(u, shifted_residual);
-          jacobian.col(j) = (shifted_residual - residual) / h;
+      // Newton on the held strains from `start`; false when 50 iterations do not converge.
+      auto solve_from = [&](const SmallVector& start) {
+        unknown = start;
+        evaluate(unknown, residual);
+        for (int iteration = 0; m > 0 && residual.cwiseAbs().maxCoeff() > tolerance; ++iteration) {
+          if (iteration == 50) return false;
+          // Algorithmic tangent d sigma_held / d eps_held by forward differences of update().
+          const double h = 1e-7 * std::max({std::abs(d_eps[control.driven]), unknown.cwiseAbs().maxCoeff(), 1e-12});
+          SmallMatrix jacobian(m, m);
+          SmallVector shifted_residual;
+          for (int j = 0; j < m; ++j) {
+            SmallVector u = unknown;
+            u[j] += h;
+            evaluate(u, shifted_residual);
+            jacobian.col(j) = (shifted_residual - residual) / h;
+          }
+          const SmallVector newton_step = jacobian.fullPivLu().solve(-residual);
+          // Backtracking: halve the step until the residual decreases (guards against kinks
+          // between regimes inside one increment).
+          double t = 1.0;
+          const double r0 = residual.norm();
+          SmallVector candidate_residual;
+          SmallVector candidate;
+          for (int halving = 0; halving < 30; ++halving, t *= 0.5) {
+            candidate = unknown + t * newton_step;
+            evaluate(candidate, candidate_residual);
+            if (candidate_residual.norm() < r0) break;
+          }
+          unknown = candidate;
+          residual = candidate_residual;
         }
-        const SmallVector newton_step = jacobian.fullPivLu().solve(-residual);
-        // Backtracking: halve the step until the residual decreases (guards against kinks
-        // between regimes inside one increment).
-        double t = 1.0;
-        const double r0 = residual.norm();
-        SmallVector candidate_residual;
-        SmallVector candidate;
-        for (int halving = 0; halving < 30; ++halving, t *= 0.5) {
-          candidate = unknown + t * newton_step;
-          evaluate(candidate, candidate_residual);
-          if (candidate_residual.norm() < r0) break;
-        }
-        unknown = candidate;
-        residual = candidate_residual;
+        return true;
+      };
+      // The previous increment's held strains, which a monotonic path continues. At a reversal they
+      // point the wrong way: an unloading step started from the loading's lateral expansion landed at
+      // the apex, where the tangent is zero, and failed although its answer is elastic. Then the
+      // elastic answer, and zero.
+      const SmallVector previous = unknown;
+      if (!solve_from(previous) && !solve_from(elastic_held_strains(control, d_eps, spec.material)) &&
+          !solve_from(SmallVector::Zero(m))) {
+        evaluate(previous, residual);
+        throw instability_error(fmt::format(
+            "element test: mixed control did not converge at increment {} (held-stress residual {:.6g} Pa from the "
+            "previous increment's strains); more increments (path.increments = {}) make each step smaller",
+            step, residual.cwiseAbs().maxCoeff(), spec.increments));
       }
 
       state = trial_state;
@@ -188,7 +220,7 @@ void write_element_test_csv(std::ostream& out, const std::vector<ElementTestPoin
          "eps_v,gamma_xy,eps_q,p,q,eq_plastic_strain,yield_function,regime,plastic_work\n";
   char buffer[64];
   auto put = [&](double v) {
-    std::snprintf(buffer, sizeof buffer, ",%.15g", v);
+    std::snprintf(buffer, sizeof buffer, ",%.15g", v + 0.0);  // (+ 0.0: the start's shears read "-0")
     out << buffer;
   };
   for (const ElementTestPoint& pt : points) {

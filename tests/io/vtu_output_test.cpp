@@ -15,9 +15,13 @@
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridReader.h>
 
+#include <sys/stat.h>
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <thread>
 #include <vector>
 
 namespace talus {
@@ -175,6 +179,39 @@ TEST(VtuOutput, FramesOfRunCountsTheFramesARunWrites) {
   Scene every_step = test::tumbling_block_scene(1e6);
   every_step.output.frame_interval = 1e-300;
   EXPECT_EQ(frames_of_run(every_step), std::size_t(1e15));
+}
+
+// A whole-file write (the run's records, element-test's CSV) goes through a temporary file and a
+// rename, which replaced whatever the path named: `-o link.csv` swapped the link for a file, and a
+// FIFO or a device (`-o /dev/null`, `/dev/stdout`, as root) became a regular file. It writes
+// through those, and through a link replaces the file the link names.
+TEST(VtuOutput, WholeFileWritesKeepLinksAndWriteThroughPipesAndDevices) {
+  const fs::path dir = temp_dir("write_through");
+  fs::create_directories(dir);
+  const auto read = [](const fs::path& p) {
+    std::ifstream in(p);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  {
+    std::ofstream(dir / "target.csv") << "old\n";
+  }
+  fs::create_symlink("target.csv", dir / "link.csv");
+  write_file_atomically((dir / "link.csv").string(), "new\n");
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir / "link.csv")));
+  EXPECT_EQ(read(dir / "target.csv"), "new\n");
+  // a named pipe: the text reaches its reader, and the pipe stays a pipe
+  const fs::path fifo = dir / "fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::string received;
+  std::thread reader([&] { received = read(fifo); });
+  write_file_atomically(fifo.string(), "through the pipe\n");
+  reader.join();
+  EXPECT_EQ(received, "through the pipe\n");
+  EXPECT_EQ(fs::status(fifo).type(), fs::file_type::fifo);
+  write_file_atomically("/dev/null", "nothing\n");
+  EXPECT_EQ(fs::status("/dev/null").type(), fs::file_type::character);
+  for (const auto& entry : fs::directory_iterator(dir)) EXPECT_NE(entry.path().extension(), ".tmp");
+  fs::remove_all(dir);
 }
 
 }  // namespace
