@@ -91,8 +91,9 @@ inline std::string range_text(const Range& r) {
 }
 
 inline void add_range(Json& schema, const Range& r) {
-  if (r.lo > -kHuge) schema[r.open_lo ? "exclusiveMinimum" : "minimum"] = r.lo;
-  if (r.hi < kHuge) schema[r.open_hi ? "exclusiveMaximum" : "maximum"] = r.hi;
+  // (an unbounded end is the reader's 1e30, which it refuses past: the schema said young = 1e31 was valid)
+  schema[r.open_lo && r.lo > -kHuge ? "exclusiveMinimum" : "minimum"] = std::max(r.lo, -kHuge);
+  schema[r.open_hi && r.hi < kHuge ? "exclusiveMaximum" : "maximum"] = std::min(r.hi, kHuge);
 }
 
 inline std::string choices_text(const std::vector<std::string>& names) {

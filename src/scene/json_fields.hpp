@@ -53,6 +53,14 @@ class ObjectReader {
 
   int integer(const std::string& key, int lo, int hi) {
     const Json& j = raw(key);
+    // A whole number written with a point (1000.0, 1e3: what a script's json.dumps of a float
+    // gives, and what JSON Schema counts as an integer) is that integer.
+    if (j.is_number_float() && std::isfinite(j.get<double>()) && std::trunc(j.get<double>()) == j.get<double>()) {
+      const double v = j.get<double>();
+      if (v < lo || v > hi)
+        throw input_error(fmt::format("{} = {} is outside the allowed range [{}, {}]", key_path(key), j.dump(), lo, hi));
+      return static_cast<int>(v);
+    }
     if (!j.is_number_integer())
       throw input_error(fmt::format("{} must be an integer in [{}, {}], got {}", key_path(key), lo, hi, j.dump()));
     // A non-negative literal is unsigned to the parser, and past 2^63 - 1 its long long wraps to a

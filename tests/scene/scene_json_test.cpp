@@ -179,6 +179,20 @@ TEST(SceneJson, AnUndampedElasticBodyOnAHighFrictionBedIsWarnedAbout) {
   EXPECT_EQ(test::warnings_with(shipped("benchmarks/sand_slide_near_threshold.json"), "on the friction face"), 0);  // sand
 }
 
+// A whole number written with a point (a script's json.dumps of a float; JSON Schema counts it an
+// integer) is that integer; a fraction is still refused.
+TEST(SceneJson, AWholeNumberWithAPointIsAnInteger) {
+  const auto with_count = [](const std::string& n) {
+    return replace_once(kMinimal, "\"material\": \"m\",", "\"material\": \"m\", \"particles_per_cell\": " + n + ",");
+  };
+  EXPECT_EQ(parse_scene(with_count("3.0"), "t").bodies[0].particles_per_cell, 3);
+  EXPECT_EQ(parse_scene(with_count("3e0"), "t").bodies[0].particles_per_cell, 3);
+  EXPECT_NE(error_of(with_count("2.5")).find("bodies[0].particles_per_cell must be an integer"), std::string::npos);
+  EXPECT_NE(error_of(with_count("1e9")).find("bodies[0].particles_per_cell = 1000000000.0 is outside the allowed range"),
+            std::string::npos)
+      << error_of(with_count("1e9"));
+}
+
 // A gravity ramp longer than the run: the whole scene ran under part of its gravity without a word.
 TEST(SceneJson, AGravityRampLongerThanTheRunIsWarnedAbout) {
   Scene scene = parse_scene(kMinimal, "t");
