@@ -125,8 +125,8 @@ def main():
         refuse("--scene", scene, "talus bench --scene update writes no work record (--record-work), which the "
                                  "model needs: use talus bench --scene update --threads T directly")
     require_talus(a.talus)
+    output_folder("--out", a.out)  # (a file of that name was a traceback; checked before the note below)
     wait_policy = apply_wait_policy(a.wait_policy)
-    output_folder("--out", a.out)  # (a file of that name was a traceback)
     counts = thread_counts(a.max_threads)
     record_path = os.path.join(a.out, a.name + "_record.json")
     record_t_path = os.path.join(a.out, a.name + "_record_t.json")
