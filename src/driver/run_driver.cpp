@@ -29,7 +29,9 @@ volatile std::sig_atomic_t g_signal = 0;
 extern "C" void on_stop_signal(int sig) { g_signal = sig; }
 
 /// SIGINT/SIGTERM set a flag for the run loop while this lives; a second signal acts as usual
-/// (SA_RESETHAND), so a run that does not stop can still be killed.
+/// (SA_RESETHAND), so a run that does not stop can still be killed. SIGUSR1 too: Open MPI's mpirun
+/// forwards it to every rank (a SIGTERM to mpirun kills the ranks a second later, before a large
+/// checkpoint is written), and batch systems send it ahead of a time limit (Slurm's --signal).
 class SignalCatcher {
  public:
   explicit SignalCatcher(bool enabled) : enabled_(enabled) {
@@ -41,11 +43,13 @@ class SignalCatcher {
     sa.sa_flags = SA_RESETHAND;
     sigaction(SIGINT, &sa, &old_int_);
     sigaction(SIGTERM, &sa, &old_term_);
+    sigaction(SIGUSR1, &sa, &old_usr1_);
   }
   ~SignalCatcher() {
     if (!enabled_) return;
     sigaction(SIGINT, &old_int_, nullptr);
     sigaction(SIGTERM, &old_term_, nullptr);
+    sigaction(SIGUSR1, &old_usr1_, nullptr);
   }
   SignalCatcher(const SignalCatcher&) = delete;
   SignalCatcher& operator=(const SignalCatcher&) = delete;
@@ -53,7 +57,7 @@ class SignalCatcher {
 
  private:
   bool enabled_;
-  struct sigaction old_int_ {}, old_term_ {};
+  struct sigaction old_int_ {}, old_term_ {}, old_usr1_ {};
 };
 
 std::string format_duration(double seconds) {

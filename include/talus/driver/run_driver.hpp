@@ -1,14 +1,14 @@
 #pragma once
 // The run loop: steps the solver to the end time, writes the outputs when each is due
 // (driver/run_outputs.hpp: energy history, runout files, frames, checkpoints), keeps the last good
-// state for the instability guards, catches SIGINT/SIGTERM and prints a progress line.
+// state for the instability guards, catches SIGINT/SIGTERM/SIGUSR1 and prints a progress line.
 //
 // Output folder:
 //   scene.json           the fully resolved scene (every default filled in)
 //   particles.pvd        ParaView time series of the frames
 //   frames/particles_NNNNNN.vtu
 //   energy.csv           time, step, dt, each term of the energy ledger (solver/energy_budget.hpp), total
-//   checkpoint.h5        the last checkpoint (output.checkpoint_interval, SIGINT/SIGTERM, instability)
+//   checkpoint.h5        the last checkpoint (output.checkpoint_interval, SIGINT/SIGTERM/SIGUSR1, instability)
 //   runout.csv           runout diagnostics on the history schedule (only with diagnostics.runout)
 //   runout.json          the runout after the last step: front, tail, gate, runout plane (diagnostics.runout)
 //   deposit.csv          the deposit thickness raster at the end (only with diagnostics.runout)
@@ -43,7 +43,7 @@ struct RunOptions {
   /// runout history before the checkpoint stays there, and the runout monitor reads its first and
   /// last rows from it (the initial front is the default gate).
   std::string resume_dir;
-  /// Catch SIGINT/SIGTERM: finish the step, write a checkpoint and return (interrupted_signal).
+  /// Catch SIGINT/SIGTERM/SIGUSR1: finish the step, write a checkpoint and return (interrupted_signal).
   bool handle_signals = true;
   /// Stop as a signal would (finish the step, write a checkpoint, return with stopped_at_deadline)
   /// after the first step that ends at or past this time (talus run --stop-after: a batch job's
@@ -89,7 +89,7 @@ struct RunSummary {
   std::string pvd_path;
   std::string checkpoint_path;  // <out_dir>/checkpoint.h5
   std::size_t checkpoints = 0;  // checkpoints written by this call
-  int interrupted_signal = 0;   // SIGINT/SIGTERM caught: the run stopped after writing a checkpoint
+  int interrupted_signal = 0;   // SIGINT/SIGTERM/SIGUSR1 caught: the run stopped after writing a checkpoint
   bool stopped_at_deadline = false;  // RunOptions::deadline passed: the run stopped after writing a checkpoint
   std::optional<RunoutResult> runout;  // with diagnostics.runout: the front after the last step
   std::string runout_path;             // <out_dir>/runout.csv (with diagnostics.runout)
