@@ -347,10 +347,12 @@ void RunLoop::start() {
   summary_.runout_path = runout_.history_path();
   if (comm_.root()) write_terrain();
   progress_line_.set_particles(solver_.distribution().particles);
-  // The energy guard reads the global ledger; in a distributed run rank 0 alone checks it (with
-  // every particle's mass), so its verdict is given once.
-  const AllParticles everyone(comm_, solver_.particles());
-  const ParticleStore& all = everyone.get();
+  // The energy guard reads the global ledger, the same on every rank, with the whole run's mass:
+  // every rank's and what left through open faces (a restart after outflow changed the guard's
+  // floor, and so the energy available that run.json reports). Every rank checks it alike.
+  double local_mass = 0.0;
+  for (double m : solver_.particles().mass) local_mass += m;
+  const double run_mass = comm_.sum_in_rank_order(local_mass) + solver_.outflow_mass();
   if (resuming_) {
     if (comm_.root() && frames_.kept_frames_in_older_order())
       fmt::print(stderr, "talus: warning: the frames before the checkpoint hold stress and strain in the order of an "
@@ -372,12 +374,12 @@ void RunLoop::start() {
       fmt::print(stderr, "talus: warning: {} held no row up to the checkpoint's step {}: the energy history starts at "
                  "the restart\n", (dir_ / "energy.csv").string(), solver_.step_count());
     summary_.initial = progress_.initial;
-    energy_guard_ = EnergyGuard(scene_, all, progress_.initial);
+    energy_guard_ = EnergyGuard(scene_, run_mass, progress_.initial);
     energy_guard_.set_max_released(progress_.energy_max_released);
   } else {
     summary_.initial = solver_.energies();
     progress_.initial = summary_.initial;
-    energy_guard_ = EnergyGuard(scene_, all, summary_.initial);
+    energy_guard_ = EnergyGuard(scene_, run_mass, summary_.initial);
     history_.write(solver_, summary_.initial);
     runout_.write(solver_);
     write_frame();
@@ -443,8 +445,15 @@ void RunLoop::write_history_row() {
   runout_.write(solver_);
   history_schedule_.advance_past(solver_.time());
   const double outflow_gravity = solver_.outflow_gravity();  // (all ranks: a sum over them)
-  if (comm_.root())
-    energy_guard_.check(e, solver_.particles(), scene_, solver_.step_count(), solver_.time(), outflow_gravity);
+  // Every rank holds the same ledger and so reaches the same verdict; then they find the fastest
+  // particle together (rank 0 named its own, another body's, when the fastest was on rank 1), and
+  // rank 0 stops the job with it.
+  if (!energy_guard_.breached(e, outflow_gravity)) return;
+  FastestParticle fastest = FastestParticle::of(solver_.particles());
+  if (comm_.distributed())
+    for (const FastestParticle& f : comm_.allgather(fastest))
+      if (f.id >= 0 && f.before(fastest)) fastest = f;
+  if (comm_.root()) energy_guard_.fail(e, fastest, scene_, solver_.step_count(), solver_.time());
 }
 
 bool RunLoop::take_snapshot() {
@@ -503,7 +512,7 @@ void RunLoop::finish() {
   recording_.finish(summary_.wall_seconds, frames_.background_seconds());
   summary_.final = solver_.energies();
   // (the guard is kept on rank 0, which reports; every rank's summary gets its value)
-  summary_.energy_available = comm_.sum_in_rank_order(comm_.root() ? energy_guard_.available() : 0.0);
+  summary_.energy_available = energy_guard_.available();  // (every rank's guard holds the same)
   if (scene_.output.energy_gap_terms) summary_.final_gap = solver_.energy_gap_terms();
   summary_.frames_in_series = frames_.listed();
 }

@@ -132,11 +132,32 @@ void check_step_displacement(const ParticleStore& P, const std::array<std::span<
   }
 }
 
-EnergyGuard::EnergyGuard(const Scene& scene, const ParticleStore& P, const EnergyBudget& initial)
+EnergyGuard::EnergyGuard(const Scene& scene, double mass, const EnergyBudget& initial)
     : initial_(initial), factor_(scene.guards.energy_growth_factor) {
-  double mass = 0.0;
-  for (double m : P.mass) mass += m;
   floor_ = 1e-3 * mass * scene.gravity.norm() * scene.grid.h;
+}
+
+FastestParticle FastestParticle::of(const ParticleStore& P) {
+  FastestParticle fastest;
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    FastestParticle candidate;
+    candidate.speed2 = P.v[0][p] * P.v[0][p] + P.v[1][p] * P.v[1][p] + P.v[2][p] * P.v[2][p];
+    candidate.id = P.id[p];
+    if (!candidate.before(fastest) && fastest.id >= 0) continue;
+    candidate.body = P.body[p];
+    for (int d = 0; d < 3; ++d) {
+      candidate.x[d] = P.x[d][p];
+      candidate.v[d] = P.v[d][p];
+    }
+    fastest = candidate;
+  }
+  return fastest;
+}
+
+bool FastestParticle::before(const FastestParticle& other) const {
+  if (std::isnan(speed2) != std::isnan(other.speed2)) return std::isnan(speed2);
+  if (speed2 != other.speed2 && !std::isnan(speed2)) return speed2 > other.speed2;
+  return id < other.id;
 }
 
 double EnergyGuard::available() const {
@@ -146,30 +167,32 @@ double EnergyGuard::available() const {
   return std::max(a, roundoff) + 1e-300;
 }
 
-void EnergyGuard::check(const EnergyBudget& e, const ParticleStore& P, const Scene& scene, std::int64_t step,
-                        double time, double outflow_gravity) {
+bool EnergyGuard::breached(const EnergyBudget& e, double outflow_gravity) {
   // (less what a gravity ramp withheld, EnergyBudget::gravity_ramp: that part did no work)
   const double released = initial_.gravity - (e.gravity + outflow_gravity) - (e.gravity_ramp - initial_.gravity_ramp);
   if (std::isfinite(released) && released > max_released_) max_released_ = released;
   const double growth = e.total() - initial_.total();
-  const double a = available();
-  if (std::isfinite(growth) && growth <= factor_ * a) return;
+  return !(std::isfinite(growth) && growth <= factor_ * available());
+}
+
+void EnergyGuard::fail(const EnergyBudget& e, const FastestParticle& fastest, const Scene& scene, std::int64_t step,
+                       double time) const {
   // The fastest particle is the likeliest seat of the instability: name it.
-  std::size_t fastest = 0;
-  double v2max = -1.0;
-  for (std::size_t p = 0; p < P.size(); ++p) {
-    const double v2 = P.v[0][p] * P.v[0][p] + P.v[1][p] * P.v[1][p] + P.v[2][p] * P.v[2][p];
-    if (v2 > v2max || std::isnan(v2)) {
-      v2max = v2;
-      fastest = p;
-      if (std::isnan(v2)) break;
-    }
-  }
+  const std::string body = fastest.body >= 0 && static_cast<std::size_t>(fastest.body) < scene.bodies.size()
+                               ? scene.bodies[static_cast<std::size_t>(fastest.body)].name
+                               : "?";
   throw instability_error(fmt::format(
       "{}: total energy = {:.6g} J grew by {:.6g} J, more than guards.energy_growth_factor = {} times "
-      "the energy available ({:.6g} J); fastest: {} field speed = {:.6g} m/s; {}",
-      step_ended(step, time), e.total(), growth, factor_, a, particle_label(P, scene, fastest), std::sqrt(std::max(v2max, 0.0)),
-      where(P, fastest)));
+      "the energy available ({:.6g} J); fastest: particle {} (body \"{}\") field speed = {:.6g} m/s; position ({:.6g}, "
+      "{:.6g}, {:.6g}) m, velocity ({:.6g}, {:.6g}, {:.6g}) m/s",
+      step_ended(step, time), e.total(), e.total() - initial_.total(), factor_, available(), fastest.id, body,
+      std::sqrt(std::max(fastest.speed2, 0.0)), fastest.x[0], fastest.x[1], fastest.x[2], fastest.v[0], fastest.v[1],
+      fastest.v[2]));
+}
+
+void EnergyGuard::check(const EnergyBudget& e, const ParticleStore& P, const Scene& scene, std::int64_t step,
+                        double time, double outflow_gravity) {
+  if (breached(e, outflow_gravity)) fail(e, FastestParticle::of(P), scene, step, time);
 }
 
 }  // namespace talus

@@ -127,7 +127,12 @@ TEST(Guards, EnergyGrowthBeyondTheFactorStops) {
   const Scene scene = test::free_fall_scene("musl");
   Solver solver(scene);
   EnergyBudget e0 = solver.energies();
-  EnergyGuard guard(scene, solver.particles(), e0);
+  double mass = 0.0;
+  for (double m : solver.particles().mass) mass += m;
+  EnergyGuard guard(scene, mass, e0);
+  // the floor of the energy available: lifting the whole mass a thousandth of a cell
+  EXPECT_NEAR(guard.available(), e0.kinetic + e0.strain + 1e-3 * mass * scene.gravity.norm() * scene.grid.h,
+              1e-12 * std::abs(e0.total()));
   EnergyBudget e = e0;
   e.kinetic = e0.kinetic + 0.5 * guard.available();
   EXPECT_NO_THROW(guard.check(e, solver.particles(), scene, 10, 0.01));
@@ -138,6 +143,8 @@ TEST(Guards, EnergyGrowthBeyondTheFactorStops) {
   } catch (const Error& err) {
     EXPECT_EQ(err.kind(), Error::Kind::Instability);
     expect_diagnosis(err.what(), "energy_growth_factor");
+    // the fastest particle, by the lowest id among equals (every particle falls alike)
+    EXPECT_NE(std::string(err.what()).find("fastest: particle 0 (body "), std::string::npos) << err.what();
     EXPECT_EQ(std::string(err.what()).rfind("after step 10, t = 0.01 s: ", 0), 0u) << err.what();
   }
   // Potential energy released by a fall is available energy: converting it into kinetic is fine.

@@ -55,17 +55,38 @@ void check_step_displacement(const ParticleStore& particles, const std::array<st
 /// the last term, the work of lifting the whole mass a thousandth of a cell, keeps A positive for
 /// a body that starts at rest). While gravity ramps, the potential it withheld (gravity_ramp) is
 /// not counted as released: gravity(s) there stands for gravity(s) + gravity_ramp(s).
+/// The fastest particle, which the energy guard names as the likeliest seat of an instability (over
+/// every rank in a distributed run: Solver::fastest_particle).
+struct FastestParticle {
+  double speed2 = -1.0;  // |v|^2 (NaN first: a particle whose velocity is not finite)
+  std::int64_t id = -1;
+  std::int32_t body = -1;
+  double x[3] = {0.0, 0.0, 0.0}, v[3] = {0.0, 0.0, 0.0};
+  /// The fastest of `particles` (none: id -1).
+  static FastestParticle of(const ParticleStore& particles);
+  /// Whether this one goes before `other`: a NaN speed first, then the faster, then the lower id.
+  bool before(const FastestParticle& other) const;
+};
+
 class EnergyGuard {
  public:
   EnergyGuard() = default;
-  EnergyGuard(const Scene& scene, const ParticleStore& particles, const EnergyBudget& initial);
-  /// Throws when the budget `e` breaks the bound; otherwise records the released potential energy.
-  /// `step` and `time`: those after the step that gave `e`.
+  /// `mass`: the run's whole mass, every rank's and what left through open faces (the floor of A is
+  /// the same whatever the rank count, and the same after a restart as before).
+  EnergyGuard(const Scene& scene, double mass, const EnergyBudget& initial);
+  /// Throws when the budget `e` breaks the bound, naming the fastest of `particles`; otherwise
+  /// records the released potential energy. `step` and `time`: those after the step that gave `e`.
   /// `outflow_gravity`: Solver::outflow_gravity(), the potential the particles that left carried out
   /// (the released energy counts them down to where they left; without it a leaving particle's -m g.x,
   /// which depends on the origin, counted as released or spent).
   void check(const EnergyBudget& e, const ParticleStore& particles, const Scene& scene, std::int64_t step, double time,
              double outflow_gravity = 0.0);
+  /// check() in two parts, for a distributed run whose ranks each hold the same ledger: whether `e`
+  /// breaks the bound (recording the released energy as check() does), and the error that names
+  /// `fastest`.
+  bool breached(const EnergyBudget& e, double outflow_gravity);
+  [[noreturn]] void fail(const EnergyBudget& e, const FastestParticle& fastest, const Scene& scene, std::int64_t step,
+                         double time) const;
   double available() const;
   /// Guard state to checkpoint: the most potential energy released so far.
   double max_released() const { return max_released_; }
