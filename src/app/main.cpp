@@ -92,6 +92,14 @@ int main(int argc, char** argv) {
   talus::app::add_dem_springs_command(app);
   talus::app::add_schema_command(app);
 
+  // Under mpirun, the commands that do not use the ranks (schema, element-test, dem-springs,
+  // --version, --help) run on rank 0 alone: on every rank they printed their output once per rank
+  // (`mpirun talus schema > s.json` interleaved two copies) and wrote their files twice.
+  if (world.distributed() && !world.root()) {
+    const auto command = std::find_if(argv + 1, argv + argc, [](const char* a) { return a[0] != '-'; });
+    const std::string word = command == argv + argc ? "" : *command;
+    if (word != "run" && word != "check" && word != "bench") return 0;
+  }
   try {
     app.parse(argc, argv);  // the commands that run kernels choose their path (select_isa_option)
     // What a command printed may still sit in stdout's buffer: a full disk or a closed pipe must

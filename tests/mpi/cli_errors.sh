@@ -60,4 +60,10 @@ if [ "$ranks" -ge 2 ]; then
     fi
   done
 fi
-echo "ok: one line, exit code 2, nothing written"
+# The commands that do not use the ranks run on rank 0 alone: their output came once per rank
+# (`mpirun talus schema > s.json` interleaved the copies) and element-test wrote its CSV twice
+versions=$("$mpirun_cmd" -np "$ranks" --oversubscribe "$talus" --version | grep -c "^talus ")
+[ "$versions" -eq 1 ] || { echo "FAIL: --version printed $versions times"; exit 1; }
+"$mpirun_cmd" -np "$ranks" --oversubscribe "$talus" schema > "$work/schema.json" || { echo "FAIL: schema"; exit 1; }
+"$talus" schema | cmp -s - "$work/schema.json" || { echo "FAIL: schema under mpirun differs from the serial one"; exit 1; }
+echo "ok: one line, exit code 2, nothing written; --version and schema once"
