@@ -537,7 +537,7 @@ void run_bench(const BenchOptions& o) {
   j["phases"] = phases;
   j["phases_max"] = phases_max;    // over the ranks; "other": outside the phases
   j["phases_mean"] = phases_mean;
-  if (world.distributed()) {  // each rank's own, to see which one waits
+  {  // each rank's own, to see which one waits (one entry on one rank: the same keys whatever the count)
     nlohmann::json per_rank = nlohmann::json::array();
     for (const RankTimes& r : rank_times) {
       nlohmann::json e;

@@ -316,6 +316,8 @@ TEST(Cli, BenchWritesTheJsonContract) {
   }
   // "other" (outside the phases) is there as the text prints it, so the phases add up to the wall
   EXPECT_TRUE(serial["phases"].contains("other")) << text;
+  ASSERT_EQ(serial["rank_phases"].size(), 1u) << text;  // the key a 1..N-rank script reads, as on N ranks
+  EXPECT_EQ(serial["rank_phases"][0]["wall"], serial["wall_seconds"]);
   EXPECT_NEAR(phase_sum, serial["wall_seconds"].get<double>(), 1e-9 * serial["wall_seconds"].get<double>());
   // the update scene names its rate with the key every bench JSON has
   const fs::path update_json = dir / "update.json";
