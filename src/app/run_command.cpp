@@ -375,18 +375,26 @@ void add_run_command(CLI::App& app) {
     try {
       summary = run_scene(solver, options);
     } catch (const Error& e) {
-      record.end_with_error(solver, e);
-      if (!world.distributed()) throw;
+      if (!world.distributed()) {
+        record.end_with_error(solver, e);
+        throw;
+      }
       // This rank may have failed alone while the others wait in a collective: it names itself and
-      // ends the whole job with its exit code (MPI_Abort), so nothing hangs.
+      // ends the whole job with its exit code (MPI_Abort), so nothing hangs. The line goes out
+      // before the record is written: two ranks that failed in one step both wrote run.json first,
+      // and the first abort cut the other's line, so the log named one rank and the record another.
       fmt::print(stderr, "talus: error on rank {} of {}: {}\n", world.rank(), world.size(), e.what());
       std::fflush(stderr);
+      record.end_with_error(solver, e);
       world.abort(e.exit_code());
     } catch (const std::exception& e) {
-      record.end_with_error(solver, e);
-      if (!world.distributed()) throw;
+      if (!world.distributed()) {
+        record.end_with_error(solver, e);
+        throw;
+      }
       fmt::print(stderr, "talus: internal error on rank {} of {}: {}\n", world.rank(), world.size(), e.what());
       std::fflush(stderr);
+      record.end_with_error(solver, e);
       world.abort(4);
     }
     const DistributionStats end = solver.distribution();
