@@ -82,13 +82,15 @@ PackingGeometry make_packing_geometry(Packing packing, const PackingParameters& 
       throw input_error("--density-ratio = " + number_text(geometry.density_ratio) +
                         " must be below 1 (it is the solid fraction gamma/rho of the packing)");
     }
-    geometry.coordination = positive_finite(
-        parameters.coordination,
-        three_d ? kDefaultRandom3dCoordination : kDefaultRandom2dCoordination, "--coordination");
+    geometry.coordination =
+        parameters.coordination.value_or(three_d ? kDefaultRandom3dCoordination : kDefaultRandom2dCoordination);
+    if (!std::isfinite(geometry.coordination))
+      throw input_error("--coordination = " + number_text(geometry.coordination) + " must be a finite number");
     // A rigid packing of frictional grains needs at least d + 1 contacts per grain (isostatic); fewer
-    // (2.5, or 1e-300, which gave kN = 5e307) describes no packing that carries a load.
+    // (2.5, or 1e-300, which gave kN = 5e307) describes no packing that carries a load. (0 and less
+    // said "must be > 0", as if 1 would do.)
     const double fewest = three_d ? 4.0 : 3.0;
-    if (geometry.coordination < fewest) {
+    if (!(geometry.coordination >= fewest)) {
       throw input_error("--coordination = " + number_text(geometry.coordination) + " is below " + number_text(fewest) +
                         ", the fewest contacts per grain of a rigid " + (three_d ? "3D" : "2D") +
                         " packing (d + 1, frictional and isostatic)");

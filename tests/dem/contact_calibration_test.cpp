@@ -413,10 +413,12 @@ TEST(Packing, NamesRoundTrip) {
 }
 
 // A random packing with fewer contacts per grain than a rigid one has (d + 1) carries no load: 2.5
-// in 2D and 3.5 in 3D (and 1e-300, which gave kN = 5e307) are refused; d + 1 itself is accepted.
+// in 2D and 3.5 in 3D (and 1e-300, which gave kN = 5e307) are refused; d + 1 itself is accepted. 0
+// and less are refused with the same words (they said "must be > 0", as if 1 would do).
 TEST(ContactCalibration, CoordinationBelowARigidPackingIsRefused) {
   for (const auto& [packing, low, fewest] : {std::tuple{Packing::random_2d, 2.5, 3.0}, std::tuple{Packing::random_3d, 3.5, 4.0},
-                                             std::tuple{Packing::random_2d, 1e-300, 3.0}}) {
+                                             std::tuple{Packing::random_2d, 1e-300, 3.0}, std::tuple{Packing::random_3d, 0.0, 4.0},
+                                             std::tuple{Packing::random_2d, -1.0, 3.0}}) {
     PackingParameters parameters;
     parameters.coordination = low;
     if (packing == Packing::random_3d) parameters.radius = 1e-3;
