@@ -24,7 +24,7 @@ import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from speed_vs_error import benchmark_parser, out_folder, parse_benchmark_args, load, variant, run  # noqa: E402
-from talus_plot import finish_axes, save_figure, write_csv_rows  # noqa: E402
+from talus_plot import finish_axes, save_figure, value_at, write_csv_rows  # noqa: E402
 
 CELLS = [0.5, 0.25, 0.125, 0.0625]
 SHAPES = ["ugimp", "cpgimp"]
@@ -57,7 +57,8 @@ def main():
             if res is None:
                 sys.exit(f"walls h = {h} {shape} {mode}: run failed")
             t, total = res["energy"]["time"], res["energy"]["total"] / res["energy"]["total"][0]
-            at = lambda when: float(np.interp(when, t, total))  # noqa: E731
+            # (refused, not clamped, at a time the run did not reach: talus_plot.value_at)
+            at = lambda when: value_at(t, total, when, f"walls h = {h} {shape} {mode}")  # noqa: E731
             impact, flight = at(T_AFTER) / at(T_BEFORE) - 1.0, at(T_END) / at(T_AFTER) - 1.0
             histories[(h, shape, mode)] = (t, total)
             rows.append({"cell": h, "shape": shape, "mls": mode, "impact_change": round(impact, 5),
