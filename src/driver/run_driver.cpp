@@ -452,7 +452,7 @@ void RunLoop::write_history_row() {
   FastestParticle fastest = FastestParticle::of(solver_.particles());
   if (comm_.distributed())
     for (const FastestParticle& f : comm_.allgather(fastest))
-      if (f.id >= 0 && f.before(fastest)) fastest = f;
+      if (f.before(fastest)) fastest = f;  // (a rank without particles gives id -1, speed2 -1: never before)
   if (comm_.root()) energy_guard_.fail(e, fastest, scene_, solver_.step_count(), solver_.time());
 }
 
@@ -511,7 +511,6 @@ void RunLoop::finish() {
   summary_.wall_seconds = progress_line_.elapsed();
   recording_.finish(summary_.wall_seconds, frames_.background_seconds());
   summary_.final = solver_.energies();
-  // (the guard is kept on rank 0, which reports; every rank's summary gets its value)
   summary_.energy_available = energy_guard_.available();  // (every rank's guard holds the same)
   if (scene_.output.energy_gap_terms) summary_.final_gap = solver_.energy_gap_terms();
   summary_.frames_in_series = frames_.listed();

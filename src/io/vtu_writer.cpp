@@ -305,9 +305,11 @@ void write_file_atomically(const std::string& given_path, const std::string& tex
       throw io_error(fmt::format("cannot write {}{}", given_path, errno ? std::string(": ") + std::strerror(errno) : ""));
     return;
   }
-  const std::string path = fs::is_symlink(fs::symlink_status(given_path, ec)) && fs::exists(target)
-                               ? fs::canonical(given_path, ec).string()
-                               : given_path;
+  std::string path = given_path;
+  if (fs::is_symlink(fs::symlink_status(given_path, ec)) && fs::exists(target)) {
+    const fs::path resolved = fs::canonical(given_path, ec);
+    if (!ec) path = resolved.string();  // (else the link itself is replaced, as before)
+  }
   // (the process's own temporary name: two ranks that write one file at once, as a distributed
   // run's ranks that fail together write run.json, each rename a whole file)
   const std::string tmp = path + "." + std::to_string(::getpid()) + ".tmp";

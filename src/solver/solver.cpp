@@ -648,10 +648,8 @@ Vec3 Solver::gravity_at(double t) const {
 }
 
 double Solver::potential_energy() const {
-  const ParticleStore& P = particles_;
-  const Vec3& g = scene_.gravity;
-  const auto sum = deterministic_sum<1>(P.size(), [&](std::size_t p, std::array<double, 1>& acc) {
-    acc[0] -= P.mass[p] * (g[0] * P.x[0][p] + g[1] * P.x[1][p] + g[2] * P.x[2][p]);
+  const auto sum = deterministic_sum<1>(particles_.size(), [&](std::size_t p, std::array<double, 1>& acc) {
+    acc[0] += particle_potential(p);
   });
   return sum[0] + periodic_gravity_shift_;  // the unwrapped positions' potential, as energies() counts it
 }
@@ -844,12 +842,16 @@ void Solver::measure_smoothing_change() {
 
 Solver::ParticleEnergy Solver::particle_energy(std::size_t p) const {
   const ParticleStore& P = particles_;
-  const Vec3& g = scene_.gravity;
   const double v2 = P.v[0][p] * P.v[0][p] + P.v[1][p] * P.v[1][p] + P.v[2][p] * P.v[2][p];
   Sym6 s;
   for (int c = 0; c < 6; ++c) s[c] = P.stress[c][p];
-  return {0.5 * P.mass[p] * v2, P.volume[p] * materials_.stored_energy_density(P.body[p], s),
-          -P.mass[p] * (g[0] * P.x[0][p] + g[1] * P.x[1][p] + g[2] * P.x[2][p])};
+  return {0.5 * P.mass[p] * v2, P.volume[p] * materials_.stored_energy_density(P.body[p], s), particle_potential(p)};
+}
+
+double Solver::particle_potential(std::size_t p) const {
+  const ParticleStore& P = particles_;
+  const Vec3& g = scene_.gravity;
+  return -P.mass[p] * (g[0] * P.x[0][p] + g[1] * P.x[1][p] + g[2] * P.x[2][p]);
 }
 
 EnergyBudget Solver::energies() const {

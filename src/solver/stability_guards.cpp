@@ -143,7 +143,7 @@ FastestParticle FastestParticle::of(const ParticleStore& P) {
     FastestParticle candidate;
     candidate.speed2 = P.v[0][p] * P.v[0][p] + P.v[1][p] * P.v[1][p] + P.v[2][p] * P.v[2][p];
     candidate.id = P.id[p];
-    if (!candidate.before(fastest) && fastest.id >= 0) continue;
+    if (!candidate.before(fastest)) continue;  // (none yet: speed2 -1, which any particle is before)
     candidate.body = P.body[p];
     for (int d = 0; d < 3; ++d) {
       candidate.x[d] = P.x[d][p];

@@ -208,6 +208,8 @@ class Solver {
     double kinetic, strain, gravity;
   };
   ParticleEnergy particle_energy(std::size_t p) const;
+  /// Its gravitational part, -m g.x (with the full g), which potential_energy() sums alone.
+  double particle_potential(std::size_t p) const;
   /// Whether particle p is beyond an open face (the test G2P flags the step with).
   bool beyond_open_face(std::size_t p) const;
   /// How many particles are beyond an open face (after they moved): one parallel count.
