@@ -26,6 +26,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <cmath>
+#include <ctime>
 #include <functional>
 #include <fstream>
 #include <initializer_list>
@@ -276,6 +277,23 @@ void require_bench_fits(long long particles, std::size_t seeded, double bytes, c
 /// with the increment of a 1/s shear rate over dt = 1e-4 s, so that every particle takes the plastic
 /// return in every pass. No grid, no transfers: the ratio of two materials here is the ratio of
 /// their updates per particle (docs/performance.md, "μ(I) against Drucker-Prager").
+/// What every bench JSON records beside its figures, so that one read later names where, when and
+/// how it was measured: the host (name, CPU, logical CPUs and those this process may use), the date
+/// and the OpenMP settings.
+void add_provenance(nlohmann::json& j) {
+  j["date"] = utc_text(std::time(nullptr));
+  j["host"] = host_json();
+  j["openmp"] = WorkRecorder::openmp_settings();
+}
+
+/// A rate measured with more threads than this process has CPUs is the oversubscription's, not the
+/// machine's: said beside it (the JSON's host.cpus_allowed records it too).
+void note_oversubscription(int threads) {
+  if (threads > cpus_allowed())
+    fmt::print("  note: {} threads on the {} CPU{} this process may use: oversubscribed, the rate is not this machine's\n",
+               threads, cpus_allowed(), cpus_allowed() == 1 ? "" : "s");
+}
+
 void run_update_bench(const BenchOptions& o) {
   const std::size_t n = static_cast<std::size_t>(o.particles);
   require_bench_fits(o.particles, n, double(n) * 7.0 * sizeof(double), "");  // the stress and the plastic strain
@@ -333,10 +351,11 @@ void run_update_bench(const BenchOptions& o) {
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double rate_updates = double(n) * o.steps / wall;
   const int threads = omp_get_max_threads();
-  fmt::print("talus bench: update scene (the constitutive update alone), {} particles, {} material, {} thread{}, {} kernels, {} passes\n",
-             n, o.material, threads, threads == 1 ? "" : "s", active_isa(), o.steps);
-  fmt::print("  {:.3f} M updates/s ({:.3f} s, {:.2f} ns per particle update)\n", rate_updates / 1e6, wall,
+  fmt::print("talus bench: update scene (the constitutive update alone), {} particles, {} material, {} thread{}, {} kernels, {} pass{}\n",
+             n, o.material, threads, threads == 1 ? "" : "s", active_isa(), o.steps, o.steps == 1 ? "" : "es");
+  fmt::print("  {:.3f} M updates/s ({:.4g} s, {:.2f} ns per particle update)\n", rate_updates / 1e6, wall,
              1e9 * wall * threads / (double(n) * o.steps));
+  note_oversubscription(threads);
   fmt::print("  plastic: {:.1f}% of the updates (dissipated {:.3e} J/m^3 in all, G = {:.4g} Pa)\n",
              100.0 * double(plastic_updates) / (double(n) * o.steps), dissipated, shear);
   if (!o.json_path.empty()) {
@@ -348,8 +367,9 @@ void run_update_bench(const BenchOptions& o) {
     j["particles"] = n;
     j["steps"] = o.steps;
     j["threads"] = omp_get_max_threads();
-  j["isa"] = active_isa();
+    j["isa"] = active_isa();
     j["cpu"] = cpu_model();
+    add_provenance(j);
     j["wall_seconds"] = wall;
     // the key every bench JSON has (the step scenes' rate; here each update is one particle's)
     j["particle_updates_per_second"] = rate_updates;
@@ -524,7 +544,9 @@ void run_bench(const BenchOptions& o) {
   j["clock"] = o.cpu_time ? "process cpu" : "wall";
   j["omp_wait_policy"] = WorkRecorder::openmp_setting("OMP_WAIT_POLICY");
   j["cpu"] = cpu_model();
-  j["wall_seconds"] = wall_max;  // the slowest rank's
+  add_provenance(j);
+  // the slowest rank's seconds, named for the clock that measured them
+  j[o.cpu_time ? "cpu_seconds" : "wall_seconds"] = wall_max;
   j["particle_updates_per_second"] = rate;
   constexpr int other = static_cast<int>(Phase::Count);
   auto phase_name = [](int p) { return p == other ? "other" : kPhaseNames[p]; };
@@ -582,8 +604,9 @@ void run_bench(const BenchOptions& o) {
                             : fmt::format("{} ({} fit, radius {} cells)", o.mls, o.mls_variant, o.mls_radius),
              workers, active_isa(), o.steps, o.steps == 1 ? "" : "s");
   // (the phase times below are totals over the timed steps too; a reader took them for one step's)
-  fmt::print("  {:.3f} M particle-updates/s ({:.3f} s{} over the {} timed step{}; the phases below are totals over "
+  fmt::print("  {:.3f} M particle-updates/s ({:.4g} s{} over the {} timed step{}; the phases below are totals over "
              "them)\n", rate / 1e6, wall_max, o.cpu_time ? " of CPU time" : "", o.steps, o.steps == 1 ? "" : "s");
+  note_oversubscription(threads);
   if (o.cpu_time && threads > 1)  // (a 2-thread run printed a third of its wall-clock rate, without a word)
     fmt::print("  note: --cpu-time sums the CPU time of the {} threads: the rate is per second of one core, not of the "
                "wall clock\n", threads);
@@ -608,7 +631,10 @@ void run_bench(const BenchOptions& o) {
                after.imbalance, after.max_imbalance, after.rebalances - before.rebalances, after.migrated - before.migrated,
                after.shared_tiles, exchange_bytes_per_step / 1e3);
   }
-  if (plastic_share >= 0.0) fmt::print("  plastic in the last step: {:.1f}% of the particles\n", 100.0 * plastic_share);
+  if (plastic_share >= 0.0)
+    fmt::print("  plastic in the last step: {:.1f}% of the particles\n", 100.0 * plastic_share);
+  else if (solver.particles().has_plastic_state())  // (the line used to vanish without a word)
+    fmt::print("  plastic in the last step: not measured (the particles were sorted in that step; try another --steps)\n");
   if (o.mls_variant == "reused" && solver.smoother())
     fmt::print("  MLS: {} of the {} timed steps fitted, the rest reused the weights ({:.0f} B/particle)\n",
                solver.smoothing_fits() - fits_before, o.steps, double(solver.mls_weight_bytes()) / n);

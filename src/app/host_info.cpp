@@ -1,5 +1,6 @@
 #include "host_info.hpp"
 
+#include <omp.h>
 #include <unistd.h>
 
 #include <array>
@@ -18,6 +19,23 @@ std::string host_name() {
   std::array<char, 256> name{};
   if (::gethostname(name.data(), name.size() - 1) != 0 || name[0] == '\0') return "unknown";
   return name.data();
+}
+
+int cpus_allowed() { return omp_get_num_procs(); }
+
+nlohmann::ordered_json host_json() {
+  return {{"name", host_name()},
+          {"cpu", cpu_model()},
+          {"logical_cpus", ::sysconf(_SC_NPROCESSORS_ONLN)},
+          {"cpus_allowed", cpus_allowed()}};
+}
+
+std::string utc_text(std::time_t time) {
+  std::tm utc{};
+  gmtime_r(&time, &utc);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  return text;
 }
 
 std::size_t status_bytes(const char* key) {

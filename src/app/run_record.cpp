@@ -10,7 +10,6 @@
 #include <fmt/core.h>
 #include <omp.h>
 
-#include <unistd.h>
 
 #include <algorithm>
 #include <ctime>
@@ -51,14 +50,6 @@ nlohmann::ordered_json earlier_parts(const fs::path& folder) {
 
 }  // namespace
 
-std::string utc_text(std::time_t time) {
-  std::tm utc{};
-  gmtime_r(&time, &utc);
-  char text[32];
-  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
-  return text;
-}
-
 RunRecord::RunRecord(const fs::path& dir, const Solver& solver, const RunStart& start, const Comm& comm)
     : path_(dir / "run.json"), comm_(comm), started_(start.clock_start) {
   const Scene& scene = solver.scene();
@@ -78,10 +69,7 @@ RunRecord::RunRecord(const fs::path& dir, const Solver& solver, const RunStart& 
   }
   // (the CPUs of the host, and those this process may run on: under mpirun's binding or taskset the
   // one figure that was recorded, OpenMP's, said 1 on a 2-CPU host)
-  record_["host"] = {{"name", host_name()},
-                     {"cpu", cpu_model()},
-                     {"logical_cpus", ::sysconf(_SC_NPROCESSORS_ONLN)},
-                     {"cpus_allowed", omp_get_num_procs()}};
+  record_["host"] = host_json();
   record_["ranks"] = comm.size();
   record_["threads"] = omp_get_max_threads();
   record_["isa"] = active_isa();
@@ -134,6 +122,9 @@ void RunRecord::end(const Solver& solver, const RunSummary& summary, const RunEn
   nlohmann::ordered_json& end = record_["end"];
   end["particles"] = counts.particles;
   end["steps_this_part"] = summary.steps - summary.first_step;
+  // (the seconds of the stepping loop, frames included, that the closing line's rate divides by;
+  // the record's wall_seconds adds the setup before it and the closing outputs after it)
+  end["stepping_wall_seconds"] = summary.wall_seconds;
   end["particle_updates_per_second"] = summary.wall_seconds > 0.0 ? summary.particle_updates / summary.wall_seconds : 0.0;
   end["frames_in_series"] = summary.frames_in_series;
   if (interrupted) {

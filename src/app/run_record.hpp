@@ -77,7 +77,4 @@ class RunRecord {
   nlohmann::ordered_json record_;
 };
 
-/// A time as UTC, ISO 8601 to the second ("2026-12-06T13:40:05Z").
-std::string utc_text(std::time_t time);
-
 }  // namespace talus::app
