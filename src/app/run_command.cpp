@@ -13,6 +13,7 @@
 #include "talus/scene/scene_json.hpp"
 #include "talus/solver/memory_estimate.hpp"
 #include "talus/solver/solver.hpp"
+#include "talus/solver/stability_guards.hpp"
 
 #include <fmt/core.h>
 #include <omp.h>
@@ -455,6 +456,13 @@ void add_run_command(CLI::App& app) {
     fmt::print("talus: energy budget closes to {:.3e} of the energy available ({:.4g} J of {:.4g} J: the initial kinetic "
                "and strain energy and the potential energy released)\n",
                summary.energy_budget_gap(), summary.energy_budget_gap_joules(), summary.energy_scale());
+    if (summary.energy_warning)  // (said as it happened, far up a long log: said again where the run is judged)
+      fmt::print(stderr, "talus: warning: the total energy grew by more than guards.energy_warning_factor = {} of the "
+                 "energy available ({:.1f}% {}; {:+.1f}% at the end): the scheme created energy, the results are "
+                 "suspect; a smaller time.courant usually helps\n",
+                 solver.scene().guards.energy_warning_factor, 100.0 * summary.energy_warning->share,
+                 step_ended(summary.energy_warning->step, summary.energy_warning->time),
+                 100.0 * summary.energy_budget_gap());
     if (solver.scene().output.energy_gap_terms) {
       // the parts of that gap (docs/theory.md, "Where the budget's gap comes from"), on the same scale
       const EnergyGapParts p = energy_gap_parts(summary.initial, summary.final, summary.final_gap);

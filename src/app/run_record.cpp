@@ -136,6 +136,10 @@ void RunRecord::end(const Solver& solver, const RunSummary& summary, const RunEn
     end["energy_budget_gap_joules"] = summary.energy_budget_gap_joules();
     end["energy_available_joules"] = summary.energy_scale();
   }
+  if (summary.energy_warning)  // where the growth first passed guards.energy_warning_factor
+    end["energy_growth_warning"] = {{"step", summary.energy_warning->step},
+                                    {"time", summary.energy_warning->time},
+                                    {"share_of_energy_available", summary.energy_warning->share}};
   end["outflow_particles"] = counts.outflow_particles;
   if (comm_.root()) write();
 }

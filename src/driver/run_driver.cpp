@@ -280,6 +280,8 @@ class RunLoop {
   CheckpointFile checkpoint_;
   OutputSchedule history_schedule_, frame_schedule_, checkpoint_schedule_;
   EnergyGuard energy_guard_;
+  FastestParticle fastest_particle() const;  // over every rank (collective)
+  void warn_of_energy_growth(const EnergyBudget& e);
   Snapshot snapshot_;
   ProgressLine progress_line_;
   SignalCatcher signals_;
@@ -448,12 +450,44 @@ void RunLoop::write_history_row() {
   // Every rank holds the same ledger and so reaches the same verdict; then they find the fastest
   // particle together (rank 0 named its own, another body's, when the fastest was on rank 1), and
   // rank 0 stops the job with it.
-  if (!energy_guard_.breached(e, outflow_gravity)) return;
+  if (energy_guard_.breached(e, outflow_gravity)) {
+    const FastestParticle fastest = fastest_particle();
+    if (comm_.root()) energy_guard_.fail(e, fastest, scene_, solver_.step_count(), solver_.time());
+    return;
+  }
+  warn_of_energy_growth(e);
+}
+
+FastestParticle RunLoop::fastest_particle() const {
   FastestParticle fastest = FastestParticle::of(solver_.particles());
-  if (comm_.distributed())
+  if (comm_.distributed())  // (collective)
     for (const FastestParticle& f : comm_.allgather(fastest))
       if (f.before(fastest)) fastest = f;  // (a rank without particles gives id -1, speed2 -1: never before)
-  if (comm_.root()) energy_guard_.fail(e, fastest, scene_, solver_.step_count(), solver_.time());
+  return fastest;
+}
+
+// Energy created short of the stop: a run that made 69% of its energy available out of nothing
+// ended "completed" without a word (the stop is at 100%, guards.energy_growth_factor). Said once,
+// where it first happens, with the particle the stop would name.
+void RunLoop::warn_of_energy_growth(const EnergyBudget& e) {
+  const double factor = scene_.guards.energy_warning_factor;
+  if (summary_.energy_warning || factor <= 0.0) return;
+  const double share = energy_guard_.growth_share(e);
+  if (!(share > factor)) return;
+  summary_.energy_warning = RunSummary::EnergyWarning{solver_.step_count(), solver_.time(), share};
+  const FastestParticle fastest = fastest_particle();  // (every rank: the same verdict)
+  if (!comm_.root()) return;
+  const std::string body = fastest.body >= 0 && static_cast<std::size_t>(fastest.body) < scene_.bodies.size()
+                               ? scene_.bodies[static_cast<std::size_t>(fastest.body)].name
+                               : "?";
+  fmt::print(stderr,
+             "talus: warning: {}: the total energy grew by {:.4g} J, {:.1f}% of the energy available (more than "
+             "guards.energy_warning_factor = {}): the scheme is creating energy, the results are suspect; fastest: "
+             "particle {} (body \"{}\") at ({:.4g}, {:.4g}, {:.4g}) m, {:.4g} m/s. A smaller time.courant usually "
+             "helps (docs/reliability.md, \"Instability guards\")\n",
+             step_ended(solver_.step_count(), solver_.time()), e.total() - summary_.initial.total(), 100.0 * share,
+             factor, fastest.id, body, fastest.x[0], fastest.x[1], fastest.x[2],
+             std::sqrt(std::max(fastest.speed2, 0.0)));
 }
 
 bool RunLoop::take_snapshot() {

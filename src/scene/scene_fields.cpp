@@ -762,6 +762,9 @@ Table<SceneDraft> make_guards_table() {
       number<SceneDraft>("energy_growth_factor", TALUS_AT(scene.guards.energy_growth_factor), {0.0, kHuge, true},
                          "stop when the total energy grew by more than this times the energy available (initial "
                          "kinetic + strain + potential released)"),
+      number<SceneDraft>("energy_warning_factor", TALUS_AT(scene.guards.energy_warning_factor), {0.0, kHuge},
+                         "warn once when the total energy grew by more than this times the energy available: the "
+                         "scheme is creating energy, short of the stop (0: off)"),
       number<SceneDraft>("min_volume_ratio", TALUS_AT(scene.guards.min_volume_ratio), {0.0, 1.0, false, true},
                          "stop when a particle's volume falls below this fraction of its seeded volume (mass / "
                          "material density): compression no granular or elastic body survives (0: off)"),

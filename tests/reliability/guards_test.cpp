@@ -463,6 +463,73 @@ TEST(HardCases, SteepSixtyDegreeSlopeWithLowFriction) {
   }
 }
 
+// Energy created short of the stop (guards.energy_growth_factor = 1): an elastic block thrown down a
+// 75-degree terrain slope into a sharp kink, on coarse cells, at the default Courant number, gains
+// 69% of its energy available by 3.5 s (a user's hunt, 2026-12-07), and ended "completed" without a
+// word. It is warned about once, where the growth first passes guards.energy_warning_factor (0.1),
+// and the summary records where (run.json's end.energy_growth_warning); 0 turns it off.
+TEST(HardCases, EnergyCreatedShortOfTheStopIsWarnedAboutOnce) {
+  const std::string text = R"({
+    "name": "kink75", "grid": { "size": [16, 0.25, 2], "cell_size": 0.25,
+                                "terrain": { "points": [[0, 22.392], [6, 0], [16, 0]] } },
+    "time": { "end": 2.7 },
+    "materials": { "rock": { "model": "linear_elastic", "density": 1000, "young": 1e7, "poisson": 0.3 } },
+    "bodies": [ { "name": "block", "material": "rock", "box": { "min": [0.5, 0, 0], "max": [1.5, 0.25, 1], "frame": "terrain" } } ],
+    "boundaries": { "x-": "open", "x+": "open", "z-": { "type": "friction", "friction_coefficient": 0.3 }, "z+": "open" },
+    "output": { "history_interval": 0.01, "frame_interval": 10 }
+  })";
+  for (const double factor : {0.1, 0.0}) {
+    SCOPED_TRACE(factor);
+    Scene scene = parse_scene(text, "kink75");
+    EXPECT_EQ(scene.guards.energy_warning_factor, 0.1);  // the default
+    scene.guards.energy_warning_factor = factor;
+    const fs::path dir = test::temp_dir("energy_warning");
+    RunOptions options;
+    options.out_dir = dir.string();
+    options.progress = false;
+    options.handle_signals = false;
+    Solver solver(scene);
+    testing::internal::CaptureStderr();
+    const RunSummary summary = run_scene(solver, options);
+    const std::string err = testing::internal::GetCapturedStderr();
+    fs::remove_all(dir);
+    const std::size_t first = err.find("talus: warning: after step ");
+    if (factor == 0.0) {
+      EXPECT_FALSE(summary.energy_warning);
+      EXPECT_EQ(first, std::string::npos) << err;
+      continue;
+    }
+    ASSERT_TRUE(summary.energy_warning);
+    // measured: after step 4356, t = 2.5605 s, 28.7% of the energy available
+    EXPECT_GT(summary.energy_warning->share, 0.1);
+    EXPECT_GT(summary.energy_warning->time, 2.0);
+    EXPECT_LT(summary.energy_warning->time, 2.7);
+    EXPECT_GT(summary.energy_budget_gap(), 0.1);  // it did create energy: the warning is true
+    ASSERT_NE(first, std::string::npos) << err;
+    EXPECT_EQ(err.find("talus: warning: after step ", first + 1), std::string::npos) << "warned more than once: " << err;
+    EXPECT_NE(err.find("guards.energy_warning_factor = 0.1"), std::string::npos) << err;
+    EXPECT_NE(err.find("fastest: particle "), std::string::npos) << err;
+  }
+}
+
+// A run that creates no energy is not warned about: the free fall, whose growth is round-off.
+TEST(HardCases, AFreeFallIsNotWarnedAboutEnergy) {
+  Scene scene = test::free_fall_scene("musl");
+  scene.guards.energy_warning_factor = 1e-6;
+  const fs::path dir = test::temp_dir("energy_no_warning");
+  RunOptions options;
+  options.out_dir = dir.string();
+  options.progress = false;
+  options.handle_signals = false;
+  Solver solver(scene);
+  testing::internal::CaptureStderr();
+  const RunSummary summary = run_scene(solver, options);
+  const std::string err = testing::internal::GetCapturedStderr();
+  fs::remove_all(dir);
+  EXPECT_FALSE(summary.energy_warning) << summary.energy_warning->share;
+  EXPECT_EQ(err.find("energy_warning_factor"), std::string::npos) << err;
+}
+
 }  // namespace
 }  // namespace guards_test
 }  // namespace talus

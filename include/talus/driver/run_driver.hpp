@@ -86,6 +86,14 @@ struct RunSummary {
   /// How far the budget failed to close: (final total - initial total) / energy_scale().
   double energy_budget_gap() const { return energy_budget_gap_joules() / energy_scale(); }
   EnergyGapTerms final_gap;  // output.energy_gap_terms: at the end (zero when off)
+  /// Where the total energy first grew by more than guards.energy_warning_factor times the energy
+  /// available (warned about as it happened); absent when it never did.
+  struct EnergyWarning {
+    std::int64_t step = 0;
+    double time = 0.0;
+    double share = 0.0;  // the growth then, of the energy available
+  };
+  std::optional<EnergyWarning> energy_warning;
   std::string pvd_path;
   std::string checkpoint_path;  // <out_dir>/checkpoint.h5
   std::size_t checkpoints = 0;  // checkpoints written by this call

@@ -77,6 +77,7 @@ struct OutputSpec {
 struct GuardSpec {
   double max_step_displacement = 1.0;  // [cells] a particle may move in one step (more: CFL breach)
   double energy_growth_factor = 1.0;   // stop when the total energy grew by more than this times the energy available
+  double energy_warning_factor = 0.1;  // warn once when it grew by more than this times the energy available; 0 = off
   double min_volume_ratio = 0.01;      // stop when a particle's volume falls below this times its seeded volume; 0 = off
   int snapshot_interval = 10;          // [steps] between in-memory copies of the last good state; 0 = none
 };

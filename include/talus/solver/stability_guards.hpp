@@ -88,6 +88,9 @@ class EnergyGuard {
   [[noreturn]] void fail(const EnergyBudget& e, const FastestParticle& fastest, const Scene& scene, std::int64_t step,
                          double time) const;
   double available() const;
+  /// How much the total energy grew since the start, as a share of available(): what both factors
+  /// (guards.energy_growth_factor, guards.energy_warning_factor) are compared with.
+  double growth_share(const EnergyBudget& e) const { return (e.total() - initial_.total()) / available(); }
   /// Guard state to checkpoint: the most potential energy released so far.
   double max_released() const { return max_released_; }
   void set_max_released(double r) { max_released_ = r; }
