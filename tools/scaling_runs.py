@@ -54,7 +54,12 @@ def run(talus, scene, threads, workdir, record=None, interval=7):
     cmd = [talus, "run", scene, "--threads", str(threads), "--quiet", "--out", out_dir]
     if record:
         cmd += ["--record-work", record, "--record-interval", str(interval)]
-    out = run_or_stop(cmd, "talus run", env=pinned_env()).stdout
+    return run_timing(cmd, out_dir, run_or_stop(cmd, "talus run", env=pinned_env()).stdout)
+
+
+def run_timing(cmd, out_dir, stdout):
+    """(steps, wall seconds, particle-updates per second, run.json or None) of a finished `talus run`
+    (cmd) into out_dir: from its run.json, else from the line it printed (stdout)."""
     try:
         with open(os.path.join(out_dir, "run.json")) as f:
             rec = json.load(f)
@@ -62,7 +67,7 @@ def run(talus, scene, threads, workdir, record=None, interval=7):
         return int(end["steps_this_part"]), float(rec["wall_seconds"]), float(end["particle_updates_per_second"]), rec
     except (OSError, ValueError, KeyError, TypeError):
         pass  # a talus that writes no run.json (or an older one without these keys): the printed line
-    m = RATE.search(out)
+    m = RATE.search(stdout)
     if not m:
         sys.exit(f"{os.path.basename(sys.argv[0])}: no rate in run.json nor in the output of {' '.join(cmd)}")
     return int(m.group(1)), float(m.group(2)), float(m.group(3)) * 1e6, None
