@@ -92,12 +92,12 @@ def main():
         sys.exit(f"bench_kernels.py: --skip {a.skip}: the cases are 1..{len(CASES)}: " +
                  "; ".join(f"{i} {name}" for i, (name, _) in enumerate(CASES, start=1)))
     require_talus(a.talus)
+    # before the runs, not after: a missing folder, or a folder named as the file (open() failed at the end)
+    require_folders(json=a.json)
     paths = choices_list("--paths", a.paths, vector_paths(a.talus))
     for option, binary in (("--mpm-limit", a.mpm_limit), ("--stream", a.stream)):
         if binary:
             require_talus(binary, option)
-    # before the runs, not after: a missing folder, or a folder named as the file (open() failed at the end)
-    require_folders(json=a.json)
     started = utc_now()
     print(time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
           "load average %.2f %.2f %.2f" % os.getloadavg(), flush=True)

@@ -114,12 +114,12 @@ def run_or_stop(cmd, what, env=None, keep_stdout=True):
     return r
 
 
-def cpu_model():
+def cpu_model(cpuinfo="/proc/cpuinfo"):
     """The CPU's model as /proc/cpuinfo names it ("model name", as talus records it; "Model" or
     "Hardware" on CPUs without that line, e.g. some ARM ones), else "unknown": reading the first
     "model name" line by split()[1] was an IndexError there."""
     try:
-        with open("/proc/cpuinfo") as f:
+        with open(cpuinfo) as f:
             lines = f.read().splitlines()
     except OSError:
         return "unknown"
