@@ -4,7 +4,11 @@
 For each case of issue 18's table it runs `talus bench` on the reference path and on the vector
 paths, alternating, ROUNDS times, and prints M particle-updates/s and the stress phase; beside them
 the minimal MPM step of shared/bench or ../shared/bench (mpm_limit, USL, 2 colour) and the STREAM triad when their
-binaries are given, in the same sitting. Results also go to a JSON file.
+binaries are given, in the same sitting. Results also go to a JSON file (--json), with what measured
+them (`provenance`: the talus build and commit, native or portable, CPU, logical CPUs, date, this
+command line) and the vector path each --paths value ran (`resolved_paths`: auto's is the best this
+CPU has). The summary is the median of the rounds (with an even number of rounds, the mean of the
+middle two).
 
 Usage: /usr/bin/python3 tools/bench_kernels.py --talus build/talus [--paths reference,avx2,avx512]
        [--mpm-limit /tmp/mpm_limit] [--stream /tmp/stream] [--particles 1000000] [--rounds 2] [--json out.json]
@@ -12,14 +16,16 @@ Usage: /usr/bin/python3 tools/bench_kernels.py --talus build/talus [--paths refe
 stream.cpp likewise). On a shared machine run it under an exclusive lock and report `uptime`.
 """
 import argparse
-import json
 import os
 import re
 import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from cli_checks import choices_list, require_at_least, require_talus, run_or_stop  # noqa: E402
+from cli_checks import (choices_list, provenance, require_at_least, require_folders, require_talus,  # noqa: E402
+                        run_or_stop, utc_now, write_json_atomically)
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 CASES = [  # name, talus bench arguments
     ("shear, B-spline, DP, MUSL", ["--scene", "shear", "--material", "dp", "--shape", "bspline2"]),
@@ -40,18 +46,30 @@ def vector_paths(talus):
     return ["auto"] + ([p.strip() for p in m.group(1).split(",")] if m else [])
 
 
+def median(values):
+    """The median: the middle value, or the mean of the middle two for an even count (it took
+    sorted(v)[n // 2], the upper of two rounds)."""
+    v = sorted(values)
+    n = len(v)
+    return v[n // 2] if n % 2 else 0.5 * (v[n // 2 - 1] + v[n // 2])
+
+
 def talus_bench(talus, args, path, particles, threads, steps, cpu_time):
+    """One bench; returns (M particle-updates/s, stress seconds, the vector path it ran: its first
+    line's "..., avx512 kernels, ...", which for --isa auto is the path auto chose)."""
     clock = ["--cpu-time"] if cpu_time else []
     out = run([talus, "bench", *args, "--particles", str(particles), "--threads", str(threads), "--steps", str(steps),
                "--isa", path, *clock], env=dict(os.environ, OMP_WAIT_POLICY="PASSIVE"))
     rate = float(re.search(r"([0-9.]+) M particle-updates/s", out).group(1))
     stress = float(re.search(r"stress\s+([0-9.]+) s", out).group(1))
-    return rate, stress
+    ran = re.search(r", (\w+) kernels,", out)
+    return rate, stress, ran.group(1) if ran else None
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--talus", default="build/talus")
+    # from the repository root, as scaling.py's (it was from the current folder)
+    ap.add_argument("--talus", default=os.path.join(ROOT, "build", "talus"))
     ap.add_argument("--paths", default="reference,avx2,auto")
     ap.add_argument("--mpm-limit", help="binary of ../shared/bench/mpm_limit.cpp")
     ap.add_argument("--stream", help="binary of ../shared/bench/stream.cpp")
@@ -74,15 +92,18 @@ def main():
         sys.exit(f"bench_kernels.py: --skip {a.skip}: the cases are 1..{len(CASES)}: " +
                  "; ".join(f"{i} {name}" for i, (name, _) in enumerate(CASES, start=1)))
     require_talus(a.talus)
+    # before the runs, not after: a missing folder, or a folder named as the file (open() failed at the end)
+    require_folders(json=a.json)
     paths = choices_list("--paths", a.paths, vector_paths(a.talus))
     for option, binary in (("--mpm-limit", a.mpm_limit), ("--stream", a.stream)):
         if binary:
             require_talus(binary, option)
-    if a.json and not os.path.isdir(os.path.dirname(os.path.abspath(a.json))):
-        sys.exit(f"bench_kernels.py: --json {a.json}: its folder does not exist")  # found before the runs, not after
+    started = utc_now()
     print(time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
           "load average %.2f %.2f %.2f" % os.getloadavg(), flush=True)
-    results = {"paths": paths, "cpu_time": a.cpu_time, "threads": a.threads, "particles": a.particles, "cases": {}, "mpm_limit": [], "stream": []}
+    results = {"paths": paths, "resolved_paths": {}, "cpu_time": a.cpu_time, "threads": a.threads,
+               "particles": a.particles, "steps": a.steps, "rounds": a.rounds, "cases": {}, "mpm_limit": [],
+               "stream": []}
     env1 = dict(os.environ, OMP_NUM_THREADS=str(a.threads))
     for rnd in range(a.rounds):
         if a.mpm_limit:  # order 2 (B-spline), 8-colour scatter, 20 steps, 50^3 cells x 8 = 1 M particles, resort 10
@@ -99,22 +120,26 @@ def main():
                 continue
             row = results["cases"].setdefault(name, {p: [] for p in paths})
             for p in paths:
-                rate, stress = talus_bench(a.talus, args, p, a.particles, a.threads, a.steps, a.cpu_time)
-                row[p].append({"rate": rate, "stress_seconds": stress})
-                print(f"{name:32s} {p:10s} {rate:7.3f} M/s  stress {stress:.3f} s", flush=True)
-    print("summary (median of rounds; ratio to the first path):")
+                rate, stress, ran = talus_bench(a.talus, args, p, a.particles, a.threads, a.steps, a.cpu_time)
+                row[p].append({"rate": rate, "stress_seconds": stress, "isa": ran})
+                results["resolved_paths"][p] = ran
+                print(f"{name:32s} {p + (f' ({ran})' if ran and ran != p else ''):18s} {rate:7.3f} M/s  "
+                      f"stress {stress:.3f} s", flush=True)
+    print(f"summary (median of {a.rounds} round{'s' if a.rounds > 1 else ''}; ratio to the first path):")
     for name, row in results["cases"].items():
-        med = {p: sorted(r["rate"] for r in row[p])[len(row[p]) // 2] for p in paths}
+        med = {p: median(r["rate"] for r in row[p]) for p in paths}
         print(f"  {name:32s} " + "  ".join(f"{p} {med[p]:.3f} ({med[p] / med[paths[0]]:.2f}x)" for p in paths))
     usl = results["cases"].get("shear, B-spline, DP, USL")
     if results["mpm_limit"] and usl:
-        lim = sorted(results["mpm_limit"])[len(results["mpm_limit"]) // 2]
+        lim = median(results["mpm_limit"])
         print(f"  mpm_limit median {lim:.3f} M/s; USL B-spline DP / mpm_limit: " +
-              "  ".join(f"{p} {sorted(r['rate'] for r in usl[p])[len(usl[p]) // 2] / lim:.2f}" for p in paths))
+              "  ".join(f"{p} {median(r['rate'] for r in usl[p]) / lim:.2f}" for p in paths))
     print("load average %.2f %.2f %.2f" % os.getloadavg())
     if a.json:
-        with open(a.json, "w") as f:
-            json.dump(results, f, indent=1)
+        # the build from talus --version (the benches print no build); `isa`: each --paths value and the
+        # path it ran
+        results["provenance"] = provenance(a.talus, {"isa": results["resolved_paths"]}, started)
+        write_json_atomically(a.json, results)
 
 
 if __name__ == "__main__":

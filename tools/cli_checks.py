@@ -1,12 +1,18 @@
 """Argument checks shared by the scripts in tools/: one line and exit 1 for a wrong path, exit 2 for a
 value out of range (argparse's status for a bad argument), right after parsing, before any work.
 
+Also provenance(), the record of what measured a result (build, vector path, CPU, date, arguments),
+which the benchmark and scaling tools write beside their figures.
+
 Only the standard library: the scripts that run without numpy (bench_kernels, compare_binaries,
 check_scene_schema) use it too. They put their own folder on sys.path before importing it.
 """
+import json
 import os
+import re
 import subprocess
 import sys
+import time
 
 
 def require_talus(path, option="--talus"):
@@ -106,3 +112,82 @@ def run_or_stop(cmd, what, env=None, keep_stdout=True):
     if r.stderr:
         print(r.stderr, end="", file=sys.stderr)
     return r
+
+
+def cpu_model(cpuinfo="/proc/cpuinfo"):
+    """The CPU's model as /proc/cpuinfo names it ("model name", as talus records it; "Model" or
+    "Hardware" on CPUs without that line, e.g. some ARM ones), else "unknown": reading the first
+    "model name" line by split()[1] was an IndexError there."""
+    try:
+        with open(cpuinfo) as f:
+            lines = f.read().splitlines()
+    except OSError:
+        return "unknown"
+    for key in ("model name", "Model", "Hardware", "cpu model"):
+        for line in lines:
+            name, colon, value = line.partition(":")
+            if colon and name.strip() == key and value.strip():
+                return value.strip()
+    return "unknown"
+
+
+VERSION_LINE = re.compile(r"talus (\S+) \(commit (\S+), (.+?), (\w+), (native|portable)[^,]*, (MPI|no MPI); "
+                          r"vector paths here: ([^)]*)\)")
+
+
+def talus_build(talus):
+    """The build of a talus binary from `talus --version`, with the keys of `talus bench --json`'s
+    `build` and run.json's `talus` (version, commit, compiler, build_type, native, mpi,
+    vector_paths); {"version_line": ...} alone when the line has another form."""
+    r = subprocess.run([str(talus), "--version"], capture_output=True, text=True)
+    line = (r.stdout or "").strip().splitlines()[0] if (r.stdout or "").strip() else ""
+    m = VERSION_LINE.search(line)
+    if not m:
+        return {"version_line": line}
+    return {"version": m.group(1), "commit": m.group(2), "compiler": m.group(3), "build_type": m.group(4),
+            "native": m.group(5) == "native", "mpi": m.group(6) == "MPI",
+            "vector_paths": [p.strip() for p in m.group(7).split(",") if p.strip()]}
+
+
+def utc_now():
+    """The date and time now, UTC, as talus's run.json writes it (2026-12-07T07:31:45Z)."""
+    return time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
+
+
+def provenance(talus, measured=None, started=None):
+    """What a result was measured with, for the JSON (and CSV) the tools write: the talus build
+    (commit, version, compiler, ...), `build` (native or portable), the vector path that ran (`isa`),
+    the CPU model, the logical CPUs, the date (UTC) and the exact command line of the tool.
+
+    measured: what a talus process wrote about itself, where the tool ran one: a `talus bench --json`
+    result (its `build`, `isa`, `cpu`) or a run.json (its `talus`, `isa`, `host`). Without it the
+    build comes from `talus --version` and the vector path is None (not known: the paths a binary
+    offers are not the one a run took). started: utc_now() when the measurement began (the date
+    recorded; default now)."""
+    measured = measured or {}
+    build = measured.get("build") or measured.get("talus")
+    if not isinstance(build, dict):
+        build = talus_build(talus)
+    host = measured.get("host") if isinstance(measured.get("host"), dict) else {}
+    native = build.get("native")
+    return {"talus": build,
+            "build": None if native is None else ("native" if native else "portable"),
+            "isa": measured.get("isa"),
+            "cpu": measured.get("cpu") or host.get("cpu") or cpu_model(),
+            "logical_cpus": host.get("logical_cpus") or os.cpu_count(),
+            "date_utc": started or utc_now(),
+            "command": list(sys.argv), "working_directory": os.getcwd()}
+
+
+def write_json_atomically(path, data):
+    """data as JSON at path, written beside and renamed into place: a failure (or a value JSON cannot
+    hold) leaves the old file, or none, never a half-written one."""
+    part = path + ".part"
+    try:
+        with open(part, "w") as f:
+            json.dump(data, f, indent=1)
+            f.write("\n")
+        os.replace(part, path)
+    finally:
+        if os.path.exists(part):
+            os.remove(part)

@@ -17,20 +17,26 @@ The load average is recorded beside every run. Run it under `flock -x` on a shar
       --stream /tmp/stream --mpm-limit /tmp/mpm_limit --message-costs /tmp/mpi_message_costs \
       --json docs/performance/mpi_bench.json
 
-Writes every bench's JSON, and prints the medians, the ratio 2x1 / 1x2 and the per-phase largest
-and mean over the ranks (docs/performance.md, "Distributed runs (MPI)").
+Writes every bench's JSON, with what measured them (`provenance`: the talus build and commit, the
+vector path, CPU, logical CPUs, date, this command line), and prints the medians, the ratio 2x1 / 1x2
+and the per-phase largest and mean over the ranks (docs/performance.md, "Distributed runs (MPI)").
+A reference not given (--stream, --mpm-limit) is printed as "not measured" and left out of the JSON.
 """
 import argparse
 import json
 import os
 import re
+import shlex
 import subprocess
 import sys
 import tempfile
 import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 # from cli_checks, not talus_plot: talus_plot imports numpy, which this tool does not need
-from cli_checks import choices_list, require_at_least, require_folders, require_talus  # noqa: E402
+from cli_checks import (choices_list, cpu_model, provenance, require_at_least, require_folders,  # noqa: E402
+                        require_talus, write_json_atomically)
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1"}
 PINNED = {"OMP_PROC_BIND": "close", "OMP_PLACES": "cores"}
@@ -72,7 +78,8 @@ def run(cmd, env):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--talus", default="build/talus")
+    # from the repository root, as scaling.py's (it was from the current folder)
+    ap.add_argument("--talus", default=os.path.join(ROOT, "build", "talus"))
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--bench-args", default="--scene block --particles 1000000 --shape linear --material elastic --mls off --steps 10")
     ap.add_argument("--layouts", default="1x2,2x1-bound,2x1-free,1x1")
@@ -87,11 +94,16 @@ def main():
         if binary:
             require_talus(binary, option)
     require_folders(json=a.json)
+    try:
+        bench_args = shlex.split(a.bench_args)
+    except ValueError as e:
+        sys.exit(f"mpi_bench.py: --bench-args {a.bench_args}: {e}")
     all_layouts = layouts(a.talus)
     # checked before the reference runs: a wrong name was a KeyError after them
     names = choices_list("--layouts", a.layouts, list(all_layouts))
     results = {"started": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()), "bench_args": a.bench_args,
-               "cpu": open("/proc/cpuinfo").read().split("model name")[1].split("\n")[0].strip(" :\t"),
+               # (not every CPU has a "model name" line: the split was an IndexError there)
+               "cpu": cpu_model(),
                "nproc": os.cpu_count(), "references": [], "message_costs": [], "runs": []}
     print(results["started"], "load", os.getloadavg(), flush=True)
 
@@ -111,8 +123,12 @@ def main():
                 out = run([a.mpm_limit, "1", "colour", "20", "50", "10"], env)
                 entry["mpm_limit_linear_m_per_s"] = float(re.search(r"particle-updates/s: ([0-9.e+]+)", out).group(1)) / 1e6
             results["references"].append(entry)
-            print(f"  {when} {threads} thread(s): STREAM {entry.get('stream_gb_per_s', 0):.2f} GB/s, "
-                  f"mpm_limit linear {entry.get('mpm_limit_linear_m_per_s', 0):.3f} M/s, load {entry['load'][0]:.2f}", flush=True)
+            # a reference not run is "not measured", not 0.00 GB/s
+            stream = f"{entry['stream_gb_per_s']:.2f} GB/s" if "stream_gb_per_s" in entry else "not measured"
+            limit = (f"{entry['mpm_limit_linear_m_per_s']:.3f} M/s" if "mpm_limit_linear_m_per_s" in entry
+                     else "not measured")
+            print(f"  {when} {threads} thread(s): STREAM {stream}, mpm_limit linear {limit}, "
+                  f"load {entry['load'][0]:.2f}", flush=True)
         if a.message_costs:
             out = run(["mpirun", "-np", "2", "--bind-to", "core", a.message_costs], clean_env({}, 1))
             costs = json.loads(out)
@@ -130,7 +146,7 @@ def main():
                 prefix, threads, extra = all_layouts[name]
                 out_json = os.path.join(tmp, f"{name}_{rnd}.json")
                 load = os.getloadavg()
-                run(prefix + ["bench"] + a.bench_args.split() + ["--threads", str(threads), "--json", out_json],
+                run(prefix + ["bench"] + bench_args + ["--threads", str(threads), "--json", out_json],
                     clean_env(extra, threads))
                 b = json.load(open(out_json))
                 results["runs"].append({"layout": name, "round": rnd, "load": load, "bench": b})
@@ -168,15 +184,21 @@ def main():
                 ratio = summary[name]["median_m_per_s"] / summary["1x2"]["median_m_per_s"]
                 results.setdefault("ratios_to_1x2", {})[name] = ratio
                 print(f"  {name} / 1x2 = {ratio:.3f}")
-    print(f"  per phase, seconds over {a.bench_args.split('--steps')[-1].strip()} steps: max over ranks (mean)")
+    # the timed steps as the benches report them: splitting the arguments on "--steps" printed the rest
+    # of the line when --steps was not last, and nothing when it was left to talus's default
+    steps = sorted({r["bench"].get("steps") for r in results["runs"]} - {None})
+    steps_text = " or ".join(str(x) for x in steps) if steps else "the timed"
+    print(f"  per phase, seconds over {steps_text} steps: max over ranks (mean)")
     print("  " + "phase".ljust(8) + "".join(n.rjust(20) for n in names))
     for p in PHASES:
         print("  " + p.ljust(8) + "".join(f"{summary[n]['phases_max'][p]:10.4f} ({summary[n]['phases_mean'][p]:6.4f})" for n in names))
     print("  " + "wall".ljust(8) + "".join(f"{summary[n]['wall_seconds']:10.4f}         " for n in names))
     print("load", os.getloadavg(), results["ended"])
     if a.json:
-        with open(a.json, "w") as f:
-            json.dump(results, f, indent=1)
+        # what measured it, from the first bench's own record (build, vector path, CPU)
+        results["provenance"] = provenance(a.talus, results["runs"][0]["bench"] if results["runs"] else None,
+                                           results["started"].replace(" UTC", "Z").replace(" ", "T"))
+        write_json_atomically(a.json, results)
 
 
 if __name__ == "__main__":

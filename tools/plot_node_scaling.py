@@ -2,9 +2,13 @@
 """Every measurement of one node session against the scaling model, in one figure
 (docs/performance.md, "Measured on a 16-core node").
 
-    /usr/bin/python3 tools/plot_node_scaling.py [DIR] [--out DIR/summary.png]
+    /usr/bin/python3 tools/plot_node_scaling.py [DIR] [--out runs/scaling/NAME_summary.png]
 
-DIR (default docs/performance/node16_2026-12-04) holds what tools/node_scaling.sh (or the session's
+The figure goes to runs/scaling/NAME_summary.png under the current folder (NAME: DIR's own name)
+unless --out names a file: DIR is a folder of committed data, whose summary.png a plain run replaced.
+To redraw the committed figure, name it: --out DIR/summary.png.
+
+DIR (default docs/performance/node16_2026-12-04 in the repository) holds what tools/node_scaling.sh (or the session's
 script, DIR/run1.sh) wrote: scaling_runs_node.json (tools/scaling_runs.py), scaling_node_block.json and
 scaling_node_shear.json (tools/scaling.py), bench_{colour_passes,block_buffers}_{1,N}.json (talus bench
 --json), and optionally run2_log.txt (the printed lines of a second sitting: repeats of the same
@@ -20,7 +24,9 @@ import re
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # for cli_checks, next to this script
-from cli_checks import require_folders  # noqa: E402
+from cli_checks import output_folder, require_folders  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 RUNS_LINE = re.compile(r"^\s*(\d+) threads\s+best\s+([0-9.]+) M/s\s+speed-up\s+([0-9.]+)\s+model\s+([0-9.]+)\s+with c\s+([0-9.]+)")
 RUNS_HEAD = re.compile(r"^(\S+) \((\d+) particles, to ([0-9.]+) s\): c\((\d+)\) = ([0-9.]+)")
@@ -55,18 +61,23 @@ def wait_policy(runs, directory):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("dir", nargs="?", default="docs/performance/node16_2026-12-04")
-    ap.add_argument("--out")
+    # from the repository root, not the current folder
+    ap.add_argument("dir", nargs="?", default=os.path.join(ROOT, "docs", "performance", "node16_2026-12-04"))
+    ap.add_argument("--out", help="the figure (default: runs/scaling/NAME_summary.png under the current folder)")
     a = ap.parse_args()
+    # before the output folder is made: a wrong DIR left an empty runs/scaling behind
+    runs_path = os.path.join(a.dir, "scaling_runs_node.json")
+    if not os.path.exists(runs_path):
+        sys.exit(f"plot_node_scaling.py: {runs_path} missing (written by tools/node_scaling.sh: unpack its "
+                 "results.tar.gz into the folder given)")
+    if not a.out:
+        name = os.path.basename(os.path.normpath(a.dir))
+        a.out = os.path.join(output_folder("--out", os.path.join("runs", "scaling")), f"{name}_summary.png")
     require_folders(out=a.out)  # (a missing folder was a traceback from savefig, after the plotting)
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    runs_path = os.path.join(a.dir, "scaling_runs_node.json")
-    if not os.path.exists(runs_path):
-        sys.exit(f"plot_node_scaling.py: {runs_path} missing (written by tools/node_scaling.sh: unpack its "
-                 "results.tar.gz into the folder given)")
     runs = json.load(open(runs_path))
     second = second_sitting(os.path.join(a.dir, "run2_log.txt"))
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.8))
@@ -126,9 +137,8 @@ def main():
     fig.suptitle(f"{top}-core node, OMP_PROC_BIND={runs['omp_proc_bind']} OMP_PLACES={runs['omp_places']} "
                  f"OMP_WAIT_POLICY={wait_policy(runs, a.dir)}", fontsize=9)
     fig.tight_layout()
-    out = a.out or os.path.join(a.dir, "summary.png")
-    fig.savefig(out, dpi=120)
-    print("wrote", out)
+    fig.savefig(a.out, dpi=120)
+    print("wrote", a.out)
 
 
 if __name__ == "__main__":

@@ -3,8 +3,11 @@
 with the scaling model's prediction (tools/scaling_model.py) drawn beside the measurement.
 
     tools/scaling.py [--talus build/talus] [--particles 1000000] [--steps 10] [--max-threads N]
-                     [--out docs/performance] [--name scaling] [--wait-policy unset|active|passive]
+                     [--out runs/scaling] [--name scaling] [--wait-policy unset|active|passive]
                      [-- extra talus bench arguments]
+
+The outputs go to runs/scaling under the current folder unless --out names another folder
+(docs/performance holds committed results: name it to replace them).
 
 Strong scaling: fixed particle count, threads 1..N (powers of two and N).
 Weak scaling: particles proportional to the thread count.
@@ -28,16 +31,22 @@ short of the work model at 16 threads: that slowdown).
 Each bench also measures the STREAM triad at the same thread count (`talus bench --stream`), so the
 CSV shows the MPM speed-up next to the memory-bandwidth speed-up of the same machine in the same run:
 `speedup_vs_stream` = (MPM speed-up) / (STREAM speed-up), the issue's target being >= 0.9 at 2 threads.
+A scaling study is of wall-clock time: --cpu-time among the bench arguments is refused (its per-core-
+second rates make no speed-up, and STREAM's is of the wall clock).
+The CSV and JSON record what measured them: the talus build and commit, native or portable, the
+vector path that ran, CPU model, logical CPUs, the date (UTC) and this command line.
 """
 import argparse
 import csv
 import json
 import os
+import shlex
 import sys
 import tempfile
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 # from cli_checks, not talus_plot: talus_plot imports numpy, which this tool does not need
-from cli_checks import output_folder, refuse, require_at_least, require_talus, run_or_stop  # noqa: E402
+from cli_checks import (output_folder, provenance, refuse, require_at_least, require_talus, run_or_stop,  # noqa: E402
+                        utc_now, write_json_atomically)
 import scaling_model  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -50,6 +59,20 @@ def thread_counts(max_threads):
         t *= 2
     counts.append(max_threads)
     return counts
+
+
+def speedup_ticks(lo, hi):
+    """Ticks for a log axis of speed-ups from lo to hi: 1, 2, 4, ... alone left a x1.23 and a x1.86 on
+    2 threads between the only two ticks; readable steps in between, fewer as the range grows."""
+    steps = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1, 1.2, 1.4, 1.6, 1.8, 2, 2.5, 3, 4, 5, 6, 8]
+    if hi / max(lo, 1e-9) > 8:  # a node's range: 1 2 4 8 16 ...
+        steps = [0.125, 0.25, 0.5, 1, 2, 3, 4, 6, 8]
+    ticks = []
+    scale = 1.0
+    while scale <= 1024:
+        ticks += [v * scale for v in steps if lo / 1.05 <= v * scale <= hi * 1.05]
+        scale *= 10
+    return sorted(set(round(t, 6) for t in ticks)) or [1.0]
 
 
 def pinned_env():
@@ -109,14 +132,18 @@ def main():
     ap.add_argument("--particles", type=int, default=1000000)
     ap.add_argument("--steps", type=int, default=10)
     ap.add_argument("--max-threads", type=int, default=os.cpu_count())
-    ap.add_argument("--out", default=os.path.join(ROOT, "docs", "performance"), help="folder of the outputs "
-                    "(default: docs/performance)")
+    ap.add_argument("--out", default=os.path.join("runs", "scaling"), help="folder of the outputs "
+                    "(default: runs/scaling under the current folder; it was docs/performance, whose committed "
+                    "results the documented command replaced)")
     ap.add_argument("--name", default="scaling", help="file stem of the CSV, JSON and PNG")
     ap.add_argument("--repeat", type=int, default=1, help="runs per point (the best is kept; all are in the JSON)")
     add_wait_policy_argument(ap)
     ap.add_argument("bench_args", nargs="*", help="extra arguments for talus bench (after --)")
     a = ap.parse_args()
     require_at_least(1, particles=a.particles, steps=a.steps, max_threads=a.max_threads, repeat=a.repeat)
+    if any(x == "--cpu-time" or x.startswith("--cpu-time=") for x in a.bench_args):
+        # per-core-second rates make no speed-up, and they were divided by STREAM's wall-clock one
+        refuse("--cpu-time", "(a bench argument)", "a scaling study is of wall-clock time: leave --cpu-time out")
     scene = next((x.split("=", 1)[1] for x in a.bench_args if x.startswith("--scene=")), None)
     if "--scene" in a.bench_args[:-1]:
         scene = a.bench_args[a.bench_args.index("--scene") + 1]
@@ -128,6 +155,8 @@ def main():
     output_folder("--out", a.out)  # (a file of that name was a traceback; checked before the note below)
     wait_policy = apply_wait_policy(a.wait_policy)
     counts = thread_counts(a.max_threads)
+    started = utc_now()
+    first_bench = None
     record_path = os.path.join(a.out, a.name + "_record.json")
     record_t_path = os.path.join(a.out, a.name + "_record_t.json")
     rows = []
@@ -148,10 +177,13 @@ def main():
                 if os.path.exists(record_t_path):
                     os.remove(record_t_path)
             r = max(runs, key=lambda x: x["particle_updates_per_second"])
+            first_bench = first_bench or r
             rows.append({"kind": kind, "threads": t, "particles": r["particles"],
                          "updates_per_second": r["particle_updates_per_second"],
                          "all_updates_per_second": [x["particle_updates_per_second"] for x in runs],
-                         "stream_triad_gb_per_s": r["stream_triad_bytes_per_second"] / 1e9, "cpu": r["cpu"]})
+                         "stream_triad_gb_per_s": r["stream_triad_bytes_per_second"] / 1e9, "cpu": r["cpu"],
+                         # the vector path this bench ran (each bench says its own)
+                         "isa": r.get("isa")})
             base = [x for x in rows if x["kind"] == kind][0]
             mpm_speedup = rows[-1]["updates_per_second"] / base["updates_per_second"]
             stream_speedup = rows[-1]["stream_triad_gb_per_s"] / base["stream_triad_gb_per_s"]
@@ -164,14 +196,25 @@ def main():
             print(f"{kind:6} threads={t:3} particles={r['particles']:9} {r['particle_updates_per_second'] / 1e6:8.3f} M/s"
                   f"  speed-up {mpm_speedup:5.2f}  STREAM {rows[-1]['stream_triad_gb_per_s']:6.2f} GB/s"
                   f" (speed-up {stream_speedup:5.2f})  ratio {mpm_speedup / stream_speedup:5.2f}", flush=True)
+    # what measured it, from the first bench's own record (build, vector path, CPU)
+    prov = provenance(a.talus, first_bench, started)
     path = os.path.join(a.out, a.name + ".csv")
     fields = []
     for r in rows:
         fields += [k for k in r if k not in fields and k != "all_updates_per_second"]
-    with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
-        w.writeheader()
-        w.writerows(rows)
+    # the provenance on every row, so that the CSV alone says what measured it
+    csv_prov = {"commit": prov["talus"].get("commit"), "build": prov["build"], "logical_cpus": prov["logical_cpus"],
+                "date_utc": prov["date_utc"], "command": shlex.join(prov["command"])}
+    fields += list(csv_prov)
+    try:  # written beside and renamed into place: no half-written CSV
+        with open(path + ".part", "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
+            w.writeheader()
+            w.writerows(dict(r, **csv_prov) for r in rows)
+        os.replace(path + ".part", path)
+    finally:
+        if os.path.exists(path + ".part"):
+            os.remove(path + ".part")
     print("wrote", path)
     for r in rows:
         if r["kind"] == "strong":
@@ -180,13 +223,13 @@ def main():
                                                                 or "none (1 thread)"))
     print("the model with it: " + ", ".join(f"{t}: {with_c[t]['speedup']:.2f}" for t in counts))
     env = pinned_env()
-    with open(os.path.join(a.out, a.name + ".json"), "w") as f:
-        json.dump({"omp_proc_bind": env["OMP_PROC_BIND"], "omp_places": env["OMP_PLACES"],
-                   "omp_wait_policy": wait_policy, "nproc": os.cpu_count(),
-                   "bench_args": a.bench_args, "particles": a.particles, "steps": a.steps, "rows": rows,
-                   "contention": {str(t): c for t, c in c_t.items()},
-                   "model": {str(t): v for t, v in predicted.items()},
-                   "model_with_contention": {str(t): v for t, v in with_c.items()}}, f, indent=1)
+    write_json_atomically(os.path.join(a.out, a.name + ".json"), {
+        "provenance": prov, "omp_proc_bind": env["OMP_PROC_BIND"], "omp_places": env["OMP_PLACES"],
+        "omp_wait_policy": wait_policy, "nproc": os.cpu_count(),
+        "bench_args": a.bench_args, "particles": a.particles, "steps": a.steps, "rows": rows,
+        "contention": {str(t): c for t, c in c_t.items()},
+        "model": {str(t): v for t, v in predicted.items()},
+        "model_with_contention": {str(t): v for t, v in with_c.items()}})
     print("wrote", os.path.join(a.out, a.name + ".json"))
     try:
         import matplotlib
@@ -196,15 +239,16 @@ def main():
         print("matplotlib missing: no plot (apt-get install python3-matplotlib)", file=sys.stderr)
         return
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
-    for kind, marker in (("strong", "o"), ("weak", "s")):
+    # one colour per kind in both panels (the automatic cycle gave "weak" C2 on the left, C1 on the right)
+    for kind, marker, colour in (("strong", "o", "C0"), ("weak", "s", "C1")):
         rs = [r for r in rows if r["kind"] == kind]
         base = rs[0]["updates_per_second"]
         threads = [r["threads"] for r in rs]
         speedup = [r["updates_per_second"] / base for r in rs]
-        ax1.plot(threads, speedup, marker=marker, label=kind)
-        ax2.plot(threads, [s / t for s, t in zip(speedup, threads)], marker=marker, label=kind)
+        ax1.plot(threads, speedup, marker=marker, color=colour, label=kind)
+        ax2.plot(threads, [s / t for s, t in zip(speedup, threads)], marker=marker, color=colour, label=kind)
         stream = [r["stream_speedup"] for r in rs]
-        ax1.plot(threads, stream, marker=marker, ls=":", lw=0.9, label=f"STREAM ({kind})")
+        ax1.plot(threads, stream, marker=marker, ls=":", lw=0.9, color=colour, alpha=0.6, label=f"STREAM ({kind})")
     threads = counts
     model = [predicted[t]["speedup"] for t in threads]
     ax1.plot(threads, model, "x--", color="C3", label="model (strong)")
@@ -214,14 +258,16 @@ def main():
     ax1.plot(threads, model_c, ":", color="C3", label=label_c)
     ax2.plot(threads, [m / t for m, t in zip(model_c, threads)], ":", color="C3", label=label_c)
     ax1.plot(threads, threads, "k--", lw=0.8, label="ideal")
-    ax1.set(xlabel="threads", ylabel="speed-up (particle-updates/s)", title="talus scaling")
+    ax1.set(xlabel="threads", ylabel="speed-up over 1 thread (ratio of particle-updates/s)", title="talus scaling")
     ax2.set(xlabel="threads", ylabel="efficiency", ylim=(0, 1.1))
     for ax in (ax1, ax2):
         ax.legend()
         ax.grid(alpha=0.3)
-    fig.suptitle(f"{rows[0]['cpu']}, OMP_PROC_BIND={env['OMP_PROC_BIND']} OMP_PLACES={env['OMP_PLACES']} "
-                 f"OMP_WAIT_POLICY={wait_policy}, "
-                 f"{' '.join(a.bench_args) or 'block, linear, elastic'}", fontsize=8)
+    fig.suptitle(f"talus bench {' '.join(a.bench_args) or 'block, linear, elastic'}: {a.particles} particles "
+                 f"(strong; weak: per thread), {a.steps} steps; commit {prov['talus'].get('commit', '?')} "
+                 f"{prov['build']}, {prov['isa']}, {prov['date_utc'][:10]}\n"
+                 f"{rows[0]['cpu']}, {prov['logical_cpus']} CPUs, OMP_PROC_BIND={env['OMP_PROC_BIND']} "
+                 f"OMP_PLACES={env['OMP_PLACES']} OMP_WAIT_POLICY={wait_policy}", fontsize=8)
     fig.tight_layout()
     fig.savefig(os.path.join(a.out, a.name + ".png"), dpi=120)
     print("wrote", os.path.join(a.out, a.name + ".png"))

@@ -39,7 +39,8 @@ count) bounds a step below by particles * B / STREAM(T).
 
 --contention 2:1.16 multiplies the parallel work at T >= 2 by the per-core slowdown c(T) measured when
 T cores work (--measure-contention REC1 REC2: block seconds per particle of a 2-thread record over those
-of a 1-thread record of the same scene); beyond the largest T given c keeps that value (an assumption).
+of a 1-thread record of the same scene; two records of different scenes, bench settings or particle
+counts are refused); beyond the largest T given c keeps that value (an assumption).
 The time at T is split into terms: ideal (parallel work / T), imbalance (critical paths above
 work / T), synchronisation (fork/join + barriers), serial (serial parts, glue, region overheads).
 The limiting term at T is the largest loss among imbalance, synchronisation, serial (and bandwidth).
@@ -160,6 +161,17 @@ def region_items(region, work):
         total_s = sum(secs)
         return [total_s * p / total_p for p in parts] if total_p else secs
     return secs
+
+
+def record_case(record):
+    """What a work record measured, for comparing two: the scene (a run's name; a bench's scene, shape,
+    scheme, material and MLS), the scatter and block edge, and the particles of its first recorded step."""
+    bench = record.get("bench") if isinstance(record.get("bench"), dict) else {}
+    scene = record.get("scene") or bench.get("scene") or "?"
+    if bench:
+        scene = f"bench {scene} " + " ".join(str(bench.get(k, "?")) for k in ("shape", "scheme", "material", "mls"))
+    return {"scene": scene, "scatter": record.get("scatter"), "block_cells": record.get("block_cells"),
+            "particles": record["steps"][0].get("particles")}
 
 
 def block_seconds_per_particle(record):
@@ -365,6 +377,13 @@ def main():
             if not any(r["schedule"] == "dynamic" and r["block_particles"] for s in rec["steps"] for r in s["regions"]):
                 refuse("--measure-contention", path, "has no block loops (dynamic regions with particles) to "
                                                      "measure c(T) from")
+        # c(T) compares one scene's speed per core at two thread counts: records of another scene or size
+        # gave a c without a word (a smaller scene's blocks fit the cache, a larger one's do not)
+        case1, caset = record_case(r1), record_case(rt)
+        if case1 != caset:
+            differ = ", ".join(f"{k} {case1[k]} against {caset[k]}" for k in case1 if case1[k] != caset[k])
+            refuse("--measure-contention", " ".join(a.measure_contention),
+                   f"the records are of different cases ({differ}): record one scene at two thread counts")
         c = block_seconds_per_particle(rt) / block_seconds_per_particle(r1)
         print(f"c({rt['threads']}) = {c:.4f}")
         return

@@ -10,8 +10,11 @@ Cases: block (talus bench, 1 M particles, linear elastic), shear (talus bench --
 --shape bspline2, 1 M particles), flume (inputs/denlinger_flume.json run to --flume-end seconds of
 simulated time, with its outputs). Threads are pinned (OMP_PROC_BIND=close, OMP_PLACES=cores unless
 set); OMP_WAIT_POLICY is --wait-policy's (unset by default, whatever the environment says), as in
-tools/scaling.py, and the values used are written to the JSON. The bench rates are those of the timed steps; the flume rate is the run's particle-updates per
-second of wall time, output included. The prediction for the flume is the run's wall time at 1 thread
+tools/scaling.py, and the values used are written to the JSON, with what measured it (`provenance`:
+the talus build and commit, native or portable, the vector path, CPU, logical CPUs, date, this
+command line); the JSON is written whole at the end or not at all. The bench rates are those of the
+timed steps; the flume rate is the run's particle-updates per second of wall time, output included
+(its run.json's, not the printed line's 0.01 M/s). The prediction for the flume is the run's wall time at 1 thread
 split by the record into the steps (scaled by the model's speed-up of the recorded steps, the run loop's
 work after them left out) and the rest of the run loop (output, guards: kept serial; the last-good-state
 snapshots, copied in parallel: divided by the thread count).
@@ -19,15 +22,16 @@ snapshots, copied in parallel: divided by the thread count).
 import argparse
 import json
 import os
-import re
 import sys
 import tempfile
 import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 # from cli_checks, not talus_plot: talus_plot imports numpy, which this tool does not need
-from cli_checks import refuse, require_at_least, require_folders, require_talus, run_or_stop  # noqa: E402
+from cli_checks import (provenance, refuse, require_at_least, require_folders, require_talus,  # noqa: E402
+                        run_or_stop, utc_now, write_json_atomically)
 import scaling_model  # noqa: E402
-from scaling import add_wait_policy_argument, apply_wait_policy  # noqa: E402
+from scaling import ROOT, add_wait_policy_argument, apply_wait_policy  # noqa: E402
+from scaling_runs import run_timing  # noqa: E402
 
 
 def env():
@@ -41,13 +45,18 @@ def load():
     return os.getloadavg()[0]
 
 
+MEASURED = {}  # the first bench --json or run.json: the build, vector path and CPU of the provenance
+
+
 def bench(talus, args, threads, record=None):
     with tempfile.NamedTemporaryFile(suffix=".json") as f:
         cmd = [talus, "bench", "--threads", str(threads), "--json", f.name] + args
         if record:
             cmd += ["--record-work", record]
         run_or_stop(cmd, "talus bench", env=env(), keep_stdout=False)
-        return json.load(open(f.name))["particle_updates_per_second"]
+        result = json.load(open(f.name))
+        MEASURED.setdefault("record", result)
+        return result
 
 
 def flume_scene(end, path):
@@ -63,10 +72,10 @@ def run(talus, scene, threads, out, record=None):
     if record:
         cmd += ["--record-work", record, "--record-interval", "37"]
     r = run_or_stop(cmd, "talus run", env=env())
-    m = re.search(r"done: (\d+) steps .* in ([0-9.]+) s \(([0-9.]+) M particle-updates/s\)", r.stdout)
-    if not m:
-        sys.exit(f"{os.path.basename(sys.argv[0])}: talus run printed no rate: {' '.join(cmd)}")
-    return float(m.group(3)) * 1e6, float(m.group(2))
+    _, wall, rate, record = run_timing(cmd, out, r.stdout)
+    if record:
+        MEASURED.setdefault("record", record)
+    return rate, wall
 
 
 def solver_steps_only(record):
@@ -87,7 +96,7 @@ def predicted_speedup(record_path, threads, schedule="recorded"):
     return one / many, record
 
 
-def plot(results, path):
+def plot(results, path, title):
     """Measured speed-ups (every run) beside the model's, per case."""
     try:
         import matplotlib
@@ -103,6 +112,7 @@ def plot(results, path):
     ax.set_xticks(range(len(results)))
     ax.set_xticklabels([e["case"] for e in results])
     ax.set(ylabel=f"speed-up at {results[0]['threads']} threads", xlim=(-0.5, len(results) - 0.5))
+    ax.set_title(title, fontsize=8)
     ax.grid(alpha=0.3)
     ax.legend()
     fig.tight_layout()
@@ -112,14 +122,15 @@ def plot(results, path):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--talus", default="build/talus")
+    # the defaults from the repository root, as scaling.py's (they were from the current folder)
+    ap.add_argument("--talus", default=os.path.join(ROOT, "build", "talus"))
     ap.add_argument("--case", action="append", choices=["block", "shear", "flume"])
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--repeat", type=int, default=2)
     ap.add_argument("--particles", type=int, default=1000000)
     ap.add_argument("--steps", type=int, default=10)
     ap.add_argument("--flume-end", type=float, default=0.5)
-    ap.add_argument("--workdir", default="build/validation")
+    ap.add_argument("--workdir", default=os.path.join(ROOT, "build", "validation"))
     ap.add_argument("--out", default="")
     add_wait_policy_argument(ap)
     a = ap.parse_args()
@@ -131,6 +142,7 @@ def main():
     os.makedirs(a.workdir, exist_ok=True)
     require_folders(out=a.out)
     wait_policy = apply_wait_policy(a.wait_policy)
+    started = utc_now()
     results = []
     for case in a.case or ["block", "shear", "flume"]:
         rec = os.path.join(a.workdir, f"{case}_record_1thread.json")
@@ -140,14 +152,15 @@ def main():
             args = ["--particles", str(a.particles), "--steps", str(a.steps)]
             if case == "shear":
                 args += ["--scene", "shear", "--material", "dp", "--shape", "bspline2"]
-            bench(a.talus, args + ["--record-steps", "3"], 1, rec)
+            # the particles as the bench seeded them (--particles is approximate: 20000 gave 21952)
+            particles = bench(a.talus, args + ["--record-steps", "3"], 1, rec)["particles"]
             ones, manys = [], []
             for _ in range(a.repeat):
-                ones.append(bench(a.talus, args, 1))
-                manys.append(bench(a.talus, args, a.threads))
+                ones.append(bench(a.talus, args, 1)["particle_updates_per_second"])
+                manys.append(bench(a.talus, args, a.threads)["particle_updates_per_second"])
             speedup, _ = predicted_speedup(rec, a.threads)
             base = sum(ones) / len(ones)
-            entry.update(command="talus bench " + " ".join(args))
+            entry.update(command="talus bench " + " ".join(args), particles=particles, steps=a.steps)
         else:
             scene = os.path.join(a.workdir, "flume_validation.json")
             flume_scene(a.flume_end, scene)
@@ -165,7 +178,7 @@ def main():
             speedup = (solver_s + other_s) / (solver_s / step_speedup + (other_s - snapshot_s) + snapshot_s / a.threads)
             base = sum(ones) / len(ones)
             entry.update(command=f"talus run inputs/denlinger_flume.json with time.end = {a.flume_end}",
-                         step_speedup=step_speedup, steps_share=share)
+                         step_speedup=step_speedup, steps_share=share, particles=record["steps"][0]["particles"])
         entry.update(measured_1=ones, measured_n=manys, predicted_speedup=speedup, predicted_n=base * speedup,
                      measured_speedup=[m / base for m in manys], load_after=load(), seconds=time.time() - t0)
         err = [(base * speedup - m) / m for m in manys]
@@ -176,12 +189,17 @@ def main():
               f"model x{speedup:.2f} -> {base * speedup / 1e6:.3f} M/s, error {', '.join(f'{100 * e:+.1f}%' for e in err)}; "
               f"load {entry['load_before']:.2f} -> {entry['load_after']:.2f}", flush=True)
     if a.out:
-        plot(results, a.out.rsplit(".", 1)[0] + ".png")
-        with open(a.out, "w") as f:
-            e = env()
-            json.dump({"cpu": open("/proc/cpuinfo").read().split("model name")[1].split("\n")[0].strip(": "),
-                       "omp_proc_bind": e["OMP_PROC_BIND"], "omp_places": e["OMP_PLACES"],
-                       "omp_wait_policy": wait_policy, "nproc": os.cpu_count(), "results": results}, f, indent=1)
+        prov = provenance(a.talus, MEASURED.get("record"), started)
+        sizes = ", ".join(f"{e['case']} {e['particles']} particles" for e in results)
+        plot(results, a.out.rsplit(".", 1)[0] + ".png",
+             f"{prov['cpu']}, {prov['logical_cpus']} CPUs; {sizes}\n"
+             f"commit {prov['talus'].get('commit', '?')} {prov['build']}, {prov['isa']}, {prov['date_utc'][:10]}")
+        e = env()
+        # the dict built first, then the file written whole: it was opened before, and a failure left
+        # it empty; the CPU without assuming a "model name" line (an IndexError without one)
+        write_json_atomically(a.out, {"provenance": prov, "cpu": prov["cpu"],
+                                      "omp_proc_bind": e["OMP_PROC_BIND"], "omp_places": e["OMP_PLACES"],
+                                      "omp_wait_policy": wait_policy, "nproc": os.cpu_count(), "results": results})
         print("wrote", a.out)
 
 

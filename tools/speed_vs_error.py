@@ -207,8 +207,8 @@ def column_sweep(talus, name, shapes, quick, mls_modes, threads, rows, failed):
 
 
 def plot_error_vs_time(rows, bench, path, threads, mls_modes):
-    """Error against run time of the rows of one benchmark, a marker per shape (cell size and particles
-    per cell written beside the columns' points); nothing when it has no rows."""
+    """Error against run time of the rows of one benchmark, a marker per shape (cell size h in metres and
+    particles per cell written beside the columns' points); nothing when it has no rows."""
     sel = [r for r in rows if r["benchmark"] == bench]
     if not sel:
         return
@@ -226,7 +226,9 @@ def plot_error_vs_time(rows, bench, path, threads, mls_modes):
                            label=f"{shape} {scheme}" + (f" MLS {mls}" if mls != "off" else ""))
                 for r in pts:
                     if bench.startswith("column"):
-                        ax.annotate(f"h={r['cell_size']:g},{r['ppc']}", (r[time_col], max(r["error"], 1e-5)),
+                        # h is grid.cell_size, in metres (the column is 50 m long); "h=2,2" gave no unit and
+                        # left the second number unnamed
+                        ax.annotate(f"h={r['cell_size']:g} m, {r['ppc']} ppc", (r[time_col], max(r["error"], 1e-5)),
                                     fontsize=6)
     ax.set_xscale("log")
     ax.set_yscale("log")
@@ -310,7 +312,7 @@ def main():
             conv.append({"shape": shape, "rate": round(float(rate), 3),
                          **{f"L2_h{h:g}": round(float(e), 6) for h, e in zip(hs, es)}})
             ax.loglog(hs, es, marker=MARKERS[shape], label=f"{shape} (rate {rate:.2f})")
-    ax.set_xlabel("cell size h")
+    ax.set_xlabel("cell size h [m]")
     ax.set_ylabel("relative L2 stress error")
     ax.set_title("column W = 10000: convergence")
     ax.legend(fontsize=8)

@@ -202,6 +202,26 @@ class Refusals(unittest.TestCase):
         self.refused(self.rec, self.bench, naming="not a work record")
         self.refused("--measure-contention", self.rec, self.bench, naming="--record-work")
 
+    def test_contention_from_records_of_different_scenes_or_sizes(self):
+        # c(T) from a 1-thread record of one scene and a T-thread record of another was printed without a word
+        def write(name, **changes):
+            rec = record([dynamic([1 * MS, 1 * MS])], scene="flume", threads=2)
+            rec.update(changes.pop("top", {}))
+            rec["steps"][0].update(changes)
+            path = os.path.join(self.tmp.name, name)
+            with open(path, "w") as f:
+                json.dump(rec, f)
+            return path
+        one = write("flume_1.json", top={"threads": 1})
+        self.refused("--measure-contention", one, write("other.json", top={"scene": "column"}),
+                     naming="scene flume against column")
+        self.refused("--measure-contention", one, write("bigger.json", particles=1600),
+                     naming="particles 800 against 1600")
+        tool = os.path.join(os.path.dirname(sm.__file__), "scaling_model.py")
+        r = subprocess.run([sys.executable, tool, "--measure-contention", one, write("same.json")],
+                           capture_output=True, text=True, timeout=30)
+        self.assertEqual((r.returncode, r.stdout.strip()), (0, "c(2) = 1.0000"), r.stderr)
+
     def test_no_records_writes_nothing(self):
         self.refused("--out", "out", naming="give one or more work records")
 
