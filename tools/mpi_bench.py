@@ -98,6 +98,9 @@ def main():
         bench_args = shlex.split(a.bench_args)
     except ValueError as e:
         sys.exit(f"mpi_bench.py: --bench-args {a.bench_args}: {e}")
+    if any(x == "--cpu-time" or x.startswith("--cpu-time=") for x in bench_args):
+        # (the layouts are compared on the wall clock; under --cpu-time the bench writes cpu_seconds)
+        sys.exit("mpi_bench.py: --bench-args --cpu-time: the layouts are compared on the wall clock: leave it out")
     all_layouts = layouts(a.talus)
     # checked before the reference runs: a wrong name was a KeyError after them
     names = choices_list("--layouts", a.layouts, list(all_layouts))
