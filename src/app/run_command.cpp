@@ -16,6 +16,7 @@
 #include "talus/solver/stability_guards.hpp"
 
 #include <fmt/core.h>
+#include <fmt/ranges.h>
 #include <omp.h>
 
 #include <nlohmann/json.hpp>
@@ -300,10 +301,15 @@ void add_run_command(CLI::App& app) {
     std::string dir = out_dir->empty() ? "runs/" + scene.name : *out_dir;
     Solver solver(std::move(scene), world);
     std::optional<RunProgress> resumed;
+    std::vector<std::string> changed;  // the keys a restart may change that this scene changes
     if (!restart->empty()) {  // checked against the scene before anything is written
       Checkpoint checkpoint;
       world.agree([&] { checkpoint = read_checkpoint(*restart, world); });  // (a rank may not see the file)
       restore_checkpoint(solver, checkpoint, *restart);
+      changed = restart_changes(checkpoint, solver.scene());
+      if (world.root() && !changed.empty())
+        fmt::print("talus: restart with a changed {}: {}; the run goes on with this scene's, no longer bit-identical to "
+                   "one without the change\n", changed.size() == 1 ? "key" : "keys", fmt::join(changed, "; "));
       // Only the run's progress is kept: the checkpoint's copy of the particles (about 190 B a
       // particle of the whole scene, on every rank) was held to the run's end.
       resumed = checkpoint.run;
@@ -370,7 +376,7 @@ void add_run_command(CLI::App& app) {
       recorder = std::make_unique<WorkRecorder>(1000, *record_interval, RecordSpan::WholeRun);
       options.recorder = recorder.get();
     }
-    RunRecord record(dir, solver, RunStart{*scene_path, *restart, memory.total(), start.particles, started, utc_started}, world);
+    RunRecord record(dir, solver, RunStart{*scene_path, *restart, changed, memory.total(), start.particles, started, utc_started}, world);
     options.heartbeat = [&record](const Solver& s) { record.progress(s); };
     RunSummary summary;
     try {

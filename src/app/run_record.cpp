@@ -64,6 +64,7 @@ RunRecord::RunRecord(const fs::path& dir, const Solver& solver, const RunStart& 
   if (!start.restart_path.empty()) {
     record_["restart"] = {{"checkpoint", absolute(start.restart_path)}, {"step", solver.step_count()},
                           {"time", solver.time()}};
+    if (!start.restart_changes.empty()) record_["restart"]["changed"] = start.restart_changes;
     std::string folder = fs::path(start.restart_path).parent_path().string();
     record_["earlier_parts"] = earlier_parts(folder.empty() ? "." : folder);
   }

@@ -23,6 +23,7 @@
 #include <ctime>
 #include <filesystem>
 #include <string>
+#include <vector>
 #include <string_view>
 
 namespace talus::app {
@@ -31,6 +32,7 @@ namespace talus::app {
 struct RunStart {
   std::string scene_path;       // as given on the command line
   std::string restart_path;     // the checkpoint resumed from (empty: a fresh run)
+  std::vector<std::string> restart_changes;  // what the scene changed of the checkpoint's (restart_changes)
   std::size_t estimated_bytes;  // the memory estimate of `talus check` (all ranks)
   std::int64_t particles;       // on every rank together
   /// When the command started (before the scene was read and the particles seeded): the record's

@@ -259,8 +259,16 @@ class RunLoop {
     progress_.energy_max_released = energy_guard_.max_released();
     if (progress_.runout_first_row.empty()) progress_.runout_first_row = runout_.first_row();
     checkpoint_.write(solver_, progress_);
+    checkpoint_time_ = solver_.time();
     ++summary_.checkpoints;
   }
+  /// The time of the checkpoint.h5 in the folder (this run's last, or the one resumed in place).
+  std::optional<double> checkpoint_time_;
+  /// Before the last good state replaces checkpoint.h5: the checkpoint there is kept as
+  /// checkpoint_earlier.h5 (what the failure's line then says). A slow blow-up that trips the energy
+  /// guard is already under way in a last good state a few steps old: the periodic checkpoint from
+  /// before it began is the one to resume with a smaller time.courant, and it was overwritten.
+  std::string keep_earlier_checkpoint();
   /// Keeps the current state as the last good one; false when the scene keeps none.
   bool take_snapshot();
   [[noreturn]] void fail(const Error& e);
@@ -346,6 +354,7 @@ void RunLoop::start() {
   if (comm_.root()) write_file_atomically((dir_ / "scene.json").string(), scene_file_json(scene_).dump(2) + "\n");
   summary_.pvd_path = frames_.pvd_path();
   summary_.checkpoint_path = checkpoint_.path();
+  if (resumed_in_place_ && fs::exists(checkpoint_.path())) checkpoint_time_ = solver_.time();
   summary_.runout_path = runout_.history_path();
   if (comm_.root()) write_terrain();
   progress_line_.set_particles(solver_.distribution().particles);
@@ -518,16 +527,26 @@ void RunLoop::fail(const Error& e) {
         frame = frames_.write(solver_);
         ++summary_.frames;
       }
+      const std::string earlier = keep_earlier_checkpoint();
       write_checkpoint();
       // its runout too, marked unstable (an unstable run wrote no runout.json)
       runout_.finish(solver_, "unstable");
-      message += fmt::format(" | last good state ({}) written to {} and checkpoint.h5",
-                             step_ended(solver_.step_count(), solver_.time()), frame);
+      message += fmt::format(" | last good state ({}) written to {} and checkpoint.h5{}",
+                             step_ended(solver_.step_count(), solver_.time()), frame, earlier);
     }
   } catch (const Error& io) {
     message += fmt::format(" | the last good state could not be written: {}", io.what());
   }
   throw instability_error(message);
+}
+
+std::string RunLoop::keep_earlier_checkpoint() {
+  if (!checkpoint_time_ || *checkpoint_time_ >= solver_.time()) return "";  // (none, or the last good state's own)
+  const fs::path from = checkpoint_.path(), to = from.parent_path() / "checkpoint_earlier.h5";
+  std::error_code ec;
+  fs::rename(from, to, ec);
+  if (ec) return "";
+  return fmt::format("; the checkpoint of t = {:.6g} s kept as {}", *checkpoint_time_, to.filename().string());
 }
 
 void RunLoop::finish() {

@@ -69,7 +69,8 @@ void clear_output_folder(const fs::path& dir, const RunProgress* resume) {
 
 std::vector<fs::path> run_output_files(const fs::path& dir) {
   std::vector<fs::path> files;
-  for (const char* f : {"particles.pvd", "energy.csv", "scene.json", "checkpoint.h5", "runout.csv", "runout.json",
+  for (const char* f : {"particles.pvd", "energy.csv", "scene.json", "checkpoint.h5", "checkpoint_earlier.h5",
+                        "runout.csv", "runout.json",
                         "deposit.csv", "terrain.vtu", "run.json"})
     files.push_back(dir / f);
   return files;

@@ -8,6 +8,7 @@
 #include <H5Cpp.h>
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -171,7 +172,52 @@ std::string first_difference(const nlohmann::json& saved, const nlohmann::json& 
   return fmt::format("{}: checkpoint {}, this scene {}", path, value_at(saved), value_at(current));
 }
 
+/// The scene's JSON without, or with only, the keys a restart may change (restart_changes).
+nlohmann::json changeable_part(const nlohmann::json& scene, bool keep) {
+  static const char* const kTimeKeys[] = {"end", "courant", "max_steps"};
+  nlohmann::json part = keep ? nlohmann::json::object() : scene;
+  if (!scene.is_object()) return part;
+  if (auto t = scene.find("time"); t != scene.end() && t->is_object())
+    for (const char* key : kTimeKeys) {
+      if (!t->contains(key)) continue;
+      if (keep)
+        part["time"][key] = (*t)[key];
+      else
+        part["time"].erase(key);
+    }
+  if (auto g = scene.find("guards"); g != scene.end()) {
+    if (keep)
+      part["guards"] = *g;
+    else
+      part.erase("guards");
+  }
+  return part;
+}
+
 }  // namespace
+
+std::vector<std::string> restart_changes(const Checkpoint& checkpoint, const Scene& scene) {
+  nlohmann::json saved;
+  try {
+    saved = nlohmann::json::parse(checkpoint.scene_json);
+  } catch (const nlohmann::json::exception&) {
+    return {};  // (restore_checkpoint refuses it)
+  }
+  const nlohmann::json now = scene_to_json(scene);
+  const nlohmann::json before = changeable_part(saved, true), after = changeable_part(now, true);
+  std::vector<std::string> lines;
+  for (const nlohmann::json& op : nlohmann::json::diff(before, after)) {
+    const std::string pointer = op.value("path", std::string());
+    std::string key = pointer.substr(1);
+    std::replace(key.begin(), key.end(), '/', '.');
+    auto value_in = [&](const nlohmann::json& j) {
+      const nlohmann::json::json_pointer at(pointer);
+      return j.contains(at) ? short_json(j.at(at)) : std::string("(not set)");
+    };
+    lines.push_back(fmt::format("{}: {} in the checkpoint's scene, {} here", key, value_in(before), value_in(after)));
+  }
+  return lines;
+}
 
 std::string scene_hash(const Scene& scene) {
   const std::string text = scene_to_json(scene).dump();
@@ -467,15 +513,23 @@ ParticleStore checked_particles(const Solver& solver, const Checkpoint& c, const
                                   path, c.talus_version, kVersion));
   const std::string hash = scene_hash(solver.scene());
   if (c.scene_hash != hash) {
-    std::string diff;
+    // The keys a restart may change (restart_changes) aside, the scenes must be the same.
+    std::string diff = "?";
     try {
-      diff = first_difference(nlohmann::json::parse(c.scene_json), scene_to_json(solver.scene()));
+      diff = first_difference(changeable_part(nlohmann::json::parse(c.scene_json), false),
+                              changeable_part(scene_to_json(solver.scene()), false));
     } catch (const std::exception&) {
     }
-    throw input_error(fmt::format(
+    if (diff.empty()) {
+      if (solver.scene().end_time < c.solver.time)
+        throw input_error(fmt::format("time.end = {} s is before the checkpoint's time, t = {:.6g} s: a restart goes on "
+                                      "from there", solver.scene().end_time, c.solver.time));
+      diff = "";
+    }
+    if (!diff.empty()) throw input_error(fmt::format(
         "checkpoint {} belongs to another scene (\"{}\", hash {}; this scene \"{}\" hashes to {}){}: a restart needs "
-        "the scene the checkpoint was written with",
-        path, c.scene_name, c.scene_hash, solver.scene().name, hash, diff.empty() ? "" : ", first difference at " + diff));
+        "the scene the checkpoint was written with (only time.end, time.courant, time.max_steps and guards.* may change)",
+        path, c.scene_name, c.scene_hash, solver.scene().name, hash, diff == "?" ? "" : ", first difference at " + diff));
   }
   const std::size_t n = c.id.size();
   auto bad = [&](const std::string& what) { return input_error(fmt::format("checkpoint {} is inconsistent: {}", path, what)); };

@@ -315,11 +315,12 @@ TEST(Checkpoint, RefusesAnotherSceneAnotherVersionAndBadFiles) {
   std::string msg;
 
   Scene other = scene;
-  other.end_time = 0.06;
+  other.gravity = Vec3(0.0, 0.0, -9.0);
+  other.end_time = 0.06;  // (a key a restart may change: not the one named)
   EXPECT_EQ(restore_error(other, path, &msg), Error::Kind::Input);
   EXPECT_NE(msg.find("belongs to another scene"), std::string::npos) << msg;
   // the two values, which "/time/end (differs)" did not give
-  EXPECT_NE(msg.find("first difference at /time/end: checkpoint 0.05, this scene 0.06"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("first difference at /gravity/2: checkpoint -9.81, this scene -9"), std::string::npos) << msg;
   EXPECT_EQ(msg.find('\n'), std::string::npos);
   // a long value is cut short, on the same line
   other = scene;
@@ -344,6 +345,53 @@ TEST(Checkpoint, RefusesAnotherSceneAnotherVersionAndBadFiles) {
   }
   EXPECT_EQ(restore_error(scene, path, &msg), Error::Kind::Input);
   EXPECT_NE(msg.find("written by talus 0.0.0"), std::string::npos) << msg;
+  test::fs::remove_all(dir);
+}
+
+// The keys a restart may change (time.end, time.courant, time.max_steps, guards.*) steer how the run
+// goes on, not the state it goes on from: an instability's last good state resumed with a smaller
+// time step (refused before 2026-12-07: "first difference at /time/courant"), a finished run
+// extended. The restore takes them, restart_changes names each, and a time.end before the
+// checkpoint's time is refused.
+TEST(Checkpoint, ARestartMayChangeTheEndTheTimeStepAndTheGuards) {
+  const auto dir = test::temp_dir("changes");
+  const Scene scene = test::tumbling_block_scene(0.05);
+  Solver solver(scene);
+  solver.step();
+  solver.step();
+  const std::string path = (dir / "c.h5").string();
+  write_checkpoint(path, solver, RunProgress{});
+  const Checkpoint checkpoint = read_checkpoint(path);
+  EXPECT_TRUE(restart_changes(checkpoint, scene).empty());
+
+  Scene changed = scene;
+  changed.end_time = 0.08;
+  changed.courant = 0.5 * scene.courant;
+  changed.max_steps = 1000;
+  changed.guards.energy_warning_factor = 0.2;
+  Solver resumed(changed);
+  ASSERT_NO_THROW(restore_checkpoint(resumed, checkpoint, path));
+  EXPECT_EQ(resumed.step_count(), solver.step_count());
+  EXPECT_EQ(resumed.time(), solver.time());
+  EXPECT_EQ(resumed.particles().x[0], solver.particles().x[0]);
+  const std::vector<std::string> lines = restart_changes(checkpoint, changed);
+  ASSERT_EQ(lines.size(), 4u);
+  EXPECT_EQ(lines[0], "guards.energy_warning_factor: 0.1 in the checkpoint's scene, 0.2 here");
+  EXPECT_EQ(lines[1], fmt::format("time.courant: {} in the checkpoint's scene, {} here", scene.courant, changed.courant));
+  EXPECT_EQ(lines[2], "time.end: 0.05 in the checkpoint's scene, 0.08 here");
+  EXPECT_EQ(lines[3], "time.max_steps: 0 in the checkpoint's scene, 1000 here");
+  // The next step takes the new Courant number's time step (the state is the checkpoint's).
+  resumed.step();
+  solver.step();
+  EXPECT_NEAR(resumed.time() - checkpoint.solver.time, 0.5 * (solver.time() - checkpoint.solver.time),
+              1e-9 * solver.time());
+
+  Scene too_early = scene;
+  too_early.end_time = 0.5 * checkpoint.solver.time;
+  std::string msg;
+  EXPECT_EQ(restore_error(too_early, path, &msg), Error::Kind::Input);
+  EXPECT_NE(msg.find("time.end = "), std::string::npos) << msg;
+  EXPECT_NE(msg.find("is before the checkpoint's time"), std::string::npos) << msg;
   test::fs::remove_all(dir);
 }
 

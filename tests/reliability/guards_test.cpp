@@ -468,8 +468,7 @@ TEST(HardCases, SteepSixtyDegreeSlopeWithLowFriction) {
 // 69% of its energy available by 3.5 s (a user's hunt, 2026-12-07), and ended "completed" without a
 // word. It is warned about once, where the growth first passes guards.energy_warning_factor (0.1),
 // and the summary records where (run.json's end.energy_growth_warning); 0 turns it off.
-TEST(HardCases, EnergyCreatedShortOfTheStopIsWarnedAboutOnce) {
-  const std::string text = R"({
+const char* const kKinkScene = R"({
     "name": "kink75", "grid": { "size": [16, 0.25, 2], "cell_size": 0.25,
                                 "terrain": { "points": [[0, 22.392], [6, 0], [16, 0]] } },
     "time": { "end": 2.7 },
@@ -478,6 +477,9 @@ TEST(HardCases, EnergyCreatedShortOfTheStopIsWarnedAboutOnce) {
     "boundaries": { "x-": "open", "x+": "open", "z-": { "type": "friction", "friction_coefficient": 0.3 }, "z+": "open" },
     "output": { "history_interval": 0.01, "frame_interval": 10 }
   })";
+
+TEST(HardCases, EnergyCreatedShortOfTheStopIsWarnedAboutOnce) {
+  const std::string text = kKinkScene;
   for (const double factor : {0.1, 0.0}) {
     SCOPED_TRACE(factor);
     Scene scene = parse_scene(text, "kink75");
@@ -510,6 +512,56 @@ TEST(HardCases, EnergyCreatedShortOfTheStopIsWarnedAboutOnce) {
     EXPECT_NE(err.find("guards.energy_warning_factor = 0.1"), std::string::npos) << err;
     EXPECT_NE(err.find("fastest: particle "), std::string::npos) << err;
   }
+}
+
+// The energy guard trips on a slow blow-up, which a last good state a few steps old already carries
+// (a hunt's steep slide: 58% of its energy created there). The periodic checkpoint from before the
+// blow-up is kept as checkpoint_earlier.h5 (it was overwritten), the line names it, and it resumes
+// to the end with a smaller time.courant, a change a restart may make.
+TEST(HardCases, TheEnergyGuardKeepsTheEarlierCheckpointToResumeWithASmallerStep) {
+  Scene scene = parse_scene(kKinkScene, "kink75");
+  scene.end_time = 3.0;
+  scene.guards.energy_growth_factor = 0.2;  // trips at t = 2.56 s (28.7% grown)
+  scene.output.checkpoint_interval = 1.0;
+  const fs::path dir = test::temp_dir("earlier_checkpoint");
+  RunOptions options;
+  options.out_dir = dir.string();
+  options.progress = false;
+  options.handle_signals = false;
+  std::string diagnosis;
+  {
+    Solver solver(scene);
+    testing::internal::CaptureStderr();
+    try {
+      run_scene(solver, options);
+    } catch (const Error& e) {
+      diagnosis = e.what();
+    }
+    testing::internal::GetCapturedStderr();
+  }
+  expect_diagnosis(diagnosis, "energy_growth_factor");
+  EXPECT_NE(diagnosis.find("; the checkpoint of t = 2.00"), std::string::npos) << diagnosis;
+  EXPECT_NE(diagnosis.find("s kept as checkpoint_earlier.h5"), std::string::npos) << diagnosis;
+  const std::string earlier = (dir / "checkpoint_earlier.h5").string();
+  ASSERT_TRUE(fs::exists(earlier));
+  const Checkpoint kept = read_checkpoint(earlier);
+  EXPECT_GT(kept.solver.time, 1.99);
+  EXPECT_LT(kept.solver.time, 2.01);
+  EXPECT_GT(read_checkpoint((dir / "checkpoint.h5").string()).solver.time, 2.5);  // the last good state
+
+  scene.courant = 0.1;  // resumed from the earlier one with a third of the step: it runs to the end
+  Solver resumed(scene);
+  restore_checkpoint(resumed, kept, earlier);
+  RunOptions again = options;
+  again.out_dir = (dir / "resumed").string();
+  again.resume = &kept.run;
+  again.resume_dir = dir.string();
+  testing::internal::CaptureStderr();
+  const RunSummary summary = run_scene(resumed, again);
+  testing::internal::GetCapturedStderr();
+  EXPECT_NEAR(summary.time, 3.0, 1e-12);
+  EXPECT_LT(summary.energy_budget_gap(), 0.05);  // measured -0.019 (to 3.5 s) by talus run
+  fs::remove_all(dir);
 }
 
 // A run that creates no energy is not warned about: the free fall, whose growth is round-off.

@@ -81,6 +81,13 @@ struct Checkpoint {
 /// FNV-1a 64 of scene_to_json(scene).dump(), as 16 hex digits.
 std::string scene_hash(const Scene& scene);
 
+/// The keys a restart may change: time.end, time.courant, time.max_steps and guards.*. They steer
+/// how the run goes on (how far, in what steps, what stops it), not the state it goes on from: an
+/// instability's last good state resumed with a smaller time.courant, a finished run extended. What
+/// the scene changes of them, one line each ("time.courant: 0.3 in the checkpoint's scene, 0.15
+/// here"); empty when nothing. Any other difference is refused by restore_checkpoint.
+std::vector<std::string> restart_changes(const Checkpoint& checkpoint, const Scene& scene);
+
 /// Write the solver's state and the run progress to `path` (through path + ".tmp" and a rename).
 /// Collective in a distributed run: the particles are gathered and rank 0 writes one file.
 void write_checkpoint(const std::string& path, const Solver& solver, const RunProgress& run);
