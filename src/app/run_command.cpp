@@ -301,6 +301,7 @@ void add_run_command(CLI::App& app) {
     std::string dir = out_dir->empty() ? "runs/" + scene.name : *out_dir;
     Solver solver(std::move(scene), world);
     std::optional<RunProgress> resumed;
+    double resumed_time = 0.0;
     std::vector<std::string> changed;  // the keys a restart may change that this scene changes
     if (!restart->empty()) {  // checked against the scene before anything is written
       Checkpoint checkpoint;
@@ -313,6 +314,7 @@ void add_run_command(CLI::App& app) {
       // Only the run's progress is kept: the checkpoint's copy of the particles (about 190 B a
       // particle of the whole scene, on every rank) was held to the run's end.
       resumed = checkpoint.run;
+      resumed_time = checkpoint.solver.time;
       if (out_dir->empty()) dir = checkpoint_folder(*restart);
     }
     require_outputs_spare_inputs(dir, *scene_path, solver.scene(), *restart, *record_path);
@@ -500,6 +502,11 @@ void add_run_command(CLI::App& app) {
                                     : fmt::format(", {} written by this run", summary.frames);
     fmt::print("talus: ParaView series: {} ({} frame{}{}); energy history: {}/energy.csv; run record: {}/run.json\n",
                summary.pvd_path, summary.frames_in_series, summary.frames_in_series == 1 ? "" : "s", written, dir, dir);
+    // (resumed into another folder: its series, energy.csv and runout.csv start at the checkpoint,
+    // which a user opening that folder alone could not tell, docs/reliability.md)
+    if (resumed && !same_file(dir, checkpoint_folder(*restart)))
+      fmt::print("talus: {}'s series and histories start at the checkpoint, t = {:.6g} s; the part before it is in {}\n",
+                 dir, resumed_time, checkpoint_folder(*restart));
     if (!summary.terrain_path.empty()) fmt::print("talus: terrain surface: {} (open it with the series)\n", summary.terrain_path);
     if (summary.runout) print_runout(*summary.runout, summary, solver.scene().runout);
   });

@@ -110,7 +110,8 @@ void write_terrain_vtu(const std::string& path, const TerrainProfile& profile, d
   for (vtkIdType i = 0; i < n; ++i) {
     const double x = xs[i], z = profile.height(x);
     const double s = profile.arc_length(x);
-    const double deg = std::atan(-profile.slope(x)) * 180.0 / M_PI;  // positive where the bed descends in +x
+    // positive where the bed descends in +x (+ 0.0: a flat bed read "-0" in ParaView's range)
+    const double deg = std::atan(-profile.slope(x)) * 180.0 / M_PI + 0.0;
     for (int side = 0; side < 2; ++side) {
       points->SetPoint(2 * i + side, x, side == 0 ? y0 : y1, z);
       arc->SetValue(2 * i + side, s);
