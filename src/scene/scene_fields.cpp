@@ -500,11 +500,14 @@ Table<BodyDraft> make_box_table() {
           {{"type", "string"}, {"enum", {"physical", "terrain"}}, {"default", "physical"}},
           [](ObjectReader& r, BodyDraft& d) {
             if (!r.has("frame")) return;
-            if (!d.scene->scene.grid.has_terrain())
-              throw input_error(fmt::format("{} needs grid.terrain (on a flat grid z is the height above the floor)",
+            const bool terrain = r.choice("frame", "physical", {"physical", "terrain"}) == "terrain";
+            // Only the terrain frame needs a bed; "physical", the default, written out is the flat grid's
+            // own frame (it was refused there as if it were "terrain").
+            if (terrain && !d.scene->scene.grid.has_terrain())
+              throw input_error(fmt::format("{} = \"terrain\" needs grid.terrain (on a flat grid z is the height "
+                                            "above the floor: leave frame out, or write \"physical\")",
                                             r.key_path("frame")));
-            d.body.frame =
-                r.choice("frame", "physical", {"physical", "terrain"}) == "terrain" ? BoxFrame::Terrain : BoxFrame::Physical;
+            d.body.frame = terrain ? BoxFrame::Terrain : BoxFrame::Physical;
           },
           [](const BodyDraft& d, Json& j) {
             if (d.body.frame == BoxFrame::Terrain) j["frame"] = "terrain";

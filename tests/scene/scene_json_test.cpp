@@ -244,6 +244,19 @@ TEST(SceneJson, OverlappingBodiesOfAnyShapeOrFrameAreWarnedAbout) {
   EXPECT_EQ(test::warnings_with(terrain, "overlap"), 0);
 }
 
+// A box's frame written out as the default, "physical", is the flat grid's own frame: accepted (it was
+// refused as if it needed grid.terrain). Only "terrain" needs a bed, and its message says so.
+TEST(SceneJson, TheDefaultFrameWrittenOutIsAcceptedOnAFlatGrid) {
+  const std::string physical =
+      replace_once(kMinimal, "\"max\": [0.5, 0.5, 0.5] }", "\"max\": [0.5, 0.5, 0.5], \"frame\": \"physical\" }");
+  EXPECT_EQ(scene_to_json(parse_scene(physical, "t")), scene_to_json(parse_scene(kMinimal, "t")));
+  test::expect_variant_error(kMinimal, "\"max\": [0.5, 0.5, 0.5] }",
+                             "\"max\": [0.5, 0.5, 0.5], \"frame\": \"terrain\" }",
+                             "bodies[0].box.frame = \"terrain\" needs grid.terrain");
+  test::expect_variant_error(kMinimal, "\"max\": [0.5, 0.5, 0.5] }", "\"max\": [0.5, 0.5, 0.5], \"frame\": \"bed\" }",
+                             "bodies[0].box.frame = \"bed\" is not one of: physical, terrain");
+}
+
 // Units written wrong pass every range: warned about where the value is far from granular matter's.
 TEST(SceneJson, ValuesThatLookLikeTheWrongUnitAreWarnedAbout) {
   const auto warned = [](const std::string& from, const std::string& to, const std::string& what) {
