@@ -314,6 +314,12 @@ TEST(SceneJson, BadInputNamesTheKeyAndTheRange) {
   test::expect_variant_error(ok, "\"min\": [0.2, 0.2, 0.2]", "\"min\": [-1e-6, 0.2, 0.2]",
                              "bodies[0].box [-1e-06, 0.5] along axis 0 lies outside the grid [0, 1]");
   test::expect_variant_error(ok, "\"cell_size\": 0.1", "\"cell_size\": 0.3", "grid.size[0] = 1 must be a positive whole multiple of grid.cell_size");
+  // a cell size too small for the cell limit names the limit, however small (at 1e-20 the count has no
+  // integer and it was called no whole divisor of the size)
+  test::expect_variant_error(ok, "\"cell_size\": 0.1", "\"cell_size\": 1e-6",
+                             "grid.size[0] / grid.cell_size = 1e+06 cells; at most 100000 per axis");
+  test::expect_variant_error(ok, "\"cell_size\": 0.1", "\"cell_size\": 1e-20",
+                             "grid.size[0] / grid.cell_size = 1e+20 cells; at most 100000 per axis");
   test::expect_variant_error(ok, "\"young\": 1e6", "\"young\": 0", "materials.m.young");
   test::expect_variant_error(ok, "\"time\"", "\"boundaries\": { \"x-\": 1 }, \"time\"",
                              "boundaries.x- must be a string (open, slip, fixed, periodic) or an object with type "
