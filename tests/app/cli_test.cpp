@@ -575,6 +575,37 @@ TEST(Cli, RunWithRunoutDiagnosticsPrintsTheRunoutAndItsFiles) {
   fs::remove_all(dir);
 }
 
+// An open bed on a terrain grid: check and run warn before the start, and the runout's closing lines
+// say that the mass left through faces other than x+ (runout.json had outflow_mass_share 1 and
+// limited_by_outflow false, and the lines printed a front of a remnant as the runout).
+TEST(Cli, ASlideThroughAnOpenBedIsWarnedAboutBeforeAndAfterTheRun) {
+  const fs::path dir = temp_dir("open_bed");
+  fs::create_directories(dir);
+  nlohmann::json scene = nlohmann::json::parse(std::ifstream(kInputs + "terrain/incline30_coarse.json"));
+  scene["boundaries"]["z-"] = "open";
+  scene["time"]["end"] = 1.0;  // (every particle has left by about 0.45 s: the fall of the block's 1 m)
+  scene["diagnostics"] = {{"runout", nlohmann::json::object()}};
+  std::ofstream(dir / "scene.json") << scene.dump();
+  const std::string before = "talus: warning: boundaries.z- = \"open\" on a terrain grid";
+  const Result check = run("check " + (dir / "scene.json").string());
+  EXPECT_EQ(check.exit_code, 0) << check.output;
+  EXPECT_NE(check.output.find(before), std::string::npos) << check.output;
+  const Result r = run("run " + (dir / "scene.json").string() + " --quiet --threads 2 --out " + (dir / "out").string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find(before), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("talus: warning: runout: 100.00% of the mass left through open faces other than x+ (open: "
+                          "x-, z-, z+; 100.00% left in all): the front and tail are those of the last sample with "
+                          "particles in the grid, not of the flow; z- is the bed of this terrain grid, so the material "
+                          "fell through the ground"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("front and tail of the mass still in the grid"), std::string::npos) << r.output;
+  const nlohmann::json result = nlohmann::json::parse(std::ifstream(dir / "out" / "runout.json"));
+  EXPECT_EQ(result.at("outflow_mass_share").get<double>(), 1.0);
+  EXPECT_FALSE(result.at("limited_by_outflow").get<bool>());
+  fs::remove_all(dir);
+}
+
 TEST(Cli, RunOnManyThreadsSuggestsBlockBuffersForFewBlocksPerColourPass) {
   // the default flume at the start: 10 blocks a colour pass on average; 8 threads would want 16 or more
   const fs::path dir = temp_dir("scatter_hint");

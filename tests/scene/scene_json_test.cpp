@@ -179,6 +179,24 @@ TEST(SceneJson, AnUndampedElasticBodyOnAHighFrictionBedIsWarnedAbout) {
   EXPECT_EQ(test::warnings_with(shipped("benchmarks/sand_slide_near_threshold.json"), "on the friction face"), 0);  // sand
 }
 
+// On a terrain grid z- is the bed: open, it lets everything that reaches the ground fall through it
+// (a slide left the grid whole, without a word). Warned about; an open floor of a flat grid, an open
+// side of a terrain grid and the shipped terrain scene are not.
+TEST(SceneJson, AnOpenBedOnATerrainGridIsWarnedAbout) {
+  const std::string warning = "boundaries.z- = \"open\" on a terrain grid: z- is the bed (grid.terrain), so the "
+                              "material leaves through the ground";
+  Scene terrain = read_scene_file(std::string(TALUS_SOURCE_DIR) + "/inputs/terrain/incline30_coarse.json");
+  EXPECT_EQ(test::warnings_with(terrain, "boundaries.z-"), 0);
+  terrain.walls[2][0] = WallSpec{WallType::Open};
+  EXPECT_EQ(test::warnings_with(terrain, warning), 1);
+  terrain.walls[2][0] = WallSpec{WallType::Slip};
+  terrain.walls[1][0] = WallSpec{WallType::Open};
+  EXPECT_EQ(test::warnings_with(terrain, "on a terrain grid"), 0);
+  Scene flat = parse_scene(kMinimal, "t");
+  flat.walls[2][0] = WallSpec{WallType::Open};
+  EXPECT_EQ(test::warnings_with(flat, "boundaries.z-"), 0);
+}
+
 // A whole number written with a point (a script's json.dumps of a float; JSON Schema counts it an
 // integer) is that integer; a fraction is still refused.
 TEST(SceneJson, AWholeNumberWithAPointIsAnInteger) {
