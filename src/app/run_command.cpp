@@ -483,13 +483,29 @@ void add_run_command(CLI::App& app) {
                  p.stress / scale, p.walls / scale, p.gravity / scale, p.transfer / scale);
     }
     if (solver.smoother() && solver.smoothing_passes() > 0) {
-      const double passes = static_cast<double>(solver.smoothing_passes());
-      fmt::print("talus: MLS smoothing: {} passes; the guard left {} particle-passes unsmoothed ({:.3g}%); the fit "
-                 "changed the strain increments by {:.2f} on average, at most {:.2f} (RMS of the change / RMS of the "
-                 "increments; near 1 means hourglass modes, docs/verification.md \"MLS radius\")\n",
-                 solver.smoothing_passes(), solver.unsmoothed_total(),
-                 100.0 * solver.unsmoothed_total() / (passes * solver.particles().size()), solver.mean_smoothing_change(),
-                 solver.max_smoothing_change());
+      // the share of the particle-passes the guard judged: those of the smoothed bodies
+      const double unsmoothed_share =
+          solver.guarded_total() > 0 ? double(solver.unsmoothed_total()) / double(solver.guarded_total()) : 0.0;
+      const MlsSettings& mls = solver.scene().smoothing.mls;
+      if (unsmoothed_share > 0.5) {
+        // A body of a few particles, or one or two particles thick, gives A too few neighbours (or too
+        // few layers of them) for the basis at any radius: the guard skipped (nearly) every particle,
+        // and the info line's "100%" was easy to read past as if the scene were smoothed.
+        std::fflush(stdout);
+        fmt::print(stderr, "talus: warning: MLS smoothing had {} effect: the guard left {} of the {} particle-passes "
+                   "unsmoothed ({:.3g}%, {} passes): too few neighbours within radius_factor {} cells, or too few "
+                   "layers of them, for the {} basis (a body of a few particles, or one or two particles thick: leave "
+                   "that axis out with solver.smoothing.axes; docs/verification.md, \"MLS strain smoothing\", the "
+                   "guard)\n",
+                   unsmoothed_share == 1.0 ? "no" : "almost no", solver.unsmoothed_total(), solver.guarded_total(),
+                   100.0 * unsmoothed_share, solver.smoothing_passes(), mls.radius_factor, to_string(mls.basis));
+      } else {
+        fmt::print("talus: MLS smoothing: {} passes; the guard left {} particle-passes unsmoothed ({:.3g}%); the fit "
+                   "changed the strain increments by {:.2f} on average, at most {:.2f} (RMS of the change / RMS of the "
+                   "increments; near 1 means hourglass modes, docs/verification.md \"MLS radius\")\n",
+                   solver.smoothing_passes(), solver.unsmoothed_total(), 100.0 * unsmoothed_share,
+                   solver.mean_smoothing_change(), solver.max_smoothing_change());
+      }
       if (solver.scene().smoothing.mls.variant == MlsVariant::Reused)
         fmt::print("talus: MLS weights reused: {} of the {} passes fitted (reuse_strain {}), the others reused the "
                    "weights of the last fit ({:.0f} B/particle)\n",

@@ -128,6 +128,35 @@ TEST(Cli, CheckWarnsAboutAnMlsRadiusMeasuredUnstable) {
   fs::remove_all(dir);
 }
 
+// A body the guard leaves unsmoothed in (nearly) every pass (one particle thick, with the quadratic
+// basis: A is singular at any radius) ends with a warning that smoothing had no effect, not with the
+// info line of a smoothed run; a block the linear basis fits keeps the info line.
+TEST(Cli, RunWarnsWhenTheMlsGuardLeftMostParticlesUnsmoothed) {
+  const fs::path dir = temp_dir("mls_unsmoothed");
+  fs::create_directories(dir);
+  nlohmann::json scene = nlohmann::json::parse(std::ifstream(kInputs + "elastic_block_slide.json"));
+  scene["time"]["end"] = 0.01;
+  auto run_with = [&](const std::string& basis, double top, int per_cell) {
+    scene["solver"]["smoothing"] = {{"basis", basis}};
+    scene["bodies"][0]["box"]["max"][2] = top;
+    scene["bodies"][0]["particles_per_cell"] = per_cell;
+    std::ofstream(dir / "scene.json") << scene.dump();
+    return run("run " + (dir / "scene.json").string() + " --quiet --threads 2 --out " + (dir / "out").string());
+  };
+  const Result sheet = run_with("quadratic", 0.02, 1);  // 10 x 10 particles in one layer
+  EXPECT_EQ(sheet.exit_code, 0) << sheet.output;
+  EXPECT_NE(sheet.output.find("talus: warning: MLS smoothing had no effect: the guard left "), std::string::npos)
+      << sheet.output;
+  EXPECT_NE(sheet.output.find("particle-passes unsmoothed (100%, "), std::string::npos) << sheet.output;
+  EXPECT_NE(sheet.output.find("for the quadratic basis"), std::string::npos) << sheet.output;
+  EXPECT_EQ(sheet.output.find("talus: MLS smoothing:"), std::string::npos) << sheet.output;
+  const Result block = run_with("linear", 0.1, 2);  // 10 x 10 x 5 cells, 2 x 2 x 2 particles each
+  EXPECT_EQ(block.exit_code, 0) << block.output;
+  EXPECT_NE(block.output.find("talus: MLS smoothing: "), std::string::npos) << block.output;
+  EXPECT_EQ(block.output.find("had no effect"), std::string::npos) << block.output;
+  fs::remove_all(dir);
+}
+
 /// The elastic block slide of inputs/, ended at 0.02 s, as `dir`/short.json (the folder made).
 void write_short_block_slide(const fs::path& dir) {
   fs::create_directories(dir);
