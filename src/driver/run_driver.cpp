@@ -260,6 +260,7 @@ class RunLoop {
     if (progress_.runout_first_row.empty()) progress_.runout_first_row = runout_.first_row();
     checkpoint_.write(solver_, progress_);
     ++summary_.checkpoints;
+    last_checkpoint_ = step_ended(solver_.step_count(), solver_.time());
   }
   /// Keeps the current state as the last good one; false when the scene keeps none.
   bool take_snapshot();
@@ -295,6 +296,9 @@ class RunLoop {
   LoopRecording recording_;
   RunSummary summary_;
   double local_updates_ = 0.0;  // this rank's particles summed over the steps taken
+  /// The state the folder's checkpoint.h5 holds ("after step N, t = ..."), if it holds one of this
+  /// run: an instability without a last good state points to it (fail()).
+  std::optional<std::string> last_checkpoint_;
 };
 
 RunSummary RunLoop::run() {
@@ -340,6 +344,8 @@ RunSummary RunLoop::run() {
 
 void RunLoop::start() {
   summary_.first_step = solver_.step_count();
+  // (resumed in place: the checkpoint it resumed from is the folder's until the run writes another)
+  if (resumed_in_place_) last_checkpoint_ = step_ended(solver_.step_count(), solver_.time());
   if (!resumed_in_place_) record_frame_folder(progress_, dir_, resuming_ ? resume_dir_ : fs::path());
   if (comm_.root()) write_file_atomically((dir_ / "scene.json").string(), scene_file_json(scene_).dump(2) + "\n");
   summary_.pvd_path = frames_.pvd_path();
@@ -489,6 +495,14 @@ void RunLoop::fail(const Error& e) {
       runout_.finish(solver_, "unstable");
       message += fmt::format(" | last good state ({}) written to {} and checkpoint.h5",
                              step_ended(solver_.step_count(), solver_.time()), frame);
+    } else {
+      // No snapshot (guards.snapshot_interval = 0): the line said nothing of a state to go back
+      // to, though a periodic checkpoint may still lie in the folder, ready to resume from.
+      message += fmt::format(" | no last good state kept (guards.snapshot_interval = {})",
+                             scene_.guards.snapshot_interval);
+      if (last_checkpoint_)
+        message += fmt::format("; checkpoint.h5 still holds the last periodic checkpoint ({}): --restart resumes "
+                               "from it", *last_checkpoint_);
     }
   } catch (const Error& io) {
     message += fmt::format(" | the last good state could not be written: {}", io.what());
