@@ -95,7 +95,8 @@ void print_scene_summary(const Scene& s, const MemoryEstimate& memory, const Mac
 }
 
 // The end-of-run lines of a scene with runout diagnostics (docs/flume.md).
-void print_runout(const RunoutResult& r, const RunSummary& summary, const RunoutSpec& spec) {
+void print_runout(const RunoutResult& r, const RunSummary& summary, const Scene& scene) {
+  const RunoutSpec& spec = scene.runout;
   const std::string front =
       r.all_left_time ? fmt::format("every particle had left the grid by t = {:.6g} s; the last front measured (t = {:.6g} s) was",
                                     *r.all_left_time, r.time)
@@ -109,8 +110,13 @@ void print_runout(const RunoutResult& r, const RunSummary& summary, const Runout
                beyond < 0.0 ? "short of" : "onto", *r.runout_plane_s);
   }
   fmt::print("; tail at s = {:.4f} m\n", r.tail);
+  // Most of the mass gone through faces other than x+ (the sides, the top, or on a terrain grid an
+  // open bed, through which a slide fell whole with nothing said): the front and tail are those of
+  // a remnant, not of the flow.
+  const double other_faces = r.outflow_mass_share - r.outflow_mass_share_x_plus;
+  const bool mostly_elsewhere = other_faces > 0.5;
   // What left through open faces is not in the quantiles: the runout of what stayed in the grid.
-  if (r.outflow_mass_share > 0.0 && !r.limited_by_outflow)
+  if (r.outflow_mass_share > 0.0 && !r.limited_by_outflow && !mostly_elsewhere)
     fmt::print("talus: runout: front and tail of the mass still in the grid: {:.2f}% left through open faces ({:.2f}% "
                "through x+)\n",
                100.0 * r.outflow_mass_share, 100.0 * r.outflow_mass_share_x_plus);
@@ -125,6 +131,20 @@ void print_runout(const RunoutResult& r, const RunSummary& summary, const Runout
   else if (r.front_at_grid_end)
     fmt::print(stderr, "talus: warning: runout: the front is within one cell of the grid's end along x: the flow ran to "
                "the end of the grid and may have run farther; extend the grid along x\n");
+  if (mostly_elsewhere) {
+    std::string open;
+    for (int d = 0; d < 3; ++d)
+      for (int side = 0; side < 2; ++side)
+        if (!(d == 0 && side == 1) && scene.walls[d][side].type == WallType::Open)
+          open += (open.empty() ? "" : ", ") + std::string(face_name(d, side));
+    const bool open_bed = scene.grid.has_terrain() && scene.walls[2][0].type == WallType::Open;
+    const std::string remnant = r.all_left_time ? std::string("of the last sample with particles in the grid")
+                                                : fmt::format("of the {:.2f}% still in the grid", 100.0 * (1.0 - r.outflow_mass_share));
+    fmt::print(stderr, "talus: warning: runout: {:.2f}% of the mass left through open faces other than x+ (open: {}; "
+               "{:.2f}% left in all): the front and tail are those {}, not of the flow{}\n",
+               100.0 * other_faces, open, 100.0 * r.outflow_mass_share, remnant,
+               open_bed ? "; z- is the bed of this terrain grid, so the material fell through the ground" : "");
+  }
   fmt::print("talus: runout history: {}; result: {}{}\n", summary.runout_path, summary.runout_summary_path,
              summary.deposit_path.empty() ? "" : "; deposit thickness: " + summary.deposit_path);
 }
@@ -479,13 +499,29 @@ void add_run_command(CLI::App& app) {
                  p.stress / scale, p.walls / scale, p.gravity / scale, p.transfer / scale);
     }
     if (solver.smoother() && solver.smoothing_passes() > 0) {
-      const double passes = static_cast<double>(solver.smoothing_passes());
-      fmt::print("talus: MLS smoothing: {} passes; the guard left {} particle-passes unsmoothed ({:.3g}%); the fit "
-                 "changed the strain increments by {:.2f} on average, at most {:.2f} (RMS of the change / RMS of the "
-                 "increments; near 1 means hourglass modes, docs/verification.md \"MLS radius\")\n",
-                 solver.smoothing_passes(), solver.unsmoothed_total(),
-                 100.0 * solver.unsmoothed_total() / (passes * solver.particles().size()), solver.mean_smoothing_change(),
-                 solver.max_smoothing_change());
+      // the share of the particle-passes the guard judged: those of the smoothed bodies
+      const double unsmoothed_share =
+          solver.guarded_total() > 0 ? double(solver.unsmoothed_total()) / double(solver.guarded_total()) : 0.0;
+      const MlsSettings& mls = solver.scene().smoothing.mls;
+      if (unsmoothed_share > 0.5) {
+        // A body of a few particles, or one or two particles thick, gives A too few neighbours (or too
+        // few layers of them) for the basis at any radius: the guard skipped (nearly) every particle,
+        // and the info line's "100%" was easy to read past as if the scene were smoothed.
+        std::fflush(stdout);
+        fmt::print(stderr, "talus: warning: MLS smoothing had {} effect: the guard left {} of the {} particle-passes "
+                   "unsmoothed ({:.3g}%, {} passes): too few neighbours within radius_factor {} cells, or too few "
+                   "layers of them, for the {} basis (a body of a few particles, or one or two particles thick: leave "
+                   "that axis out with solver.smoothing.axes; docs/verification.md, \"MLS strain smoothing\", the "
+                   "guard)\n",
+                   unsmoothed_share == 1.0 ? "no" : "almost no", solver.unsmoothed_total(), solver.guarded_total(),
+                   100.0 * unsmoothed_share, solver.smoothing_passes(), mls.radius_factor, to_string(mls.basis));
+      } else {
+        fmt::print("talus: MLS smoothing: {} passes; the guard left {} particle-passes unsmoothed ({:.3g}%); the fit "
+                   "changed the strain increments by {:.2f} on average, at most {:.2f} (RMS of the change / RMS of the "
+                   "increments; near 1 means hourglass modes, docs/verification.md \"MLS radius\")\n",
+                   solver.smoothing_passes(), solver.unsmoothed_total(), 100.0 * unsmoothed_share,
+                   solver.mean_smoothing_change(), solver.max_smoothing_change());
+      }
       if (solver.scene().smoothing.mls.variant == MlsVariant::Reused)
         fmt::print("talus: MLS weights reused: {} of the {} passes fitted (reuse_strain {}), the others reused the "
                    "weights of the last fit ({:.0f} B/particle)\n",
@@ -508,7 +544,7 @@ void add_run_command(CLI::App& app) {
       fmt::print("talus: {}'s series and histories start at the checkpoint, t = {:.6g} s; the part before it is in {}\n",
                  dir, resumed_time, checkpoint_folder(*restart));
     if (!summary.terrain_path.empty()) fmt::print("talus: terrain surface: {} (open it with the series)\n", summary.terrain_path);
-    if (summary.runout) print_runout(*summary.runout, summary, solver.scene().runout);
+    if (summary.runout) print_runout(*summary.runout, summary, solver.scene());
   });
 }
 

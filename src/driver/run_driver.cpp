@@ -259,11 +259,17 @@ class RunLoop {
     progress_.energy_max_released = energy_guard_.max_released();
     if (progress_.runout_first_row.empty()) progress_.runout_first_row = runout_.first_row();
     checkpoint_.write(solver_, progress_);
-    checkpoint_time_ = solver_.time();
     ++summary_.checkpoints;
+    checkpoint_on_disk_ = CheckpointMark{solver_.step_count(), solver_.time()};
   }
-  /// The time of the checkpoint.h5 in the folder (this run's last, or the one resumed in place).
-  std::optional<double> checkpoint_time_;
+  /// The state the folder's checkpoint.h5 holds, if it holds one of this run (its last, or the one
+  /// resumed in place): an instability without a last good state points to it, and one with a last
+  /// good state keeps it (fail()).
+  struct CheckpointMark {
+    std::int64_t step;
+    double time;
+  };
+  std::optional<CheckpointMark> checkpoint_on_disk_;
   /// Before the last good state replaces checkpoint.h5: the checkpoint there is kept as
   /// checkpoint_earlier.h5 (what the failure's line then says). A slow blow-up that trips the energy
   /// guard is already under way in a last good state a few steps old: the periodic checkpoint from
@@ -350,11 +356,13 @@ RunSummary RunLoop::run() {
 
 void RunLoop::start() {
   summary_.first_step = solver_.step_count();
+  // (resumed in place: the checkpoint it resumed from is the folder's until the run writes another)
+  if (resumed_in_place_ && fs::exists(checkpoint_.path()))
+    checkpoint_on_disk_ = CheckpointMark{solver_.step_count(), solver_.time()};
   if (!resumed_in_place_) record_frame_folder(progress_, dir_, resuming_ ? resume_dir_ : fs::path());
   if (comm_.root()) write_file_atomically((dir_ / "scene.json").string(), scene_file_json(scene_).dump(2) + "\n");
   summary_.pvd_path = frames_.pvd_path();
   summary_.checkpoint_path = checkpoint_.path();
-  if (resumed_in_place_ && fs::exists(checkpoint_.path())) checkpoint_time_ = solver_.time();
   summary_.runout_path = runout_.history_path();
   if (comm_.root()) write_terrain();
   progress_line_.set_particles(solver_.distribution().particles);
@@ -533,6 +541,14 @@ void RunLoop::fail(const Error& e) {
       runout_.finish(solver_, "unstable");
       message += fmt::format(" | last good state ({}) written to {} and checkpoint.h5{}",
                              step_ended(solver_.step_count(), solver_.time()), frame, earlier);
+    } else {
+      // No snapshot (guards.snapshot_interval = 0): the line said nothing of a state to go back
+      // to, though a periodic checkpoint may still lie in the folder, ready to resume from.
+      message += fmt::format(" | no last good state kept (guards.snapshot_interval = {})",
+                             scene_.guards.snapshot_interval);
+      if (checkpoint_on_disk_)
+        message += fmt::format("; checkpoint.h5 still holds the last periodic checkpoint ({}): --restart resumes "
+                               "from it", step_ended(checkpoint_on_disk_->step, checkpoint_on_disk_->time));
     }
   } catch (const Error& io) {
     message += fmt::format(" | the last good state could not be written: {}", io.what());
@@ -541,12 +557,12 @@ void RunLoop::fail(const Error& e) {
 }
 
 std::string RunLoop::keep_earlier_checkpoint() {
-  if (!checkpoint_time_ || *checkpoint_time_ >= solver_.time()) return "";  // (none, or the last good state's own)
+  if (!checkpoint_on_disk_ || checkpoint_on_disk_->time >= solver_.time()) return "";  // (none, or the last good state's own)
   const fs::path from = checkpoint_.path(), to = from.parent_path() / "checkpoint_earlier.h5";
   std::error_code ec;
   fs::rename(from, to, ec);
   if (ec) return "";
-  return fmt::format("; the checkpoint of t = {:.6g} s kept as {}", *checkpoint_time_, to.filename().string());
+  return fmt::format("; the checkpoint of t = {:.6g} s kept as {}", checkpoint_on_disk_->time, to.filename().string());
 }
 
 void RunLoop::finish() {

@@ -130,6 +130,12 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
         radius, kMlsStableRadiusFactor));
   for (std::string& w : seeding_warnings(scene.grid, scene.bodies, body_label(scene))) warnings.push_back(std::move(w));
   for (std::string& w : terrain_warnings(scene.grid, scene.courant)) warnings.push_back(std::move(w));
+  // On a terrain grid z- is the bed itself, not a face below it: open, it removes whatever settles
+  // on the ground (a slide fell through it whole, and only runout.json's outflow share told).
+  if (scene.grid.has_terrain() && scene.walls[2][0].type == WallType::Open)
+    warnings.push_back(
+        "boundaries.z- = \"open\" on a terrain grid: z- is the bed (grid.terrain), so the material leaves through "
+        "the ground as it reaches it; give the bed \"friction\", \"slip\" or \"fixed\"");
   // Units written wrong pass every range: a friction coefficient written as an angle in degrees (29
   // for tan 29 degrees), a friction angle written in radians (0.61 for 35 degrees). Warned about
   // where the value is far outside what granular matter shows.

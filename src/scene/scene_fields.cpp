@@ -117,13 +117,16 @@ Table<SceneDraft> make_grid_table() {
             const Vec3 size = r.vec3("size", 0.0, kHuge);
             for (int a = 0; a < 3; ++a) {
               const double n = size[a] / g.h;
+              // The limit first: past about 9.2e18 cells llround has no result (a cell_size of 1e-20 was
+              // called no whole divisor of the size), and any count past the limit is refused for it.
+              constexpr double kMaxCells = 100000;
+              if (n > kMaxCells + 0.5)
+                throw input_error(fmt::format("{}[{}] / {} = {:.6g} cells; at most {} per axis", r.key_path("size"), a,
+                                              r.key_path("cell_size"), n, kMaxCells));
               const long long cells = std::llround(n);
               if (cells < 1 || std::abs(n - static_cast<double>(cells)) > 1e-6 * std::max(1.0, n))
                 throw input_error(fmt::format("{}[{}] = {} must be a positive whole multiple of {} = {}", r.key_path("size"),
                                               a, size[a], r.key_path("cell_size"), g.h));
-              if (cells > 100000)
-                throw input_error(
-                    fmt::format("{}[{}] / cell_size = {} cells; at most 100000 per axis", r.key_path("size"), a, cells));
               g.cells[a] = static_cast<int>(cells);
             }
           },
@@ -500,11 +503,14 @@ Table<BodyDraft> make_box_table() {
           {{"type", "string"}, {"enum", {"physical", "terrain"}}, {"default", "physical"}},
           [](ObjectReader& r, BodyDraft& d) {
             if (!r.has("frame")) return;
-            if (!d.scene->scene.grid.has_terrain())
-              throw input_error(fmt::format("{} needs grid.terrain (on a flat grid z is the height above the floor)",
+            const bool terrain = r.choice("frame", "physical", {"physical", "terrain"}) == "terrain";
+            // Only the terrain frame needs a bed; "physical", the default, written out is the flat grid's
+            // own frame (it was refused there as if it were "terrain").
+            if (terrain && !d.scene->scene.grid.has_terrain())
+              throw input_error(fmt::format("{} = \"terrain\" needs grid.terrain (on a flat grid z is the height "
+                                            "above the floor: leave frame out, or write \"physical\")",
                                             r.key_path("frame")));
-            d.body.frame =
-                r.choice("frame", "physical", {"physical", "terrain"}) == "terrain" ? BoxFrame::Terrain : BoxFrame::Physical;
+            d.body.frame = terrain ? BoxFrame::Terrain : BoxFrame::Physical;
           },
           [](const BodyDraft& d, Json& j) {
             if (d.body.frame == BoxFrame::Terrain) j["frame"] = "terrain";

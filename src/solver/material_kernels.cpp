@@ -274,7 +274,7 @@ HWY_ATTR KernelStop MuILanes(const MaterialKernelFields& f, const MuIKernelConst
     const V mean = hn::Div(hn::Add(hn::Add(trial[0], trial[1]), trial[2]), third);
     const V pressure = hn::Neg(mean);
     // Step 2, disconnected (no contact pressure): no stress, and the work E(sigma_n) + sigma_n : d_eps
-    // released, in MuI::update's operations (MuI::elastic_energy_density, then the work in component
+    // released (none where it is below zero), in MuI::update's operations (MuI::elastic_energy_density, then the work in component
     // order). A free surface puts a few such particles in many groups; the steps below give such a
     // lane values it does not keep (a square root of a negative pressure: NaN, selected away).
     const auto connected = hn::Gt(pressure, zero);
@@ -288,6 +288,7 @@ HWY_ATTR KernelStop MuILanes(const MaterialKernelFields& f, const MuIKernelConst
       V work = zero;
       for (int c = 0; c < 6; ++c) work = hn::Add(work, hn::Mul(hn::Mul(c < 3 ? one : two, st.s[c]), st.de[c]));
       released = hn::Add(energy, work);
+      released = hn::IfThenElse(hn::Lt(released, zero), zero, released);  // MuI::update's "released < 0 ? 0"
     }
     for (int c = 0; c < 3; ++c) s[c] = hn::Sub(trial[c], mean);
     for (int c = 3; c < 6; ++c) s[c] = trial[c];

@@ -816,6 +816,7 @@ void Solver::update_stress_smoothed(const NodeVectors& node_velocity, double dt,
       mls_strain_since_fit_ += std::sqrt(largest);
     }
     unsmoothed_total_ += static_cast<std::int64_t>(last_smoothing_.unsmoothed);
+    guarded_total_ += static_cast<std::int64_t>(last_smoothing_.smoothed + last_smoothing_.unsmoothed);
     recorded(rec, RegionSchedule::Static, "mls change", P.size(), 1, [&] { measure_smoothing_change(); });
   }
   ScopedPhase timer(times_, Phase::Stress);

@@ -128,6 +128,35 @@ TEST(Cli, CheckWarnsAboutAnMlsRadiusMeasuredUnstable) {
   fs::remove_all(dir);
 }
 
+// A body the guard leaves unsmoothed in (nearly) every pass (one particle thick, with the quadratic
+// basis: A is singular at any radius) ends with a warning that smoothing had no effect, not with the
+// info line of a smoothed run; a block the linear basis fits keeps the info line.
+TEST(Cli, RunWarnsWhenTheMlsGuardLeftMostParticlesUnsmoothed) {
+  const fs::path dir = temp_dir("mls_unsmoothed");
+  fs::create_directories(dir);
+  nlohmann::json scene = nlohmann::json::parse(std::ifstream(kInputs + "elastic_block_slide.json"));
+  scene["time"]["end"] = 0.01;
+  auto run_with = [&](const std::string& basis, double top, int per_cell) {
+    scene["solver"]["smoothing"] = {{"basis", basis}};
+    scene["bodies"][0]["box"]["max"][2] = top;
+    scene["bodies"][0]["particles_per_cell"] = per_cell;
+    std::ofstream(dir / "scene.json") << scene.dump();
+    return run("run " + (dir / "scene.json").string() + " --quiet --threads 2 --out " + (dir / "out").string());
+  };
+  const Result sheet = run_with("quadratic", 0.02, 1);  // 10 x 10 particles in one layer
+  EXPECT_EQ(sheet.exit_code, 0) << sheet.output;
+  EXPECT_NE(sheet.output.find("talus: warning: MLS smoothing had no effect: the guard left "), std::string::npos)
+      << sheet.output;
+  EXPECT_NE(sheet.output.find("particle-passes unsmoothed (100%, "), std::string::npos) << sheet.output;
+  EXPECT_NE(sheet.output.find("for the quadratic basis"), std::string::npos) << sheet.output;
+  EXPECT_EQ(sheet.output.find("talus: MLS smoothing:"), std::string::npos) << sheet.output;
+  const Result block = run_with("linear", 0.1, 2);  // 10 x 10 x 5 cells, 2 x 2 x 2 particles each
+  EXPECT_EQ(block.exit_code, 0) << block.output;
+  EXPECT_NE(block.output.find("talus: MLS smoothing: "), std::string::npos) << block.output;
+  EXPECT_EQ(block.output.find("had no effect"), std::string::npos) << block.output;
+  fs::remove_all(dir);
+}
+
 /// The elastic block slide of inputs/, ended at 0.02 s, as `dir`/short.json (the folder made).
 void write_short_block_slide(const fs::path& dir) {
   fs::create_directories(dir);
@@ -572,6 +601,37 @@ TEST(Cli, RunWithRunoutDiagnosticsPrintsTheRunoutAndItsFiles) {
   EXPECT_NE(r.output.find((dir / "runout.json").string()), std::string::npos) << r.output;
   for (const char* f : {"runout.csv", "runout.json", "deposit.csv", "particles.pvd"}) EXPECT_TRUE(fs::exists(dir / f)) << f;
   EXPECT_FALSE(fs::exists(dir / "terrain.vtu"));  // a flat grid has no terrain surface
+  fs::remove_all(dir);
+}
+
+// An open bed on a terrain grid: check and run warn before the start, and the runout's closing lines
+// say that the mass left through faces other than x+ (runout.json had outflow_mass_share 1 and
+// limited_by_outflow false, and the lines printed a front of a remnant as the runout).
+TEST(Cli, ASlideThroughAnOpenBedIsWarnedAboutBeforeAndAfterTheRun) {
+  const fs::path dir = temp_dir("open_bed");
+  fs::create_directories(dir);
+  nlohmann::json scene = nlohmann::json::parse(std::ifstream(kInputs + "terrain/incline30_coarse.json"));
+  scene["boundaries"]["z-"] = "open";
+  scene["time"]["end"] = 1.0;  // (every particle has left by about 0.45 s: the fall of the block's 1 m)
+  scene["diagnostics"] = {{"runout", nlohmann::json::object()}};
+  std::ofstream(dir / "scene.json") << scene.dump();
+  const std::string before = "talus: warning: boundaries.z- = \"open\" on a terrain grid";
+  const Result check = run("check " + (dir / "scene.json").string());
+  EXPECT_EQ(check.exit_code, 0) << check.output;
+  EXPECT_NE(check.output.find(before), std::string::npos) << check.output;
+  const Result r = run("run " + (dir / "scene.json").string() + " --quiet --threads 2 --out " + (dir / "out").string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find(before), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("talus: warning: runout: 100.00% of the mass left through open faces other than x+ (open: "
+                          "x-, z-, z+; 100.00% left in all): the front and tail are those of the last sample with "
+                          "particles in the grid, not of the flow; z- is the bed of this terrain grid, so the material "
+                          "fell through the ground"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("front and tail of the mass still in the grid"), std::string::npos) << r.output;
+  const nlohmann::json result = nlohmann::json::parse(std::ifstream(dir / "out" / "runout.json"));
+  EXPECT_EQ(result.at("outflow_mass_share").get<double>(), 1.0);
+  EXPECT_FALSE(result.at("limited_by_outflow").get<bool>());
   fs::remove_all(dir);
 }
 

@@ -627,6 +627,35 @@ TEST(Crash, InstabilityExitsThreeWithOneLineAndTheLastGoodState) {
   fs::remove_all(dir);
 }
 
+// Without snapshots (guards.snapshot_interval 0) there is no last good state to write; the line said
+// nothing of one, nor that the periodic checkpoint written earlier is still in the folder to resume from.
+TEST(Crash, InstabilityWithoutSnapshotsNamesThePeriodicCheckpointLeft) {
+  const fs::path dir = test::temp_dir("unstable_no_snapshot");
+  const auto error_line = [&](double checkpoint_interval, const std::string& out_name) {
+    std::ofstream(dir / "s.json") << test::small_slide_json(
+        0.5, checkpoint_interval,
+        R"(, "gravity": [200.0, 0.0, -9.81], "guards": {"max_step_displacement": 0.08, "snapshot_interval": 0})");
+    const auto [code, out] =
+        run_captured("run " + (dir / "s.json").string() + " --quiet --threads 1 --out " + (dir / out_name).string());
+    EXPECT_EQ(code, 3) << out;
+    const auto line = out.find("talus: error: in step ");
+    return line == std::string::npos ? out : out.substr(line, out.find('\n', line) - line);
+  };
+  const std::string with = error_line(0.02, "with");
+  EXPECT_NE(with.find("| no last good state kept (guards.snapshot_interval = 0); checkpoint.h5 still holds the last "
+                      "periodic checkpoint (after step "),
+            std::string::npos)
+      << with;
+  EXPECT_NE(with.find(" s): --restart resumes from it"), std::string::npos) << with;
+  const Checkpoint kept = read_checkpoint((dir / "with" / "checkpoint.h5").string());
+  EXPECT_NE(with.find(fmt::format("(after step {}, ", kept.solver.step)), std::string::npos) << with;
+  const std::string without = error_line(0.0, "without");
+  EXPECT_NE(without.find("| no last good state kept (guards.snapshot_interval = 0)"), std::string::npos) << without;
+  EXPECT_EQ(without.find("checkpoint"), std::string::npos) << without;
+  EXPECT_FALSE(fs::exists(dir / "without" / "checkpoint.h5"));
+  fs::remove_all(dir);
+}
+
 // A frame that cannot be written mid-run (its folder replaced by a file, as a full or vanished disk
 // would fail it) ends the run with talus's one line naming the frame and the system's reason, and
 // nothing of VTK's own report (some twenty lines before 2026-12-06); the banner comes first in a log

@@ -179,6 +179,24 @@ TEST(SceneJson, AnUndampedElasticBodyOnAHighFrictionBedIsWarnedAbout) {
   EXPECT_EQ(test::warnings_with(shipped("benchmarks/sand_slide_near_threshold.json"), "on the friction face"), 0);  // sand
 }
 
+// On a terrain grid z- is the bed: open, it lets everything that reaches the ground fall through it
+// (a slide left the grid whole, without a word). Warned about; an open floor of a flat grid, an open
+// side of a terrain grid and the shipped terrain scene are not.
+TEST(SceneJson, AnOpenBedOnATerrainGridIsWarnedAbout) {
+  const std::string warning = "boundaries.z- = \"open\" on a terrain grid: z- is the bed (grid.terrain), so the "
+                              "material leaves through the ground";
+  Scene terrain = read_scene_file(std::string(TALUS_SOURCE_DIR) + "/inputs/terrain/incline30_coarse.json");
+  EXPECT_EQ(test::warnings_with(terrain, "boundaries.z-"), 0);
+  terrain.walls[2][0] = WallSpec{WallType::Open};
+  EXPECT_EQ(test::warnings_with(terrain, warning), 1);
+  terrain.walls[2][0] = WallSpec{WallType::Slip};
+  terrain.walls[1][0] = WallSpec{WallType::Open};
+  EXPECT_EQ(test::warnings_with(terrain, "on a terrain grid"), 0);
+  Scene flat = parse_scene(kMinimal, "t");
+  flat.walls[2][0] = WallSpec{WallType::Open};
+  EXPECT_EQ(test::warnings_with(flat, "boundaries.z-"), 0);
+}
+
 // A whole number written with a point (a script's json.dumps of a float; JSON Schema counts it an
 // integer) is that integer; a fraction is still refused.
 TEST(SceneJson, AWholeNumberWithAPointIsAnInteger) {
@@ -244,6 +262,19 @@ TEST(SceneJson, OverlappingBodiesOfAnyShapeOrFrameAreWarnedAbout) {
   EXPECT_EQ(test::warnings_with(terrain, "overlap"), 0);
 }
 
+// A box's frame written out as the default, "physical", is the flat grid's own frame: accepted (it was
+// refused as if it needed grid.terrain). Only "terrain" needs a bed, and its message says so.
+TEST(SceneJson, TheDefaultFrameWrittenOutIsAcceptedOnAFlatGrid) {
+  const std::string physical =
+      replace_once(kMinimal, "\"max\": [0.5, 0.5, 0.5] }", "\"max\": [0.5, 0.5, 0.5], \"frame\": \"physical\" }");
+  EXPECT_EQ(scene_to_json(parse_scene(physical, "t")), scene_to_json(parse_scene(kMinimal, "t")));
+  test::expect_variant_error(kMinimal, "\"max\": [0.5, 0.5, 0.5] }",
+                             "\"max\": [0.5, 0.5, 0.5], \"frame\": \"terrain\" }",
+                             "bodies[0].box.frame = \"terrain\" needs grid.terrain");
+  test::expect_variant_error(kMinimal, "\"max\": [0.5, 0.5, 0.5] }", "\"max\": [0.5, 0.5, 0.5], \"frame\": \"bed\" }",
+                             "bodies[0].box.frame = \"bed\" is not one of: physical, terrain");
+}
+
 // Units written wrong pass every range: warned about where the value is far from granular matter's.
 TEST(SceneJson, ValuesThatLookLikeTheWrongUnitAreWarnedAbout) {
   const auto warned = [](const std::string& from, const std::string& to, const std::string& what) {
@@ -301,6 +332,12 @@ TEST(SceneJson, BadInputNamesTheKeyAndTheRange) {
   test::expect_variant_error(ok, "\"min\": [0.2, 0.2, 0.2]", "\"min\": [-1e-6, 0.2, 0.2]",
                              "bodies[0].box [-1e-06, 0.5] along axis 0 lies outside the grid [0, 1]");
   test::expect_variant_error(ok, "\"cell_size\": 0.1", "\"cell_size\": 0.3", "grid.size[0] = 1 must be a positive whole multiple of grid.cell_size");
+  // a cell size too small for the cell limit names the limit, however small (at 1e-20 the count has no
+  // integer and it was called no whole divisor of the size)
+  test::expect_variant_error(ok, "\"cell_size\": 0.1", "\"cell_size\": 1e-6",
+                             "grid.size[0] / grid.cell_size = 1e+06 cells; at most 100000 per axis");
+  test::expect_variant_error(ok, "\"cell_size\": 0.1", "\"cell_size\": 1e-20",
+                             "grid.size[0] / grid.cell_size = 1e+20 cells; at most 100000 per axis");
   test::expect_variant_error(ok, "\"young\": 1e6", "\"young\": 0", "materials.m.young");
   test::expect_variant_error(ok, "\"time\"", "\"boundaries\": { \"x-\": 1 }, \"time\"",
                              "boundaries.x- must be a string (open, slip, fixed, periodic) or an object with type "

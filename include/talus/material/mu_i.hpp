@@ -44,10 +44,11 @@ struct MuIParameters {
 };
 
 struct MuIResult {
-  /// Energy dissipated per unit volume in this increment [J/m^3]: flowing (>= 0),
-  /// tau gdot_p dt with the returned tau (as Drucker-Prager counts it; docs/mu-i.md sec. 3); disconnected,
-  /// E(sigma_n) + sigma_n : d_eps (what the step's work left of the stored energy; may be < 0 by
-  /// the explicit step's second-order error).
+  /// Energy dissipated per unit volume in this increment [J/m^3], >= 0: flowing, tau gdot_p dt with
+  /// the returned tau (as Drucker-Prager counts it; docs/mu-i.md sec. 3); disconnected, what the
+  /// step's work left of the stored energy, E(sigma_n) + sigma_n : d_eps, or 0 where the explicit
+  /// work overshot the stored energy (that overshoot is energy the explicit step made, not negative
+  /// dissipation: the budget's gap shows it, docs/mu-i.md sec. 3).
   double plastic_work = 0.0;
   /// Equivalent plastic shear strain of this increment, gdot_p dt >= 0.
   double plastic_shear_strain = 0.0;
@@ -113,11 +114,15 @@ inline MuIResult MuI::update(Sym6& stress, const Sym6& strain_increment, double 
   // 2. Disconnected (Dunatunga & Kamrin 2015, sec. 3.2): no contact pressure, no stress. The
   //    grid forces of this step came from the start-of-step stress sigma_n and did the work
   //    -sigma_n : d_eps on the grains; what the particle held beyond that, E(sigma_n) + sigma_n : d_eps,
-  //    is released and counted as dissipated (docs/mu-i.md sec. 3, "Dissipation").
+  //    is released and counted as dissipated (docs/mu-i.md sec. 3, "Dissipation"). Below zero the
+  //    explicit work overshot the stored energy (p crossed zero within the step, and sigma_n worked
+  //    over all of it): energy the step made, not dissipation, so none is counted and the budget's
+  //    gap shows it, as it shows the elastic steps' second-order term. (NaN passes, for the guards.)
   if (!(p > 0.0)) {
     double work = 0.0;
     for (int c = 0; c < 6; ++c) work += (c < 3 ? 1.0 : 2.0) * stress[c] * strain_increment[c];
-    result.plastic_work = elastic_energy_density(stress) + work;
+    const double released = elastic_energy_density(stress) + work;
+    result.plastic_work = released < 0.0 ? 0.0 : released;
     for (int c = 0; c < 6; ++c) stress[c] = 0.0;
     result.regime = MuIResult::Regime::Disconnected;
     return result;
