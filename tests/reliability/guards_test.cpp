@@ -468,6 +468,27 @@ TEST(HardCases, SteepSixtyDegreeSlopeWithLowFriction) {
 // 69% of its energy available by 3.5 s (a user's hunt, 2026-12-07), and ended "completed" without a
 // word. It is warned about once, where the growth first passes guards.energy_warning_factor (0.1),
 // and the summary records where (run.json's end.energy_growth_warning); 0 turns it off.
+/// A scene run to its end through the run driver in a temporary folder (removed after), with what
+/// it printed on stderr.
+struct CapturedRun {
+  RunSummary summary;
+  std::string err;
+};
+CapturedRun run_capturing_stderr(const Scene& scene, const std::string& name) {
+  const fs::path dir = test::temp_dir(name);
+  RunOptions options;
+  options.out_dir = dir.string();
+  options.progress = false;
+  options.handle_signals = false;
+  Solver solver(scene);
+  testing::internal::CaptureStderr();
+  CapturedRun run;
+  run.summary = run_scene(solver, options);
+  run.err = testing::internal::GetCapturedStderr();
+  fs::remove_all(dir);
+  return run;
+}
+
 const char* const kKinkScene = R"({
     "name": "kink75", "grid": { "size": [16, 0.25, 2], "cell_size": 0.25,
                                 "terrain": { "points": [[0, 22.392], [6, 0], [16, 0]] } },
@@ -485,16 +506,7 @@ TEST(HardCases, EnergyCreatedShortOfTheStopIsWarnedAboutOnce) {
     Scene scene = parse_scene(text, "kink75");
     EXPECT_EQ(scene.guards.energy_warning_factor, 0.1);  // the default
     scene.guards.energy_warning_factor = factor;
-    const fs::path dir = test::temp_dir("energy_warning");
-    RunOptions options;
-    options.out_dir = dir.string();
-    options.progress = false;
-    options.handle_signals = false;
-    Solver solver(scene);
-    testing::internal::CaptureStderr();
-    const RunSummary summary = run_scene(solver, options);
-    const std::string err = testing::internal::GetCapturedStderr();
-    fs::remove_all(dir);
+    const auto [summary, err] = run_capturing_stderr(scene, "energy_warning");
     const std::size_t first = err.find("talus: warning: after step ");
     if (factor == 0.0) {
       EXPECT_FALSE(summary.energy_warning);
@@ -568,16 +580,7 @@ TEST(HardCases, TheEnergyGuardKeepsTheEarlierCheckpointToResumeWithASmallerStep)
 TEST(HardCases, AFreeFallIsNotWarnedAboutEnergy) {
   Scene scene = test::free_fall_scene("musl");
   scene.guards.energy_warning_factor = 1e-6;
-  const fs::path dir = test::temp_dir("energy_no_warning");
-  RunOptions options;
-  options.out_dir = dir.string();
-  options.progress = false;
-  options.handle_signals = false;
-  Solver solver(scene);
-  testing::internal::CaptureStderr();
-  const RunSummary summary = run_scene(solver, options);
-  const std::string err = testing::internal::GetCapturedStderr();
-  fs::remove_all(dir);
+  const auto [summary, err] = run_capturing_stderr(scene, "energy_no_warning");
   EXPECT_FALSE(summary.energy_warning) << summary.energy_warning->share;
   EXPECT_EQ(err.find("energy_warning_factor"), std::string::npos) << err;
 }
