@@ -173,7 +173,8 @@ def provenance(talus, measured=None, started=None):
     return {"talus": build,
             "build": None if native is None else ("native" if native else "portable"),
             "isa": measured.get("isa"),
-            "cpu": measured.get("cpu") or host.get("cpu") or cpu_model(),
+            # (talus says "unknown" where /proc/cpuinfo has no "model name": then this script's own reading)
+            "cpu": next((c for c in (measured.get("cpu"), host.get("cpu")) if c and c != "unknown"), None) or cpu_model(),
             "logical_cpus": host.get("logical_cpus") or os.cpu_count(),
             "date_utc": started or utc_now(),
             "command": list(sys.argv), "working_directory": os.getcwd()}

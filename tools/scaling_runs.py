@@ -64,7 +64,10 @@ def run_timing(cmd, out_dir, stdout):
         with open(os.path.join(out_dir, "run.json")) as f:
             rec = json.load(f)
         end = rec["end"]
-        return int(end["steps_this_part"]), float(rec["wall_seconds"]), float(end["particle_updates_per_second"]), rec
+        # the stepping loop's seconds, which the rate divides by (the record's wall_seconds adds the
+        # setup and the closing outputs; records before 2026-12-07 have only that)
+        wall = end.get("stepping_wall_seconds", rec["wall_seconds"])
+        return int(end["steps_this_part"]), float(wall), float(end["particle_updates_per_second"]), rec
     except (OSError, ValueError, KeyError, TypeError):
         pass  # a talus that writes no run.json (or an older one without these keys): the printed line
     m = RATE.search(stdout)

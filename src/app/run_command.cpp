@@ -276,8 +276,9 @@ void add_run_command(CLI::App& app) {
               0.1, 86400.0);
   auto restart = std::make_shared<std::string>();
   refuse_empty(cmd->add_option("--restart", *restart,
-                               "Continue from a checkpoint (e.g. runs/<name>/checkpoint.h5) of this same scene; output "
-                               "goes to the checkpoint's folder unless --out is given"),
+                               "Continue from a checkpoint (e.g. runs/<name>/checkpoint.h5) of this scene (only time.end, "
+                               "time.courant, time.max_steps and guards may differ); output goes to the checkpoint's "
+                               "folder unless --out is given"),
                "give a checkpoint file, or leave --restart out for a fresh run");
   auto record_path = std::make_shared<std::string>();
   auto record_interval = std::make_shared<int>(37);  // prime: does not alias with sort_interval (20) or output cadences
@@ -328,9 +329,15 @@ void add_run_command(CLI::App& app) {
       world.agree([&] { checkpoint = read_checkpoint(*restart, world); });  // (a rank may not see the file)
       restore_checkpoint(solver, checkpoint, *restart);
       changed = restart_changes(checkpoint, solver.scene());
-      if (world.root() && !changed.empty())
-        fmt::print("talus: restart with a changed {}: {}; the run goes on with this scene's, no longer bit-identical to "
-                   "one without the change\n", changed.size() == 1 ? "key" : "keys", fmt::join(changed, "; "));
+      if (world.root() && !changed.empty()) {
+        // (only another time step changes the bits of what is computed; another end clips the last step)
+        const bool steps_change = std::any_of(changed.begin(), changed.end(),
+                                              [](const std::string& c) { return c.rfind("time.courant:", 0) == 0; });
+        fmt::print("talus: restart with {} changed: {}; the run goes on with this scene's{}\n",
+                   changed.size() == 1 ? std::string("1 key") : fmt::format("{} keys", changed.size()),
+                   fmt::join(changed, "; "),
+                   steps_change ? " (another time.courant: other time steps, other results than without the change)" : "");
+      }
       // Only the run's progress is kept: the checkpoint's copy of the particles (about 190 B a
       // particle of the whole scene, on every rank) was held to the run's end.
       resumed = checkpoint.run;
@@ -392,6 +399,7 @@ void add_run_command(CLI::App& app) {
     if (resumed) {
       options.resume = &*resumed;
       options.resume_dir = checkpoint_folder(*restart);
+      options.resume_file = *restart;
     }
     std::unique_ptr<WorkRecorder> recorder;
     if (!record_path->empty()) {
@@ -486,7 +494,7 @@ void add_run_command(CLI::App& app) {
                summary.energy_budget_gap(), summary.energy_budget_gap_joules(), summary.energy_scale());
     if (summary.energy_warning)  // (said as it happened, far up a long log: said again where the run is judged)
       fmt::print(stderr, "talus: warning: the total energy grew by more than guards.energy_warning_factor = {} of the "
-                 "energy available ({:.1f}% {}; {:+.1f}% at the end): the scheme created energy, the results are "
+                 "energy available ({:.3g}% {}; {:+.3g}% at the end): the scheme created energy, the results are "
                  "suspect; a smaller time.courant usually helps\n",
                  solver.scene().guards.energy_warning_factor, 100.0 * summary.energy_warning->share,
                  step_ended(summary.energy_warning->step, summary.energy_warning->time),

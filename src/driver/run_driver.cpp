@@ -230,6 +230,7 @@ class RunLoop {
         resuming_(options.resume != nullptr),
         resumed_in_place_(resuming_ && (options.resume_dir.empty() || same_file(options.resume_dir, options.out_dir))),
         progress_(resuming_ ? *options.resume : RunProgress{}), resume_dir_(options.resume_dir),
+        resume_file_(options.resume_file),
         history_(dir_, resume_step(), comm_.root(), scene_.output.energy_gap_terms), runout_(scene_, dir_, resume_step(), comm_, options.resume_dir, progress_.runout_first_row),
         frames_(dir_, scene_.output.compress, progress_, comm_, options.frames_in_background), checkpoint_(dir_),
         history_schedule_{scene_.output.history_interval, progress_.next_history},
@@ -257,6 +258,7 @@ class RunLoop {
   void write_checkpoint() {
     frames_.complete(solver_);  // a resumed run keeps the frames the checkpoint lists: they must be on disk
     progress_.energy_max_released = energy_guard_.max_released();
+    progress_.energy_warning = summary_.energy_warning;
     if (progress_.runout_first_row.empty()) progress_.runout_first_row = runout_.first_row();
     checkpoint_.write(solver_, progress_);
     ++summary_.checkpoints;
@@ -288,6 +290,7 @@ class RunLoop {
   bool resumed_in_place_;  // resuming in the checkpoint's own folder, which holds the outputs before it
   RunProgress progress_;
   fs::path resume_dir_;
+  std::string resume_file_;  // RunOptions::resume_file
   EnergyHistory history_;
   RunoutFiles runout_;
   FrameSeries frames_;
@@ -356,8 +359,11 @@ RunSummary RunLoop::run() {
 
 void RunLoop::start() {
   summary_.first_step = solver_.step_count();
-  // (resumed in place: the checkpoint it resumed from is the folder's until the run writes another)
-  if (resumed_in_place_ && fs::exists(checkpoint_.path()))
+  summary_.energy_warning = progress_.energy_warning;  // (a resumed run: warned in the part before)
+  // (resumed in place from the folder's checkpoint.h5: it holds this state until the run writes
+  // another; resumed from another file, checkpoint_earlier.h5 say, what checkpoint.h5 holds is not known)
+  if (resumed_in_place_ && fs::exists(checkpoint_.path()) &&
+      (resume_file_.empty() || same_file(resume_file_, checkpoint_.path())))
     checkpoint_on_disk_ = CheckpointMark{solver_.step_count(), solver_.time()};
   if (!resumed_in_place_) record_frame_folder(progress_, dir_, resuming_ ? resume_dir_ : fs::path());
   if (comm_.root()) write_file_atomically((dir_ / "scene.json").string(), scene_file_json(scene_).dump(2) + "\n");
@@ -491,14 +497,14 @@ void RunLoop::warn_of_energy_growth(const EnergyBudget& e) {
   if (summary_.energy_warning || factor <= 0.0) return;
   const double share = energy_guard_.growth_share(e);
   if (!(share > factor)) return;
-  summary_.energy_warning = RunSummary::EnergyWarning{solver_.step_count(), solver_.time(), share};
+  summary_.energy_warning = EnergyWarning{solver_.step_count(), solver_.time(), share};
   const FastestParticle fastest = fastest_particle();  // (every rank: the same verdict)
   if (!comm_.root()) return;
   const std::string body = fastest.body >= 0 && static_cast<std::size_t>(fastest.body) < scene_.bodies.size()
                                ? scene_.bodies[static_cast<std::size_t>(fastest.body)].name
                                : "?";
   fmt::print(stderr,
-             "talus: warning: {}: the total energy grew by {:.4g} J, {:.1f}% of the energy available (more than "
+             "talus: warning: {}: the total energy grew by {:.4g} J, {:.3g}% of the energy available (more than "
              "guards.energy_warning_factor = {}): the scheme is creating energy, the results are suspect; fastest: "
              "particle {} (body \"{}\") at ({:.4g}, {:.4g}, {:.4g}) m, {:.4g} m/s. A smaller time.courant usually "
              "helps (docs/reliability.md, \"Instability guards\")\n",
@@ -524,6 +530,7 @@ bool RunLoop::take_snapshot() {
 // already) and a checkpoint, and stop with the diagnosis.
 void RunLoop::fail(const Error& e) {
   std::string message = e.what();
+  std::string earlier;  // what became of the checkpoint before (said even if the new one fails)
   try {
     history_.flush();
     if (snapshot_.valid) {
@@ -535,7 +542,7 @@ void RunLoop::fail(const Error& e) {
         frame = frames_.write(solver_);
         ++summary_.frames;
       }
-      const std::string earlier = keep_earlier_checkpoint();
+      earlier = keep_earlier_checkpoint();
       write_checkpoint();
       // its runout too, marked unstable (an unstable run wrote no runout.json)
       runout_.finish(solver_, "unstable");
@@ -551,7 +558,7 @@ void RunLoop::fail(const Error& e) {
                                "from it", step_ended(checkpoint_on_disk_->step, checkpoint_on_disk_->time));
     }
   } catch (const Error& io) {
-    message += fmt::format(" | the last good state could not be written: {}", io.what());
+    message += fmt::format(" | the last good state could not be written: {}{}", io.what(), earlier);
   }
   throw instability_error(message);
 }
@@ -560,6 +567,9 @@ std::string RunLoop::keep_earlier_checkpoint() {
   if (!checkpoint_on_disk_ || checkpoint_on_disk_->time >= solver_.time()) return "";  // (none, or the last good state's own)
   const fs::path from = checkpoint_.path(), to = from.parent_path() / "checkpoint_earlier.h5";
   std::error_code ec;
+  // One kept by an earlier failure in this folder (a run resumed in place since) holds the state
+  // from before that blow-up, the earliest there is: never replaced, as a resume from it may fail again.
+  if (fs::exists(to, ec)) return fmt::format("; {} (an earlier failure's) left as it was", to.filename().string());
   fs::rename(from, to, ec);
   if (ec) return "";
   return fmt::format("; the checkpoint of t = {:.6g} s kept as {}", checkpoint_on_disk_->time, to.filename().string());

@@ -61,7 +61,13 @@ void clear_output_folder(const fs::path& dir, const RunProgress* resume) {
     const bool listed = resume && *index < resume->frame_times.size();
     if (!listed) fs::remove(entry.path(), ec);
   }
-  if (resume) return;
+  if (resume) {
+    // The end of the part before (a run extended by a later time.end, or one resumed after it was
+    // stopped or went unstable): until this part writes its own, a deposit.csv and a runout.json
+    // "final" there described an end the run no longer has.
+    for (const char* f : {"deposit.csv", "runout.json"}) fs::remove(dir / f, ec);
+    return;
+  }
   for (const fs::path& f : run_output_files(dir)) fs::remove(f, ec);
 }
 

@@ -344,6 +344,11 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
         write_attribute(r, (std::string("initial_") + name).c_str(), value);
       });
       write_attribute(r, "energy_max_released", run.energy_max_released);
+      if (run.energy_warning) {
+        write_attribute(r, "energy_warning_step", run.energy_warning->step);
+        write_attribute(r, "energy_warning_time", run.energy_warning->time);
+        write_attribute(r, "energy_warning_share", run.energy_warning->share);
+      }
       if (!run.runout_first_row.empty()) write_attribute(r, "runout_first_row", run.runout_first_row);
       if (!run.frame_folders.empty()) write_attribute(r, "frame_folders", nlohmann::json(run.frame_folders).dump());
       write_array(r, "frame_times", run.frame_times);
@@ -483,6 +488,10 @@ Checkpoint read_checkpoint(const std::string& path, const Comm& comm) {
       if (!absent_before_ramp_term(r, attribute)) value = read_attribute<double>(r, attribute.c_str());
     });
     c.run.energy_max_released = read_attribute<double>(r, "energy_max_released");
+    if (r.attrExists("energy_warning_step"))
+      c.run.energy_warning = EnergyWarning{read_attribute<std::int64_t>(r, "energy_warning_step"),
+                                           read_attribute<double>(r, "energy_warning_time"),
+                                           read_attribute<double>(r, "energy_warning_share")};
     // absent in checkpoints written before 2026-12-06 and in scenes without runout diagnostics
     if (r.attrExists("runout_first_row")) c.run.runout_first_row = read_string_attribute(r, "runout_first_row");
     // absent in checkpoints written before it was kept; one that does not parse is as good as absent
@@ -524,6 +533,9 @@ ParticleStore checked_particles(const Solver& solver, const Checkpoint& c, const
       if (solver.scene().end_time < c.solver.time)
         throw input_error(fmt::format("time.end = {} s is before the checkpoint's time, t = {:.6g} s: a restart goes on "
                                       "from there", solver.scene().end_time, c.solver.time));
+      if (solver.scene().max_steps > 0 && solver.scene().max_steps < c.solver.step)
+        throw input_error(fmt::format("time.max_steps = {} is below the checkpoint's step, {}: a restart goes on from "
+                                      "there (0: no limit)", solver.scene().max_steps, c.solver.step));
       diff = "";
     }
     if (!diff.empty()) throw input_error(fmt::format(

@@ -392,6 +392,10 @@ TEST(Checkpoint, ARestartMayChangeTheEndTheTimeStepAndTheGuards) {
   EXPECT_EQ(restore_error(too_early, path, &msg), Error::Kind::Input);
   EXPECT_NE(msg.find("time.end = "), std::string::npos) << msg;
   EXPECT_NE(msg.find("is before the checkpoint's time"), std::string::npos) << msg;
+  Scene too_few = scene;
+  too_few.max_steps = 1;  // the checkpoint is after step 2
+  EXPECT_EQ(restore_error(too_few, path, &msg), Error::Kind::Input);
+  EXPECT_NE(msg.find("time.max_steps = 1 is below the checkpoint's step, 2"), std::string::npos) << msg;
   test::fs::remove_all(dir);
 }
 

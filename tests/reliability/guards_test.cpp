@@ -561,6 +561,26 @@ TEST(HardCases, TheEnergyGuardKeepsTheEarlierCheckpointToResumeWithASmallerStep)
   EXPECT_LT(kept.solver.time, 2.01);
   EXPECT_GT(read_checkpoint((dir / "checkpoint.h5").string()).solver.time, 2.5);  // the last good state
 
+  {  // Resumed in place from the kept one, unchanged, it fails again: the kept one stays as it was (a
+     // review found it replaced by the earlier failure's last good state, and the line naming the wrong time).
+    Solver again(scene);
+    restore_checkpoint(again, kept, earlier);
+    RunOptions in_place = options;
+    in_place.resume = &kept.run;
+    in_place.resume_file = earlier;
+    std::string second;
+    testing::internal::CaptureStderr();
+    try {
+      run_scene(again, in_place);
+    } catch (const Error& e) {
+      second = e.what();
+    }
+    testing::internal::GetCapturedStderr();
+    expect_diagnosis(second, "energy_growth_factor");
+    EXPECT_EQ(second.find("kept as checkpoint_earlier.h5"), std::string::npos) << second;
+    EXPECT_NEAR(read_checkpoint(earlier).solver.time, kept.solver.time, 0.0);
+  }
+
   scene.courant = 0.1;  // resumed from the earlier one with a third of the step: it runs to the end
   Solver resumed(scene);
   restore_checkpoint(resumed, kept, earlier);
@@ -574,6 +594,42 @@ TEST(HardCases, TheEnergyGuardKeepsTheEarlierCheckpointToResumeWithASmallerStep)
   EXPECT_NEAR(summary.time, 3.0, 1e-12);
   EXPECT_LT(summary.energy_budget_gap(), 0.05);  // measured -0.019 (to 3.5 s) by talus run
   fs::remove_all(dir);
+}
+
+// A run resumed after its energy warning neither warns again nor records a later step as the first:
+// the checkpoint keeps the warning (resumed, it warned at t = 2.61 s and run.json named that step).
+TEST(HardCases, TheEnergyWarningIsKeptAcrossARestart) {
+  Scene scene = parse_scene(kKinkScene, "kink75");
+  scene.output.checkpoint_interval = 2.6;  // after the warning at t = 2.56 s
+  const fs::path dir = test::temp_dir("warning_restart");
+  RunOptions options;
+  options.out_dir = dir.string();
+  options.progress = false;
+  options.handle_signals = false;
+  Solver first(scene);
+  testing::internal::CaptureStderr();
+  const RunSummary whole = run_scene(first, options);
+  testing::internal::GetCapturedStderr();
+  ASSERT_TRUE(whole.energy_warning);
+
+  const std::string path = (dir / "checkpoint.h5").string();
+  const Checkpoint checkpoint = read_checkpoint(path);
+  ASSERT_GT(checkpoint.solver.time, whole.energy_warning->time);
+  ASSERT_TRUE(checkpoint.run.energy_warning);
+  EXPECT_EQ(checkpoint.run.energy_warning->step, whole.energy_warning->step);
+  Solver resumed(scene);
+  restore_checkpoint(resumed, checkpoint, path);
+  RunOptions again = options;
+  again.resume = &checkpoint.run;
+  testing::internal::CaptureStderr();
+  const RunSummary rest = run_scene(resumed, again);
+  const std::string err = testing::internal::GetCapturedStderr();
+  fs::remove_all(dir);
+  EXPECT_EQ(err.find("talus: warning: after step "), std::string::npos) << err;
+  ASSERT_TRUE(rest.energy_warning);
+  EXPECT_EQ(rest.energy_warning->step, whole.energy_warning->step);
+  EXPECT_EQ(rest.energy_warning->time, whole.energy_warning->time);
+  EXPECT_EQ(rest.energy_warning->share, whole.energy_warning->share);
 }
 
 // A run that creates no energy is not warned about: the free fall, whose growth is round-off.

@@ -97,6 +97,12 @@ class RecordsAndMedians(Work):
         record = {"wall_seconds": 0.0884, "end": {"steps_this_part": 13, "particle_updates_per_second": 293712.5}}
         with open(os.path.join(out, "run.json"), "w") as f:
             json.dump(record, f)
+        self.assertEqual(run_timing(["talus"], out, printed)[:3], (13, 0.0884, 293712.5))  # a record before 2026-12-07
+        # the stepping loop's seconds, which the rate divides by, not the whole command's
+        record["wall_seconds"] = 0.12
+        record["end"]["stepping_wall_seconds"] = 0.0884
+        with open(os.path.join(out, "run.json"), "w") as f:
+            json.dump(record, f)
         self.assertEqual(run_timing(["talus"], out, printed)[:3], (13, 0.0884, 293712.5))
 
     def test_bench_kernels_median_of_an_even_count_is_the_mean_of_the_middle_two(self):

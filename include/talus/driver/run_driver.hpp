@@ -43,6 +43,10 @@ struct RunOptions {
   /// runout history before the checkpoint stays there, and the runout monitor reads its first and
   /// last rows from it (the initial front is the default gate).
   std::string resume_dir;
+  /// The checkpoint file resumed from (talus run --restart FILE). Empty: the folder's own
+  /// checkpoint.h5. A run resumed in place from another file (checkpoint_earlier.h5) does not know
+  /// what the folder's checkpoint.h5 holds.
+  std::string resume_file;
   /// Catch SIGINT/SIGTERM/SIGUSR1: finish the step, write a checkpoint and return (interrupted_signal).
   bool handle_signals = true;
   /// Stop as a signal would (finish the step, write a checkpoint, return with stopped_at_deadline)
@@ -87,12 +91,7 @@ struct RunSummary {
   double energy_budget_gap() const { return energy_budget_gap_joules() / energy_scale(); }
   EnergyGapTerms final_gap;  // output.energy_gap_terms: at the end (zero when off)
   /// Where the total energy first grew by more than guards.energy_warning_factor times the energy
-  /// available (warned about as it happened); absent when it never did.
-  struct EnergyWarning {
-    std::int64_t step = 0;
-    double time = 0.0;
-    double share = 0.0;  // the growth then, of the energy available
-  };
+  /// available (warned about as it happened, or in the part before the checkpoint); absent when it never did.
   std::optional<EnergyWarning> energy_warning;
   std::string pvd_path;
   std::string checkpoint_path;  // <out_dir>/checkpoint.h5

@@ -26,9 +26,11 @@
 #include "talus/particles/particle_store.hpp"
 #include "talus/scene/scene.hpp"
 #include "talus/solver/solver.hpp"
+#include "talus/solver/stability_guards.hpp"
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -54,6 +56,9 @@ struct RunProgress {
   /// ones stay where they were, so a later restart in that folder finds only its own. Empty in
   /// checkpoints written before it was kept (every frame then counts as the checkpoint folder's).
   std::vector<std::pair<std::size_t, std::string>> frame_folders;
+  /// The run's energy warning so far (a resumed run neither warns again nor records a later step as
+  /// the first); absent in checkpoints written before 2026-12-07.
+  std::optional<EnergyWarning> energy_warning;
 };
 
 struct Checkpoint {

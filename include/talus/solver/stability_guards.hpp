@@ -68,6 +68,14 @@ struct FastestParticle {
   bool before(const FastestParticle& other) const;
 };
 
+/// Where the total energy first grew by more than guards.energy_warning_factor times the energy
+/// available (the run warns of it once; run.json's end.energy_growth_warning; kept in checkpoints).
+struct EnergyWarning {
+  std::int64_t step = 0;
+  double time = 0.0;
+  double share = 0.0;  // the growth then, of the energy available
+};
+
 class EnergyGuard {
  public:
   EnergyGuard() = default;
