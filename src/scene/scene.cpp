@@ -12,8 +12,11 @@
 #include <fmt/core.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <optional>
 
 namespace talus {
 
@@ -104,6 +107,36 @@ BodyLabel body_label(const Scene& scene) {
     const BodySpec& body = scene.bodies[b];
     return fmt::format("bodies[{}]{}", b, body.shape == BodyShapeKind::Box ? "" : std::string(".") + to_string(body.shape));
   };
+}
+
+// A bed that rises along +x under the runout diagnostics, which measure along +x.
+void add_runout_direction_warning(const Scene& scene, std::vector<std::string>& warnings) {
+  const GridGeometry& grid = scene.grid;
+  const double x0 = grid.origin[0], x1 = x0 + grid.cells[0] * grid.h;
+  const double g = scene.gravity.norm();
+  // The runout is measured down the flume along +x: the front is the mass quantile of the largest s.
+  // A profile surveyed from the toe up (the bed rising along +x) reported the scarp as the "front"
+  // while 8.8% of the mass left through x- (a user's run). The test: the bed's height at the x+ end above
+  // its height at the x- end (a flat grid: gravity pulling along -x).
+  if (scene.runout.enabled) {
+    if (grid.has_terrain()) {
+      const TerrainProfile profile(grid.terrain);
+      const double z0 = profile.height(x0), z1 = profile.height(x1);
+      if (z1 > z0)
+        warnings.push_back(fmt::format(
+            "diagnostics.runout on a bed that rises along +x (grid.terrain: z = {:.6g} m at the grid's x- end, x = "
+            "{:.6g} m, and z = {:.6g} m at its x+ end, x = {:.6g} m): the runout is measured down the flume along +x "
+            "(the front is the mass's farthest s along +x), so on this bed the front is the upslope end of the mass; "
+            "mirror the profile (x -> -x, the points in reverse order) and the bodies so that the bed descends along +x",
+            z0, x0, z1, x1));
+    } else if (scene.gravity[0] < -1e-9 * g) {
+      warnings.push_back(fmt::format(
+          "diagnostics.runout with gravity[0] = {} < 0 on a flat grid: the flow runs along -x, but the runout is "
+          "measured along +x (the front is the mass's farthest x), so the front is the upslope end of the mass; "
+          "mirror the scene along x (gravity[0] > 0)",
+          scene.gravity[0]));
+    }
+  }
 }
 
 }  // namespace
@@ -238,6 +271,7 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
         "solver.smoothing.variant = \"cell\" is not energy-stable: one fit per cell fed energy into the elastic block "
         "between walls at radii of 1.5 to 3 cells (docs/verification.md, \"MLS, one fit per cell\"); compare with "
         "\"particle\" before relying on it");
+  add_runout_direction_warning(scene, warnings);
   return warnings;
 }
 
