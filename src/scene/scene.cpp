@@ -139,6 +139,75 @@ void add_runout_direction_warning(const Scene& scene, std::vector<std::string>& 
   }
 }
 
+// Values in another unit than the key's, which pass every range (as friction_angle and
+// friction_coefficient in scene_warnings), and an elastic modulus too soft to carry the body's weight.
+void add_unit_warnings(const Scene& scene, std::vector<std::string>& warnings) {
+  const GridGeometry& grid = scene.grid;
+  const double g = scene.gravity.norm();
+  // Units written wrong pass every range. A scene
+  // with gravity of 1 to 50 m/s^2 is in SI units; the benchmarks in inputs/benchmarks/ are not (density 1
+  // with gravity 0 or 200-250 m/s^2 along x), and are not warned about.
+  constexpr double kLightest = 100.0, kHeaviest = 25000.0;  // kg/m^3: dry snow and up; osmium is 22 600
+  constexpr double kGravityLow = 1.0, kGravityHigh = 50.0;  // m/s^2
+  const bool si_gravity = g >= kGravityLow && g <= kGravityHigh;
+  for (const MaterialSpec& m : scene.materials) {
+    if (si_gravity && m.density < kLightest)
+      warnings.push_back(fmt::format(
+          "materials.{}.density = {} kg/m³ is below {} kg/m³, lighter than any soil or rock: in g/cm³ or t/m³? ({} "
+          "g/cm³ is {:.6g} kg/m³)",
+          m.name, m.density, kLightest, m.density, m.density * 1000.0));
+    if (si_gravity && m.density > kHeaviest)
+      warnings.push_back(fmt::format(
+          "materials.{}.density = {} kg/m³ is above {} kg/m³, heavier than any rock (osmium: 22 600): a unit weight "
+          "ρ g in N/m³ ({:.6g} kg/m³ at |g| = {:.4g} m/s²), or another unit?",
+          m.name, m.density, kHeaviest, m.density / g, g));
+    // d in I = shear rate d / sqrt(p / rho_s) (docs/mu-i.md): the shipped scenes' 0.5 mm sand and beads.
+    constexpr double kCoarsest = 0.05;  // m: coarse gravel; boulders are no μ(I) continuum at these cells
+    if (m.model == MaterialModel::MuI && m.mu_i.grain_diameter > kCoarsest)
+      warnings.push_back(fmt::format(
+          "materials.{}.grain_diameter = {} m is a grain of {:.4g} mm, above {} m: in metres, not millimetres? (0.5 "
+          "mm is 0.0005)",
+          m.name, m.mu_i.grain_diameter, m.mu_i.grain_diameter * 1000.0, kCoarsest));
+  }
+  // On a terrain grid the profile tilts the bed: a tilted gravity counts the slope twice.
+  if (grid.has_terrain() && g > 0.0) {
+    const Vec3& v = scene.gravity;
+    if (std::hypot(v[0], v[1]) > 1e-9 * g)
+      warnings.push_back(fmt::format(
+          "gravity = [{}, {}, {}] on a terrain grid has a component along x or y: grid.terrain already tilts the bed, "
+          "so the slope is counted twice; give gravity [0, 0, -{:.4g}] (a tilted gravity is for a flat grid)",
+          v[0], v[1], v[2], g));
+    if (v[2] > 0.0)
+      warnings.push_back(fmt::format(
+          "gravity[2] = {} > 0 on a terrain grid points up, away from the bed: z is up; give gravity [0, 0, -{:.4g}]",
+          v[2], g));
+    if (g < kGravityLow || g > kGravityHigh)
+      warnings.push_back(fmt::format(
+          "|gravity| = {:.6g} m/s² on a terrain grid is far from 9.81 (outside [{}, {}]): in cm/s² or another unit?",
+          g, kGravityLow, kGravityHigh));
+  }
+  // Self-weight: a body of height H under its own weight strains by about rho g H / E. Above 0.1 the
+  // small-strain elasticity the materials use means nothing (young = 5e3 Pa for a 5 m slab of density
+  // 1800: 18); the shipped scenes strain by 0.013 at most. H is the body's extent along gravity.
+  constexpr double kSelfWeightStrain = 0.1;
+  if (g > 0.0)
+    for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
+      const BodySpec& body = scene.bodies[b];
+      const MaterialSpec& m = scene.materials[static_cast<std::size_t>(body.material)];
+      double height = 0.0;
+      for (int d = 0; d < 3; ++d) height += std::abs(scene.gravity[d]) / g * (body.box_max[d] - body.box_min[d]);
+      const double strain = m.density * g * height / m.elastic.young;
+      if (strain > kSelfWeightStrain) {
+        warnings.push_back(fmt::format(
+            "bodies[{}] (\"{}\"): its self-weight strain ρ g H / E = {:.3g} (density {} kg/m³, |g| = {:.4g} m/s², H = "
+            "{:.4g} m its extent along gravity, materials.{}.young = {} Pa) is above {}: the body would sag by more "
+            "than a tenth of its height under its own weight; young in Pa, not kPa or MPa? (the shipped sand: 2e6 Pa)",
+            b, body.name, strain, m.density, g, height, m.name, m.elastic.young, kSelfWeightStrain));
+        break;  // one line says it
+      }
+    }
+}
+
 }  // namespace
 
 ParticleStore seed_particles(const Scene& scene, const SeedFilter& keep) {
@@ -272,6 +341,7 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
         "between walls at radii of 1.5 to 3 cells (docs/verification.md, \"MLS, one fit per cell\"); compare with "
         "\"particle\" before relying on it");
   add_runout_direction_warning(scene, warnings);
+  add_unit_warnings(scene, warnings);
   return warnings;
 }
 

@@ -69,6 +69,57 @@ TEST(AuthoringWarnings, ABedRisingAlongXUnderTheRunoutDiagnosticsIsWarnedAbout) 
   for (const char* name : kShippedScenes) EXPECT_EQ(warnings_with(shipped(name), "along -x"), 0) << name;
 }
 
+TEST(AuthoringWarnings, ValuesThatLookLikeTheWrongUnitAreWarnedAbout) {
+  const auto warned = [](const std::string& from, const std::string& to, const std::string& what) {
+    return warnings_with(parse_scene(replace_once(kDescending, from, to), "t"), what);
+  };
+  EXPECT_EQ(warned("\"density\": 1800", "\"density\": 1.8",
+                   "materials.sand.density = 1.8 kg/m³ is below 100 kg/m³, lighter than any soil or rock: in g/cm³ or "
+                   "t/m³? (1.8 g/cm³ is 1800 kg/m³)"), 1);
+  EXPECT_EQ(warned("\"density\": 1800", "\"density\": 17658", "materials.sand.density"), 0);
+  EXPECT_EQ(warned("\"density\": 1800", "\"density\": 176580", "materials.sand.density = 176580 kg/m³ is above 25000"), 1);
+  EXPECT_EQ(warnings_with(parse_scene(kDescending, "t"), "materials.sand"), 0);
+  // μ(I): d is in metres (0.5 mm sand: 0.0005)
+  const std::string mu_i = R"("poisson": 0.3, "model": "mu_i", "grain_density": 2650, "grain_diameter": )";
+  EXPECT_EQ(warned("\"poisson\": 0.3", mu_i + "0.5",
+                   "materials.sand.grain_diameter = 0.5 m is a grain of 500 mm, above 0.05 m: in metres, not "
+                   "millimetres?"), 1);
+  EXPECT_EQ(warned("\"poisson\": 0.3", mu_i + "0.0005", "grain_diameter"), 0);
+  EXPECT_EQ(warned("\"poisson\": 0.3", mu_i + "0.02", "grain_diameter"), 0);  // gravel
+  // gravity on a terrain grid: tilted (the slope counted twice), up, or in cm/s²
+  EXPECT_EQ(warned("\"time\"", "\"gravity\": [4.9, 0, -8.5], \"time\"",
+                   "gravity = [4.9, 0, -8.5] on a terrain grid has a component along x or y: grid.terrain already tilts "
+                   "the bed, so the slope is counted twice"), 1);
+  EXPECT_EQ(warned("\"time\"", "\"gravity\": [0, 0, 9.81], \"time\"", "gravity[2] = 9.81 > 0 on a terrain grid points up"), 1);
+  EXPECT_EQ(warned("\"time\"", "\"gravity\": [0, 0, -981], \"time\"",
+                   "|gravity| = 981 m/s² on a terrain grid is far from 9.81 (outside [1, 50]): in cm/s²"), 1);
+  EXPECT_EQ(warned("\"time\"", "\"gravity\": [0, 0, -0.0981], \"time\"", "far from 9.81"), 1);
+  EXPECT_EQ(warnings_with(parse_scene(kDescending, "t"), "gravity"), 0);
+  // (a flat grid with 200-250 m/s² along x, the column benchmarks in nondimensional units: none)
+  for (const char* name : kShippedScenes) {
+    const Scene s = shipped(name);
+    EXPECT_EQ(warnings_with(s, "gravity"), 0) << name;
+    EXPECT_EQ(warnings_with(s, "kg/m³ is"), 0) << name;
+    EXPECT_EQ(warnings_with(s, "self-weight"), 0) << name;
+  }
+}
+
+// young = 5e3 Pa for a 5 m slab of density 1800: rho g H / E = 18 (the first-step warning, about the
+// step, says nothing here); 5e6 Pa: 0.018.
+TEST(AuthoringWarnings, AModulusTooSoftForTheBodysWeightIsWarnedAbout) {
+  const auto with_young = [](const std::string& young) {
+    return parse_scene(replace_once(kDescending, "\"young\": 5e6", "\"young\": " + young), "t");
+  };
+  EXPECT_EQ(warnings_with(with_young("5e3"),
+                          "bodies[0] (\"slab\"): its self-weight strain ρ g H / E = 17.7 (density 1800 kg/m³, |g| = "
+                          "9.81 m/s², H = 5 m its extent along gravity, materials.sand.young = 5000 Pa) is above 0.1"),
+            1);
+  EXPECT_EQ(warnings_with(with_young("5e3"), "is longer than the"), 0);
+  EXPECT_EQ(warnings_with(with_young("5e6"), "self-weight"), 0);
+  EXPECT_EQ(warnings_with(with_young("8e5"), "self-weight"), 1);   // 0.11
+  EXPECT_EQ(warnings_with(with_young("9e5"), "self-weight"), 0);   // 0.098
+}
+
 }  // namespace
 }  // namespace authoring_warnings_test
 }  // namespace talus
