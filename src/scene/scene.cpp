@@ -109,6 +109,30 @@ BodyLabel body_label(const Scene& scene) {
   };
 }
 
+// The bodies' footprint along x: the x range over which they rest on the bed (a prism's vertices
+// within half a cell of the bed: the flume's wedge rests on [-0.21, 0] while its free surface
+// reaches 0.08 m past the gate), or their whole extent along x where nothing rests on it.
+std::array<double, 2> bodies_footprint_x(const Scene& scene) {
+  const GridGeometry& g = scene.grid;
+  std::optional<TerrainProfile> profile;
+  if (g.has_terrain()) profile.emplace(g.terrain);
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const BodySpec& b : scene.bodies) {
+    double b_lo = b.box_min[0], b_hi = b.box_max[0];
+    if (b.shape == BodyShapeKind::Prism) {
+      double on_lo = std::numeric_limits<double>::infinity(), on_hi = -on_lo;
+      for (const auto& p : b.prism.points) {
+        const double bed = profile ? profile->height(p[0]) : g.origin[2];
+        if (std::abs(p[1] - bed) <= 0.5 * g.h) on_lo = std::min(on_lo, p[0]), on_hi = std::max(on_hi, p[0]);
+      }
+      if (on_lo <= on_hi) b_lo = on_lo, b_hi = on_hi;
+    }
+    lo = std::min(lo, b_lo);
+    hi = std::max(hi, b_hi);
+  }
+  return {lo, hi};
+}
+
 // A bed that rises along +x under the runout diagnostics, which measure along +x.
 void add_runout_direction_warning(const Scene& scene, std::vector<std::string>& warnings) {
   const GridGeometry& grid = scene.grid;
@@ -206,6 +230,39 @@ void add_unit_warnings(const Scene& scene, std::vector<std::string>& warnings) {
         break;  // one line says it
       }
     }
+}
+
+// The gate inside the mass, and a runout plane upslope of the gate.
+void add_runout_gate_warnings(const Scene& scene, std::vector<std::string>& warnings) {
+  const GridGeometry& grid = scene.grid;
+  const double x0 = grid.origin[0], x1 = x0 + grid.cells[0] * grid.h;
+  // The gate inside the mass: the runout from the gate starts at the part of the mass already beyond
+  // it; a runout plane upslope of the gate: beyond_runout_plane counts from behind the gate.
+  if (scene.runout.enabled && !scene.bodies.empty()) {
+    const auto [lo, hi] = bodies_footprint_x(scene);
+    const double margin = 1e-9 * (std::abs(lo) + std::abs(hi)) + 1e-12;
+    if (scene.runout.has_gate && scene.runout.gate_x > lo + margin && scene.runout.gate_x < hi - margin)
+      warnings.push_back(fmt::format(
+          "diagnostics.runout.gate_x = {} lies inside the bodies' initial extent along x [{:.6g}, {:.6g}]: the "
+          "runout from the gate counts the {:.6g} m of the mass already beyond it; put the gate at the bodies' "
+          "downslope end (x = {:.6g}) or leave gate_x out (the runout is then measured from the initial front)",
+          scene.runout.gate_x, lo, hi, hi - scene.runout.gate_x, hi));
+    std::optional<double> plane;
+    if (scene.runout.has_runout_plane)
+      plane = scene.runout.runout_plane_x;
+    else if (grid.has_terrain())
+      if (const auto start = TerrainProfile(grid.terrain).last_segment_start(); start && *start >= x0 && *start <= x1)
+        plane = start;
+    const double gate = scene.runout.has_gate ? scene.runout.gate_x : hi;
+    if (plane && *plane < gate - margin)
+      warnings.push_back(fmt::format(
+          "diagnostics.runout.runout_plane_x = {:.6g}{} is upslope of {} = {:.6g}: the runout plane, where the bed "
+          "flattens, starts behind the {}, so beyond_runout_plane counts from behind it; the runout plane lies "
+          "downslope (along +x) of the gate",
+          *plane, scene.runout.has_runout_plane ? "" : " (its default, the end of the terrain's last transition)",
+          scene.runout.has_gate ? "gate_x" : "the bodies' downslope end", gate,
+          scene.runout.has_gate ? "gate" : "mass"));
+  }
 }
 
 }  // namespace
@@ -342,6 +399,7 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
         "\"particle\" before relying on it");
   add_runout_direction_warning(scene, warnings);
   add_unit_warnings(scene, warnings);
+  add_runout_gate_warnings(scene, warnings);
   return warnings;
 }
 

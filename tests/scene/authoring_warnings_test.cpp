@@ -120,6 +120,27 @@ TEST(AuthoringWarnings, AModulusTooSoftForTheBodysWeightIsWarnedAbout) {
   EXPECT_EQ(warnings_with(with_young("9e5"), "self-weight"), 0);   // 0.098
 }
 
+TEST(AuthoringWarnings, AGateInsideTheBodiesOrARunoutPlaneUpslopeOfItIsWarnedAbout) {
+  const auto with_runout = [](const std::string& runout) {
+    return parse_scene(replace_once(kDescending, "\"runout\": {}", "\"runout\": " + runout), "t");
+  };
+  EXPECT_EQ(warnings_with(with_runout(R"({ "gate_x": 10 })"),
+                          "diagnostics.runout.gate_x = 10 lies inside the bodies' initial extent along x [8, 28]: the "
+                          "runout from the gate counts the 18 m of the mass already beyond it"),
+            1);
+  EXPECT_EQ(warnings_with(with_runout(R"({ "gate_x": 28 })"), "gate_x"), 0);
+  EXPECT_EQ(warnings_with(with_runout(R"({ "gate_x": 28, "runout_plane_x": 5 })"),
+                          "diagnostics.runout.runout_plane_x = 5 is upslope of gate_x = 28"),
+            1);
+  EXPECT_EQ(warnings_with(with_runout(R"({ "gate_x": 28, "runout_plane_x": 90 })"), "upslope"), 0);
+  // The flume's wedge rests on the bed over [-0.21, 0] and its free surface reaches x = 0.08 past the
+  // gate foot at x = 0: the gate is at the end of its footprint, not inside it.
+  for (const char* name : kShippedScenes) EXPECT_EQ(warnings_with(shipped(name), "diagnostics.runout."), 0) << name;
+  Scene inside = shipped("denlinger_flume.json");
+  inside.runout.gate_x = -0.1;
+  EXPECT_EQ(warnings_with(inside, "gate_x = -0.1 lies inside the bodies' initial extent along x [-0.213388, 0]"), 1);
+}
+
 }  // namespace
 }  // namespace authoring_warnings_test
 }  // namespace talus
