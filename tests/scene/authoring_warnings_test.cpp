@@ -141,6 +141,23 @@ TEST(AuthoringWarnings, AGateInsideTheBodiesOrARunoutPlaneUpslopeOfItIsWarnedAbo
   EXPECT_EQ(warnings_with(inside, "gate_x = -0.1 lies inside the bodies' initial extent along x [-0.213388, 0]"), 1);
 }
 
+// docs/scene-reference.md, grid.terrain.radii: "put kinks on node columns or use r >= 2h".
+TEST(AuthoringWarnings, AKinkBetweenNodeColumnsIsWarnedAbout) {
+  Scene s = parse_scene(kDescending, "t");  // kinks at x = 25, 50, 70, 90 and h = 2: 25 lies between 24 and 26
+  EXPECT_EQ(warnings_with(s, "grid.terrain.points[1] = (25, 48) is a sharp kink (radius 0) between the node columns "
+                             "x = 24 and 26 m"), 1);
+  EXPECT_EQ(warnings_with(s, "is a sharp kink"), 1);  // 50, 70 and 90 lie on node columns
+  s.grid.terrain.radii = {0.0, 1.0, 0.0, 0.0, 0.0, 0.0};
+  EXPECT_EQ(warnings_with(s, "grid.terrain.points[1] = (25, 48) is a transition of radius 1 m, below 2h = 4 m,"), 1);
+  s.grid.terrain.radii = {0.0, 4.0, 0.0, 0.0, 0.0, 0.0};
+  EXPECT_EQ(warnings_with(s, "grid.terrain.points[1]"), 0);
+  // a slight bend between columns is cut by less than a transition of r = 2h departs: none
+  s.grid.terrain.points = {{0.0, 60.0}, {25.0, 48.0}, {120.0, 0.5}};
+  s.grid.terrain.radii.clear();
+  EXPECT_EQ(warnings_with(s, "grid.terrain.points[1]"), 0);
+  for (const char* name : kShippedScenes) EXPECT_EQ(warnings_with(shipped(name), "node columns x ="), 0) << name;
+}
+
 }  // namespace
 }  // namespace authoring_warnings_test
 }  // namespace talus
