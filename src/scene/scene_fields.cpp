@@ -483,9 +483,23 @@ void check_inside_grid(const BodySpec& b, const std::string& path, const Scene& 
     // (round-off of the grid's extent, the same margin on both sides: relative to the lower bound
     // alone it was none at an origin of 0, where a min of -1e-17 was refused)
     const double margin = 1e-12 * (std::abs(lo) + std::abs(hi));
-    if (b.box_min[d] < lo - margin || b.box_max[d] > hi + margin)
-      throw input_error(fmt::format("{} [{}, {}] along axis {} lies outside the grid [{:.12g}, {:.12g}]", path,
-                                    b.box_min[d], b.box_max[d], d, lo, hi));
+    const bool below = b.box_min[d] < lo - margin, above = b.box_max[d] > hi + margin;
+    if (!below && !above) continue;
+    // (named by the key at fault: a box's min[d] or max[d], the third of a terrain-frame box being w)
+    const bool wholly = b.box_max[d] < lo - margin || b.box_min[d] > hi + margin;
+    const std::string extent = fmt::format("[{}, {}] along axis {}", b.box_min[d], b.box_max[d], d);
+    const std::string grid_range = fmt::format("[{:.12g}, {:.12g}]", lo, hi);
+    if (b.shape != BodyShapeKind::Box)
+      throw input_error(fmt::format("{} {} lies {}outside the grid {}", path, extent, wholly ? "wholly " : "partly ",
+                                    grid_range));
+    const char* axis = d == 0 ? "x" : d == 1 ? "y" : b.frame == BoxFrame::Terrain ? "w, the height above the bed" : "z";
+    if (below && above)
+      throw input_error(fmt::format("{0}.min[{1}] = {2} and {0}.max[{1}] = {3} ({4}) lie outside the grid {5}: the box "
+                                    "is wider than the grid along axis {1}",
+                                    path, d, b.box_min[d], b.box_max[d], axis, grid_range));
+    throw input_error(fmt::format("{}.{}[{}] = {} ({}) lies outside the grid {}: the box {} lies {}outside it", path,
+                                  below ? "min" : "max", d, below ? b.box_min[d] : b.box_max[d], axis, grid_range,
+                                  extent, wholly ? "wholly " : "partly "));
   }
 }
 
@@ -652,6 +666,8 @@ WallSpec read_wall(const Json& j, const std::string& path) {
         "{} must be a string (open, slip, fixed, periodic) or an object with type (friction needs one), got {}", path,
         j.type_name()));
   ObjectReader r(j, path);
+  // (a misspelt key first: friction_coeff was reported as the missing friction_coefficient)
+  r.refuse_unknown({"type", "friction_coefficient"});
   w.type = wall_type(r.string("type"), r.key_path("type"));
   if (w.type == WallType::Friction) w.friction_coefficient = r.number("friction_coefficient", 0.0, 100.0);
   r.finish();

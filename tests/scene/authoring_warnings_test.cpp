@@ -158,6 +158,21 @@ TEST(AuthoringWarnings, AKinkBetweenNodeColumnsIsWarnedAbout) {
   for (const char* name : kShippedScenes) EXPECT_EQ(warnings_with(shipped(name), "node columns x ="), 0) << name;
 }
 
+TEST(AuthoringWarnings, AMisspeltFaceKeyAndABoxOutsideTheGridNameTheKey) {
+  test::expect_variant_error(kDescending, "\"friction_coefficient\": 0.5", "\"friction_coeff\": 0.5",
+                             "unknown key boundaries.z-.friction_coeff (allowed here: type, friction_coefficient)");
+  test::expect_variant_error(kDescending, "\"max\": [28, 2, 5]", "\"max\": [28, 2, 20]",
+                             "bodies[0].box.max[2] = 20 (w, the height above the bed) lies outside the grid [0, 16]: the "
+                             "box [0, 20] along axis 2 lies partly outside it");
+  test::expect_variant_error(kDescending, "\"min\": [8, 0, 0]", "\"min\": [-130, 0, 0]",
+                             "bodies[0].box.min[0] = -130 (x) lies outside the grid [0, 120]: the box [-130, 28] along axis "
+                             "0 lies partly outside it");
+  test::expect_variant_error(kDescending, "\"min\": [8, 0, 0], \"max\": [28, 2, 5]",
+                             "\"min\": [130, 0, 0], \"max\": [140, 2, 5]",
+                             "bodies[0].box.max[0] = 140 (x) lies outside the grid [0, 120]: the box [130, 140] along axis "
+                             "0 lies wholly outside it");
+}
+
 }  // namespace
 }  // namespace authoring_warnings_test
 }  // namespace talus
