@@ -211,6 +211,12 @@ TEST(Cli, CheckEstimatesTheFramesDiskUseAndRunWarnsWhenTheyMayNotFit) {
   EXPECT_NE(check.find("\ndisk       51 frames of at most 1.5 MB (LZ4 writes less) and a checkpoint of 1.5 MB: at most 78.0 MB; "), std::string::npos)
       << check;
   EXPECT_NE(check.find("\nok\n"), std::string::npos) << check;  // (no warning)
+  // the work: particles x the steps at the initial time step (a flow that speeds up takes more: the
+  // elastic block of terrain/slope_to_runout_linear.json took 7112 steps of the 6961 estimated)
+  EXPECT_NE(check.find("\ntime       end 1 s, initial dt 1.551e-04 s: ~6448 steps and ~5.16e+07 particle-updates (8000 "
+                       "particles x steps) at the initial time step; a flow that speeds up takes more\n"),
+            std::string::npos)
+      << check;
   // A frame every step: at most one a step, so the steps (about 6 448 a second at the initial time
   // step) bound the count, not the interval (10^9 a second); 10^4 s of them are 96 TB.
   const std::string interval = "\"frame_interval\": 0.02";
