@@ -136,23 +136,26 @@ std::array<double, 2> bodies_footprint_x(const Scene& scene) {
 // A bed that rises along +x under the runout diagnostics, which measure along +x.
 void add_runout_direction_warning(const Scene& scene, std::vector<std::string>& warnings) {
   const GridGeometry& grid = scene.grid;
-  const double x0 = grid.origin[0], x1 = x0 + grid.cells[0] * grid.h;
   const double g = scene.gravity.norm();
   // The runout is measured down the flume along +x: the front is the mass quantile of the largest s.
   // A profile surveyed from the toe up (the bed rising along +x) reported the scarp as the "front"
-  // while 8.8% of the mass left through x- (a user's run). The test: the bed's height at the x+ end above
-  // its height at the x- end (a flat grid: gravity pulling along -x).
-  if (scene.runout.enabled) {
+  // while 8.8% of the mass left through x- (a user's run). The test: the bed under the bodies (over
+  // their footprint along x) rises along +x, so that they flow toward -x (a valley whose far wall
+  // ends higher than the slide starts is not warned about); on a flat grid, gravity pulling along -x.
+  if (scene.runout.enabled && !scene.bodies.empty()) {
     if (grid.has_terrain()) {
       const TerrainProfile profile(grid.terrain);
-      const double z0 = profile.height(x0), z1 = profile.height(x1);
-      if (z1 > z0)
+      const auto [lo, hi] = bodies_footprint_x(scene);
+      const double z_lo = profile.height(lo), z_hi = profile.height(hi);
+      const double slope = hi > lo ? (z_hi - z_lo) / (hi - lo) : profile.slope(lo);
+      if (slope > 1e-9)
         warnings.push_back(fmt::format(
-            "diagnostics.runout on a bed that rises along +x (grid.terrain: z = {:.6g} m at the grid's x- end, x = "
-            "{:.6g} m, and z = {:.6g} m at its x+ end, x = {:.6g} m): the runout is measured down the flume along +x "
-            "(the front is the mass's farthest s along +x), so on this bed the front is the upslope end of the mass; "
-            "mirror the profile (x -> -x, the points in reverse order) and the bodies so that the bed descends along +x",
-            z0, x0, z1, x1));
+            "diagnostics.runout on a bed that rises along +x under the bodies (grid.terrain: z = {:.6g} m at x = "
+            "{:.6g} m and {:.6g} m at x = {:.6g} m, the ends of their footprint): the runout is measured down the "
+            "flume along +x (the front is the mass's farthest s along +x), so on this bed the front is the upslope "
+            "end of the mass; mirror the profile (x -> -x, the points in reverse order) and the bodies so that the "
+            "bed descends along +x",
+            z_lo, lo, z_hi, hi));
     } else if (scene.gravity[0] < -1e-9 * g) {
       warnings.push_back(fmt::format(
           "diagnostics.runout with gravity[0] = {} < 0 on a flat grid: the flow runs along -x, but the runout is "

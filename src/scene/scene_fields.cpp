@@ -854,7 +854,7 @@ Table<SceneDraft> make_diagnostics_table() {
           "runout", runout_table, "absent (off)",
           "runout diagnostics along the flume coordinate s (arc length of the terrain, x when flat): `runout.csv`, "
           "`runout.json`, `deposit.csv` (docs/flume.md §4). Measured along +x: `run` and `check` warn where the bed "
-          "rises along +x (the terrain's height at the grid's x+ end above its x- end; on a flat grid, gravity[0] < 0)",
+          "under the bodies rises along +x (over their footprint along x; on a flat grid, gravity[0] < 0)",
           {.begin = [](SceneDraft& d) { d.scene.runout.enabled = true; },
            .present = [](const SceneDraft& d) { return d.scene.runout.enabled; }}),
   }};

@@ -52,11 +52,15 @@ const char* kShippedScenes[] = {"denlinger_flume.json", "denlinger_flume_abe2005
                                 "terrain/incline30_coarse.json", "terrain/horizontal_plane_fine.json"};
 
 TEST(AuthoringWarnings, ABedRisingAlongXUnderTheRunoutDiagnosticsIsWarnedAbout) {
-  const std::string rising = "diagnostics.runout on a bed that rises along +x (grid.terrain: z = 0 m at the grid's x- "
-                             "end, x = 0 m, and z = 60 m at its x+ end, x = 120 m)";
+  const std::string rising = "diagnostics.runout on a bed that rises along +x under the bodies (grid.terrain: z = 45.6 m "
+                             "at x = 92 m and 56.16 m at x = 112 m, the ends of their footprint)";
   EXPECT_EQ(warnings_with(parse_scene(kRising, "t"), rising), 1);
   EXPECT_EQ(warnings_with(parse_scene(kRising, "t"), "mirror the profile"), 1);
   EXPECT_EQ(warnings_with(parse_scene(kDescending, "t"), "rises along +x"), 0);
+  // a valley whose far wall ends higher than the slide starts: the slide still runs along +x
+  Scene valley = parse_scene(kDescending, "t");
+  valley.grid.terrain.points = {{0.0, 60.0}, {60.0, 0.0}, {120.0, 70.0}};
+  EXPECT_EQ(warnings_with(valley, "rises along +x"), 0);
   // without the runout diagnostics nothing is measured along +x
   Scene off = parse_scene(kRising, "t");
   off.runout.enabled = false;
