@@ -84,7 +84,7 @@ void print_scene_summary(const Scene& s, const MemoryEstimate& memory, const Mac
   fmt::print("method     {} with {} shape functions, Courant {}\n", to_string(s.scheme), to_string(s.shape), s.courant);
   const double dt = s.initial_time_step();
   // (a count past 10^15 in full was a line of 154 digits for a vanishing density)
-  const double steps = s.end_time / dt;
+  const double steps = estimated_steps(s);  // (as the disk line counts them: whole steps, time.max_steps)
   const auto count = [](double n) { return n < 1e15 ? fmt::format("{:.0f}", n) : fmt::format("{:.3g}", n); };
   // The work: particle-updates, the particles times the steps. The steps are counted at the initial
   // time step, the wave speed and velocities of the start: a flow that speeds up shortens the step

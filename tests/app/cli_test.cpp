@@ -213,7 +213,7 @@ TEST(Cli, CheckEstimatesTheFramesDiskUseAndRunWarnsWhenTheyMayNotFit) {
   EXPECT_NE(check.find("\nok\n"), std::string::npos) << check;  // (no warning)
   // the work: particles x the steps at the initial time step (a flow that speeds up takes more: the
   // elastic block of terrain/slope_to_runout_linear.json took 7112 steps of the 6961 estimated)
-  EXPECT_NE(check.find("\ntime       end 1 s, initial dt 1.551e-04 s: ~6448 steps and ~5.16e+07 particle-updates (8000 "
+  EXPECT_NE(check.find("\ntime       end 1 s, initial dt 1.551e-04 s: ~6449 steps and ~5.16e+07 particle-updates (8000 "
                        "particles x steps) at the initial time step; a flow that speeds up takes more\n"),
             std::string::npos)
       << check;
