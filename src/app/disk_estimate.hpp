@@ -13,6 +13,10 @@ namespace talus::app {
 
 struct DiskEstimate {
   std::size_t frames = 0;           // the most a run writes (driver/run_outputs.hpp frames_of_run)
+  /// The frames are bounded by the steps, one a step, at the steps estimated at the initial time step
+  /// (output.frame_interval shorter than the step): then an estimate, short of a flow that speeds up.
+  bool frames_by_steps = false;
+  double steps = 0.0;               // driver/run_outputs.hpp estimated_steps
   std::size_t bytes_per_frame = 0;  // uncompressed (io/vtu_writer.hpp): an upper bound with LZ4
   bool compressed = true;           // output.compress
   /// checkpoint.h5: written by every run that is stopped (signal, --stop-after, an instability) and
@@ -29,6 +33,10 @@ struct DiskEstimate {
   /// 20.1 GB free in runs/x".
   std::string summary(const std::filesystem::path& out_dir) const;
 };
+
+/// "the outputs may not fit: ..." where the estimate exceeds the free space (`talus check` and
+/// `talus run` print it as a warning before the run); none where it fits or the space is unknown.
+std::optional<std::string> disk_warning(const DiskEstimate& disk, const std::filesystem::path& out_dir);
 
 /// The estimate for a run of `scene` with `particles` particles into `out_dir` (which may not exist
 /// yet: the free space is that of its nearest existing ancestor).

@@ -61,13 +61,21 @@ MachineShare machine_share(const Comm& world, const std::string& restart) {
   return share;
 }
 
-void print_warnings(const Scene& scene) {
-  for (const std::string& w : scene_warnings(scene)) fmt::print(stderr, "talus: warning: {}\n", w);
+/// The scene's warnings and `more` (the disk's), one line each on stderr, after what stdout holds
+/// so far; returns how many.
+std::size_t print_warnings(const Scene& scene, const std::vector<std::string>& more = {}) {
+  std::vector<std::string> warnings = scene_warnings(scene);
+  warnings.insert(warnings.end(), more.begin(), more.end());
+  std::fflush(stdout);
+  for (const std::string& w : warnings) fmt::print(stderr, "talus: warning: {}\n", w);
+  std::fflush(stderr);
+  return warnings.size();
 }
 
 // What a run would do, from the scene and the memory estimate alone: nothing is seeded or
 // allocated, so this answers at once on any scene (solver/memory_estimate.hpp).
-void print_scene_summary(const Scene& s, const MemoryEstimate& memory, const MachineShare& share) {
+void print_scene_summary(const Scene& s, const MemoryEstimate& memory, const MachineShare& share,
+                         const DiskEstimate& disk, const std::string& out_dir) {
   const auto& g = s.grid;
   fmt::print("scene      {}{}\n", s.name, s.description.empty() ? "" : " - " + s.description);
   fmt::print("grid       {} x {} x {} cells of {} m, origin ({}, {}, {})\n", g.cells[0], g.cells[1], g.cells[2], g.h,
@@ -76,9 +84,14 @@ void print_scene_summary(const Scene& s, const MemoryEstimate& memory, const Mac
   fmt::print("method     {} with {} shape functions, Courant {}\n", to_string(s.scheme), to_string(s.shape), s.courant);
   const double dt = s.initial_time_step();
   // (a count past 10^15 in full was a line of 154 digits for a vanishing density)
-  const double steps = s.end_time / dt;
-  fmt::print("time       end {} s, initial dt {:.3e} s (~{} steps if speeds stay low)\n", s.end_time, dt,
-             steps < 1e15 ? fmt::format("{:.0f}", steps) : fmt::format("{:.3g}", steps));
+  const double steps = estimated_steps(s);  // (as the disk line counts them: whole steps, time.max_steps)
+  const auto count = [](double n) { return n < 1e15 ? fmt::format("{:.0f}", n) : fmt::format("{:.3g}", n); };
+  // The work: particle-updates, the particles times the steps. The steps are counted at the initial
+  // time step, the wave speed and velocities of the start: a flow that speeds up shortens the step
+  // and takes more (the flowing runs of one user's landslide scenes took 36-45% more).
+  fmt::print("time       end {} s, initial dt {:.3e} s: ~{} steps and ~{:.3g} particle-updates ({} particles x steps) "
+             "at the initial time step; a flow that speeds up takes more\n",
+             s.end_time, dt, count(steps), double(memory.particles) * steps, memory.particles);
   const std::optional<std::size_t> available = available_memory();
   fmt::print("memory     about {}: {} B per particle, {} of grid at the start (up to {} if the flow covers the whole "
              "grid); {}\n",
@@ -89,9 +102,7 @@ void print_scene_summary(const Scene& s, const MemoryEstimate& memory, const Mac
     fmt::print("memory     about {} on this machine ({} of the {} ranks{}), what the check compares\n",
                format_bytes(double(bytes_on_this_machine(s, memory, share))), share.ranks_here, share.ranks,
                share.root_here ? ", rank 0 among them, which gathers every particle" : "");
-  // (where `talus run` writes by default; --out names another folder)
-  const std::string out_dir = "runs/" + s.name;
-  fmt::print("disk       {}\n", estimate_disk(s, memory.particles, out_dir).summary(out_dir));
+  fmt::print("disk       {}\n", disk.summary(out_dir));
 }
 
 // The end-of-run lines of a scene with runout diagnostics (docs/flume.md).
@@ -378,12 +389,11 @@ void add_run_command(CLI::App& app) {
                  dir);
     if (world.root() && !world.distributed())
       if (const auto hint = scatter_hint(solver.scene(), solver.cell_sort(), threads)) fmt::print("{}\n", *hint);
-    if (world.root()) {
-      const DiskEstimate disk = estimate_disk(solver.scene(), std::size_t(start.particles), dir);
-      if (disk.available && disk.total() > double(*disk.available))
-        fmt::print("talus: warning: the outputs may not fit: {} (a frame or checkpoint that cannot be written stops the run)\n",
-                   disk.summary(dir));
-    }
+    if (world.root())  // (the same line as `talus check`'s, app/disk_estimate.hpp)
+      if (const auto w = disk_warning(estimate_disk(solver.scene(), std::size_t(start.particles), dir), dir)) {
+        std::fflush(stdout);
+        fmt::print(stderr, "talus: warning: {}\n", *w);
+      }
     // Out now, ahead of the progress lines and any error on stderr: a log of both (`> log 2>&1`)
     // had this banner after the error that ended the run.
     std::fflush(stdout);
@@ -572,12 +582,17 @@ void add_check_command(CLI::App& app) {
     // smaller machine then refused the run); the refusal comes after the summary on one rank
     if (world.distributed()) world.agree([&] { require_memory_fits(scene, memory, share); });
     if (!world.root()) return;
-    print_warnings(scene);
-    print_scene_summary(scene, memory, share);
+    // (where `talus run` writes by default; --out names another folder) The disk's warning is
+    // `talus run`'s (check said ok where the run warned of 215 GB of frames), with the scene's.
+    const std::string out_dir = "runs/" + scene.name;
+    const DiskEstimate disk = estimate_disk(scene, memory.particles, out_dir);
+    std::vector<std::string> more;
+    if (const auto w = disk_warning(disk, out_dir)) more.push_back(*w);
+    const std::size_t warnings = print_warnings(scene, more);
+    print_scene_summary(scene, memory, share, disk, out_dir);
     // (check said ok, and the run stopped at once: the default folder held this scene file, or
     // could not be made here)
     try {
-      const std::string out_dir = "runs/" + scene.name;
       require_outputs_spare_inputs(out_dir, *scene_path, scene, "", "");
       require_no_folder_in_place_of_an_output(out_dir);
       check_writable_folder(out_dir, "output folder");
@@ -585,7 +600,12 @@ void add_check_command(CLI::App& app) {
       fmt::print("note       talus run without --out would stop: {}\n", e.what());
     }
     if (!world.distributed()) require_memory_fits(scene, memory, share);  // (under mpirun: checked above, on every rank)
-    fmt::print("ok{}\n", world.distributed() ? fmt::format(" (for {} ranks)", world.size()) : "");
+    // (a bare "ok" last, on stdout, hid the warnings on stderr: it counts them)
+    const std::string ranks = world.distributed() ? fmt::format("for {} ranks", world.size()) : "";
+    const std::string warned =
+        warnings == 0 ? "" : fmt::format("{} warning{} above, on stderr", warnings, warnings == 1 ? "" : "s");
+    fmt::print("ok{}\n", ranks.empty() && warned.empty() ? std::string()
+                                                           : fmt::format(" ({}{}{})", ranks, ranks.empty() || warned.empty() ? "" : "; ", warned));
   });
 }
 

@@ -158,6 +158,12 @@ RunoutResult RunoutMonitor::result(const RunoutSample* now) const {
   r.step = measured.step;
   r.front = measured.front;
   r.tail = measured.tail;
+  r.front_x = std::isfinite(r.front) ? coordinates_.x_at(r.front) : r.front;
+  r.tail_x = std::isfinite(r.tail) ? coordinates_.x_at(r.tail) : r.tail;
+  if (!coordinates_.flat() && std::isfinite(r.front) && std::isfinite(r.tail)) {
+    r.front_z = coordinates_.profile().height(r.front_x);
+    r.tail_z = coordinates_.profile().height(r.tail_x);
+  }
   r.gate_from_scene = spec_.has_gate;
   r.gate_s = spec_.has_gate ? coordinates_.s(spec_.gate_x) : first_->front;
   r.from_gate = r.front - r.gate_s;

@@ -82,16 +82,29 @@ std::vector<fs::path> run_output_files(const fs::path& dir) {
   return files;
 }
 
-std::size_t frames_of_run(const Scene& scene) {
+std::size_t frames_by_interval(const Scene& scene) {
   const double interval = scene.output.frame_interval;
   if (interval <= 0.0) return 2;
   // (a frame falls on the first step at or past each multiple, and the last step writes one unless
   // it was such a step: 1 + ceil(end / interval), less a rounding margin when end is a multiple)
   const double frames = 1.0 + std::ceil(scene.end_time / interval * (1.0 - 1e-12));
-  // (a run writes at most one frame a step, and none takes 10^15 steps: the cap keeps a vanishing
-  // interval, 1e-300 s, from overflowing the count and still bounds what is written)
+  // (none takes 10^15 steps: the cap keeps a vanishing interval, 1e-300 s, from overflowing the count)
   constexpr double kMostFrames = 1e15;
   return static_cast<std::size_t>(std::min(frames, kMostFrames));
+}
+
+double estimated_steps(const Scene& scene) {
+  const double steps = std::ceil(scene.end_time / scene.initial_time_step() * (1.0 - 1e-12));
+  return scene.max_steps > 0 ? std::min(steps, double(scene.max_steps)) : steps;
+}
+
+std::size_t frames_of_run(const Scene& scene) {
+  // A run writes at most one frame a step, the first at step 0: with an interval shorter than the
+  // step (end 1 s, frame_interval 1e-5 s: 100 001 frames by the interval, 227 written), the steps
+  // bound the count; they are estimated at the initial time step (a flow that speeds up takes more).
+  const std::size_t by_interval = frames_by_interval(scene);
+  const double by_steps = estimated_steps(scene) + 1.0;
+  return by_steps < double(by_interval) ? static_cast<std::size_t>(by_steps) : by_interval;
 }
 
 bool same_file(const fs::path& a, const fs::path& b) {

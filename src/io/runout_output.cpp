@@ -65,10 +65,11 @@ std::string runout_result_json(const RunoutResult& r) {
   auto boolean = [](bool b) { return b ? "true" : "false"; };
   return fmt::format(
       "{{\"status\": \"{}\", \"final\": {}, \"time\": {}, \"step\": {}, \"front\": {}, \"tail\": {}, "
-      "\"gate_s\": {}, \"gate_from_scene\": {}, \"from_gate\": {}, \"runout_plane_s\": {}, "
+      "\"front_x\": {}, \"front_z\": {}, \"tail_x\": {}, \"tail_z\": {}, \"gate_s\": {}, \"gate_from_scene\": {}, \"from_gate\": {}, \"runout_plane_s\": {}, "
       "\"beyond_runout_plane\": {}, \"all_left_time\": {}, \"outflow_mass_share\": {}, "
       "\"outflow_mass_share_x_plus\": {}, \"limited_by_outflow\": {}, \"front_at_grid_end\": {}}}",
-      r.status, boolean(r.final), number(r.time), r.step, number(r.front), number(r.tail), number(r.gate_s),
+      r.status, boolean(r.final), number(r.time), r.step, number(r.front), number(r.tail), number(r.front_x),
+      optional(r.front_z), number(r.tail_x), optional(r.tail_z), number(r.gate_s),
       boolean(r.gate_from_scene), number(r.from_gate), optional(r.runout_plane_s), optional(r.beyond_runout_plane),
       optional(r.all_left_time), number(r.outflow_mass_share), number(r.outflow_mass_share_x_plus),
       boolean(r.limited_by_outflow), boolean(r.front_at_grid_end));

@@ -12,8 +12,11 @@
 #include <fmt/core.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <optional>
 
 namespace talus {
 
@@ -104,6 +107,165 @@ BodyLabel body_label(const Scene& scene) {
     const BodySpec& body = scene.bodies[b];
     return fmt::format("bodies[{}]{}", b, body.shape == BodyShapeKind::Box ? "" : std::string(".") + to_string(body.shape));
   };
+}
+
+// The bodies' footprint along x: the x range over which they rest on the bed (a prism's vertices
+// within half a cell of the bed: the flume's wedge rests on [-0.21, 0] while its free surface
+// reaches 0.08 m past the gate), or their whole extent along x where nothing rests on it.
+std::array<double, 2> bodies_footprint_x(const Scene& scene) {
+  const GridGeometry& g = scene.grid;
+  std::optional<TerrainProfile> profile;
+  if (g.has_terrain()) profile.emplace(g.terrain);
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const BodySpec& b : scene.bodies) {
+    double b_lo = b.box_min[0], b_hi = b.box_max[0];
+    if (b.shape == BodyShapeKind::Prism) {
+      double on_lo = std::numeric_limits<double>::infinity(), on_hi = -on_lo;
+      for (const auto& p : b.prism.points) {
+        const double bed = profile ? profile->height(p[0]) : g.origin[2];
+        if (std::abs(p[1] - bed) <= 0.5 * g.h) on_lo = std::min(on_lo, p[0]), on_hi = std::max(on_hi, p[0]);
+      }
+      if (on_lo <= on_hi) b_lo = on_lo, b_hi = on_hi;
+    }
+    lo = std::min(lo, b_lo);
+    hi = std::max(hi, b_hi);
+  }
+  return {lo, hi};
+}
+
+// A bed that rises along +x under the runout diagnostics, which measure along +x.
+void add_runout_direction_warning(const Scene& scene, std::vector<std::string>& warnings) {
+  const GridGeometry& grid = scene.grid;
+  const double g = scene.gravity.norm();
+  // The runout is measured down the flume along +x: the front is the mass quantile of the largest s.
+  // A profile surveyed from the toe up (the bed rising along +x) reported the scarp as the "front"
+  // while 8.8% of the mass left through x- (a user's run). The test: the bed under the bodies (over
+  // their footprint along x) rises along +x, so that they flow toward -x (a valley whose far wall
+  // ends higher than the slide starts is not warned about); on a flat grid, gravity pulling along -x.
+  if (scene.runout.enabled && !scene.bodies.empty()) {
+    if (grid.has_terrain()) {
+      const TerrainProfile profile(grid.terrain);
+      const auto [lo, hi] = bodies_footprint_x(scene);
+      const double z_lo = profile.height(lo), z_hi = profile.height(hi);
+      const double slope = hi > lo ? (z_hi - z_lo) / (hi - lo) : profile.slope(lo);
+      if (slope > 1e-9)
+        warnings.push_back(fmt::format(
+            "diagnostics.runout on a bed that rises along +x under the bodies (grid.terrain: z = {:.6g} m at x = "
+            "{:.6g} m and {:.6g} m at x = {:.6g} m, the ends of their footprint): the runout is measured down the "
+            "flume along +x (the front is the mass's farthest s along +x), so on this bed the front is the upslope "
+            "end of the mass; mirror the profile (x -> -x, the points in reverse order) and the bodies so that the "
+            "bed descends along +x",
+            z_lo, lo, z_hi, hi));
+    } else if (scene.gravity[0] < -1e-9 * g) {
+      warnings.push_back(fmt::format(
+          "diagnostics.runout with gravity[0] = {} < 0 on a flat grid: the flow runs along -x, but the runout is "
+          "measured along +x (the front is the mass's farthest x), so the front is the upslope end of the mass; "
+          "mirror the scene along x (gravity[0] > 0)",
+          scene.gravity[0]));
+    }
+  }
+}
+
+// Values in another unit than the key's, which pass every range (as friction_angle and
+// friction_coefficient in scene_warnings), and an elastic modulus too soft to carry the body's weight.
+void add_unit_warnings(const Scene& scene, std::vector<std::string>& warnings) {
+  const GridGeometry& grid = scene.grid;
+  const double g = scene.gravity.norm();
+  // Units written wrong pass every range. A scene
+  // with gravity of 1 to 50 m/s^2 is in SI units; the benchmarks in inputs/benchmarks/ are not (density 1
+  // with gravity 0 or 200-250 m/s^2 along x), and are not warned about.
+  constexpr double kLightest = 100.0, kHeaviest = 25000.0;  // kg/m^3: dry snow and up; osmium is 22 600
+  constexpr double kGravityLow = 1.0, kGravityHigh = 50.0;  // m/s^2
+  const bool si_gravity = g >= kGravityLow && g <= kGravityHigh;
+  for (const MaterialSpec& m : scene.materials) {
+    if (si_gravity && m.density < kLightest)
+      warnings.push_back(fmt::format(
+          "materials.{}.density = {} kg/m³ is below {} kg/m³, lighter than any soil or rock: in g/cm³ or t/m³? ({} "
+          "g/cm³ is {:.6g} kg/m³)",
+          m.name, m.density, kLightest, m.density, m.density * 1000.0));
+    if (si_gravity && m.density > kHeaviest)
+      warnings.push_back(fmt::format(
+          "materials.{}.density = {} kg/m³ is above {} kg/m³, heavier than any rock (osmium: 22 600): a unit weight "
+          "ρ g in N/m³ ({:.6g} kg/m³ at |g| = {:.4g} m/s²), or another unit?",
+          m.name, m.density, kHeaviest, m.density / g, g));
+    // d in I = shear rate d / sqrt(p / rho_s) (docs/mu-i.md): the shipped scenes' 0.5 mm sand and beads.
+    constexpr double kCoarsest = 0.05;  // m: coarse gravel; boulders are no μ(I) continuum at these cells
+    if (m.model == MaterialModel::MuI && m.mu_i.grain_diameter > kCoarsest)
+      warnings.push_back(fmt::format(
+          "materials.{}.grain_diameter = {} m is a grain of {:.4g} mm, above {} m: in metres, not millimetres? (0.5 "
+          "mm is 0.0005)",
+          m.name, m.mu_i.grain_diameter, m.mu_i.grain_diameter * 1000.0, kCoarsest));
+  }
+  // On a terrain grid the profile tilts the bed: a tilted gravity counts the slope twice.
+  if (grid.has_terrain() && g > 0.0) {
+    const Vec3& v = scene.gravity;
+    if (std::hypot(v[0], v[1]) > 1e-9 * g)
+      warnings.push_back(fmt::format(
+          "gravity = [{}, {}, {}] on a terrain grid has a component along x or y: grid.terrain already tilts the bed, "
+          "so the slope is counted twice; give gravity [0, 0, -{:.4g}] (a tilted gravity is for a flat grid)",
+          v[0], v[1], v[2], g));
+    if (v[2] > 0.0)
+      warnings.push_back(fmt::format(
+          "gravity[2] = {} > 0 on a terrain grid points up, away from the bed: z is up; give gravity [0, 0, -{:.4g}]",
+          v[2], g));
+    if (g < kGravityLow || g > kGravityHigh)
+      warnings.push_back(fmt::format(
+          "|gravity| = {:.6g} m/s² on a terrain grid is far from 9.81 (outside [{}, {}]): in cm/s² or another unit?",
+          g, kGravityLow, kGravityHigh));
+  }
+  // Self-weight: a body of height H under its own weight strains by about rho g H / E. Above 0.1 the
+  // small-strain elasticity the materials use means nothing (young = 5e3 Pa for a 5 m slab of density
+  // 1800: 18); the shipped scenes strain by 0.013 at most. H is the body's extent along gravity.
+  constexpr double kSelfWeightStrain = 0.1;
+  if (g > 0.0)
+    for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
+      const BodySpec& body = scene.bodies[b];
+      const MaterialSpec& m = scene.materials[static_cast<std::size_t>(body.material)];
+      double height = 0.0;
+      for (int d = 0; d < 3; ++d) height += std::abs(scene.gravity[d]) / g * (body.box_max[d] - body.box_min[d]);
+      const double strain = m.density * g * height / m.elastic.young;
+      if (strain > kSelfWeightStrain) {
+        warnings.push_back(fmt::format(
+            "bodies[{}] (\"{}\"): its self-weight strain ρ g H / E = {:.3g} (density {} kg/m³, |g| = {:.4g} m/s², H = "
+            "{:.4g} m its extent along gravity, materials.{}.young = {} Pa) is above {}: the body would sag by more "
+            "than a tenth of its height under its own weight; young in Pa, not kPa or MPa? (the shipped sand: 2e6 Pa)",
+            b, body.name, strain, m.density, g, height, m.name, m.elastic.young, kSelfWeightStrain));
+        break;  // one line says it
+      }
+    }
+}
+
+// The gate inside the mass, and a runout plane upslope of the gate.
+void add_runout_gate_warnings(const Scene& scene, std::vector<std::string>& warnings) {
+  const GridGeometry& grid = scene.grid;
+  const double x0 = grid.origin[0], x1 = x0 + grid.cells[0] * grid.h;
+  // The gate inside the mass: the runout from the gate starts at the part of the mass already beyond
+  // it; a runout plane upslope of the gate: beyond_runout_plane counts from behind the gate.
+  if (scene.runout.enabled && !scene.bodies.empty()) {
+    const auto [lo, hi] = bodies_footprint_x(scene);
+    const double margin = 1e-9 * (std::abs(lo) + std::abs(hi)) + 1e-12;
+    if (scene.runout.has_gate && scene.runout.gate_x > lo + margin && scene.runout.gate_x < hi - margin)
+      warnings.push_back(fmt::format(
+          "diagnostics.runout.gate_x = {} lies inside the bodies' initial extent along x [{:.6g}, {:.6g}]: the "
+          "runout from the gate counts the {:.6g} m of the mass already beyond it; put the gate at the bodies' "
+          "downslope end (x = {:.6g}) or leave gate_x out (the runout is then measured from the initial front)",
+          scene.runout.gate_x, lo, hi, hi - scene.runout.gate_x, hi));
+    std::optional<double> plane;
+    if (scene.runout.has_runout_plane)
+      plane = scene.runout.runout_plane_x;
+    else if (grid.has_terrain())
+      if (const auto start = TerrainProfile(grid.terrain).last_segment_start(); start && *start >= x0 && *start <= x1)
+        plane = start;
+    const double gate = scene.runout.has_gate ? scene.runout.gate_x : hi;
+    if (plane && *plane < gate - margin)
+      warnings.push_back(fmt::format(
+          "diagnostics.runout.runout_plane_x = {:.6g}{} is upslope of {} = {:.6g}: the runout plane, where the bed "
+          "flattens, starts behind the {}, so beyond_runout_plane counts from behind it; the runout plane lies "
+          "downslope (along +x) of the gate",
+          *plane, scene.runout.has_runout_plane ? "" : " (its default, the end of the terrain's last transition)",
+          scene.runout.has_gate ? "gate_x" : "the bodies' downslope end", gate,
+          scene.runout.has_gate ? "gate" : "mass"));
+  }
 }
 
 }  // namespace
@@ -238,6 +400,9 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
         "solver.smoothing.variant = \"cell\" is not energy-stable: one fit per cell fed energy into the elastic block "
         "between walls at radii of 1.5 to 3 cells (docs/verification.md, \"MLS, one fit per cell\"); compare with "
         "\"particle\" before relying on it");
+  add_runout_direction_warning(scene, warnings);
+  add_unit_warnings(scene, warnings);
+  add_runout_gate_warnings(scene, warnings);
   return warnings;
 }
 

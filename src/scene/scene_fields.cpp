@@ -82,7 +82,8 @@ Table<SceneDraft> make_terrain_table() {
           "radii", "[r per point]", "all 0", "≥ 0, one per point; transitions must fit on their segments",
           "radius of the circular transition at each interior point (0: sharp kink; end points ignored). The grid's "
           "bed is the profile sampled at the node columns: a transition departs from it by ≤ h²/8r; a sharp kink "
-          "between node columns is cut by a chord, so put kinks on node columns or use r ≥ 2h",
+          "between node columns is cut by a chord, so put kinks on node columns or use r ≥ 2h (`run` and `check` warn "
+          "where a vertex with r < 2h lies between node columns and the chord passes more than h/16 from it)",
           {{"type", "array"}, {"items", {{"type", "number"}, {"minimum", 0}}}},
           [](ObjectReader& r, SceneDraft& d) {
             if (!r.has("radii")) return;
@@ -378,7 +379,7 @@ Fields<MuIParameters> mu_i_fields() {
                 {.allowed = "> μs", .domain_checked = true}),
       number<P>("i0", TALUS_AT(i0), {0.0, kHuge, true}, "I0 of μ(I) = μs + (μ2 − μs)/(1 + I0/I)",
                 {.domain_checked = true}),
-      number<P>("grain_diameter", TALUS_AT(grain_diameter), {0.0, kHuge, true}, "d in I = γ̇ᵖ d / √(p/ρs)",
+      number<P>("grain_diameter", TALUS_AT(grain_diameter), {0.0, kHuge, true}, "d in I = γ̇ᵖ d / √(p/ρs), in metres (in a scene, above 0.05 m `run` and `check` warn: millimetres?)",
                 {.unit = "m", .domain_checked = true}),
       number<P>("grain_density", TALUS_AT(grain_density), {0.0, kHuge, true}, "ρs, the density of the grains (not of the packing: that is `density`, which may not exceed it)",
                 {.unit = "kg/m³", .domain_checked = true}),
@@ -402,8 +403,12 @@ Table<MaterialSpec> make_material_table() {
                  models,
                  "constitutive model (Drucker–Prager: Abe, Johansson & Konagai 2005, eq. 23–25; docs/drucker-prager.md; "
                  "μ(I): Jop, Forterre & Pouliquen 2006 in the form of Dunatunga & Kamrin 2015, docs/mu-i.md)"),
-       number<M>("density", TALUS_AT(density), {0.0, kHuge, true}, "initial density [kg/m³]", {.required = true}),
-       number<M>("young", TALUS_AT(elastic.young), {0.0, kHuge, true}, "Young's modulus E [Pa]", {.required = true}),
+       number<M>("density", TALUS_AT(density), {0.0, kHuge, true}, "initial density [kg/m³] (below 100 or above 25000, with gravity of 1 to 50 m/s², `run` and `check` warn: "
+                 "g/cm³?)",
+                 {.required = true}),
+       number<M>("young", TALUS_AT(elastic.young), {0.0, kHuge, true}, "Young's modulus E [Pa] (`run` and `check` warn where a body's self-weight strain ρ g H / E, H its "
+                 "extent along gravity, passes 0.1)",
+                 {.required = true}),
        number<M>("poisson", TALUS_AT(elastic.poisson), {-1.0, 0.5, true, true}, "Poisson's ratio ν",
                  {.required = true, .when = elastic}),
        number<M>("poisson", TALUS_AT(elastic.poisson), {0.0, 0.5, false, true}, "Poisson's ratio ν",
@@ -483,9 +488,23 @@ void check_inside_grid(const BodySpec& b, const std::string& path, const Scene& 
     // (round-off of the grid's extent, the same margin on both sides: relative to the lower bound
     // alone it was none at an origin of 0, where a min of -1e-17 was refused)
     const double margin = 1e-12 * (std::abs(lo) + std::abs(hi));
-    if (b.box_min[d] < lo - margin || b.box_max[d] > hi + margin)
-      throw input_error(fmt::format("{} [{}, {}] along axis {} lies outside the grid [{:.12g}, {:.12g}]", path,
-                                    b.box_min[d], b.box_max[d], d, lo, hi));
+    const bool below = b.box_min[d] < lo - margin, above = b.box_max[d] > hi + margin;
+    if (!below && !above) continue;
+    // (named by the key at fault: a box's min[d] or max[d], the third of a terrain-frame box being w)
+    const bool wholly = b.box_max[d] < lo - margin || b.box_min[d] > hi + margin;
+    const std::string extent = fmt::format("[{}, {}] along axis {}", b.box_min[d], b.box_max[d], d);
+    const std::string grid_range = fmt::format("[{:.12g}, {:.12g}]", lo, hi);
+    if (b.shape != BodyShapeKind::Box)
+      throw input_error(fmt::format("{} {} lies {}outside the grid {}", path, extent, wholly ? "wholly " : "partly ",
+                                    grid_range));
+    const char* axis = d == 0 ? "x" : d == 1 ? "y" : b.frame == BoxFrame::Terrain ? "w, the height above the bed" : "z";
+    if (below && above)
+      throw input_error(fmt::format("{0}.min[{1}] = {2} and {0}.max[{1}] = {3} ({4}) lie outside the grid {5}: the box "
+                                    "is wider than the grid along axis {1}",
+                                    path, d, b.box_min[d], b.box_max[d], axis, grid_range));
+    throw input_error(fmt::format("{}.{}[{}] = {} ({}) lies outside the grid {}: the box {} lies {}outside it", path,
+                                  below ? "min" : "max", d, below ? b.box_min[d] : b.box_max[d], axis, grid_range,
+                                  extent, wholly ? "wholly " : "partly "));
   }
 }
 
@@ -652,6 +671,8 @@ WallSpec read_wall(const Json& j, const std::string& path) {
         "{} must be a string (open, slip, fixed, periodic) or an object with type (friction needs one), got {}", path,
         j.type_name()));
   ObjectReader r(j, path);
+  // (a misspelt key first: friction_coeff was reported as the missing friction_coefficient)
+  r.refuse_unknown({"type", "friction_coefficient"});
   w.type = wall_type(r.string("type"), r.key_path("type"));
   if (w.type == WallType::Friction) w.friction_coefficient = r.number("friction_coefficient", 0.0, 100.0);
   r.finish();
@@ -803,9 +824,11 @@ Table<SceneDraft> make_runout_table() {
       number<SceneDraft>("tail_quantile", TALUS_AT(scene.runout.tail_quantile), {0.0, 0.5},
                          "tail = the s below which this share of the mass lies"),
       present_number("gate_x", &RunoutSpec::gate_x, &RunoutSpec::has_gate, "the initial front",
-                     "x of the gate; the runout is measured from it"),
+                     "x of the gate; the runout is measured from it (`run` and `check` warn when it lies inside the bodies' "
+                     "footprint along x)"),
       present_number("runout_plane_x", &RunoutSpec::runout_plane_x, &RunoutSpec::has_runout_plane,
-                     "the end of the terrain's last transition (none outside the grid)", "x where the runout plane starts"),
+                     "the end of the terrain's last transition (none outside the grid)", "x where the runout plane starts (`run` and `check` warn "
+                     "when it lies upslope of the gate)"),
       custom<SceneDraft>(
           "deposit_cell", "number [m]", "`grid.cell_size`", "> 0, at most 1e7 raster cells",
           "cell of the deposit thickness raster in (s, y)", {{"type", "number"}, {"exclusiveMinimum", 0}},
@@ -830,7 +853,8 @@ Table<SceneDraft> make_diagnostics_table() {
       object<SceneDraft>(
           "runout", runout_table, "absent (off)",
           "runout diagnostics along the flume coordinate s (arc length of the terrain, x when flat): `runout.csv`, "
-          "`runout.json`, `deposit.csv` (docs/flume.md §4)",
+          "`runout.json`, `deposit.csv` (docs/flume.md §4). Measured along +x: `run` and `check` warn where the bed "
+          "under the bodies rises along +x (over their footprint along x; on a flat grid, gravity[0] < 0)",
           {.begin = [](SceneDraft& d) { d.scene.runout.enabled = true; },
            .present = [](const SceneDraft& d) { return d.scene.runout.enabled; }}),
   }};
@@ -960,7 +984,9 @@ Table<SceneDraft> make_scene_table() {
           [](const SceneDraft& d, Json& j) { j["name"] = d.scene.name; }),
       string<SceneDraft>("description", TALUS_AT(scene.description), "free text, printed by `talus check`"),
       section("grid", grid_table, false, "the grid: a box of cubic cells"),
-      vec3<SceneDraft>("gravity", TALUS_AT(scene.gravity), "body force per unit mass", {.type = "[gx, gy, gz]"}),
+      vec3<SceneDraft>("gravity", TALUS_AT(scene.gravity), "body force per unit mass. On a terrain grid `run` and `check` warn about a component along x or y (the "
+                       "terrain tilts the bed: the slope counted twice), one up (+z), or |g| outside [1, 50] m/s²",
+                       {.type = "[gx, gy, gz]"}),
       section("time", time_table, false, "the time span and the time step"),
       section("solver", solver_table, true, "the update scheme, shape functions and their options"),
       materials_field(),

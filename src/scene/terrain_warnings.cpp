@@ -127,6 +127,29 @@ std::vector<std::string> terrain_warnings(const GridGeometry& grid, double coura
         "measure s along the profile, so their distances come out that much longer. Sample the profile no finer "
         "than the cells, or refine the grid",
         grid.h, 100.0 * (bed.profile_length / bed.chord_length - 1.0)));
+  // A kink between two node columns is cut by the chord between them (docs/scene-reference.md,
+  // grid.terrain.radii: "put kinks on node columns or use r >= 2h"). Warned about, with r < 2h, where
+  // the chord passes farther from the profile at the vertex than a transition of r = 2h departs from
+  // its chords, h^2 / 8r = h / 16: a slight bend between columns, or a kink on a column, is not.
+  for (std::size_t k = 1; k + 1 < points.size(); ++k) {
+    const double xk = points[k][0];
+    if (!(xk > grid.origin[0] && xk < x_end)) continue;
+    const double left = grid.origin[0] + std::floor((xk - grid.origin[0]) / grid.h) * grid.h, right = left + grid.h;
+    const double t = (xk - left) / grid.h;
+    const double chord = (1.0 - t) * profile.height(left) + t * profile.height(right);
+    const double off = std::abs(profile.height(xk) - chord);
+    const double radius = k < grid.terrain.radii.size() ? grid.terrain.radii[k] : 0.0;
+    if (radius >= 2.0 * grid.h || off <= grid.h / 16.0) continue;
+    warnings.push_back(fmt::format(
+        "grid.terrain.points[{}] = ({:.6g}, {:.6g}) is a {} between the node columns x = {:.6g} and {:.6g} m: the bed "
+        "the grid resolves cuts it with the chord between them, {:.3g} m from the profile at the vertex (a transition "
+        "of r = 2h departs h/16 = {:.3g} m); put the vertex on a node column or give it a radius of 2h = {:.6g} m or "
+        "more (grid.terrain.radii[{}])",
+        k, xk, points[k][1],
+        radius > 0.0 ? fmt::format("transition of radius {} m, below 2h = {:.6g} m,", radius, 2.0 * grid.h)
+                     : std::string("sharp kink (radius 0)"),
+        left, right, off, grid.h / 16.0, 2.0 * grid.h, k));
+  }
   return warnings;
 }
 

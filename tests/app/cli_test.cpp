@@ -210,15 +210,33 @@ TEST(Cli, CheckEstimatesTheFramesDiskUseAndRunWarnsWhenTheyMayNotFit) {
   const std::string check = run("check " + kInputs + "elastic_block_slide.json").output;
   EXPECT_NE(check.find("\ndisk       51 frames of at most 1.5 MB (LZ4 writes less) and a checkpoint of 1.5 MB: at most 78.0 MB; "), std::string::npos)
       << check;
+  EXPECT_NE(check.find("\nok\n"), std::string::npos) << check;  // (no warning)
+  // the work: particles x the steps at the initial time step (a flow that speeds up takes more: the
+  // elastic block of terrain/slope_to_runout_linear.json took 7112 steps of the 6961 estimated)
+  EXPECT_NE(check.find("\ntime       end 1 s, initial dt 1.551e-04 s: ~6449 steps and ~5.16e+07 particle-updates (8000 "
+                       "particles x steps) at the initial time step; a flow that speeds up takes more\n"),
+            std::string::npos)
+      << check;
+  // A frame every step: at most one a step, so the steps (about 6 448 a second at the initial time
+  // step) bound the count, not the interval (10^9 a second); 10^4 s of them are 96 TB.
   const std::string interval = "\"frame_interval\": 0.02";
   ASSERT_NE(text.find(interval), std::string::npos);
   text.replace(text.find(interval), interval.size(), "\"frame_interval\": 1e-9");
+  const std::string end = "\"end\": 1.0";
+  ASSERT_NE(text.find(end), std::string::npos);
+  text.replace(text.find(end), end.size(), "\"end\": 1e4");
   std::ofstream(dir / "many.json") << text;
+  const std::string warning = "talus: warning: the outputs may not fit: about 64483284 frames (one a step: ~64483283 steps "
+                              "at the initial time step, more if the flow speeds up) of at most 1.5 MB";
   const Result r = run("run " + (dir / "many.json").string() + " --out " + (dir / "out").string() +
                        " --threads 1 --quiet --stop-after 0.1s");
   EXPECT_EQ(r.exit_code, 75) << r.output;
-  EXPECT_NE(r.output.find("talus: warning: the outputs may not fit: 1000000001 frames of at most 1.5 MB"), std::string::npos)
-      << r.output;
+  EXPECT_NE(r.output.find(warning), std::string::npos) << r.output;
+  // `talus check` says the same (it said ok, and nothing of it), and its last line counts the warning
+  const Result c = run("check " + (dir / "many.json").string());
+  EXPECT_EQ(c.exit_code, 0) << c.output;
+  EXPECT_NE(c.output.find(warning), std::string::npos) << c.output;
+  EXPECT_NE(c.output.find("\nok (1 warning above, on stderr)\n"), std::string::npos) << c.output;
   fs::remove_all(dir);
 }
 

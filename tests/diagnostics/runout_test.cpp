@@ -175,6 +175,36 @@ TEST(Runout, RunoutPlaneStartsWhereTheTransitionEnds) {
   EXPECT_NEAR(*plane_of(RunoutGrid{0.0, 1.0, 0.05}), c.s(0.5), 1e-12);
 }
 
+// runout.json gave the front and tail only as arc length s: it gives their x and, on a terrain, the
+// bed's height z there too (null on a flat grid).
+TEST(Runout, TheResultGivesWhereTheFrontAndTailLie) {
+  RunoutSpec spec;
+  spec.enabled = true;
+  const FlumeCoordinates c{TerrainProfile(flume_terrain(31.4, 0.2))};
+  RunoutMonitor monitor(spec, c);
+  monitor.sample(uniform_strip(1000, 2.0), 0.0, 0);
+  const RunoutResult r = monitor.result();
+  EXPECT_NEAR(r.front_x, 994.5 * 0.002, 1e-9);  // the front particle's x (its s is the arc length there)
+  EXPECT_NEAR(r.tail_x, 4.5 * 0.002, 1e-9);
+  EXPECT_GT(r.front, r.front_x);  // s runs along the sloping bed: longer than x
+  ASSERT_TRUE(r.front_z && r.tail_z);
+  EXPECT_DOUBLE_EQ(*r.front_z, c.profile().height(r.front_x));
+  EXPECT_DOUBLE_EQ(*r.tail_z, c.profile().height(r.tail_x));
+  EXPECT_GT(*r.tail_z, *r.front_z);  // the tail lies upslope
+  const nlohmann::json j = nlohmann::json::parse(runout_result_json(r));
+  EXPECT_EQ(j.at("front_x").get<double>(), r.front_x);
+  EXPECT_EQ(j.at("front_z").get<double>(), *r.front_z);
+  EXPECT_EQ(j.at("tail_x").get<double>(), r.tail_x);
+  EXPECT_EQ(j.at("tail_z").get<double>(), *r.tail_z);
+  RunoutMonitor flat(spec, FlumeCoordinates());
+  flat.sample(uniform_strip(1000, 2.0), 0.0, 0);
+  const RunoutResult f = flat.result();
+  EXPECT_EQ(f.front_x, f.front);
+  const nlohmann::json jf = nlohmann::json::parse(runout_result_json(f));
+  EXPECT_TRUE(jf.at("front_z").is_null());
+  EXPECT_TRUE(jf.at("tail_z").is_null());
+}
+
 TEST(Runout, MonitorDifferencesTheFrontAndMeasuresFromTheGate) {
   RunoutSpec spec;
   spec.enabled = true;

@@ -175,10 +175,24 @@ TEST(VtuOutput, FramesOfRunCountsTheFramesARunWrites) {
     EXPECT_EQ(summary.frames, frames_of_run(scene)) << "frame_interval " << interval;
     fs::remove_all(dir);
   }
-  // A vanishing interval (allowed: a frame every step) is capped, not overflowed.
+  // A vanishing interval (allowed: a frame every step) is capped, not overflowed: by the interval at
+  // 10^15, and by one frame a step at the steps estimated at the initial time step (end 1 s,
+  // frame_interval 1e-5 s counted 100 001 frames where a run wrote 227).
   Scene every_step = test::tumbling_block_scene(1e6);
   every_step.output.frame_interval = 1e-300;
-  EXPECT_EQ(frames_of_run(every_step), std::size_t(1e15));
+  EXPECT_EQ(frames_by_interval(every_step), std::size_t(1e15));
+  EXPECT_EQ(frames_of_run(every_step), std::size_t(estimated_steps(every_step)) + 1);
+  EXPECT_LT(frames_of_run(every_step), std::size_t(1e15));
+  // A run with a frame every step writes one a step: its steps and the first (this block spins at a
+  // steady rate, so the steps are those estimated at the start).
+  Scene short_interval = test::tumbling_block_scene(0.02);
+  short_interval.output.frame_interval = 1e-9;
+  const fs::path dir = temp_dir("frames_of_run_steps");
+  const RunSummary summary = run_quietly(short_interval, dir);
+  EXPECT_EQ(summary.frames, std::size_t(summary.steps) + 1);
+  EXPECT_LT(frames_of_run(short_interval), frames_by_interval(short_interval));
+  EXPECT_NEAR(double(frames_of_run(short_interval)), double(summary.frames), 0.02 * double(summary.frames));
+  fs::remove_all(dir);
 }
 
 // A whole-file write (the run's records, element-test's CSV) goes through a temporary file and a

@@ -85,7 +85,7 @@ TEST(PrismBody, BadPrismsAreRefusedNamingTheKey) {
        "bodies[0].prism.points: the last point, [0.1, 0.1], repeats the first; leave it out"},
       {R"({"points": [[0.1, 0.1], [0.5, 0.1], [0.5, "a"]], "y": [0.2, 0.8]})", "bodies[0].prism.points[2][1] must be a number"},
       {R"({"points": [[0.1, 0.1], [0.5, 0.1], [0.5, 0.5]], "y": [0.8, 0.2]})", "bodies[0].prism.y = [0.8, 0.2] must have y0 < y1"},
-      {R"({"points": [[0.1, 0.1], [1.5, 0.1], [0.5, 0.5]], "y": [0.2, 0.8]})", "bodies[0].prism [0.1, 1.5] along axis 0 lies outside the grid"},
+      {R"({"points": [[0.1, 0.1], [1.5, 0.1], [0.5, 0.5]], "y": [0.2, 0.8]})", "bodies[0].prism [0.1, 1.5] along axis 0 lies partly outside the grid"},
       {R"({"points": [[0.1, 0.1], [0.5, 0.1], [0.5, 0.5]], "y": [0.2, 0.8], "z": 1})", "unknown key bodies[0].prism.z"},
       // A sliver between the particle rows holds no particle: refused when seeded, naming the prism.
       {R"({"points": [[0.1, 0.01], [0.9, 0.01], [0.9, 0.02]], "y": [0.2, 0.8]})", "bodies[0].prism (\"wedge\") holds no particle"},

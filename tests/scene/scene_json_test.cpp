@@ -330,7 +330,8 @@ TEST(SceneJson, BadInputNamesTheKeyAndTheRange) {
   EXPECT_NO_THROW(parse_scene(replace_once(ok, "\"min\": [0.2, 0.2, 0.2]", "\"min\": [-1e-17, 0.2, 0.2]"), "t.json"));
   EXPECT_NO_THROW(parse_scene(replace_once(ok, "\"max\": [0.5, 0.5, 0.5]", "\"max\": [0.5, 0.5, 1.0000000000000002]"), "t.json"));
   test::expect_variant_error(ok, "\"min\": [0.2, 0.2, 0.2]", "\"min\": [-1e-6, 0.2, 0.2]",
-                             "bodies[0].box [-1e-06, 0.5] along axis 0 lies outside the grid [0, 1]");
+                             "bodies[0].box.min[0] = -1e-06 (x) lies outside the grid [0, 1]: the box [-1e-06, 0.5] along axis 0 "
+                             "lies partly outside it");
   test::expect_variant_error(ok, "\"cell_size\": 0.1", "\"cell_size\": 0.3", "grid.size[0] = 1 must be a positive whole multiple of grid.cell_size");
   // a cell size too small for the cell limit names the limit, however small (at 1e-20 the count has no
   // integer and it was called no whole divisor of the size)

@@ -75,6 +75,10 @@ struct RunoutResult {
   double time = 0.0;                      // of the sample the front and tail are from
   std::int64_t step = 0;                  // of that sample
   double front = 0.0, tail = 0.0;
+  /// Where the front and tail lie: x at their s, and on a terrain the bed's height z there (none on a
+  /// flat grid, where s = x and the bed is no profile).
+  double front_x = 0.0, tail_x = 0.0;
+  std::optional<double> front_z, tail_z;
   double gate_s = 0.0;                    // s of the gate (scene gate_x, else the initial front)
   bool gate_from_scene = false;
   double from_gate = 0.0;                 // front - gate_s

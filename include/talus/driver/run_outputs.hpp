@@ -211,9 +211,15 @@ class CheckpointFile {
   std::string path_;
 };
 
-/// The most frames a run of `scene` writes from its start: the first at t = 0, one each
-/// output.frame_interval, and the last at the end (2 with no interval). Fewer when max_steps or an
-/// emptied grid ends it early.
+/// The frames a run of `scene` writes from its start by output.frame_interval: the first at t = 0,
+/// one each interval, and the last at the end (2 with no interval).
+std::size_t frames_by_interval(const Scene& scene);
+/// The steps a run of `scene` takes at its initial time step (Scene::initial_time_step), to time.end
+/// or time.max_steps: an estimate, short of a flow that speeds up (its step shrinks).
+double estimated_steps(const Scene& scene);
+/// The frames a run of `scene` writes: frames_by_interval, but at most one a step, so no more than
+/// estimated_steps + 1 (then an estimate, not a bound). Fewer when max_steps or an emptied grid ends
+/// it early.
 std::size_t frames_of_run(const Scene& scene);
 
 /// The folder frame i of a run was written in (RunProgress::frame_folders, relative to the run's
