@@ -500,16 +500,13 @@ void RunLoop::warn_of_energy_growth(const EnergyBudget& e) {
   summary_.energy_warning = EnergyWarning{solver_.step_count(), solver_.time(), share};
   const FastestParticle fastest = fastest_particle();  // (every rank: the same verdict)
   if (!comm_.root()) return;
-  const std::string body = fastest.body >= 0 && static_cast<std::size_t>(fastest.body) < scene_.bodies.size()
-                               ? scene_.bodies[static_cast<std::size_t>(fastest.body)].name
-                               : "?";
   fmt::print(stderr,
              "talus: warning: {}: the total energy grew by {:.4g} J, {:.3g}% of the energy available (more than "
              "guards.energy_warning_factor = {}): the scheme is creating energy, the results are suspect; fastest: "
-             "particle {} (body \"{}\") at ({:.4g}, {:.4g}, {:.4g}) m, {:.4g} m/s. A smaller time.courant usually "
+             "{} at ({:.4g}, {:.4g}, {:.4g}) m, {:.4g} m/s. A smaller time.courant usually "
              "helps (docs/reliability.md, \"Instability guards\")\n",
              step_ended(solver_.step_count(), solver_.time()), e.total() - summary_.initial.total(), 100.0 * share,
-             factor, fastest.id, body, fastest.x[0], fastest.x[1], fastest.x[2],
+             factor, fastest.label(scene_), fastest.x[0], fastest.x[1], fastest.x[2],
              std::sqrt(std::max(fastest.speed2, 0.0)));
 }
 

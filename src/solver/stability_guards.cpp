@@ -19,9 +19,13 @@ std::string step_ended(std::int64_t step, double time) { return fmt::format("aft
 
 namespace {
 
+std::string labelled(std::int64_t id, std::int64_t body, const Scene& scene) {
+  const bool named = body >= 0 && static_cast<std::size_t>(body) < scene.bodies.size();
+  return fmt::format("particle {} (body \"{}\")", id, named ? scene.bodies[static_cast<std::size_t>(body)].name : "?");
+}
+
 std::string particle_label(const ParticleStore& P, const Scene& scene, std::size_t p) {
-  const std::size_t body = P.body[p];
-  return fmt::format("particle {} (body \"{}\")", P.id[p], body < scene.bodies.size() ? scene.bodies[body].name : "?");
+  return labelled(P.id[p], P.body[p], scene);
 }
 
 std::string where(const ParticleStore& P, std::size_t p) {
@@ -154,6 +158,8 @@ FastestParticle FastestParticle::of(const ParticleStore& P) {
   return fastest;
 }
 
+std::string FastestParticle::label(const Scene& scene) const { return labelled(id, body, scene); }
+
 bool FastestParticle::before(const FastestParticle& other) const {
   if (std::isnan(speed2) != std::isnan(other.speed2)) return std::isnan(speed2);
   if (speed2 != other.speed2 && !std::isnan(speed2)) return speed2 > other.speed2;
@@ -178,14 +184,11 @@ bool EnergyGuard::breached(const EnergyBudget& e, double outflow_gravity) {
 void EnergyGuard::fail(const EnergyBudget& e, const FastestParticle& fastest, const Scene& scene, std::int64_t step,
                        double time) const {
   // The fastest particle is the likeliest seat of the instability: name it.
-  const std::string body = fastest.body >= 0 && static_cast<std::size_t>(fastest.body) < scene.bodies.size()
-                               ? scene.bodies[static_cast<std::size_t>(fastest.body)].name
-                               : "?";
   throw instability_error(fmt::format(
       "{}: total energy = {:.6g} J grew by {:.6g} J, more than guards.energy_growth_factor = {} times "
-      "the energy available ({:.6g} J); fastest: particle {} (body \"{}\") field speed = {:.6g} m/s; position ({:.6g}, "
+      "the energy available ({:.6g} J); fastest: {} field speed = {:.6g} m/s; position ({:.6g}, "
       "{:.6g}, {:.6g}) m, velocity ({:.6g}, {:.6g}, {:.6g}) m/s",
-      step_ended(step, time), e.total(), e.total() - initial_.total(), factor_, available(), fastest.id, body,
+      step_ended(step, time), e.total(), e.total() - initial_.total(), factor_, available(), fastest.label(scene),
       std::sqrt(std::max(fastest.speed2, 0.0)), fastest.x[0], fastest.x[1], fastest.x[2], fastest.v[0], fastest.v[1],
       fastest.v[2]));
 }

@@ -66,6 +66,8 @@ struct FastestParticle {
   static FastestParticle of(const ParticleStore& particles);
   /// Whether this one goes before `other`: a NaN speed first, then the faster, then the lower id.
   bool before(const FastestParticle& other) const;
+  /// How the energy guard's stop and warning name it: `particle 23 (body "block")` ("?" without a body).
+  std::string label(const Scene& scene) const;
 };
 
 /// Where the total energy first grew by more than guards.energy_warning_factor times the energy
