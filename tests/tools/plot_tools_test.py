@@ -570,6 +570,62 @@ class ColumnCollapseTitle(unittest.TestCase):
         self.assertEqual(plot_column_collapse.material_text(s), "mu(I) mu_s = 0.382 (20.9 deg)")
 
 
+class EnergyGuardDemo(unittest.TestCase):
+    """tools/energy_guard_demo.py on the shipped inputs/terrain/energy_guard_kink.json (docs/reliability.md,
+    "The energy guard on a shipped scene"): the run warns, trips the guard and keeps checkpoint_earlier.h5,
+    the resume with a smaller time.courant completes, and the shares the tool computes from energy.csv are
+    talus's own (the tool checks them)."""
+
+    def setUp(self):
+        self.work = tempfile.mkdtemp(prefix="talus_energy_guard_")
+
+    def tearDown(self):
+        shutil.rmtree(self.work, ignore_errors=True)
+
+    def test_bad_arguments_are_refused_in_one_line_before_any_run(self):
+        runs = os.path.join(self.work, "runs")
+        no_checkpoints = os.path.join(self.work, "no_checkpoints.json")
+        s = scene("inputs/terrain/energy_guard_kink.json")
+        del s["output"]["checkpoint_interval"]
+        with open(no_checkpoints, "w") as f:
+            json.dump(s, f)
+        for args, code, text in ((["--courant", "0"], 2, "--courant 0.0: give a number in (0, 1]"),
+                                 (["--courant", "1.5"], 2, "--courant 1.5: give a number in (0, 1]"),
+                                 (["--threads", "0"], 2, "--threads 0: give 1 or more"),
+                                 (["--scene", os.path.join(self.work, "nope.json")], 1, "nope.json: no such file"),
+                                 (["--scene", no_checkpoints], 1, "no output.checkpoint_interval"),
+                                 (["--talus", os.path.join(self.work, "talus")], 1, "no executable file there")):
+            code_, out, err = tool("energy_guard_demo.py", "--talus", TALUS, "--runs", runs, "--out", self.work, *args)
+            self.assertEqual((code_, out), (code, ""), err)
+            self.assertEqual(len(err.strip().splitlines()), 1, err)
+            self.assertIn(text, err)
+        self.assertFalse(os.path.exists(runs))
+
+    def test_the_shipped_scene_warns_trips_the_guard_and_resumes_to_its_end(self):
+        runs, out = os.path.join(self.work, "runs"), os.path.join(self.work, "out")
+        code, stdout, err = tool("energy_guard_demo.py", "--talus", TALUS, "--runs", runs, "--out", out)
+        self.assertEqual(code, 0, err)
+        lines = stdout.splitlines()
+        # measured (2026-12-07): warned after step 4343 (t = 2.553 s, 16.4%), tripped after step 4424
+        # (t = 2.597 s, 42.9%), resumed from the checkpoint of t = 2.0 s with Courant 0.1: -1.93% at 3.5 s
+        self.assertTrue(lines[0].startswith("warning: after step "), stdout)
+        self.assertIn("(more than energy_warning_factor = 0.1)", lines[0])
+        self.assertTrue(lines[1].startswith("trip: after step "), stdout)
+        self.assertIn("(energy_growth_factor = 0.4)", lines[1])
+        self.assertIn("kept: checkpoint_earlier.h5 of t = 2.0001", lines[2])
+        self.assertIn("resumed: no warning, completed at step ", lines[3])
+        self.assertIn("t = 3.5 s; energy budget gap -", lines[3])
+        self.assertTrue(os.path.isfile(os.path.join(runs, "run", "checkpoint_earlier.h5")))
+        with open(os.path.join(runs, "run", "run.json")) as f:
+            self.assertEqual(json.load(f)["status"], "unstable")
+        with open(os.path.join(runs, "resumed", "run.json")) as f:
+            record = json.load(f)
+        self.assertEqual(record["status"], "completed")
+        self.assertLess(abs(record["end"]["energy_budget_gap"]), 0.05)
+        self.assertNotIn("energy_growth_warning", record["end"])
+        self.assertEqual(os.listdir(out), ["energy_guard_kink.png"])
+
+
 if __name__ == "__main__":
     if len(sys.argv) < 2:
         sys.exit("usage: plot_tools_test.py TALUS")
