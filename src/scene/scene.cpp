@@ -400,6 +400,16 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
         "solver.smoothing.variant = \"cell\" is not energy-stable: one fit per cell fed energy into the elastic block "
         "between walls at radii of 1.5 to 3 cells (docs/verification.md, \"MLS, one fit per cell\"); compare with "
         "\"particle\" before relying on it");
+  // The warning is said at an energy row short of the stop; at or above the stop's factor the stop
+  // comes first (or at the same row, and the row that trips the guard warns of nothing), so it never is.
+  const GuardSpec& guards = scene.guards;
+  if (guards.energy_warning_factor > 0.0 && guards.energy_growth_factor > 0.0 &&
+      guards.energy_warning_factor >= guards.energy_growth_factor)
+    warnings.push_back(fmt::format(
+        "guards.energy_warning_factor = {} is not below guards.energy_growth_factor = {}: the energy guard stops "
+        "the run before the warning could be said, so it never is; give a warning factor below the stop's (the "
+        "default 0.1 against 1), or 0 to turn it off",
+        guards.energy_warning_factor, guards.energy_growth_factor));
   add_runout_direction_warning(scene, warnings);
   add_unit_warnings(scene, warnings);
   add_runout_gate_warnings(scene, warnings);

@@ -177,6 +177,33 @@ TEST(AuthoringWarnings, AMisspeltFaceKeyAndABoxOutsideTheGridNameTheKey) {
                              "0 lies wholly outside it");
 }
 
+// A warning factor at or above the stop's is never said: the row that passes it trips the guard first.
+TEST(AuthoringWarnings, AnEnergyWarningThatTheGuardWouldAlwaysPreemptIsWarnedAbout) {
+  const auto with_guards = [](const std::string& guards) {
+    return parse_scene(replace_once(kDescending, "\"output\"", "\"guards\": " + guards + ", \"output\""), "t");
+  };
+  EXPECT_EQ(warnings_with(with_guards(R"({ "energy_warning_factor": 0.5, "energy_growth_factor": 0.2 })"),
+                          "guards.energy_warning_factor = 0.5 is not below guards.energy_growth_factor = 0.2: the "
+                          "energy guard stops the run before the warning could be said, so it never is"),
+            1);
+  EXPECT_EQ(warnings_with(with_guards(R"({ "energy_warning_factor": 0.2, "energy_growth_factor": 0.2 })"),
+                          "guards.energy_warning_factor = 0.2 is not below guards.energy_growth_factor = 0.2"),
+            1);
+  EXPECT_EQ(warnings_with(with_guards(R"({ "energy_warning_factor": 1.5 })"),  // the stop's default, 1
+                          "guards.energy_warning_factor = 1.5 is not below guards.energy_growth_factor = 1:"),
+            1);
+  EXPECT_EQ(warnings_with(with_guards(R"({ "energy_warning_factor": 0.1, "energy_growth_factor": 0.2 })"),
+                          "energy_warning_factor"),
+            0);
+  EXPECT_EQ(warnings_with(with_guards(R"({ "energy_warning_factor": 0, "energy_growth_factor": 0.05 })"),  // off
+                          "energy_warning_factor"),
+            0);
+  EXPECT_EQ(warnings_with(parse_scene(kDescending, "t"), "energy_warning_factor"), 0);  // the defaults, 0.1 and 1
+  // the shipped scene that warns and then trips the guard by design
+  EXPECT_EQ(warnings_with(shipped("terrain/energy_guard_kink.json"), "energy_warning_factor"), 0);
+  for (const char* name : kShippedScenes) EXPECT_EQ(warnings_with(shipped(name), "energy_warning_factor"), 0) << name;
+}
+
 }  // namespace
 }  // namespace authoring_warnings_test
 }  // namespace talus
