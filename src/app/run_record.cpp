@@ -142,6 +142,13 @@ void RunRecord::end(const Solver& solver, const RunSummary& summary, const RunEn
                                     {"time", summary.energy_warning->time},
                                     {"share_of_energy_available", summary.energy_warning->share}};
   end["outflow_particles"] = counts.outflow_particles;
+  // Where they left: each open face's particles and mass (a face that is not open lets nothing out)
+  nlohmann::ordered_json by_face = nlohmann::ordered_json::object();
+  for (int face = 0; face < OutflowFaces::kFaces; ++face)
+    if (solver.scene().walls[face / 2][face % 2].type == WallType::Open)
+      by_face[OutflowFaces::kNames[face]] = {{"particles", counts.outflow_by_face.particles[face]},
+                                             {"mass_kg", counts.outflow_by_face.mass[face]}};
+  end["outflow_by_face"] = std::move(by_face);
   if (comm_.root()) write();
 }
 

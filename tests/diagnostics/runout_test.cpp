@@ -664,9 +664,11 @@ TEST(RunoutOutput, MassLeftThroughTheOpenFacesIsSaidAndTheFrontFlagged) {
     return nlohmann::json::parse(in);
   };
   double energy_available = 0.0;
+  OutflowFaces faces;
   {
     Solver solver(parse_scene(kOutflowScene, "outflow"));
     energy_available = run_scene(solver, options).energy_available;
+    faces = solver.outflow_faces();
     double in_grid = 0.0;
     for (double m : solver.particles().mass) in_grid += m;
     const double total = in_grid + solver.outflow_mass();
@@ -684,7 +686,7 @@ TEST(RunoutOutput, MassLeftThroughTheOpenFacesIsSaidAndTheFrontFlagged) {
     // so the share through x+ before the checkpoint was kept.
     const std::string checkpoint_path = (dir / "both" / "checkpoint.h5").string();
     const Checkpoint checkpoint = read_checkpoint(checkpoint_path);
-    ASSERT_GT(checkpoint.solver.outflow_mass_x_plus, 0.0);
+    ASSERT_GT(checkpoint.solver.outflow_faces.mass[OutflowFaces::kXPlus], 0.0);
     Solver resumed(parse_scene(kOutflowScene, "outflow"));
     restore_checkpoint(resumed, checkpoint, checkpoint_path);
     const std::string whole = read_text(dir / "both" / "runout.json");
@@ -694,6 +696,11 @@ TEST(RunoutOutput, MassLeftThroughTheOpenFacesIsSaidAndTheFrontFlagged) {
     // from the particles still there, and run.json's figure changed with the restart)
     EXPECT_EQ(run_scene(resumed, again).energy_available, energy_available);
     EXPECT_EQ(read_text(dir / "both" / "runout.json"), whole);
+    // and what left through each face, the faces the checkpoint saved included
+    ASSERT_GT(faces.particles[3], 0);  // y+
+    const OutflowFaces resumed_faces = resumed.outflow_faces();
+    EXPECT_EQ(resumed_faces.particles, faces.particles);
+    EXPECT_EQ(std::memcmp(resumed_faces.mass.data(), faces.mass.data(), sizeof(faces.mass)), 0);
   }
   {
     // Only the block that leaves sideways: the share is said, but the front is not limited by it.
