@@ -61,6 +61,8 @@ RunRecord::RunRecord(const fs::path& dir, const Solver& solver, const RunStart& 
   std::error_code ec;
   record_["working_directory"] = fs::current_path(ec).string();
   record_["scene"] = {{"name", scene.name}, {"file", absolute(start.scene_path)}, {"resolved", "scene.json"}};
+  // the frames' `body` point array holds indices: entry i names body i (as the frames' field data)
+  record_["body_names"] = body_names(scene);
   if (!start.restart_path.empty()) {
     record_["restart"] = {{"checkpoint", absolute(start.restart_path)}, {"step", solver.step_count()},
                           {"time", solver.time()}};

@@ -417,7 +417,7 @@ std::string FrameSeries::write(Solver& solver) {
   // The copy of the arrays is the only part that reads the particles: the solver may go on once
   // it is made. The writer's thread owns the frame; pvd_ is touched only by one thread at a time
   // (the run loop's waits for the writer before it reads or writes pvd_ again).
-  auto frame = std::make_shared<const ParticleFrame>(solver.particles(), time);
+  auto frame = std::make_shared<const ParticleFrame>(solver.particles(), time, body_names(solver.scene()));
   const bool distributed = comm_.distributed();
   const std::string path = (dir_ / (distributed ? frame_piece_name(index, comm_.rank()) : name)).string();
   writer_.start([this, frame, path, time, name, distributed] {

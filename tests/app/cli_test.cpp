@@ -660,6 +660,8 @@ TEST(Cli, ASlideThroughAnOpenBedIsWarnedAboutBeforeAndAfterTheRun) {
   EXPECT_EQ(particles, record.at("end").at("outflow_particles").get<std::int64_t>());
   EXPECT_GT(by_face.at("z-").at("particles").get<std::int64_t>(), particles / 2) << by_face;
   EXPECT_GT(by_face.at("z-").at("mass_kg").get<double>(), 0.0);
+  // and names the bodies whose indices the frames' `body` array holds
+  EXPECT_EQ(record.at("body_names"), nlohmann::json::array({"block"}));
   fs::remove_all(dir);
 }
 

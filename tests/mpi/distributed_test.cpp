@@ -12,7 +12,9 @@
 #include <fmt/core.h>
 #include <gtest/gtest.h>
 #include <omp.h>
+#include <vtkFieldData.h>
 #include <vtkPointData.h>
+#include <vtkStringArray.h>
 #include <vtkSmartPointer.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLPUnstructuredGridReader.h>
@@ -348,6 +350,7 @@ TEST(Distributed, FramesReadBackAsOneDataSet) {
   const RunSummary summary = run_scene(s, options);
   const std::int64_t particles = s.distribution().particles;
   std::int64_t points = -1, unique_ids = -1;
+  std::string body_names;
   if (world().root()) {
     const std::string last = (folder.path / fmt::format("frames/particles_{:06}.{}", summary.frames - 1,
                                                         world().distributed() ? "pvtu" : "vtu")).string();
@@ -364,12 +367,17 @@ TEST(Distributed, FramesReadBackAsOneDataSet) {
         for (vtkIdType i = 0; i < id_array->GetNumberOfTuples(); ++i) ids.push_back(static_cast<std::int64_t>(id_array->GetTuple1(i)));
       std::sort(ids.begin(), ids.end());
       unique_ids = std::unique(ids.begin(), ids.end()) - ids.begin();
+      // the bodies' names, which every piece carries in its field data, reach the data set
+      if (auto* names = vtkStringArray::SafeDownCast(grid->GetFieldData()->GetAbstractArray("body_names")))
+        for (vtkIdType i = 0; i < names->GetNumberOfValues(); ++i) body_names += std::string(names->GetValue(i)) + ";";
     } else {
       points = unique_ids = particles;
+      body_names = "left;right;";
     }
   }
   const double read = world().broadcast(fmt::format("{} {}", points, unique_ids)) == fmt::format("{} {}", particles, particles);
   EXPECT_TRUE(read) << "the last frame holds every particle once";
+  EXPECT_EQ(world().broadcast(body_names), "left;right;") << "the frame names the bodies";
 }
 
 // Particles leave through the open x- and x+ faces from the slabs at either end: the mass and count
