@@ -42,7 +42,7 @@ DiskEstimate estimate_disk(const Scene& scene, std::size_t particles, const fs::
   e.frames = frames_of_run(scene);
   e.steps = estimated_steps(scene);
   e.frames_by_steps = e.frames < frames_by_interval(scene);
-  e.bytes_per_frame = particle_frame_bytes(particles);
+  e.bytes_per_frame = particle_frame_bytes(particles, body_names(scene));
   e.compressed = scene.output.compress;
   e.checkpoint_bytes = particles * checkpoint_bytes_per_particle(scene);
   e.checkpoints_at_once = scene.output.checkpoint_interval > 0.0 ? 2 : 1;

@@ -446,7 +446,7 @@ void add_run_command(CLI::App& app) {
     }
     const DistributionStats end = solver.distribution();
     const std::int64_t outflow_particles = solver.outflow_particles();
-    record.end(solver, summary, RunEnd{end.particles, outflow_particles});
+    record.end(solver, summary, RunEnd{end.particles, outflow_particles, solver.outflow_faces()});
     const double outflow_mass = solver.outflow_mass();
     double mass = outflow_mass;
     for (double m : solver.particles().mass) mass += m;

@@ -61,6 +61,8 @@ RunRecord::RunRecord(const fs::path& dir, const Solver& solver, const RunStart& 
   std::error_code ec;
   record_["working_directory"] = fs::current_path(ec).string();
   record_["scene"] = {{"name", scene.name}, {"file", absolute(start.scene_path)}, {"resolved", "scene.json"}};
+  // the frames' `body` point array holds indices: entry i names body i (as the frames' field data)
+  record_["body_names"] = body_names(scene);
   if (!start.restart_path.empty()) {
     record_["restart"] = {{"checkpoint", absolute(start.restart_path)}, {"step", solver.step_count()},
                           {"time", solver.time()}};
@@ -142,6 +144,13 @@ void RunRecord::end(const Solver& solver, const RunSummary& summary, const RunEn
                                     {"time", summary.energy_warning->time},
                                     {"share_of_energy_available", summary.energy_warning->share}};
   end["outflow_particles"] = counts.outflow_particles;
+  // Where they left: each open face's particles and mass (a face that is not open lets nothing out)
+  nlohmann::ordered_json by_face = nlohmann::ordered_json::object();
+  for (int face = 0; face < OutflowFaces::kFaces; ++face)
+    if (solver.scene().walls[face / 2][face % 2].type == WallType::Open)
+      by_face[OutflowFaces::kNames[face]] = {{"particles", counts.outflow_by_face.particles[face]},
+                                             {"mass_kg", counts.outflow_by_face.mass[face]}};
+  end["outflow_by_face"] = std::move(by_face);
   if (comm_.root()) write();
 }
 

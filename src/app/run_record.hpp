@@ -45,6 +45,7 @@ struct RunStart {
 struct RunEnd {
   std::int64_t particles;          // on every rank together
   std::int64_t outflow_particles;  // left through the open faces, this run and the parts before it
+  OutflowFaces outflow_by_face;    // the same by face, with their mass
 };
 
 class RunRecord {

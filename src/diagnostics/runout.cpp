@@ -22,6 +22,16 @@ struct Entry {
 
 int measure_runout_regions(std::size_t n, int threads) { return 2 + parallel_sort_regions(n, threads); }
 
+void locate_front_and_tail(RunoutSample& r, const FlumeCoordinates& c) {
+  const double none = std::numeric_limits<double>::quiet_NaN();
+  // (a front of NaN, no particle left, has no x; x_at would extrapolate the terrain from it)
+  r.front_x = std::isfinite(r.front) ? c.x_at(r.front) : none;
+  r.tail_x = std::isfinite(r.tail) ? c.x_at(r.tail) : none;
+  const bool on_terrain = !c.flat();
+  r.front_z = on_terrain && std::isfinite(r.front_x) ? c.profile().height(r.front_x) : none;
+  r.tail_z = on_terrain && std::isfinite(r.tail_x) ? c.profile().height(r.tail_x) : none;
+}
+
 RunoutSample measure_runout(const ParticleStore& P, const FlumeCoordinates& c, double front_quantile,
                             double tail_quantile) {
   RunoutSample r;
@@ -30,6 +40,7 @@ RunoutSample measure_runout(const ParticleStore& P, const FlumeCoordinates& c, d
     const double none = std::numeric_limits<double>::quiet_NaN();
     r.front = r.tail = r.s_min = r.s_max = r.centre_s = r.centre_velocity_s = none;
     r.centre = Vec3::Constant(none);
+    locate_front_and_tail(r, c);
     return r;
   }
   std::vector<Entry> order(n);
@@ -84,6 +95,7 @@ RunoutSample measure_runout(const ParticleStore& P, const FlumeCoordinates& c, d
   r.centre_s = sum_s / mass;
   r.centre = sum_x / mass;
   r.centre_velocity_s = sum_v / mass;
+  locate_front_and_tail(r, c);
   return r;
 }
 
@@ -158,11 +170,13 @@ RunoutResult RunoutMonitor::result(const RunoutSample* now) const {
   r.step = measured.step;
   r.front = measured.front;
   r.tail = measured.tail;
-  r.front_x = std::isfinite(r.front) ? coordinates_.x_at(r.front) : r.front;
-  r.tail_x = std::isfinite(r.tail) ? coordinates_.x_at(r.tail) : r.tail;
-  if (!coordinates_.flat() && std::isfinite(r.front) && std::isfinite(r.tail)) {
-    r.front_z = coordinates_.profile().height(r.front_x);
-    r.tail_z = coordinates_.profile().height(r.tail_x);
+  RunoutSample located = measured;  // (located anew: a sample given to resume() may not be)
+  locate_front_and_tail(located, coordinates_);
+  r.front_x = located.front_x;
+  r.tail_x = located.tail_x;
+  if (std::isfinite(located.front_z) && std::isfinite(located.tail_z)) {  // (none on a flat grid)
+    r.front_z = located.front_z;
+    r.tail_z = located.tail_z;
   }
   r.gate_from_scene = spec_.has_gate;
   r.gate_s = spec_.has_gate ? coordinates_.s(spec_.gate_x) : first_->front;

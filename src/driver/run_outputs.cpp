@@ -138,7 +138,7 @@ std::string energy_header(bool gap_terms) {
 }
 
 /// Rewrite a CSV file (atomically) with its header and the rows `keep` accepts, up to the first it
-/// refuses; returns the number of rows kept.
+/// refuses (keep(line) gives the row to write, or nothing); returns the number of rows kept.
 template <class Keep>
 std::size_t cut_csv(const fs::path& path, const std::string& header, Keep keep) {
   std::string kept = header + "\n";
@@ -146,8 +146,10 @@ std::size_t cut_csv(const fs::path& path, const std::string& header, Keep keep) 
   std::string line;
   std::getline(in, line);  // the old header
   std::size_t rows = 0;
-  while (std::getline(in, line) && keep(line)) {
-    kept += line + "\n";
+  while (std::getline(in, line)) {
+    const std::optional<std::string> row = keep(line);
+    if (!row) break;
+    kept += *row + "\n";
     ++rows;
   }
   in.close();
@@ -225,15 +227,15 @@ EnergyHistory::EnergyHistory(const fs::path& dir, std::optional<std::int64_t> re
   if (resume_step) {
     // Keep the complete rows (time,step,...) up to the checkpoint's step.
     const auto commas = std::count(header.begin(), header.end(), ',');
-    kept_rows_ = cut_csv(path, header, [&](const std::string& line) {
+    kept_rows_ = cut_csv(path, header, [&](const std::string& line) -> std::optional<std::string> {
       const auto c1 = line.find(',');
       const auto c2 = c1 == std::string::npos ? std::string::npos : line.find(',', c1 + 1);
-      if (c2 == std::string::npos || std::count(line.begin(), line.end(), ',') != commas) return false;
+      if (c2 == std::string::npos || std::count(line.begin(), line.end(), ',') != commas) return std::nullopt;
       try {
-        return std::stoll(line.substr(c1 + 1, c2 - c1 - 1)) <= *resume_step;
+        if (std::stoll(line.substr(c1 + 1, c2 - c1 - 1)) <= *resume_step) return line;
       } catch (const std::exception&) {
-        return false;
       }
+      return std::nullopt;
     });
   }
   file_.open(path, resume_step ? std::ios::app : std::ios::trunc);
@@ -265,12 +267,20 @@ RunoutFiles::RunoutFiles(const Scene& scene, const fs::path& dir, std::optional<
     // The monitor continues from the first and last rows up to the checkpoint's step: the first
     // is the initial front (the default gate), the last the front velocity's difference.
     std::optional<RunoutSample> first, last;
-    const auto up_to_checkpoint = [&](const std::string& line) {
-      const auto row = parse_runout_csv_row(line);
-      if (!row || row->step > *resume_step) return false;
+    const FlumeCoordinates& coordinates = monitor_->coordinates();
+    // A row read back: located again (a runout.csv written before front_x ... tail_z lacks them; the
+    // row is then written with them, so the kept file has one header's columns), the same text otherwise.
+    const auto read_row = [&](const std::string& line) {
+      std::optional<RunoutSample> row = parse_runout_csv_row(line);
+      if (row) locate_front_and_tail(*row, coordinates);
+      return row;
+    };
+    const auto up_to_checkpoint = [&](const std::string& line) -> std::optional<std::string> {
+      const auto row = read_row(line);
+      if (!row || row->step > *resume_step) return std::nullopt;
       if (!first) first = row;
       last = row;
-      return true;
+      return runout_csv_row(*row);
     };
     if (resume_dir.empty() || same_file(resume_dir, dir)) {
       cut_csv(history_path_, runout_csv_header(), up_to_checkpoint);  // keep those rows, drop later ones
@@ -289,7 +299,7 @@ RunoutFiles::RunoutFiles(const Scene& scene, const fs::path& dir, std::optional<
     // that lacks it (a resume of a resume into another folder, runout.csv removed) gave a runout
     // from a later front, 22% short, without a word. The checkpoint keeps that row; one written
     // before it did is resumed from the folder's first row, with a warning when that is not the start.
-    const std::optional<RunoutSample> saved = saved_first_row.empty() ? std::nullopt : parse_runout_csv_row(saved_first_row);
+    const std::optional<RunoutSample> saved = saved_first_row.empty() ? std::nullopt : read_row(saved_first_row);
     if (saved) {
       first = saved;
       if (!last) last = saved;  // (the front velocity of the first row after the restart is then a mean)
@@ -407,7 +417,7 @@ std::string FrameSeries::write(Solver& solver) {
   // The copy of the arrays is the only part that reads the particles: the solver may go on once
   // it is made. The writer's thread owns the frame; pvd_ is touched only by one thread at a time
   // (the run loop's waits for the writer before it reads or writes pvd_ again).
-  auto frame = std::make_shared<const ParticleFrame>(solver.particles(), time);
+  auto frame = std::make_shared<const ParticleFrame>(solver.particles(), time, body_names(solver.scene()));
   const bool distributed = comm_.distributed();
   const std::string path = (dir_ / (distributed ? frame_piece_name(index, comm_.rank()) : name)).string();
   writer_.start([this, frame, path, time, name, distributed] {

@@ -9,6 +9,7 @@
 #include <fmt/core.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -22,6 +23,16 @@ namespace {
 
 constexpr const char* kFormat = "talus-checkpoint";
 constexpr int kFormatVersion = 3;  // 2: outflow through open faces; 3: the energy ledger's names
+
+/// The /solver attributes of the outflow by face (OutflowFaces' order). outflow_mass_x_plus was
+/// kept before the others; all are read as 0 (counted from the restart) from a checkpoint without
+/// them, as the version did not change.
+constexpr std::array<const char*, OutflowFaces::kFaces> kOutflowMassNames = {
+    "outflow_mass_x_minus", "outflow_mass_x_plus", "outflow_mass_y_minus",
+    "outflow_mass_y_plus",  "outflow_mass_z_minus", "outflow_mass_z_plus"};
+constexpr std::array<const char*, OutflowFaces::kFaces> kOutflowParticleNames = {
+    "outflow_particles_x_minus", "outflow_particles_x_plus", "outflow_particles_y_minus",
+    "outflow_particles_y_plus",  "outflow_particles_z_minus", "outflow_particles_z_plus"};
 
 template <class T>
 const H5::PredType& h5_type();
@@ -104,6 +115,10 @@ void check_scalars(const Checkpoint& c, const std::string& path) {
   if (s.step < 0) refuse(fmt::format("its step is {}", s.step));
   if (!(std::isfinite(s.last_dt) && s.last_dt >= 0.0)) refuse(fmt::format("its last time step is {} s", s.last_dt));
   if (!(std::isfinite(s.outflow_mass) && s.outflow_mass >= 0.0)) refuse(fmt::format("its outflow mass is {} kg", s.outflow_mass));
+  for (int face = 0; face < OutflowFaces::kFaces; ++face)
+    if (!(std::isfinite(s.outflow_faces.mass[face]) && s.outflow_faces.mass[face] >= 0.0) || s.outflow_faces.particles[face] < 0)
+      refuse(fmt::format("its outflow through {} is {} kg, {} particles", OutflowFaces::kNames[face],
+                         s.outflow_faces.mass[face], s.outflow_faces.particles[face]));
   for (const auto& [name, value] : {std::pair{"next_frame", c.run.next_frame}, std::pair{"next_history", c.run.next_history},
                                     std::pair{"next_checkpoint", c.run.next_checkpoint}})
     if (!std::isfinite(value)) refuse(fmt::format("/run {} is {}", name, value));
@@ -232,23 +247,27 @@ std::string scene_hash(const Scene& scene) {
 namespace {
 
 /// The scalars of a rank's SolverState kept per rank, by name, in one order: f(name, value,
-/// required). Not required: the energy gap terms, absent in checkpoints written before them.
+/// required). Not required: the energy gap terms and the outflow by face, absent in checkpoints
+/// written before them.
 template <class State, class F>
 void for_each_rank_scalar(State& s, F&& f) {
   EnergyBudget::for_each_term(s.work, [&](const char* name, auto& value, bool accumulated) {
     if (accumulated) f(name, value, true);
   });
   f("outflow_mass", s.outflow_mass, true);
-  f("outflow_mass_x_plus", s.outflow_mass_x_plus, false);
+  for (int face = 0; face < OutflowFaces::kFaces; ++face) f(kOutflowMassNames[face], s.outflow_faces.mass[face], false);
   f("periodic_gravity_shift", s.periodic_gravity_shift, true);
   EnergyGapTerms::for_each_term(s.gap, [&](const char* name, auto& value) { f(name, value, false); });
 }
+/// The same for the integers: f(name, value, required).
 template <class State, class F>
 void for_each_rank_integer(State& s, F&& f) {
-  f("outflow_particles", s.outflow_particles);
-  f("sorts", s.sorts);
-  f("steps_since_sort", s.steps_since_sort);
-  f("needs_sort", s.needs_sort);
+  f("outflow_particles", s.outflow_particles, true);
+  for (int face = 0; face < OutflowFaces::kFaces; ++face)
+    f(kOutflowParticleNames[face], s.outflow_faces.particles[face], false);
+  f("sorts", s.sorts, true);
+  f("steps_since_sort", s.steps_since_sort, true);
+  f("needs_sort", s.needs_sort, true);
 }
 
 }  // namespace
@@ -272,10 +291,11 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
       rank_scalars[name] = comm.gather(std::vector<double>{value});
       value = comm.sum_in_rank_order(value);
     });
-    for_each_rank_integer(state, [&](const char* name, auto& value) {
+    for_each_rank_integer(state, [&](const char* name, auto& value, bool) {
       rank_integers[name] = comm.gather(std::vector<std::int64_t>{static_cast<std::int64_t>(value)});
     });
     state.outflow_particles = comm.sum_in_rank_order(std::vector<std::int64_t>{state.outflow_particles})[0];
+    for (auto& count : state.outflow_faces.particles) count = comm.sum_in_rank_order(std::vector<std::int64_t>{count})[0];
     state.needs_sort = comm.any(state.needs_sort);
     if (!comm.root()) return;
   }
@@ -301,8 +321,11 @@ void write_checkpoint(const std::string& path, const Solver& solver, const RunPr
         if (accumulated) write_attribute(s, name, value);
       });
       write_attribute(s, "outflow_mass", state.outflow_mass);
-      write_attribute(s, "outflow_mass_x_plus", state.outflow_mass_x_plus);
       write_attribute(s, "outflow_particles", state.outflow_particles);
+      for (int face = 0; face < OutflowFaces::kFaces; ++face) {
+        write_attribute(s, kOutflowMassNames[face], state.outflow_faces.mass[face]);
+        write_attribute(s, kOutflowParticleNames[face], state.outflow_faces.particles[face]);
+      }
       write_attribute(s, "steps_since_sort", static_cast<std::int32_t>(state.steps_since_sort));
       write_attribute(s, "sorts", state.sorts);
       write_attribute(s, "needs_sort", static_cast<std::int32_t>(state.needs_sort));
@@ -413,9 +436,14 @@ Checkpoint read_checkpoint(const std::string& path, const Comm& comm) {
       if (accumulated && !absent_before_ramp_term(s, name)) value = read_attribute<double>(s, name);
     });
     c.solver.outflow_mass = read_attribute<double>(s, "outflow_mass");
-    // absent in checkpoints written before it was kept: counted from the restart
-    if (s.attrExists("outflow_mass_x_plus")) c.solver.outflow_mass_x_plus = read_attribute<double>(s, "outflow_mass_x_plus");
     c.solver.outflow_particles = read_attribute<std::int64_t>(s, "outflow_particles");
+    // absent in checkpoints written before they were kept: counted from the restart
+    for (int face = 0; face < OutflowFaces::kFaces; ++face) {
+      if (s.attrExists(kOutflowMassNames[face]))
+        c.solver.outflow_faces.mass[face] = read_attribute<double>(s, kOutflowMassNames[face]);
+      if (s.attrExists(kOutflowParticleNames[face]))
+        c.solver.outflow_faces.particles[face] = read_attribute<std::int64_t>(s, kOutflowParticleNames[face]);
+    }
     c.solver.steps_since_sort = read_attribute<std::int32_t>(s, "steps_since_sort");
     c.solver.sorts = read_attribute<std::int64_t>(s, "sorts");
     c.solver.needs_sort = read_attribute<std::int32_t>(s, "needs_sort") != 0;
@@ -438,8 +466,9 @@ Checkpoint read_checkpoint(const std::string& path, const Comm& comm) {
         for_each_rank_scalar(c.rank_states[r], [&](const char* name, double& value, bool required) {
           if (required || ranks.nameExists(name)) value = read_array<double>(ranks, name).at(r);
         });
-        for_each_rank_integer(c.rank_states[r], [&](const char* name, auto& value) {
-          value = static_cast<std::remove_reference_t<decltype(value)>>(read_array<std::int64_t>(ranks, name).at(r));
+        for_each_rank_integer(c.rank_states[r], [&](const char* name, auto& value, bool required) {
+          if (required || ranks.nameExists(name))
+            value = static_cast<std::remove_reference_t<decltype(value)>>(read_array<std::int64_t>(ranks, name).at(r));
         });
       }
     }
@@ -606,7 +635,8 @@ void restore_particles(Solver& solver, ParticleStore P, const Checkpoint& c) {
     EnergyBudget::for_each_term(state.work, [](const char*, double& value, bool accumulated) {
       if (accumulated) value = 0.0;
     });
-    state.outflow_mass = state.outflow_mass_x_plus = state.periodic_gravity_shift = 0.0;
+    state.outflow_mass = state.periodic_gravity_shift = 0.0;
+    state.outflow_faces = OutflowFaces{};
     state.gap = EnergyGapTerms{};
     state.outflow_particles = 0;
   }

@@ -15,28 +15,33 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 #include <vector>
 
 namespace talus {
 
 std::string runout_csv_header() {
-  return "time,step,mass,front,tail,s_min,s_max,centre_s,centre_x,centre_y,centre_z,centre_velocity_s,front_velocity";
+  // (front_x ... tail_z came last, after front_velocity: readers that take the columns by position
+  // read the first thirteen as before)
+  return "time,step,mass,front,tail,s_min,s_max,centre_s,centre_x,centre_y,centre_z,centre_velocity_s,front_velocity,"
+         "front_x,front_z,tail_x,tail_z";
 }
 
 std::string runout_csv_row(const RunoutSample& r) {
   // The shortest text that reads back to the same double: a restart continues from these rows
   // (the front velocity differences the last one), so they must round-trip exactly.
-  return fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{}",
+  return fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                      r.time, r.step, r.mass, r.front, r.tail, r.s_min, r.s_max, r.centre_s, r.centre[0], r.centre[1],
-                     r.centre[2], r.centre_velocity_s, r.front_velocity);
+                     r.centre[2], r.centre_velocity_s, r.front_velocity, r.front_x, r.front_z, r.tail_x, r.tail_z);
 }
 
 std::optional<RunoutSample> parse_runout_csv_row(const std::string& row) {
   std::vector<std::string> fields;
   std::stringstream in(row);
   for (std::string f; std::getline(in, f, ',');) fields.push_back(f);
-  if (fields.size() != 13) return std::nullopt;
+  // 13 fields: a row written before front_x ... tail_z (the caller locates them, locate_front_and_tail)
+  if (fields.size() != kRunoutCsvColumns && fields.size() != kRunoutCsvColumnsBeforeLocation) return std::nullopt;
   RunoutSample r;
   try {
     std::size_t k = 0;
@@ -52,6 +57,12 @@ std::optional<RunoutSample> parse_runout_csv_row(const std::string& row) {
     for (int d = 0; d < 3; ++d) r.centre[d] = next();
     r.centre_velocity_s = next();
     r.front_velocity = next();
+    const double none = std::numeric_limits<double>::quiet_NaN();
+    const bool located = fields.size() == kRunoutCsvColumns;
+    r.front_x = located ? next() : none;
+    r.front_z = located ? next() : none;
+    r.tail_x = located ? next() : none;
+    r.tail_z = located ? next() : none;
   } catch (const std::exception&) {
     return std::nullopt;
   }

@@ -202,8 +202,8 @@ void Solver::remove_outflow(std::size_t leaving) {
     gap_.outflow_strain += e.strain;
     gap_.outflow_gravity += e.gravity;
     outflow_mass_ += P.mass[p];
-    // (a particle past x+ and another face at once counts as x+: it is ahead of the front either way)
-    if (gather_limits_.open[0][1] && P.x[0][p] > gather_limits_.hi[0]) outflow_mass_x_plus_ += P.mass[p];
+    const double point[3] = {P.x[0][p], P.x[1][p], grid_.w_of(P.x[0][p], P.x[2][p])};  // as beyond_open_face
+    outflow_faces_.add(outflow_face(gather_limits_, point), P.mass[p]);
     ++outflow_particles_;
   }
   P.permute(kept, scratch_, 0);  // the step's displacement is spent: the scratch is free
@@ -338,7 +338,16 @@ DistributionStats Solver::distribution() const {
 
 std::int64_t Solver::outflow_particles() const { return comm_.sum_in_rank_order(std::vector<std::int64_t>{outflow_particles_})[0]; }
 double Solver::outflow_mass() const { return comm_.sum_in_rank_order(outflow_mass_); }
-double Solver::outflow_mass_x_plus() const { return comm_.sum_in_rank_order(outflow_mass_x_plus_); }
+double Solver::outflow_mass_x_plus() const { return comm_.sum_in_rank_order(outflow_faces_.mass[OutflowFaces::kXPlus]); }
+OutflowFaces Solver::outflow_faces() const {
+  OutflowFaces all;
+  const std::vector<double> mass = comm_.sum_in_rank_order(std::vector<double>(outflow_faces_.mass.begin(), outflow_faces_.mass.end()));
+  const std::vector<std::int64_t> count =
+      comm_.sum_in_rank_order(std::vector<std::int64_t>(outflow_faces_.particles.begin(), outflow_faces_.particles.end()));
+  std::copy(mass.begin(), mass.end(), all.mass.begin());
+  std::copy(count.begin(), count.end(), all.particles.begin());
+  return all;
+}
 double Solver::outflow_gravity() const { return comm_.sum_in_rank_order(gap_.outflow_gravity); }
 
 bool Solver::finished() const {
@@ -921,7 +930,7 @@ SolverState Solver::state() const {
   s.work = work_;
   s.gap = gap_;
   s.outflow_mass = outflow_mass_;
-  s.outflow_mass_x_plus = outflow_mass_x_plus_;
+  s.outflow_faces = outflow_faces_;
   s.outflow_particles = outflow_particles_;
   s.steps_since_sort = steps_since_sort_;
   s.sorts = sorts_;
@@ -1028,7 +1037,7 @@ void Solver::restore_counters(const SolverState& s) {
   work_ = s.work;
   gap_ = s.gap;
   outflow_mass_ = s.outflow_mass;
-  outflow_mass_x_plus_ = s.outflow_mass_x_plus;
+  outflow_faces_ = s.outflow_faces;
   outflow_particles_ = s.outflow_particles;
   steps_since_sort_ = s.steps_since_sort;
   sorts_ = s.sorts;

@@ -656,6 +656,18 @@ TEST(Cli, ASlideThroughAnOpenBedIsWarnedAboutBeforeAndAfterTheRun) {
   const nlohmann::json result = nlohmann::json::parse(std::ifstream(dir / "out" / "runout.json"));
   EXPECT_EQ(result.at("outflow_mass_share").get<double>(), 1.0);
   EXPECT_FALSE(result.at("limited_by_outflow").get<bool>());
+  // run.json says through which face it left (it gave only the count in all): each open face's
+  // particles and mass, the bed's z- nearly all of it
+  const nlohmann::json record = nlohmann::json::parse(std::ifstream(dir / "out" / "run.json"));
+  const nlohmann::json& by_face = record.at("end").at("outflow_by_face");
+  EXPECT_EQ(by_face.size(), 4u) << by_face;  // x-, x+, z-, z+: the open faces, and no other
+  std::int64_t particles = 0;
+  for (const char* face : {"x-", "x+", "z-", "z+"}) particles += by_face.at(face).at("particles").get<std::int64_t>();
+  EXPECT_EQ(particles, record.at("end").at("outflow_particles").get<std::int64_t>());
+  EXPECT_GT(by_face.at("z-").at("particles").get<std::int64_t>(), particles / 2) << by_face;
+  EXPECT_GT(by_face.at("z-").at("mass_kg").get<double>(), 0.0);
+  // and names the bodies whose indices the frames' `body` array holds
+  EXPECT_EQ(record.at("body_names"), nlohmann::json::array({"block"}));
   fs::remove_all(dir);
 }
 

@@ -19,8 +19,10 @@
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridReader.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <numeric>
@@ -203,6 +205,53 @@ TEST(Runout, TheResultGivesWhereTheFrontAndTailLie) {
   const nlohmann::json jf = nlohmann::json::parse(runout_result_json(f));
   EXPECT_TRUE(jf.at("front_z").is_null());
   EXPECT_TRUE(jf.at("tail_z").is_null());
+}
+
+/// The first `n` comma-separated fields of a CSV line (a runout.csv row as an older talus wrote it).
+std::string first_fields(const std::string& line, std::size_t n) {
+  std::size_t end = 0;
+  for (std::size_t field = 0; field < n && end != std::string::npos; ++field) end = line.find(',', end + (field > 0));
+  return line.substr(0, end);
+}
+
+// runout.csv had no x or z of the front and tail, which runout.json gives: each row has them now, in
+// four columns after the thirteen it had (front_x, front_z, tail_x, tail_z), nan z on a flat grid.
+TEST(Runout, TheHistoryGivesWhereTheFrontAndTailLie) {
+  RunoutSpec spec;
+  spec.enabled = true;
+  const FlumeCoordinates c{TerrainProfile(flume_terrain(31.4, 0.2))};
+  RunoutMonitor monitor(spec, c);
+  const RunoutSample s = monitor.sample(uniform_strip(1000, 2.0), 0.0, 0);
+  const RunoutResult r = monitor.result();
+  EXPECT_EQ(s.front_x, r.front_x);
+  EXPECT_EQ(s.tail_x, r.tail_x);
+  EXPECT_EQ(s.front_z, *r.front_z);
+  EXPECT_EQ(s.tail_z, *r.tail_z);
+  const std::string header = runout_csv_header();
+  EXPECT_EQ(header.substr(header.find(",front_velocity,") + 1), "front_velocity,front_x,front_z,tail_x,tail_z");
+  const std::string row = runout_csv_row(s);
+  EXPECT_EQ(std::count(row.begin(), row.end(), ','), std::count(header.begin(), header.end(), ','));
+  const std::optional<RunoutSample> back = parse_runout_csv_row(row);
+  ASSERT_TRUE(back.has_value());
+  EXPECT_EQ(back->front_x, s.front_x);
+  EXPECT_EQ(back->front_z, s.front_z);
+  EXPECT_EQ(back->tail_x, s.tail_x);
+  EXPECT_EQ(back->tail_z, s.tail_z);
+  RunoutMonitor flat(spec, FlumeCoordinates());
+  const RunoutSample f = flat.sample(uniform_strip(1000, 2.0), 0.0, 0);
+  EXPECT_EQ(f.front_x, f.front);
+  EXPECT_EQ(f.tail_x, f.tail);
+  EXPECT_TRUE(std::isnan(f.front_z) && std::isnan(f.tail_z));
+  EXPECT_NE(runout_csv_row(f).find(",nan,"), std::string::npos);
+  // a row of the thirteen older columns still reads (a restart in a folder written before), unlocated
+  const std::string old = first_fields(row, kRunoutCsvColumnsBeforeLocation);
+  const std::optional<RunoutSample> old_back = parse_runout_csv_row(old);
+  ASSERT_TRUE(old_back.has_value()) << old;
+  EXPECT_EQ(old_back->front, s.front);
+  EXPECT_TRUE(std::isnan(old_back->front_x));
+  RunoutSample located = *old_back;
+  locate_front_and_tail(located, c);
+  EXPECT_EQ(runout_csv_row(located), row);
 }
 
 TEST(Runout, MonitorDifferencesTheFrontAndMeasuresFromTheGate) {
@@ -435,6 +484,41 @@ TEST(RunoutOutput, RestartContinuesTheHistoryBitForBit) {
   fs::remove_all(dir);
 }
 
+// A folder written before runout.csv had front_x ... tail_z, resumed: the rows kept up to the
+// checkpoint get the four columns (from their front and tail), so the file is the one an
+// uninterrupted run writes now, not rows of thirteen columns under a header of seventeen.
+TEST(RunoutOutput, RestartAddsTheFrontsPlaceToAnOlderHistory) {
+  Scene scene = parse_scene(kSlideScene, "slide");
+  scene.output.checkpoint_interval = 0.012;  // one checkpoint, mid-run
+  const fs::path dir = temp_dir("runout_restart_older");
+  RunOptions options;
+  options.out_dir = dir.string();
+  options.progress = false;
+  options.handle_signals = false;
+  {
+    Solver solver(scene);
+    run_scene(solver, options);
+  }
+  const std::string reference = read_text(dir / "runout.csv");
+  {
+    // the history as the older talus wrote it: every line cut after its thirteenth field
+    std::istringstream in(reference);
+    std::string older;
+    for (std::string line; std::getline(in, line);) older += first_fields(line, kRunoutCsvColumnsBeforeLocation) + "\n";
+    ASSERT_EQ(older.find("front_x"), std::string::npos);
+    std::ofstream(dir / "runout.csv") << older;
+  }
+  const std::string checkpoint_path = (dir / "checkpoint.h5").string();
+  const Checkpoint checkpoint = read_checkpoint(checkpoint_path);
+  ASSERT_GT(checkpoint.solver.step, 0);
+  Solver resumed(scene);
+  restore_checkpoint(resumed, checkpoint, checkpoint_path);
+  options.resume = &checkpoint.run;
+  run_scene(resumed, options);
+  EXPECT_EQ(read_text(dir / "runout.csv"), reference);
+  fs::remove_all(dir);
+}
+
 // runout.json says how the run ended and which state it describes: a run stopped between history
 // rows gave the row before the stop, and nothing said that it was not the end; an unstable run wrote
 // none; one stopped at time.max_steps is completed (as run.json says) with its deposit, but not final.
@@ -580,9 +664,11 @@ TEST(RunoutOutput, MassLeftThroughTheOpenFacesIsSaidAndTheFrontFlagged) {
     return nlohmann::json::parse(in);
   };
   double energy_available = 0.0;
+  OutflowFaces faces;
   {
     Solver solver(parse_scene(kOutflowScene, "outflow"));
     energy_available = run_scene(solver, options).energy_available;
+    faces = solver.outflow_faces();
     double in_grid = 0.0;
     for (double m : solver.particles().mass) in_grid += m;
     const double total = in_grid + solver.outflow_mass();
@@ -600,7 +686,7 @@ TEST(RunoutOutput, MassLeftThroughTheOpenFacesIsSaidAndTheFrontFlagged) {
     // so the share through x+ before the checkpoint was kept.
     const std::string checkpoint_path = (dir / "both" / "checkpoint.h5").string();
     const Checkpoint checkpoint = read_checkpoint(checkpoint_path);
-    ASSERT_GT(checkpoint.solver.outflow_mass_x_plus, 0.0);
+    ASSERT_GT(checkpoint.solver.outflow_faces.mass[OutflowFaces::kXPlus], 0.0);
     Solver resumed(parse_scene(kOutflowScene, "outflow"));
     restore_checkpoint(resumed, checkpoint, checkpoint_path);
     const std::string whole = read_text(dir / "both" / "runout.json");
@@ -610,6 +696,11 @@ TEST(RunoutOutput, MassLeftThroughTheOpenFacesIsSaidAndTheFrontFlagged) {
     // from the particles still there, and run.json's figure changed with the restart)
     EXPECT_EQ(run_scene(resumed, again).energy_available, energy_available);
     EXPECT_EQ(read_text(dir / "both" / "runout.json"), whole);
+    // and what left through each face, the faces the checkpoint saved included
+    ASSERT_GT(faces.particles[3], 0);  // y+
+    const OutflowFaces resumed_faces = resumed.outflow_faces();
+    EXPECT_EQ(resumed_faces.particles, faces.particles);
+    EXPECT_EQ(std::memcmp(resumed_faces.mass.data(), faces.mass.data(), sizeof(faces.mass)), 0);
   }
   {
     // Only the block that leaves sideways: the share is said, but the front is not limited by it.

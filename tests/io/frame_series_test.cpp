@@ -98,7 +98,8 @@ TEST(FrameSeries, OneRankWritesVtuFramesAsWriteParticlesVtuDoes) {
     EXPECT_EQ(frames.write(solver), "frames/particles_000000.vtu");
     for (int s = 0; s < 5; ++s) solver.step();
     // The file the frame must be: write_particles_vtu's, of the particles when write() is called.
-    write_particles_vtu((dir / "expected.vtu").string(), solver.particles(), compress, solver.time());
+    write_particles_vtu((dir / "expected.vtu").string(), solver.particles(), compress, solver.time(),
+                        body_names(solver.scene()));
     EXPECT_EQ(frames.write(solver), "frames/particles_000001.vtu");
     EXPECT_TRUE(frames.has_frame_of_step(5));
     ASSERT_EQ(progress.frame_times.size(), 2u);
@@ -176,7 +177,8 @@ struct OneRankSeries {
 TEST(FrameSeries, WithoutBackgroundEveryFrameIsOnDiskAndListedWhenWriteReturns) {
   OneRankSeries s("series_foreground");
   FrameSeries frames(s.dir, true, s.progress, Comm(), false);
-  write_particles_vtu((s.dir / "expected.vtu").string(), s.solver.particles(), true, s.solver.time());
+  write_particles_vtu((s.dir / "expected.vtu").string(), s.solver.particles(), true, s.solver.time(),
+                      body_names(s.solver.scene()));
   EXPECT_EQ(frames.write(s.solver), "frames/particles_000000.vtu");
   EXPECT_EQ(test::file_bytes(s.dir / "frames" / "particles_000000.vtu"), test::file_bytes(s.dir / "expected.vtu"));
   EXPECT_EQ(pvd_files(frames.pvd_path()), std::vector<std::string>{"frames/particles_000000.vtu"});

@@ -12,6 +12,7 @@
 #include <vtkFieldData.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
+#include <vtkStringArray.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridReader.h>
 
@@ -102,8 +103,8 @@ TEST(VtuOutput, FramesDeclareLengthsThatHoldArraysOverFourGiB) {
 }
 
 // particle_frame_bytes, the disk-use estimate of `talus check` and `talus run`, against the files:
-// an uncompressed frame (with its time, as the runs write them) within 64 bytes, whatever its
-// particle count; a compressed one no larger but for its block headers.
+// an uncompressed frame (with its time and body names, as the runs write them) within 64 bytes,
+// whatever its particle count; a compressed one no larger but for its block headers.
 TEST(VtuOutput, FrameBytesEstimateMatchesAFrame) {
   Solver solver(test::tumbling_block_scene(0.01));
   const fs::path dir = temp_dir("vtu_bytes");
@@ -112,11 +113,12 @@ TEST(VtuOutput, FrameBytesEstimateMatchesAFrame) {
   for (const ParticleStore* store : {&solver.particles(), static_cast<const ParticleStore*>(&none)}) {
     for (bool compress : {false, true}) {
       const fs::path path = dir / (compress ? "lz4.vtu" : "raw.vtu");
-      write_particles_vtu(path.string(), *store, compress, 0.125);
+      const std::vector<std::string> names = {"block", "a body with a longer name", "c"};
+      write_particles_vtu(path.string(), *store, compress, 0.125, names);
       const auto actual = static_cast<double>(fs::file_size(path));
-      const auto estimate = static_cast<double>(particle_frame_bytes(store->size()));
-      if (compress)  // (each compressed array's block header, 4 UInt64, is 24 bytes longer than a raw one's: 13 arrays)
-        EXPECT_LE(actual, estimate + 13 * 24) << store->size() << " particles";
+      const auto estimate = static_cast<double>(particle_frame_bytes(store->size(), names));
+      if (compress)  // (each compressed array's block header, 4 UInt64, is 24 bytes longer than a raw one's: 14 arrays)
+        EXPECT_LE(actual, estimate + 14 * 24) << store->size() << " particles";
       else
         EXPECT_NEAR(actual, estimate, 64.0) << store->size() << " particles";
     }
@@ -149,6 +151,11 @@ TEST(VtuOutput, RunWritesSeriesIndexSceneAndHistory) {
     vtkDataArray* time = reader->GetOutput()->GetFieldData()->GetArray("TimeValue");
     ASSERT_NE(time, nullptr) << frame;
     EXPECT_EQ(time->GetTuple1(0), listed[f]) << frame;
+    // and the bodies' names, name i for the `body` index i (the frames gave indices alone)
+    auto* names = vtkStringArray::SafeDownCast(reader->GetOutput()->GetFieldData()->GetAbstractArray("body_names"));
+    ASSERT_NE(names, nullptr) << frame;
+    ASSERT_EQ(names->GetNumberOfValues(), static_cast<vtkIdType>(scene.bodies.size())) << frame;
+    for (std::size_t b = 0; b < scene.bodies.size(); ++b) EXPECT_EQ(std::string(names->GetValue(b)), scene.bodies[b].name) << frame;
   }
   EXPECT_EQ(summary.frames_in_series, 5u);
   EXPECT_TRUE(fs::exists(dir / "scene.json"));

@@ -12,7 +12,9 @@
 #include <fmt/core.h>
 #include <gtest/gtest.h>
 #include <omp.h>
+#include <vtkFieldData.h>
 #include <vtkPointData.h>
+#include <vtkStringArray.h>
 #include <vtkSmartPointer.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLPUnstructuredGridReader.h>
@@ -348,6 +350,7 @@ TEST(Distributed, FramesReadBackAsOneDataSet) {
   const RunSummary summary = run_scene(s, options);
   const std::int64_t particles = s.distribution().particles;
   std::int64_t points = -1, unique_ids = -1;
+  std::string body_names;
   if (world().root()) {
     const std::string last = (folder.path / fmt::format("frames/particles_{:06}.{}", summary.frames - 1,
                                                         world().distributed() ? "pvtu" : "vtu")).string();
@@ -364,12 +367,50 @@ TEST(Distributed, FramesReadBackAsOneDataSet) {
         for (vtkIdType i = 0; i < id_array->GetNumberOfTuples(); ++i) ids.push_back(static_cast<std::int64_t>(id_array->GetTuple1(i)));
       std::sort(ids.begin(), ids.end());
       unique_ids = std::unique(ids.begin(), ids.end()) - ids.begin();
+      // the bodies' names, which every piece carries in its field data, reach the data set
+      if (auto* names = vtkStringArray::SafeDownCast(grid->GetFieldData()->GetAbstractArray("body_names")))
+        for (vtkIdType i = 0; i < names->GetNumberOfValues(); ++i) body_names += std::string(names->GetValue(i)) + ";";
     } else {
       points = unique_ids = particles;
+      body_names = "left;right;";
     }
   }
   const double read = world().broadcast(fmt::format("{} {}", points, unique_ids)) == fmt::format("{} {}", particles, particles);
   EXPECT_TRUE(read) << "the last frame holds every particle once";
+  EXPECT_EQ(world().broadcast(body_names), "left;right;") << "the frame names the bodies";
+}
+
+// Particles leave through the open x- and x+ faces from the slabs at either end: the mass and count
+// by face (run.json's end.outflow_by_face) are every rank's summed, the serial run's, and a restart
+// on the same ranks keeps them bit for bit.
+TEST(Distributed, OutflowByFaceIsSummedOverTheRanksAndCheckpointed) {
+  SharedFolder folder("outflow_faces");
+  Scene scene = crossing_blocks(0.05);
+  scene.walls[0][0].type = scene.walls[0][1].type = WallType::Open;
+  scene.bodies[0].velocity = Vec3(-3.0, 0, 0);  // apart, each out through its end
+  scene.bodies[1].velocity = Vec3(3.0, 0, 0);
+  Solver serial(scene);
+  run(serial);
+  const OutflowFaces expected = serial.outflow_faces();
+  ASSERT_GT(expected.particles[0], 0);
+  ASSERT_GT(expected.particles[1], 0);
+  const std::string path = (folder.path / "checkpoint.h5").string();
+  Solver whole(scene, world());
+  while (whole.outflow_particles() == 0) whole.step();  // a checkpoint after some have left
+  write_checkpoint(path, whole, RunProgress{});
+  world().barrier();  // rank 0 has written it
+  run(whole);
+  const OutflowFaces all = whole.outflow_faces();
+  EXPECT_EQ(all.particles, expected.particles);
+  for (int face = 0; face < OutflowFaces::kFaces; ++face)
+    EXPECT_LE(std::abs(all.mass[face] - expected.mass[face]), 1e-12 * serial.outflow_mass()) << OutflowFaces::kNames[face];
+  EXPECT_EQ(all.particles[0] + all.particles[1], whole.outflow_particles());
+  Solver same(scene, world());
+  restore_checkpoint(same, read_checkpoint(path, world()), path);
+  run(same);
+  const OutflowFaces resumed = same.outflow_faces();
+  EXPECT_EQ(resumed.particles, all.particles);
+  EXPECT_EQ(std::memcmp(resumed.mass.data(), all.mass.data(), sizeof(all.mass)), 0);
 }
 
 // A restart on ranks whose slabs seed no particle (a body narrower than a block column, at the

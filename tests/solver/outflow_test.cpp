@@ -54,6 +54,63 @@ TEST(Outflow, ParticlesLeavingAnOpenFaceAreRemovedAndCounted) {
   EXPECT_NEAR(e1.total(), e0.total(), 0.01 * e0.kinetic);
 }
 
+// run.json's end.outflow_by_face: the mass and particles that left through each face. Only the share
+// through x+ was kept; a block thrown out sideways and one through the floor could not be told apart.
+TEST(Outflow, EachFaceCountsWhatLeftThroughIt) {
+  const std::string json = R"({
+    "name": "three_ways_out",
+    "grid": { "origin": [0, 0, 0], "size": [0.6, 0.4, 0.3], "cell_size": 0.025 },
+    "gravity": [0, 0, -9.81],
+    "time": { "end": 0.1, "courant": 0.3 },
+    "materials": { "m": { "density": 1000.0, "young": 1.0e6, "poisson": 0.3 } },
+    "bodies": [ { "name": "east", "material": "m", "box": { "min": [0.45, 0.25, 0.1], "max": [0.55, 0.35, 0.15] },
+                  "particles_per_cell": 2, "velocity": [3.0, 0.0, 0.0] },
+                { "name": "south", "material": "m", "box": { "min": [0.1, 0.02, 0.1], "max": [0.2, 0.12, 0.15] },
+                  "particles_per_cell": 2, "velocity": [0.0, -3.0, 0.0] },
+                { "name": "down", "material": "m", "box": { "min": [0.3, 0.15, 0.02], "max": [0.4, 0.25, 0.07] },
+                  "particles_per_cell": 2, "velocity": [0.0, 0.0, -3.0] } ],
+    "boundaries": { "x-": "slip", "x+": "open", "y-": "open", "y+": "open", "z-": "open", "z+": "slip" }
+  })";
+  Solver a(parse_scene(json, "three_ways_out"));
+  while (a.outflow_particles() == 0) a.step();
+  Solver b(parse_scene(json, "three_ways_out"));
+  b.restore(a.particles(), a.state());  // the counts so far go with the state
+  while (!a.finished()) {
+    a.step();
+    b.step();
+  }
+  const OutflowFaces faces = a.outflow_faces();
+  EXPECT_GT(faces.particles[1], 0);  // x+
+  EXPECT_GT(faces.particles[2], 0);  // y-
+  EXPECT_GT(faces.particles[4], 0);  // z-
+  EXPECT_EQ(faces.particles[0] + faces.particles[3] + faces.particles[5], 0);  // x-, z+ are walls; nothing went y+
+  EXPECT_EQ(faces.particles[1] + faces.particles[2] + faces.particles[4], a.outflow_particles());
+  double mass = 0.0;
+  for (double m : faces.mass) mass += m;
+  EXPECT_NEAR(mass, a.outflow_mass(), 1e-12 * a.outflow_mass());
+  EXPECT_EQ(faces.mass[OutflowFaces::kXPlus], a.outflow_mass_x_plus());  // the runout's share: the same sum
+  const OutflowFaces restored = b.outflow_faces();
+  EXPECT_EQ(restored.particles, faces.particles);
+  EXPECT_EQ(std::memcmp(restored.mass.data(), faces.mass.data(), sizeof(faces.mass)), 0);
+}
+
+// A particle past two open faces at once (a corner) counts once: at x+ first (ahead of the runout's
+// front), then in the order x-, y-, y+, z-, z+.
+TEST(Outflow, APastACornerCountsAtOneFace) {
+  GatherOptions limits;
+  limits.lo = {0.0, 0.0, 0.0};
+  limits.hi = {1.0, 1.0, 1.0};
+  for (auto& axis : limits.open) axis = {true, true};
+  const double past_x_plus_and_y_minus[3] = {1.5, -0.5, 0.5}, past_x_minus_and_z_plus[3] = {-0.5, 0.5, 1.5},
+               past_y_plus_and_z_minus[3] = {0.5, 1.5, -0.5}, inside[3] = {0.5, 0.5, 0.5};
+  EXPECT_EQ(outflow_face(limits, past_x_plus_and_y_minus), 1);
+  EXPECT_EQ(outflow_face(limits, past_x_minus_and_z_plus), 0);
+  EXPECT_EQ(outflow_face(limits, past_y_plus_and_z_minus), 3);
+  EXPECT_EQ(outflow_face(limits, inside), -1);
+  limits.open[0][1] = false;  // x+ a wall: past it is no way out
+  EXPECT_EQ(outflow_face(limits, past_x_plus_and_y_minus), 2);
+}
+
 // guards.max_step_displacement allows up to 2 cells a step. A very soft block under gravity along +x
 // next to the open x+ face moves 1.5 cells in its first step (a time step from its slow wave speed):
 // the B-spline's next support of the particles that pass the face reached beyond the padded arrays,

@@ -30,7 +30,15 @@ struct RunoutSample {
   Vec3 centre = Vec3::Zero();      // centre of mass (x, y, z) [m]
   double centre_velocity_s = 0.0;  // mass-weighted mean of v . t(x): the momentum along the bed / M [m/s]
   double front_velocity = 0.0;     // (front - previous front) / (time - previous time) [m/s]; 0 for the first
+  /// Where the front and tail lie (locate_front_and_tail): x at their s, and the bed's height z there
+  /// on a terrain. NaN for z on a flat grid (s = x, the bed is no profile), and for all four when no
+  /// particle is left.
+  double front_x = 0.0, front_z = 0.0, tail_x = 0.0, tail_z = 0.0;
 };
+
+/// Fills the sample's front_x, front_z, tail_x, tail_z from its front and tail (s). measure_runout
+/// calls it; a restart calls it for rows read back from a runout.csv written before these columns.
+void locate_front_and_tail(RunoutSample& sample, const FlumeCoordinates& coordinates);
 
 /// One sample of the particle set (front_velocity left 0; RunoutMonitor fills it in). With no particle
 /// left (all went through the open faces) the mass is 0 and every position and velocity is NaN.

@@ -3,16 +3,22 @@
 // deposit.csv, the deposit thickness raster at the end of the run.
 #include "talus/diagnostics/runout.hpp"
 
+#include <cstddef>
 #include <optional>
 #include <string>
 
 namespace talus {
 
-/// time,step,mass,front,tail,s_min,s_max,centre_s,centre_x,centre_y,centre_z,centre_velocity_s,front_velocity
+/// time,step,mass,front,tail,s_min,s_max,centre_s,centre_x,centre_y,centre_z,centre_velocity_s,front_velocity,
+/// front_x,front_z,tail_x,tail_z
 std::string runout_csv_header();
+inline constexpr std::size_t kRunoutCsvColumns = 17;
+/// The columns of a runout.csv written before front_x ... tail_z were added (a restart reads it).
+inline constexpr std::size_t kRunoutCsvColumnsBeforeLocation = 13;
 /// One row; every number in the shortest form that reads back exactly (a restart continues from it).
 std::string runout_csv_row(const RunoutSample& sample);
-/// The inverse of runout_csv_row (a restart reads its history back); empty for a malformed row.
+/// The inverse of runout_csv_row (a restart reads its history back); empty for a malformed row. A
+/// row of the 13 older columns reads with front_x ... tail_z NaN: locate_front_and_tail fills them.
 std::optional<RunoutSample> parse_runout_csv_row(const std::string& row);
 
 /// The runout result as a JSON object (runout.json): status (run.json's), final (the run reached

@@ -29,21 +29,27 @@ constexpr int vtk_symmetric_component(int voigt) {
 /// false. nullopt when the file cannot be read or has no stress array.
 std::optional<bool> frame_stress_in_vtk_order(const std::string& path);
 
+/// The scene's body names in index order: a frame's `body_names` (the `body` point array holds
+/// indices into it).
+std::vector<std::string> body_names(const Scene& scene);
+
 /// Write the particles to `path` (written to a temporary name, then renamed, so a reader never sees
 /// a half-written frame). Point arrays: id, velocity, speed, stress (6 components in VTK's order
 /// xx yy zz xy yz xz, named so), strain (6, likewise), density, volume, body. A store with no
 /// particles (an empty rank of a distributed run) gives a valid file with 0 points and the same
 /// arrays. With `time`, the file's field data holds
 /// it as `TimeValue` (the array ParaView reads): a frame opened on its own, without the .pvd, has
-/// its simulated time.
+/// its simulated time. With `body_names` (body_names(scene)), the field data holds them as the
+/// string array `body_names`, name i for body index i: ParaView's spreadsheet view shows it
+/// (attribute "Field Data"), so the `body` indices can be read as names.
 void write_particles_vtu(const std::string& path, const ParticleStore& particles, bool compress,
-                         std::optional<double> time = std::nullopt);
+                         std::optional<double> time = std::nullopt, const std::vector<std::string>& body_names = {});
 
 /// The bytes write_particles_vtu writes for a frame of `particles` particles without compression
 /// (the arrays' values, the vertex cells, their block headers and the XML around them), from the
-/// arrays it builds; with compression (output.compress, the default) a frame is smaller. For the
-/// disk-use estimate of `talus check` and `talus run`.
-std::size_t particle_frame_bytes(std::size_t particles);
+/// arrays it builds, with its time and these body names; with compression (output.compress, the
+/// default) a frame is smaller. For the disk-use estimate of `talus check` and `talus run`.
+std::size_t particle_frame_bytes(std::size_t particles, const std::vector<std::string>& body_names = {});
 
 /// One frame's point arrays (those write_particles_vtu writes), copied out of the store, in
 /// parallel, when it is built: the store may change afterwards while the frame is written, on
@@ -51,7 +57,8 @@ std::size_t particle_frame_bytes(std::size_t particles);
 /// have written at construction.
 class ParticleFrame {
  public:
-  explicit ParticleFrame(const ParticleStore& particles, std::optional<double> time = std::nullopt);
+  explicit ParticleFrame(const ParticleStore& particles, std::optional<double> time = std::nullopt,
+                         const std::vector<std::string>& body_names = {});
   ~ParticleFrame();
   /// As write_particles_vtu: through a temporary name and a rename.
   void write(const std::string& path, bool compress) const;

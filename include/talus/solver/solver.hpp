@@ -9,6 +9,7 @@
 #include "talus/solver/body_materials.hpp"
 #include "talus/solver/energy_budget.hpp"
 #include "talus/solver/grid_update.hpp"
+#include "talus/solver/outflow_faces.hpp"
 #include "talus/transfer/transfers.hpp"
 #include "talus/particles/cell_sort.hpp"
 #include "talus/particles/particle_scratch.hpp"
@@ -39,7 +40,7 @@ struct SolverState {
   EnergyBudget work;                    // the accumulated terms (kinetic, strain, gravity stay 0)
   EnergyGapTerms gap;                   // output.energy_gap_terms: accumulated (zero when off)
   double outflow_mass = 0.0;            // [kg] of the particles removed at open faces
-  double outflow_mass_x_plus = 0.0;     // [kg] the part of it that left through the x+ face (downslope)
+  OutflowFaces outflow_faces;           // the mass and count of outflow_mass, outflow_particles by face
   std::int64_t outflow_particles = 0;
   int steps_since_sort = 0;
   std::int64_t sorts = 0;
@@ -133,6 +134,9 @@ class Solver {
   /// over every rank (collective in a distributed run).
   std::int64_t outflow_particles() const;
   double outflow_mass() const;
+  /// Mass and count that left through each face (collective in a distributed run: each rank's
+  /// summed in rank order).
+  OutflowFaces outflow_faces() const;
   /// The part of outflow_mass() that left through the x+ face: ahead of the flow's front, which the
   /// runout diagnostics then cannot see (collective in a distributed run).
   double outflow_mass_x_plus() const;
@@ -295,7 +299,7 @@ class Solver {
   std::vector<double> block_increment_kinetic_;
   void add_tile_gap_terms();
   double outflow_mass_ = 0.0;
-  double outflow_mass_x_plus_ = 0.0;     // SolverState::outflow_mass_x_plus
+  OutflowFaces outflow_faces_;           // SolverState::outflow_faces
   double periodic_gravity_shift_ = 0.0;  // SolverState::periodic_gravity_shift
   std::int64_t outflow_particles_ = 0;
   std::int64_t seeded_particles_ = 0;
