@@ -11,6 +11,7 @@
 #include "talus/core/error.hpp"
 #include "talus/core/version.hpp"
 #include "talus/driver/run_outputs.hpp"
+#include "talus/io/atomic_file.hpp"
 #include "talus/scene/scene_json.hpp"
 #include "talus/material/drucker_prager.hpp"
 #include "talus/material/mu_i.hpp"
@@ -28,10 +29,10 @@
 #include <cmath>
 #include <ctime>
 #include <functional>
-#include <fstream>
 #include <initializer_list>
 #include <limits>
 #include <memory>
+#include <ostream>
 #include <tuple>
 #include <optional>
 #include <string>
@@ -374,9 +375,7 @@ void run_update_bench(const BenchOptions& o) {
     // the key every bench JSON has (the step scenes' rate; here each update is one particle's)
     j["particle_updates_per_second"] = rate_updates;
     j["plastic_share"] = double(plastic_updates) / (double(n) * o.steps);
-    std::ofstream out(o.json_path);
-    if (!out) throw io_error(fmt::format("cannot write {}", o.json_path));
-    out << j.dump(2) << "\n";
+    write_file_atomically(o.json_path, j.dump(2) + "\n");
   }
 }
 
@@ -645,11 +644,7 @@ void run_bench(const BenchOptions& o) {
              "({:.0f} B/particle in particle fields), grid {:.1f} MB active{}\n",
              double(rss) / n, double(rss - std::min(rss, rss_start)) / n, rss_start / 1e6, field_bytes / n, double(grid_bytes) / 1e6,
              world.distributed() ? " (all ranks)" : "");
-  if (!o.json_path.empty()) {
-    std::ofstream out(o.json_path);
-    if (!out) throw io_error(fmt::format("cannot write {}", o.json_path));
-    out << j.dump(2) << "\n";
-  }
+  if (!o.json_path.empty()) write_file_atomically(o.json_path, j.dump(2) + "\n");
   if (!o.record_path.empty()) record_work(solver, o, j);
 }
 
@@ -669,10 +664,7 @@ void record_work(Solver& solver, const BenchOptions& o, const nlohmann::json& be
   meta["cpu"] = cpu_model();
   meta["block_cells"] = solver.cell_sort().block_cells();
   meta["scatter"] = to_string(solver.scene().scatter);
-  std::ofstream out(o.record_path);
-  if (!out) throw io_error(fmt::format("cannot write {}", o.record_path));
-  recorder.write_json(out, meta);
-  if (!out.flush()) throw io_error(fmt::format("writing {} failed (is the disk full?)", o.record_path));
+  write_file_atomically(o.record_path, [&](std::ostream& out) { recorder.write_json(out, meta); });
   fmt::print("  work record: {} steps, {}\n", recorder.steps().size(), o.record_path);
 }
 

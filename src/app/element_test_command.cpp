@@ -8,7 +8,7 @@
 #include "option_checks.hpp"
 #include "talus/core/error.hpp"
 #include "talus/material/element_test.hpp"
-#include "talus/io/vtu_writer.hpp"
+#include "talus/io/atomic_file.hpp"
 #include "talus/material/mu_i_shear_test.hpp"
 #include "talus/scene/element_test_json.hpp"
 

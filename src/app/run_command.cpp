@@ -6,6 +6,7 @@
 #include "run_record.hpp"
 #include "talus/core/simd_dispatch.hpp"
 #include "talus/core/error.hpp"
+#include "talus/io/atomic_file.hpp"
 #include "talus/io/checkpoint.hpp"
 #include "talus/driver/folder_lock.hpp"
 #include "talus/driver/run_driver.hpp"
@@ -28,7 +29,7 @@
 #include <chrono>
 #include <cstdio>
 #include <ctime>
-#include <fstream>
+#include <ostream>
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
@@ -298,10 +299,7 @@ void write_work_record(const WorkRecorder& recorder, const Solver& solver, const
   meta["block_cells"] = solver.cell_sort().block_cells();
   meta["run_wall_seconds"] = summary.wall_seconds;
   meta["run_particles_end"] = solver.particles().size();
-  std::ofstream out(path);
-  if (!out) throw io_error(fmt::format("cannot write {}", path));
-  recorder.write_json(out, meta);
-  if (!out.flush()) throw io_error(fmt::format("writing {} failed (is the disk full?)", path));
+  write_file_atomically(path, [&](std::ostream& out) { recorder.write_json(out, meta); });
   fmt::print("talus: work record: {} steps, {}\n", recorder.steps().size(), path);
 }
 

@@ -4,6 +4,7 @@
 #include "talus/diagnostics/runout.hpp"
 #include "talus/driver/run_outputs.hpp"
 #include "talus/io/runout_output.hpp"
+#include "talus/io/atomic_file.hpp"
 #include "talus/io/vtu_writer.hpp"
 #include "talus/particles/particle_migration.hpp"
 #include "talus/scene/scene_json.hpp"

@@ -1,6 +1,7 @@
 #include "talus/driver/run_outputs.hpp"
 
 #include "talus/core/error.hpp"
+#include "talus/io/atomic_file.hpp"
 #include "talus/io/runout_output.hpp"
 #include "talus/particles/particle_migration.hpp"
 
