@@ -4,6 +4,7 @@
 
 #include "talus/core/error.hpp"
 #include "talus/driver/run_outputs.hpp"
+#include "talus/driver/warning.hpp"
 #include "talus/io/checkpoint.hpp"
 #include "talus/scene/scene_json.hpp"
 
@@ -55,8 +56,7 @@ MachineShare machine_share(const Comm& world, const std::string& restart) {
 std::size_t print_warnings(const Scene& scene, const std::vector<std::string>& more) {
   std::vector<std::string> warnings = scene_warnings(scene);
   warnings.insert(warnings.end(), more.begin(), more.end());
-  std::fflush(stdout);
-  for (const std::string& w : warnings) fmt::print(stderr, "talus: warning: {}\n", w);
+  for (const std::string& w : warnings) warn("{}", w);
   std::fflush(stderr);
   return warnings.size();
 }

@@ -11,6 +11,7 @@
 #include "talus/driver/folder_lock.hpp"
 #include "talus/driver/run_driver.hpp"
 #include "talus/driver/run_outputs.hpp"
+#include "talus/driver/warning.hpp"
 #include "talus/scene/scene_json.hpp"
 #include "talus/solver/memory_estimate.hpp"
 #include "talus/solver/solver.hpp"
@@ -83,17 +84,16 @@ void print_runout(const RunoutResult& r, const RunSummary& summary, const Scene&
     fmt::print("talus: runout: front and tail of the mass still in the grid: {:.2f}% left through open faces ({:.2f}% "
                "through x+)\n",
                100.0 * r.outflow_mass_share, 100.0 * r.outflow_mass_share_x_plus);
-  std::fflush(stdout);  // (the warnings below follow the line they qualify, also in a log of both)
   if (r.limited_by_outflow)
-    fmt::print(stderr, "talus: warning: runout limited by outflow: {:.2f}% of the mass left through the open face x+, "
-               "ahead of the front (more than the {:.2g}% the front quantile leaves ahead of it; {:.2f}% left in all): "
-               "the front and tail are quantiles of the mass still in the grid and the flow's front lay beyond the "
-               "grid; extend the grid along x\n",
-               100.0 * r.outflow_mass_share_x_plus, 100.0 * (1.0 - spec.front_quantile),
-               100.0 * r.outflow_mass_share);
+    warn("runout limited by outflow: {:.2f}% of the mass left through the open face x+, "
+         "ahead of the front (more than the {:.2g}% the front quantile leaves ahead of it; {:.2f}% left in all): "
+         "the front and tail are quantiles of the mass still in the grid and the flow's front lay beyond the "
+         "grid; extend the grid along x",
+         100.0 * r.outflow_mass_share_x_plus, 100.0 * (1.0 - spec.front_quantile),
+         100.0 * r.outflow_mass_share);
   else if (r.front_at_grid_end)
-    fmt::print(stderr, "talus: warning: runout: the front is within one cell of the grid's end along x: the flow ran to "
-               "the end of the grid and may have run farther; extend the grid along x\n");
+    warn("runout: the front is within one cell of the grid's end along x: the flow ran to "
+         "the end of the grid and may have run farther; extend the grid along x");
   if (mostly_elsewhere) {
     std::string open;
     for (int d = 0; d < 3; ++d)
@@ -103,10 +103,10 @@ void print_runout(const RunoutResult& r, const RunSummary& summary, const Scene&
     const bool open_bed = scene.grid.has_terrain() && scene.walls[2][0].type == WallType::Open;
     const std::string remnant = r.all_left_time ? std::string("of the last sample with particles in the grid")
                                                 : fmt::format("of the {:.2f}% still in the grid", 100.0 * (1.0 - r.outflow_mass_share));
-    fmt::print(stderr, "talus: warning: runout: {:.2f}% of the mass left through open faces other than x+ (open: {}; "
-               "{:.2f}% left in all): the front and tail are those {}, not of the flow{}\n",
-               100.0 * other_faces, open, 100.0 * r.outflow_mass_share, remnant,
-               open_bed ? "; z- is the bed of this terrain grid, so the material fell through the ground" : "");
+    warn("runout: {:.2f}% of the mass left through open faces other than x+ (open: {}; "
+         "{:.2f}% left in all): the front and tail are those {}, not of the flow{}",
+         100.0 * other_faces, open, 100.0 * r.outflow_mass_share, remnant,
+         open_bed ? "; z- is the bed of this terrain grid, so the material fell through the ground" : "");
   }
   fmt::print("talus: runout history: {}; result: {}{}\n", summary.runout_path, summary.runout_summary_path,
              summary.deposit_path.empty() ? "" : "; deposit thickness: " + summary.deposit_path);
@@ -234,10 +234,7 @@ void print_start_banner(const Solver& solver, std::int64_t particles, const Memo
   if (world.root() && !world.distributed())
     if (const auto hint = scatter_hint(solver.scene(), solver.cell_sort(), threads)) fmt::print("{}\n", *hint);
   if (world.root())  // (the same line as `talus check`'s, app/disk_estimate.hpp)
-    if (const auto w = disk_warning(estimate_disk(solver.scene(), std::size_t(particles), dir), dir)) {
-      std::fflush(stdout);
-      fmt::print(stderr, "talus: warning: {}\n", *w);
-    }
+    if (const auto w = disk_warning(estimate_disk(solver.scene(), std::size_t(particles), dir), dir)) warn("{}", *w);
   // Out now, ahead of the progress lines and any error on stderr: a log of both (`> log 2>&1`)
   // had this banner after the error that ended the run.
   std::fflush(stdout);
@@ -330,14 +327,13 @@ void print_smoothing_report(const Solver& solver) {
     // A body of a few particles, or one or two particles thick, gives A too few neighbours (or too
     // few layers of them) for the basis at any radius: the guard skipped (nearly) every particle,
     // and the info line's "100%" was easy to read past as if the scene were smoothed.
-    std::fflush(stdout);
-    fmt::print(stderr, "talus: warning: MLS smoothing had {} effect: the guard left {} of the {} particle-passes "
-               "unsmoothed ({:.3g}%, {} passes): too few neighbours within radius_factor {} cells, or too few "
-               "layers of them, for the {} basis (a body of a few particles, or one or two particles thick: leave "
-               "that axis out with solver.smoothing.axes; docs/verification.md, \"MLS strain smoothing\", the "
-               "guard)\n",
-               unsmoothed_share == 1.0 ? "no" : "almost no", solver.unsmoothed_total(), solver.guarded_total(),
-               100.0 * unsmoothed_share, solver.smoothing_passes(), mls.radius_factor, to_string(mls.basis));
+    warn("MLS smoothing had {} effect: the guard left {} of the {} particle-passes "
+         "unsmoothed ({:.3g}%, {} passes): too few neighbours within radius_factor {} cells, or too few "
+         "layers of them, for the {} basis (a body of a few particles, or one or two particles thick: leave "
+         "that axis out with solver.smoothing.axes; docs/verification.md, \"MLS strain smoothing\", the "
+         "guard)",
+         unsmoothed_share == 1.0 ? "no" : "almost no", solver.unsmoothed_total(), solver.guarded_total(),
+         100.0 * unsmoothed_share, solver.smoothing_passes(), mls.radius_factor, to_string(mls.basis));
   } else {
     fmt::print("talus: MLS smoothing: {} passes; the guard left {} particle-passes unsmoothed ({:.3g}%); the fit "
                "changed the strain increments by {:.2f} on average, at most {:.2f} (RMS of the change / RMS of the "
