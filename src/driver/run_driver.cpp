@@ -263,7 +263,6 @@ class RunLoop {
     progress_.energy_warning = summary_.energy_warning;
     if (progress_.runout_first_row.empty()) progress_.runout_first_row = runout_.first_row();
     checkpoint_.write(solver_, progress_);
-    ++summary_.checkpoints;
     checkpoint_on_disk_ = CheckpointMark{solver_.step_count(), solver_.time()};
   }
   /// The state the folder's checkpoint.h5 holds, if it holds one of this run (its last, or the one

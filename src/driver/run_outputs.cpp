@@ -393,7 +393,6 @@ FrameSeries::FrameSeries(const fs::path& dir, bool compress, RunProgress& progre
         missing_from_.push_back(written_in / "frames");
     }
   }
-  kept_frames_ = entries.size();
   if (!entries.empty()) {
     kept_frames_in_older_order_ = frame_stress_in_vtk_order((dir / entries.back().second).string()) == false;
     pvd_.assign(std::move(entries));
