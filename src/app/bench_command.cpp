@@ -11,13 +11,16 @@
 #include "talus/core/error.hpp"
 #include "talus/core/version.hpp"
 #include "talus/driver/run_outputs.hpp"
+#include "talus/io/atomic_file.hpp"
 #include "talus/scene/scene_json.hpp"
 #include "talus/material/drucker_prager.hpp"
 #include "talus/material/mu_i.hpp"
 #include "talus/solver/memory_estimate.hpp"
 #include "talus/solver/solver.hpp"
 
+
 #include <fmt/core.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 #include <omp.h>
 
@@ -28,10 +31,10 @@
 #include <cmath>
 #include <ctime>
 #include <functional>
-#include <fstream>
 #include <initializer_list>
 #include <limits>
 #include <memory>
+#include <ostream>
 #include <tuple>
 #include <optional>
 #include <string>
@@ -95,24 +98,66 @@ double stream_triad_bytes_per_second(const Comm& comm) {
 
 /// The sand the `dp` material and the column scene use: Abe, Johansson & Konagai 2005, Table 2 (E = 2 MPa, nu = 0.3,
 /// phi = 40 deg, psi = 0, c = 10 Pa, no hardening, combined-hardening parameter 0.8 -> kinematic
-/// fraction 0.2), density 1600 kg/m^3.
-const char* const kSand = R"("model": "drucker_prager", "density": 1600.0, "young": 2.0e6, "poisson": 0.3,
-    "friction_angle": 40.0, "dilatancy_angle": 0.0, "cohesion": 10.0, "hardening_modulus": 0.0,
-    "kinematic_fraction": 0.2)";
-/// The `mu_i` material: the glass beads of Jop et al. 2006 (the model's defaults), with the sand's
-/// elasticity and density so that the time step and the waves match the `dp` bench.
-const char* const kBeads = R"("model": "mu_i", "density": 1600.0, "young": 2.0e6, "poisson": 0.3)";
-constexpr double kBenchCell = 0.01;  // [m]
-int g_block_cells = 0;               // --block-cells, for every bench scene
-std::string g_scatter = "colour_passes";  // --scatter, for every bench scene
-const char* const kElastic = R"("model": "linear_elastic", "density": 2000.0, "young": 1.0e7, "poisson": 0.3)";
+/// fraction 0.2), density kBenchDensity. The update scene builds its model from these, the step
+/// scenes read them from their scene text (material_json).
+DruckerPragerParameters bench_sand() {
+  DruckerPragerParameters sand;
+  sand.young = 2.0e6;
+  sand.poisson = 0.3;
+  sand.friction_angle_deg = 40.0;
+  sand.dilatancy_angle_deg = 0.0;
+  sand.cohesion = 10.0;
+  sand.hardening_modulus = 0.0;
+  sand.kinematic_fraction = 0.2;
+  return sand;
+}
+constexpr double kBenchDensity = 1600.0;  // [kg/m^3] the sand's and the beads'
+constexpr double kBenchCell = 0.01;       // [m]
+
+/// The scene file's keys of the bench material `material` (--material): `dp` the sand; `mu_i` the
+/// glass beads of Jop et al. 2006 (the model's defaults), with the sand's elasticity and density so
+/// that the time step and the waves match the `dp` bench; `elastic` a linear elastic solid.
+/// (fmt's shortest form of each number reads back as the same double.)
+std::string material_json(const std::string& material) {
+  const DruckerPragerParameters sand = bench_sand();
+  if (material == "dp")
+    return fmt::format(R"("model": "drucker_prager", "density": {}, "young": {}, "poisson": {},
+    "friction_angle": {}, "dilatancy_angle": {}, "cohesion": {}, "hardening_modulus": {},
+    "kinematic_fraction": {})",
+                       kBenchDensity, sand.young, sand.poisson, sand.friction_angle_deg, sand.dilatancy_angle_deg,
+                       sand.cohesion, sand.hardening_modulus, sand.kinematic_fraction);
+  if (material == "mu_i")
+    return fmt::format(R"("model": "mu_i", "density": {}, "young": {}, "poisson": {})", kBenchDensity, sand.young,
+                       sand.poisson);
+  return R"("model": "linear_elastic", "density": 2000.0, "young": 1.0e7, "poisson": 0.3)";
+}
+
+/// The smoothing keys of --mls linear|quadratic|cubic: MLS smoothing of the strain increments (Edo
+/// & Matsubara 2015, eq. 54) with the radius --mls-radius (cells, default 2) over all three axes;
+/// nothing with --mls off.
+std::string smoothing_json(const BenchOptions& o) {
+  if (o.mls == "off") return std::string();
+  return fmt::format(R"(, "smoothing": {{ "basis": "{}", "radius_factor": {}, "variant": "{}"{} }})", o.mls, o.mls_radius,
+                     o.mls_variant,
+                     o.mls_variant == "reused" ? fmt::format(R"(, "reuse_strain": {})", o.mls_reuse_strain) : std::string());
+}
+
+/// Where a bench scene's box body lies in its grid: the block's and the column's differ in this alone.
+struct BenchLayout {
+  std::string name;
+  double grid_xy = 0.0;         // the square grid's side [m]
+  double grid_z = 0.0;          // its height [m]
+  double body_lo = 0.0;         // the body's extent along x and along y [m]
+  double body_hi = 0.0;
+  double body_top = 0.0;        // its height [m]
+  double floor_friction = 0.0;  // the floor's friction coefficient
+  std::string body_extra;       // keys added to the body (e.g. its velocity)
+};
 
 /// The scene of both benches: one box body of the bench material (2x2x2 particles per 1 cm cell)
-/// on a frictional floor, open at the top, in a square grid of side `grid_xy` and height `grid_z`.
-/// `body_extra` adds keys to the body (e.g. its velocity); `mls_json` the smoothing (--mls).
-Scene bench_scene(const std::string& name, double grid_xy, double grid_z, double body_lo, double body_hi,
-                  double body_top, double floor_friction, const std::string& body_extra, const std::string& shape,
-                  const std::string& scheme, const std::string& material, const std::string& mls_json) {
+/// on a frictional floor, open at the top, as `layout` places it, with the options' shape, scheme,
+/// material, smoothing (--mls), block size (--block-cells) and scatter (--scatter).
+Scene bench_scene(const BenchLayout& layout, const BenchOptions& o) {
   const std::string json = fmt::format(R"({{
     "name": "{0}",
     "grid": {{ "origin": [0, 0, 0], "size": [{1}, {1}, {2}], "cell_size": {3} }},
@@ -122,58 +167,87 @@ Scene bench_scene(const std::string& name, double grid_xy, double grid_z, double
     "bodies": [ {{ "name": "body", "material": "m", "box": {{ "min": [{8}, {8}, 0], "max": [{9}, {9}, {10}] }},
                   "particles_per_cell": 2{11} }} ],
     "boundaries": {{ "z-": {{ "type": "friction", "friction_coefficient": {12} }}, "z+": "open" }}
-  }})", name, grid_xy, grid_z, kBenchCell, shape, scheme, mls_json,
-                                       material == "dp" ? kSand : material == "mu_i" ? kBeads : kElastic, body_lo,
-                                       body_hi, body_top, body_extra, floor_friction, g_block_cells, g_scatter);
-  return parse_scene(json, name);
+  }})", layout.name, layout.grid_xy, layout.grid_z, kBenchCell, o.shape, o.scheme, smoothing_json(o),
+                                       material_json(o.material), layout.body_lo, layout.body_hi, layout.body_top,
+                                       layout.body_extra, layout.floor_friction, o.block_cells, o.scatter);
+  return parse_scene(json, layout.name);
 }
 
 /// The block scene: a cube of about N particles sliding (0.5, 0.2, 0) m/s on a floor with mu = 0.3,
 /// in a grid with room around it. Shear waves from the settling keep every particle's stress
 /// changing, so no phase can take a shortcut.
-/// --mls linear|quadratic|cubic adds MLS smoothing of the strain increments (Edo & Matsubara 2015, eq. 54) with
-/// the radius --mls-radius (cells, default 2) over all three axes.
-Scene block_scene(long long particles, const std::string& shape, const std::string& scheme, const std::string& material,
-                  const std::string& mls_json) {
-  const int side = std::max(2, static_cast<int>(std::lround(std::cbrt(particles / 8.0))));  // cells per edge
+Scene block_scene(const BenchOptions& o) {
+  const int side = std::max(2, static_cast<int>(std::lround(std::cbrt(o.particles / 8.0))));  // cells per edge
   const double h = kBenchCell, edge = side * h;
-  return bench_scene("bench_block", edge + 8 * h, edge + 4 * h, 4 * h, 4 * h + edge, edge, 0.3,
-                     R"(, "velocity": [0.5, 0.2, 0])", shape, scheme, material, mls_json);
+  return bench_scene({.name = "bench_block",
+                      .grid_xy = edge + 8 * h,
+                      .grid_z = edge + 4 * h,
+                      .body_lo = 4 * h,
+                      .body_hi = 4 * h + edge,
+                      .body_top = edge,
+                      .floor_friction = 0.3,
+                      .body_extra = R"(, "velocity": [0.5, 0.2, 0])"},
+                     o);
 }
 
 /// The column scene: a square column of sand (height = 2 x width, about N particles) released at
 /// t = 0 on a floor with mu = 0.5. It collapses and spreads, yielding more and more; in the bench's
 /// first steps only a few particles near the floor yield (the bench prints the share; the shear
 /// scene is the one with nearly all of them plastic). The grid leaves room for the runout.
-Scene column_scene(long long particles, const std::string& shape, const std::string& scheme, const std::string& material,
-                   const std::string& mls_json) {
-  const int side = std::max(2, static_cast<int>(std::lround(std::cbrt(particles / 16.0))));  // cells across
+Scene column_scene(const BenchOptions& o) {
+  const int side = std::max(2, static_cast<int>(std::lround(std::cbrt(o.particles / 16.0))));  // cells across
   const double h = kBenchCell;
   const double width = side * h, height = 2 * side * h, room = 1.5 * width + 4 * h;
-  return bench_scene("bench_column", width + 2 * room, height + 4 * h, room, room + width, height, 0.5, "", shape,
-                     scheme, material, mls_json);
+  return bench_scene({.name = "bench_column",
+                      .grid_xy = width + 2 * room,
+                      .grid_z = height + 4 * h,
+                      .body_lo = room,
+                      .body_hi = room + width,
+                      .body_top = height,
+                      .floor_friction = 0.5,
+                      .body_extra = ""},
+                     o);
+}
+
+/// The words of `values` as the scene file spells them (their to_string): the bench's options take
+/// the scene's words, and name them in their help and their refusals.
+template <class Enum>
+std::vector<std::string> words_of(std::initializer_list<Enum> values) {
+  std::vector<std::string> words;
+  for (const Enum value : values) words.emplace_back(to_string(value));
+  return words;
+}
+std::vector<std::string> shape_words() {
+  return words_of({ShapeKind::Linear, ShapeKind::UGimp, ShapeKind::CpGimp, ShapeKind::BSpline2});
+}
+std::vector<std::string> scheme_words() {
+  return words_of({SchemeKind::Musl, SchemeKind::Usl, SchemeKind::Usf, SchemeKind::Usavg});
+}
+std::vector<std::string> mls_words() {  // "off", then the bases
+  std::vector<std::string> words = words_of({MlsBasis::Linear, MlsBasis::Quadratic, MlsBasis::Cubic});
+  words.insert(words.begin(), "off");
+  return words;
+}
+std::vector<std::string> mls_variant_words() {
+  return words_of({MlsVariant::Particle, MlsVariant::Cell, MlsVariant::Reused});
+}
+std::vector<std::string> scatter_words() { return words_of({ScatterOrder::ColourPasses, ScatterOrder::BlockBuffers}); }
+
+/// Refuses the value `value` of `option` unless it is one of `allowed`, naming those.
+void require_one_of(const char* option, const std::string& value, const std::vector<std::string>& allowed) {
+  if (std::find(allowed.begin(), allowed.end(), value) == allowed.end())
+    throw input_error(fmt::format("{} {}: unknown; available: {}", option, value, fmt::join(allowed, ", ")));
 }
 
 void refuse_unavailable(const BenchOptions& o) {
-  auto one_of = [](const std::string& v, std::initializer_list<const char*> allowed) {
-    for (const char* a : allowed)
-      if (v == a) return true;
-    return false;
-  };
-  if (!one_of(o.shape, {"linear", "ugimp", "cpgimp", "bspline2"}))
-    throw input_error(fmt::format("--shape {}: unknown; available: linear, ugimp, cpgimp, bspline2", o.shape));
-  if (!one_of(o.scheme, {"musl", "usl", "usf", "usavg"}))
-    throw input_error(fmt::format("--scheme {}: unknown; available: musl, usl, usf, usavg", o.scheme));
-  if (!one_of(o.scene, {"block", "column", "shear", "update"}))
-    throw input_error(fmt::format("--scene {}: unknown; available: block, column, shear, update", o.scene));
+  require_one_of("--shape", o.shape, shape_words());
+  require_one_of("--scheme", o.scheme, scheme_words());
+  require_one_of("--scene", o.scene, {"block", "column", "shear", "update"});
   if ((o.scene == "shear" || o.scene == "update") && o.material != "dp" && o.material != "mu_i")
     throw input_error(fmt::format("--scene {} needs --material dp or mu_i (the material is put at its yield stress)", o.scene));
-  if (!one_of(o.material, {"elastic", "dp", "mu_i"}))
-    throw input_error(fmt::format("--material {}: unknown; available: elastic, dp, mu_i", o.material));
-  if (!one_of(o.mls, {"off", "linear", "quadratic", "cubic"}))
-    throw input_error(fmt::format("--mls {}: unknown; available: off, linear, quadratic, cubic", o.mls));
-  if (!one_of(o.mls_variant, {"particle", "cell", "reused"}))
-    throw input_error(fmt::format("--mls-variant {}: unknown; available: particle, cell, reused", o.mls_variant));
+  require_one_of("--material", o.material, {"elastic", "dp", "mu_i"});
+  require_one_of("--mls", o.mls, mls_words());
+  require_one_of("--mls-variant", o.mls_variant, mls_variant_words());
   // The update scene times the constitutive update alone, on the wall clock, with no solver: the
   // grid's, the smoother's and the measurements' options were ignored without a word (a scaling
   // study with --record-work then found no record).
@@ -271,12 +345,6 @@ void require_bench_fits(long long particles, std::size_t seeded, double bytes, c
                                                     : std::string("not even --particles 1000 fits")));
 }
 
-/// The update scene: the constitutive update alone, as BodyMaterials runs it per particle (objective
-/// rotation, then the model), over N particles held in structure-of-arrays like the particle store,
-/// each in simple shear at its yield stress (overburden p = 1 kPa ... 17 kPa across the particles)
-/// with the increment of a 1/s shear rate over dt = 1e-4 s, so that every particle takes the plastic
-/// return in every pass. No grid, no transfers: the ratio of two materials here is the ratio of
-/// their updates per particle (docs/performance.md, "μ(I) against Drucker-Prager").
 /// What every bench JSON records beside its figures, so that one read later names where, when and
 /// how it was measured: the host (name, CPU, logical CPUs and those this process may use), the date
 /// and the OpenMP settings.
@@ -294,24 +362,25 @@ void note_oversubscription(int threads) {
                threads, cpus_allowed(), cpus_allowed() == 1 ? "" : "s");
 }
 
+/// The update scene: the constitutive update alone, as BodyMaterials runs it per particle (objective
+/// rotation, then the model), over N particles held in structure-of-arrays like the particle store,
+/// each in simple shear at its yield stress (overburden p = 1 kPa ... 17 kPa across the particles)
+/// with the increment of a 1/s shear rate over dt = 1e-4 s, so that every particle takes the plastic
+/// return in every pass. No grid, no transfers: the ratio of two materials here is the ratio of
+/// their updates per particle (docs/performance.md, "μ(I) against Drucker-Prager").
 void run_update_bench(const BenchOptions& o) {
   const std::size_t n = static_cast<std::size_t>(o.particles);
   require_bench_fits(o.particles, n, double(n) * 7.0 * sizeof(double), "");  // the stress and the plastic strain
   set_threads(o.threads);
-  const double dt = 1.0e-4, rate = 1.0, shear = 2.0e6 / (2.0 * 1.3);
+  const double dt = 1.0e-4, rate = 1.0;
   std::array<std::vector<double>, 6> stress;
   for (auto& c : stress) c.assign(n, 0.0);
   std::vector<double> plastic(n, 0.0);
-  DruckerPragerParameters dp;
-  dp.young = 2.0e6;
-  dp.poisson = 0.3;
-  dp.friction_angle_deg = 40.0;
-  dp.cohesion = 10.0;
-  dp.kinematic_fraction = 0.2;
+  const DruckerPragerParameters dp = bench_sand();
   const DruckerPrager sand(dp);
-  MuIParameters mi;
-  mi.young = 2.0e6;
-  mi.poisson = 0.3;
+  MuIParameters mi;  // the glass beads, with the sand's elasticity (material_json)
+  mi.young = dp.young;
+  mi.poisson = dp.poisson;
   const MuI beads(mi);
   for (std::size_t p = 0; p < n; ++p) {
     const double pressure = 1.0e3 + 1.6e4 * double(p) / double(n);
@@ -357,7 +426,7 @@ void run_update_bench(const BenchOptions& o) {
              1e9 * wall * threads / (double(n) * o.steps));
   note_oversubscription(threads);
   fmt::print("  plastic: {:.1f}% of the updates (dissipated {:.3e} J/m^3 in all, G = {:.4g} Pa)\n",
-             100.0 * double(plastic_updates) / (double(n) * o.steps), dissipated, shear);
+             100.0 * double(plastic_updates) / (double(n) * o.steps), dissipated, sand.shear_modulus());
   if (!o.json_path.empty()) {
     nlohmann::json j;
     j["talus_version"] = kVersion;
@@ -374,11 +443,13 @@ void run_update_bench(const BenchOptions& o) {
     // the key every bench JSON has (the step scenes' rate; here each update is one particle's)
     j["particle_updates_per_second"] = rate_updates;
     j["plastic_share"] = double(plastic_updates) / (double(n) * o.steps);
-    std::ofstream out(o.json_path);
-    if (!out) throw io_error(fmt::format("cannot write {}", o.json_path));
-    out << j.dump(2) << "\n";
+    write_file_atomically(o.json_path, j.dump(2) + "\n");
   }
 }
+
+/// The phase `p` by name; past the last, "other": the clock outside the phases.
+constexpr int kOtherPhase = static_cast<int>(Phase::Count);
+const char* phase_name(int p) { return p == kOtherPhase ? "other" : kPhaseNames[p]; }
 
 /// What each rank measured over the timed steps, gathered to every rank (Comm::allgather) so that
 /// rank 0 can print the largest and the mean of each phase: the step waits for the slowest rank at
@@ -392,14 +463,13 @@ struct RankTimes {
 /// Per phase (and "other": the clock outside the phases, i.e. the time step and the step's
 /// collective, the migration and the exchange setup at a sort) the largest and the mean over the ranks.
 struct PhaseSpread {
-  std::array<double, static_cast<int>(Phase::Count) + 1> max{}, mean{};
+  std::array<double, kOtherPhase + 1> max{}, mean{};
 };
 PhaseSpread phase_spread(const std::vector<RankTimes>& ranks) {
   PhaseSpread s;
-  constexpr int other = static_cast<int>(Phase::Count);
   for (const RankTimes& r : ranks) {
-    for (int p = 0; p <= other; ++p) {
-      const double seconds = p == other ? std::max(0.0, r.wall - r.phases.total()) : r.phases.seconds[p];
+    for (int p = 0; p <= kOtherPhase; ++p) {
+      const double seconds = p == kOtherPhase ? std::max(0.0, r.wall - r.phases.total()) : r.phases.seconds[p];
       s.max[p] = std::max(s.max[p], seconds);
       s.mean[p] += seconds / double(ranks.size());
     }
@@ -425,49 +495,38 @@ void refuse_unwritable_outputs(const BenchOptions& o, const Comm& world) {
   if (world.any(!refusal.empty())) throw input_error(refusal);
 }
 
-void run_bench(const BenchOptions& o) {
-  refuse_unavailable(o);
-  const Comm world = Comm::world();
-  refuse_unwritable_outputs(o, world);
-  if (world.distributed() && o.scene == "update")
-    throw input_error("--scene update: one rank only (it has no grid to split); run it without mpirun");
-  if (world.distributed() && o.mls != "off")
-    throw input_error(fmt::format("--mls {}: MLS smoothing is not available in a distributed run yet; run it without "
-                                  "mpirun", o.mls));
-  if (world.distributed() && !o.record_path.empty())
-    throw input_error("--record-work: one rank only (the record is of one process's threads); run it without mpirun");
-  if (o.scene == "update") {
-    run_update_bench(o);
-    return;
-  }
-  set_threads(o.threads);
-  phase_clock() = o.cpu_time ? PhaseClock::ProcessCpu : PhaseClock::Wall;
-  g_block_cells = o.block_cells;
-  g_scatter = o.scatter;
-  // What the process holds before the scene exists (the program and its libraries, ~25 MB): the
-  // per-particle figure without it is what a larger run costs per particle.
-  const std::size_t rss_at_start = status_bytes("VmRSS:");
-  const std::string mls_json =
-      o.mls == "off" ? std::string()
-                     : fmt::format(R"(, "smoothing": {{ "basis": "{}", "radius_factor": {}, "variant": "{}"{} }})", o.mls,
-                                   o.mls_radius, o.mls_variant,
-                                   o.mls_variant == "reused" ? fmt::format(R"(, "reuse_strain": {})", o.mls_reuse_strain)
-                                                             : std::string());
-  Scene scene = o.scene == "column" ? column_scene(o.particles, o.shape, o.scheme, o.material, mls_json)
-                                    : block_scene(o.particles, o.shape, o.scheme, o.material, mls_json);
-  const MemoryEstimate estimate = estimate_memory(scene, MemoryScope::Solver);
-  require_bench_fits(o.particles, estimate.particles, double(estimate.total()), " with the grid");
-  Solver solver(std::move(scene), world);
-  if (o.scene == "shear") start_in_simple_shear(solver);
+/// What the timed steps of a step scene measured, over every rank (each figure a collective).
+struct StepMeasures {
+  std::int64_t particles = 0;       // on every rank together
+  std::vector<RankTimes> rank_times;
+  PhaseSpread spread;
+  double wall_max = 0.0;            // the slowest rank's seconds
+  double rate = 0.0;                // particle-updates per second
+  DistributionStats before, after;  // the slabs around the timed steps
+  double exchange_bytes_per_step = 0.0;
+  double plastic_share = -1.0;      // of the particles in the last step; < 0: not measured
+  std::int64_t fits_before = 0;     // MLS fits before the timed steps
+  std::size_t rss = 0, rss_start = 0;
+  double field_bytes = 0.0;
+  std::int64_t grid_bytes = 0;
+  double stream = 0.0;              // --stream: the triad's bytes per second
+  std::int64_t unsmoothed = 0;      // MLS: the particles the guard left unsmoothed in the last step
+  double smoothing_change = 0.0;
+};
+
+/// One untimed step, then the timed steps, with every rank's times, memory and plastic share.
+/// `rss_at_start`: what the process held before the scene existed.
+StepMeasures measure_steps(Solver& solver, const BenchOptions& o, std::size_t rss_at_start, const Comm& world) {
+  StepMeasures m;
   solver.step();  // first step: first touch of the grid pages; not timed
   solver.phase_times() = PhaseTimes{};
-  const DistributionStats before = solver.distribution();  // collective: before the clock starts
-  const std::int64_t n = before.particles;                  // on every rank together
+  m.before = solver.distribution();  // collective: before the clock starts
+  m.particles = m.before.particles;
   world.barrier();  // the ranks start the clock together
   double start = phase_clock_seconds();
   std::vector<double> plastic_before;  // eps_p before the last timed step (not timed: a copy)
   std::size_t sorts_before = 0, rss_before_copy = 0;
-  const std::int64_t fits_before = solver.smoothing_fits();
+  m.fits_before = solver.smoothing_fits();
   double wall = 0.0;
   for (int s = 0; s < o.steps; ++s) {
     if (s + 1 == o.steps && solver.particles().has_plastic_state()) {
@@ -480,27 +539,26 @@ void run_bench(const BenchOptions& o) {
     solver.step();
   }
   wall += phase_clock_seconds() - start;
-  const std::vector<RankTimes> rank_times = world.allgather(RankTimes{solver.phase_times(), wall, static_cast<std::int64_t>(solver.particles().size())});
-  const PhaseSpread spread = phase_spread(rank_times);
-  const double wall_max = std::max_element(rank_times.begin(), rank_times.end(), [](const RankTimes& a, const RankTimes& b) {
+  m.rank_times = world.allgather(RankTimes{solver.phase_times(), wall, static_cast<std::int64_t>(solver.particles().size())});
+  m.spread = phase_spread(m.rank_times);
+  m.wall_max = std::max_element(m.rank_times.begin(), m.rank_times.end(), [](const RankTimes& a, const RankTimes& b) {
                             return a.wall < b.wall;
                           })->wall;
-  const DistributionStats after = solver.distribution();
-  const double exchange_bytes_per_step = double(after.exchange_bytes - before.exchange_bytes) / o.steps;
+  m.after = solver.distribution();
+  m.exchange_bytes_per_step = double(m.after.exchange_bytes - m.before.exchange_bytes) / o.steps;
   // The share of particles whose plastic strain grew in the last step: how much of the Drucker-
   // Prager cost is the return mapping rather than the elastic trial. A sort in that step reorders
   // the particles (and moves them between ranks): then the share is not reported. The sort count
   // is the same on every rank (the sorts are collective).
-  double plastic_share = -1.0;
   const bool comparable = solver.particles().has_plastic_state() && plastic_before.size() == solver.particles().size() &&
                           solver.sort_count() == static_cast<std::int64_t>(sorts_before);
   if (!world.any(!comparable)) {  // every rank alike, so that all take the collective below
     std::int64_t grew = 0;
     for (std::size_t p = 0; p < plastic_before.size(); ++p)
       grew += solver.particles().plastic_strain[p] > plastic_before[p] ? 1 : 0;
-    plastic_share = double(world.sum_in_rank_order(std::vector<std::int64_t>{grew})[0]) / double(after.particles);
+    m.plastic_share = double(world.sum_in_rank_order(std::vector<std::int64_t>{grew})[0]) / double(m.after.particles);
   }
-  const double rate = double(n) * o.steps / wall_max;
+  m.rate = double(m.particles) * o.steps / m.wall_max;
   // The high-water mark of the steps; with plastic state, as it was before the bench copied eps_p
   // (the steps allocate nothing, so the last step cannot raise it except by a sort's buffers).
   // Distributed: memory is summed over the ranks (each holds the program, ~25 MB, once).
@@ -508,19 +566,22 @@ void run_bench(const BenchOptions& o) {
       static_cast<std::int64_t>(rss_before_copy > 0 ? rss_before_copy : peak_rss_bytes()),
       static_cast<std::int64_t>(rss_at_start), static_cast<std::int64_t>(solver.particles().bytes()),
       static_cast<std::int64_t>(solver.grid().active_bytes())});
-  const std::size_t rss = static_cast<std::size_t>(memory[0]), rss_start = static_cast<std::size_t>(memory[1]);
-  const double field_bytes = double(memory[2]);
-  const std::int64_t grid_bytes = memory[3];
+  m.rss = static_cast<std::size_t>(memory[0]);
+  m.rss_start = static_cast<std::size_t>(memory[1]);
+  m.field_bytes = double(memory[2]);
+  m.grid_bytes = memory[3];
   // after the memory high-water mark is read: the triad's 384 MiB must not count as the solver's
-  const double stream = o.stream ? stream_triad_bytes_per_second(world) : 0.0;
-  std::int64_t unsmoothed = 0;
-  double smoothing_change = 0.0;
+  m.stream = o.stream ? stream_triad_bytes_per_second(world) : 0.0;
   if (solver.smoother()) {
-    unsmoothed = world.sum_in_rank_order(std::vector<std::int64_t>{static_cast<std::int64_t>(solver.last_smoothing().unsmoothed)})[0];
-    smoothing_change = -world.min(-solver.last_smoothing_change());  // the largest rank's
+    m.unsmoothed = world.sum_in_rank_order(std::vector<std::int64_t>{static_cast<std::int64_t>(solver.last_smoothing().unsmoothed)})[0];
+    m.smoothing_change = -world.min(-solver.last_smoothing_change());  // the largest rank's
   }
-  if (!world.root()) return;
+  return m;
+}
 
+/// The step scene's results as the bench JSON (--json) and the work record's "bench" hold them.
+nlohmann::json bench_json(const BenchOptions& o, const Solver& solver, const StepMeasures& m, const Comm& world) {
+  const std::int64_t n = m.particles;
   const int threads = omp_get_max_threads();
   nlohmann::json j;
   j["talus_version"] = kVersion;
@@ -546,24 +607,22 @@ void run_bench(const BenchOptions& o) {
   j["cpu"] = cpu_model();
   add_provenance(j);
   // the slowest rank's seconds, named for the clock that measured them
-  j[o.cpu_time ? "cpu_seconds" : "wall_seconds"] = wall_max;
-  j["particle_updates_per_second"] = rate;
-  constexpr int other = static_cast<int>(Phase::Count);
-  auto phase_name = [](int p) { return p == other ? "other" : kPhaseNames[p]; };
+  j[o.cpu_time ? "cpu_seconds" : "wall_seconds"] = m.wall_max;
+  j["particle_updates_per_second"] = m.rate;
   nlohmann::json phases, phases_max, phases_mean;
-  for (int p = 0; p <= other; ++p) {
-    phases[phase_name(p)] = spread.max[p];  // one rank: its phases ("other" too, as printed)
-    phases_max[phase_name(p)] = spread.max[p];
-    phases_mean[phase_name(p)] = spread.mean[p];
+  for (int p = 0; p <= kOtherPhase; ++p) {
+    phases[phase_name(p)] = m.spread.max[p];  // one rank: its phases ("other" too, as printed)
+    phases_max[phase_name(p)] = m.spread.max[p];
+    phases_mean[phase_name(p)] = m.spread.mean[p];
   }
   j["phases"] = phases;
   j["phases_max"] = phases_max;    // over the ranks; "other": outside the phases
   j["phases_mean"] = phases_mean;
   {  // each rank's own, to see which one waits (one entry on one rank: the same keys whatever the count)
     nlohmann::json per_rank = nlohmann::json::array();
-    for (const RankTimes& r : rank_times) {
+    for (const RankTimes& r : m.rank_times) {
       nlohmann::json e;
-      for (int p = 0; p < other; ++p) e[kPhaseNames[p]] = r.phases.seconds[p];
+      for (int p = 0; p < kOtherPhase; ++p) e[kPhaseNames[p]] = r.phases.seconds[p];
       e["other"] = std::max(0.0, r.wall - r.phases.total());
       e["wall"] = r.wall;
       e["particles"] = r.particles;
@@ -571,30 +630,36 @@ void run_bench(const BenchOptions& o) {
     }
     j["rank_phases"] = per_rank;
   }
-  j["exchange_bytes_per_step"] = exchange_bytes_per_step;  // node sums sent by all ranks together
-  j["imbalance"] = after.imbalance;                         // largest rank's particles / mean, at the end
-  j["max_imbalance"] = after.max_imbalance;
-  j["shared_tiles"] = after.shared_tiles;
-  j["migrated"] = after.migrated - before.migrated;         // in the timed steps
-  j["rebalances"] = after.rebalances - before.rebalances;
+  j["exchange_bytes_per_step"] = m.exchange_bytes_per_step;  // node sums sent by all ranks together
+  j["imbalance"] = m.after.imbalance;                         // largest rank's particles / mean, at the end
+  j["max_imbalance"] = m.after.max_imbalance;
+  j["shared_tiles"] = m.after.shared_tiles;
+  j["migrated"] = m.after.migrated - m.before.migrated;         // in the timed steps
+  j["rebalances"] = m.after.rebalances - m.before.rebalances;
   j["sorts"] = solver.sort_count();
-  if (plastic_share >= 0.0) j["plastic_share_last_step"] = plastic_share;
+  if (m.plastic_share >= 0.0) j["plastic_share_last_step"] = m.plastic_share;
   if (const MlsStrainSmoother* mls = solver.smoother()) {
     j["mls_radius"] = mls->radius();
     j["mls_terms"] = mls->term_count();
-    j["mls_unsmoothed_last_step"] = unsmoothed;
-    j["mls_strain_change_last_step"] = smoothing_change;
-    j["mls_fits"] = solver.smoothing_fits() - fits_before;  // in the timed steps
+    j["mls_unsmoothed_last_step"] = m.unsmoothed;
+    j["mls_strain_change_last_step"] = m.smoothing_change;
+    j["mls_fits"] = solver.smoothing_fits() - m.fits_before;  // in the timed steps
     j["mls_weight_bytes_per_particle"] = double(solver.mls_weight_bytes()) / n;
   }
-  j["bytes_per_particle"] = double(rss) / n;
-  j["particle_field_bytes_per_particle"] = field_bytes / n;
-  j["grid_active_bytes"] = grid_bytes;
-  j["peak_rss_bytes"] = rss;
-  j["rss_at_start_bytes"] = rss_start;
-  j["bytes_per_particle_above_start"] = double(rss - std::min(rss, rss_start)) / n;
-  if (o.stream) j["stream_triad_bytes_per_second"] = stream;
+  j["bytes_per_particle"] = double(m.rss) / n;
+  j["particle_field_bytes_per_particle"] = m.field_bytes / n;
+  j["grid_active_bytes"] = m.grid_bytes;
+  j["peak_rss_bytes"] = m.rss;
+  j["rss_at_start_bytes"] = m.rss_start;
+  j["bytes_per_particle_above_start"] = double(m.rss - std::min(m.rss, m.rss_start)) / n;
+  if (o.stream) j["stream_triad_bytes_per_second"] = m.stream;
+  return j;
+}
 
+/// The step scene's results on stdout.
+void print_bench(const BenchOptions& o, const Solver& solver, const StepMeasures& m, const Comm& world) {
+  const std::int64_t n = m.particles;
+  const int threads = omp_get_max_threads();
   const std::string workers =
       world.distributed() ? fmt::format("{} ranks x {} thread{}", world.size(), threads, threads == 1 ? "" : "s")
                           : fmt::format("{} thread{}", threads, threads == 1 ? "" : "s");
@@ -605,7 +670,7 @@ void run_bench(const BenchOptions& o) {
              workers, active_isa(), o.steps, o.steps == 1 ? "" : "s");
   // (the phase times below are totals over the timed steps too; a reader took them for one step's)
   fmt::print("  {:.3f} M particle-updates/s ({:.4g} s{} over the {} timed step{}; the phases below are totals over "
-             "them)\n", rate / 1e6, wall_max, o.cpu_time ? " of CPU time" : "", o.steps, o.steps == 1 ? "" : "s");
+             "them)\n", m.rate / 1e6, m.wall_max, o.cpu_time ? " of CPU time" : "", o.steps, o.steps == 1 ? "" : "s");
   note_oversubscription(threads);
   if (o.cpu_time && threads > 1)  // (a 2-thread run printed a third of its wall-clock rate, without a word)
     fmt::print("  note: --cpu-time sums the CPU time of the {} threads: the rate is per second of one core, not of the "
@@ -615,41 +680,69 @@ void run_bench(const BenchOptions& o) {
                "(11-15 us a region at 2 threads, 38-218 us at 16 on a 16-core VM): unset it to time talus rather than the wake-ups\n");
   if (!world.distributed()) {
     const double total = solver.phase_times().total();
-    for (int p = 0; p < other; ++p)
+    for (int p = 0; p < kOtherPhase; ++p)
       fmt::print("  {:<7} {:8.4f} s  {:5.1f}%\n", kPhaseNames[p], solver.phase_times().seconds[p],
                  100.0 * solver.phase_times().seconds[p] / std::max(total, 1e-300));
   } else {
     // Shares of the slowest rank's wall; max / mean > 1 is time some rank spent that another did
     // not (its extra work, or its wait for a neighbour at an exchange, inside p2g and remap).
     fmt::print("  {:<7} {:>9} {:>9} {:>6} {:>9}\n", "phase", "max s", "mean s", "max %", "max/mean");
-    for (int p = 0; p <= other; ++p)
-      fmt::print("  {:<7} {:9.4f} {:9.4f} {:5.1f}% {:9.2f}\n", phase_name(p), spread.max[p], spread.mean[p],
-                 100.0 * spread.max[p] / std::max(wall_max, 1e-300), spread.max[p] / std::max(spread.mean[p], 1e-300));
+    for (int p = 0; p <= kOtherPhase; ++p)
+      fmt::print("  {:<7} {:9.4f} {:9.4f} {:5.1f}% {:9.2f}\n", phase_name(p), m.spread.max[p], m.spread.mean[p],
+                 100.0 * m.spread.max[p] / std::max(m.wall_max, 1e-300), m.spread.max[p] / std::max(m.spread.mean[p], 1e-300));
     fmt::print("  (other: outside the phases: the time step and the step's collective, migration and exchange setup at a sort)\n");
     fmt::print("  slabs: imbalance {:.3f} (largest rank's particles / mean), {:.3f} at most; {} rebalances and {} particles "
                "migrated in the timed steps; {} shared tiles; {:.1f} kB of node sums exchanged a step (all ranks)\n",
-               after.imbalance, after.max_imbalance, after.rebalances - before.rebalances, after.migrated - before.migrated,
-               after.shared_tiles, exchange_bytes_per_step / 1e3);
+               m.after.imbalance, m.after.max_imbalance, m.after.rebalances - m.before.rebalances, m.after.migrated - m.before.migrated,
+               m.after.shared_tiles, m.exchange_bytes_per_step / 1e3);
   }
-  if (plastic_share >= 0.0)
-    fmt::print("  plastic in the last step: {:.1f}% of the particles\n", 100.0 * plastic_share);
+  if (m.plastic_share >= 0.0)
+    fmt::print("  plastic in the last step: {:.1f}% of the particles\n", 100.0 * m.plastic_share);
   else if (solver.particles().has_plastic_state())  // (the line used to vanish without a word)
     fmt::print("  plastic in the last step: not measured (the particles were sorted in that step; try another --steps)\n");
   if (o.mls_variant == "reused" && solver.smoother())
     fmt::print("  MLS: {} of the {} timed steps fitted, the rest reused the weights ({:.0f} B/particle)\n",
-               solver.smoothing_fits() - fits_before, o.steps, double(solver.mls_weight_bytes()) / n);
+               solver.smoothing_fits() - m.fits_before, o.steps, double(solver.mls_weight_bytes()) / n);
   if (o.stream)
-    fmt::print("  STREAM triad: {:.2f} GB/s at {}{}\n", stream / 1e9, world.distributed() ? "all ranks, " : "",
+    fmt::print("  STREAM triad: {:.2f} GB/s at {}{}\n", m.stream / 1e9, world.distributed() ? "all ranks, " : "",
                workers);
   fmt::print("  memory: {:.0f} B/particle peak RSS, {:.0f} B/particle above the {:.1f} MB the process held before the scene "
              "({:.0f} B/particle in particle fields), grid {:.1f} MB active{}\n",
-             double(rss) / n, double(rss - std::min(rss, rss_start)) / n, rss_start / 1e6, field_bytes / n, double(grid_bytes) / 1e6,
+             double(m.rss) / n, double(m.rss - std::min(m.rss, m.rss_start)) / n, m.rss_start / 1e6, m.field_bytes / n,
+             double(m.grid_bytes) / 1e6,
              world.distributed() ? " (all ranks)" : "");
-  if (!o.json_path.empty()) {
-    std::ofstream out(o.json_path);
-    if (!out) throw io_error(fmt::format("cannot write {}", o.json_path));
-    out << j.dump(2) << "\n";
+}
+
+void run_bench(const BenchOptions& o) {
+  refuse_unavailable(o);
+  const Comm world = Comm::world();
+  refuse_unwritable_outputs(o, world);
+  if (world.distributed() && o.scene == "update")
+    throw input_error("--scene update: one rank only (it has no grid to split); run it without mpirun");
+  if (world.distributed() && o.mls != "off")
+    throw input_error(fmt::format("--mls {}: MLS smoothing is not available in a distributed run yet; run it without "
+                                  "mpirun", o.mls));
+  if (world.distributed() && !o.record_path.empty())
+    throw input_error("--record-work: one rank only (the record is of one process's threads); run it without mpirun");
+  if (o.scene == "update") {
+    run_update_bench(o);
+    return;
   }
+  set_threads(o.threads);
+  phase_clock() = o.cpu_time ? PhaseClock::ProcessCpu : PhaseClock::Wall;
+  // What the process holds before the scene exists (the program and its libraries, ~25 MB): the
+  // per-particle figure without it is what a larger run costs per particle.
+  const std::size_t rss_at_start = status_bytes("VmRSS:");
+  Scene scene = o.scene == "column" ? column_scene(o) : block_scene(o);
+  const MemoryEstimate estimate = estimate_memory(scene, MemoryScope::Solver);
+  require_bench_fits(o.particles, estimate.particles, double(estimate.total()), " with the grid");
+  Solver solver(std::move(scene), world);
+  if (o.scene == "shear") start_in_simple_shear(solver);
+  const StepMeasures measures = measure_steps(solver, o, rss_at_start, world);
+  if (!world.root()) return;
+  const nlohmann::json j = bench_json(o, solver, measures, world);
+  print_bench(o, solver, measures, world);
+  if (!o.json_path.empty()) write_file_atomically(o.json_path, j.dump(2) + "\n");
   if (!o.record_path.empty()) record_work(solver, o, j);
 }
 
@@ -669,10 +762,7 @@ void record_work(Solver& solver, const BenchOptions& o, const nlohmann::json& be
   meta["cpu"] = cpu_model();
   meta["block_cells"] = solver.cell_sort().block_cells();
   meta["scatter"] = to_string(solver.scene().scatter);
-  std::ofstream out(o.record_path);
-  if (!out) throw io_error(fmt::format("cannot write {}", o.record_path));
-  recorder.write_json(out, meta);
-  if (!out.flush()) throw io_error(fmt::format("writing {} failed (is the disk full?)", o.record_path));
+  write_file_atomically(o.record_path, [&](std::ostream& out) { recorder.write_json(out, meta); });
   fmt::print("  work record: {} steps, {}\n", recorder.steps().size(), o.record_path);
 }
 
@@ -685,12 +775,12 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("--scene", o->scene, "block (a cube sliding on a frictional floor) | column (a sand column collapsing, 2:1) | shear (the block's sand in simple shear at yield: every particle plastic every step; --material dp or mu_i) | update (the constitutive update alone, every particle plastic; --material dp or mu_i)")->capture_default_str();
   check_range(cmd->add_option("--particles", o->particles, "Approximate particle count"), 1000LL, 100000000LL)
       ->capture_default_str();
-  cmd->add_option("--shape", o->shape, "linear | ugimp | cpgimp | bspline2")
+  cmd->add_option("--shape", o->shape, fmt::format("{}", fmt::join(shape_words(), " | ")))
       ->capture_default_str();
-  cmd->add_option("--scheme", o->scheme, "musl | usl | usf | usavg")
+  cmd->add_option("--scheme", o->scheme, fmt::format("{}", fmt::join(scheme_words(), " | ")))
       ->capture_default_str();
   cmd->add_option("--material", o->material, "elastic | dp (Drucker-Prager sand, Abe, Johansson & Konagai 2005, Table 2) | mu_i (glass beads, Jop et al. 2006); --scene shear and update need dp or mu_i")->capture_default_str();
-  cmd->add_option("--mls", o->mls, "off | linear | quadratic | cubic")->capture_default_str();
+  cmd->add_option("--mls", o->mls, fmt::format("{}", fmt::join(mls_words(), " | ")))->capture_default_str();
   check_range(cmd->add_option("--mls-radius", o->mls_radius, "MLS radius in cells (solver.smoothing.radius_factor)"),
               0.5, 8.0)
       ->capture_default_str();
@@ -720,7 +810,7 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("--scatter", o->scatter,
                   "solver.scatter: colour_passes (8 passes over the colour blocks) or block_buffers (one pass into "
                   "per-block node boxes, then their sum)")
-      ->check(CLI::IsMember({"colour_passes", "block_buffers"}))
+      ->check(CLI::IsMember(scatter_words()))
       ->capture_default_str();
   check_range(cmd->add_option("--record-steps", o->record_steps, "Steps recorded by --record-work"), 1, 1000)
       ->capture_default_str()

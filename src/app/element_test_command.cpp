@@ -7,8 +7,9 @@
 #include "commands.hpp"
 #include "option_checks.hpp"
 #include "talus/core/error.hpp"
+#include "talus/driver/warning.hpp"
 #include "talus/material/element_test.hpp"
-#include "talus/io/vtu_writer.hpp"
+#include "talus/io/atomic_file.hpp"
 #include "talus/material/mu_i_shear_test.hpp"
 #include "talus/scene/element_test_json.hpp"
 
@@ -38,7 +39,7 @@ void write_csv(const std::string& out_file, Write write) {
 void run_mu_i_test_command(const MuIShearSpec& spec, const std::string& out_file) {
   const std::vector<MuIShearPoint> points = run_mu_i_shear_test(spec);
   if (const std::string shortfall = mu_i_shear_strain_shortfall(spec); !shortfall.empty())
-    fmt::print(stderr, "talus: warning: {}\n", shortfall);
+    warn("{}", shortfall);
   write_csv(out_file, [&](std::ostream& out) { write_mu_i_shear_csv(out, points); });
   double worst = 0.0;
   for (const MuIShearPoint& p : points) worst = std::fmax(worst, std::abs(p.relative_error));
@@ -58,10 +59,8 @@ void run_element_test_command(const std::string& spec_file, const std::string& o
   // 1e7 increments (the largest allowed) took 2.5 minutes, 6.3 GB of memory and a 2.3 GB CSV without
   // a word: say so before (about 230 B a row on disk, 630 B an increment held while it runs).
   if (spec.increments > 1000000)
-    fmt::print(stderr,
-               "talus: warning: path.increments = {}: the CSV will take about {:.2g} GB and the test about {:.2g} GB "
-               "of memory while it runs\n",
-               spec.increments, 230e-9 * spec.increments, 630e-9 * spec.increments);
+    warn("path.increments = {}: the CSV will take about {:.2g} GB and the test about {:.2g} GB of memory while it runs",
+         spec.increments, 230e-9 * spec.increments, 630e-9 * spec.increments);
   const std::vector<ElementTestPoint> points = run_element_test(spec);
 
   write_csv(out_file, [&](std::ostream& out) { write_element_test_csv(out, points); });

@@ -1,15 +1,17 @@
-// `talus run SCENE`: run a scene and write its outputs. `talus check SCENE`: validate it and print
-// what a run would do, writing nothing.
+// `talus run SCENE`: run a scene and write its outputs.
 #include "commands.hpp"
 #include "disk_estimate.hpp"
 #include "option_checks.hpp"
+#include "run_checks.hpp"
 #include "run_record.hpp"
 #include "talus/core/simd_dispatch.hpp"
 #include "talus/core/error.hpp"
+#include "talus/io/atomic_file.hpp"
 #include "talus/io/checkpoint.hpp"
 #include "talus/driver/folder_lock.hpp"
 #include "talus/driver/run_driver.hpp"
 #include "talus/driver/run_outputs.hpp"
+#include "talus/driver/warning.hpp"
 #include "talus/scene/scene_json.hpp"
 #include "talus/solver/memory_estimate.hpp"
 #include "talus/solver/solver.hpp"
@@ -28,7 +30,7 @@
 #include <chrono>
 #include <cstdio>
 #include <ctime>
-#include <fstream>
+#include <ostream>
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
@@ -42,68 +44,19 @@ namespace {
 /// "a temporary failure; the user is invited to retry", which a job script can tell from an error.
 constexpr int kStoppedAtDeadline = 75;
 
-/// How this run's ranks sit on the machines, for the memory check: under mpirun the ranks on this
-/// host, known by their host names (a check of the whole scene against each host's memory refused
-/// any scene larger than one node, however many nodes ran it).
-MachineShare machine_share(const Comm& world, const std::string& restart) {
-  MachineShare share;
-  share.restart = !restart.empty();
-  if (!world.distributed()) return share;
-  share.restart_reads_own_part = share.restart && checkpoint_ranks(restart) == world.size();
-  char name[256] = {};
-  ::gethostname(name, sizeof name - 1);
-  // (libstdc++'s string hash has a fixed seed: every rank hashes a name alike)
-  const std::uint64_t mine = std::hash<std::string>{}(name);
-  const std::vector<std::uint64_t> hosts = world.allgather(mine);
-  share.ranks = world.size();
-  share.ranks_here = static_cast<int>(std::count(hosts.begin(), hosts.end(), mine));
-  share.root_here = hosts[0] == mine;
-  return share;
-}
-
-/// The scene's warnings and `more` (the disk's), one line each on stderr, after what stdout holds
-/// so far; returns how many.
-std::size_t print_warnings(const Scene& scene, const std::vector<std::string>& more = {}) {
-  std::vector<std::string> warnings = scene_warnings(scene);
-  warnings.insert(warnings.end(), more.begin(), more.end());
-  std::fflush(stdout);
-  for (const std::string& w : warnings) fmt::print(stderr, "talus: warning: {}\n", w);
-  std::fflush(stderr);
-  return warnings.size();
-}
-
-// What a run would do, from the scene and the memory estimate alone: nothing is seeded or
-// allocated, so this answers at once on any scene (solver/memory_estimate.hpp).
-void print_scene_summary(const Scene& s, const MemoryEstimate& memory, const MachineShare& share,
-                         const DiskEstimate& disk, const std::string& out_dir) {
-  const auto& g = s.grid;
-  fmt::print("scene      {}{}\n", s.name, s.description.empty() ? "" : " - " + s.description);
-  fmt::print("grid       {} x {} x {} cells of {} m, origin ({}, {}, {})\n", g.cells[0], g.cells[1], g.cells[2], g.h,
-             g.origin[0], g.origin[1], g.origin[2]);
-  fmt::print("particles  {} in {} bod{}\n", memory.particles, s.bodies.size(), s.bodies.size() == 1 ? "y" : "ies");
-  fmt::print("method     {} with {} shape functions, Courant {}\n", to_string(s.scheme), to_string(s.shape), s.courant);
-  const double dt = s.initial_time_step();
-  // (a count past 10^15 in full was a line of 154 digits for a vanishing density)
-  const double steps = estimated_steps(s);  // (as the disk line counts them: whole steps, time.max_steps)
-  const auto count = [](double n) { return n < 1e15 ? fmt::format("{:.0f}", n) : fmt::format("{:.3g}", n); };
-  // The work: particle-updates, the particles times the steps. The steps are counted at the initial
-  // time step, the wave speed and velocities of the start: a flow that speeds up shortens the step
-  // and takes more (the flowing runs of one user's landslide scenes took 36-45% more).
-  fmt::print("time       end {} s, initial dt {:.3e} s: ~{} steps and ~{:.3g} particle-updates ({} particles x steps) "
-             "at the initial time step; a flow that speeds up takes more\n",
-             s.end_time, dt, count(steps), double(memory.particles) * steps, memory.particles);
-  const std::optional<std::size_t> available = available_memory();
-  fmt::print("memory     about {}: {} B per particle, {} of grid at the start (up to {} if the flow covers the whole "
-             "grid); {}\n",
-             format_bytes(double(memory.total())), memory.bytes_per_particle, format_bytes(double(memory.grid_bytes)),
-             format_bytes(double(memory.grid_bytes_bound)),
-             available ? format_bytes(double(*available)) + " available" : "available memory unknown");
-  if (share.ranks > 1)  // (the line above is the whole scene's; the check is of each machine)
-    fmt::print("memory     about {} on this machine ({} of the {} ranks{}), what the check compares\n",
-               format_bytes(double(bytes_on_this_machine(s, memory, share))), share.ranks_here, share.ranks,
-               share.root_here ? ", rank 0 among them, which gathers every particle" : "");
-  fmt::print("disk       {}\n", disk.summary(out_dir));
-}
+/// The options of `talus run` (add_run_command says what each means).
+struct RunCommandOptions {
+  std::string scene_path;
+  std::string out_dir;  // empty: runs/<scene name>, or the checkpoint's folder on a restart
+  int threads = 0;
+  bool quiet = false;
+  double progress_every = 0.0;
+  std::string restart;
+  std::string record_path;
+  int record_interval = 37;  // prime: does not alias with sort_interval (20) or output cadences
+  double stop_after = 0.0;
+  bool foreground_frames = false;
+};
 
 // The end-of-run lines of a scene with runout diagnostics (docs/flume.md).
 void print_runout(const RunoutResult& r, const RunSummary& summary, const Scene& scene) {
@@ -131,17 +84,16 @@ void print_runout(const RunoutResult& r, const RunSummary& summary, const Scene&
     fmt::print("talus: runout: front and tail of the mass still in the grid: {:.2f}% left through open faces ({:.2f}% "
                "through x+)\n",
                100.0 * r.outflow_mass_share, 100.0 * r.outflow_mass_share_x_plus);
-  std::fflush(stdout);  // (the warnings below follow the line they qualify, also in a log of both)
   if (r.limited_by_outflow)
-    fmt::print(stderr, "talus: warning: runout limited by outflow: {:.2f}% of the mass left through the open face x+, "
-               "ahead of the front (more than the {:.2g}% the front quantile leaves ahead of it; {:.2f}% left in all): "
-               "the front and tail are quantiles of the mass still in the grid and the flow's front lay beyond the "
-               "grid; extend the grid along x\n",
-               100.0 * r.outflow_mass_share_x_plus, 100.0 * (1.0 - spec.front_quantile),
-               100.0 * r.outflow_mass_share);
+    warn("runout limited by outflow: {:.2f}% of the mass left through the open face x+, "
+         "ahead of the front (more than the {:.2g}% the front quantile leaves ahead of it; {:.2f}% left in all): "
+         "the front and tail are quantiles of the mass still in the grid and the flow's front lay beyond the "
+         "grid; extend the grid along x",
+         100.0 * r.outflow_mass_share_x_plus, 100.0 * (1.0 - spec.front_quantile),
+         100.0 * r.outflow_mass_share);
   else if (r.front_at_grid_end)
-    fmt::print(stderr, "talus: warning: runout: the front is within one cell of the grid's end along x: the flow ran to "
-               "the end of the grid and may have run farther; extend the grid along x\n");
+    warn("runout: the front is within one cell of the grid's end along x: the flow ran to "
+         "the end of the grid and may have run farther; extend the grid along x");
   if (mostly_elsewhere) {
     std::string open;
     for (int d = 0; d < 3; ++d)
@@ -151,10 +103,10 @@ void print_runout(const RunoutResult& r, const RunSummary& summary, const Scene&
     const bool open_bed = scene.grid.has_terrain() && scene.walls[2][0].type == WallType::Open;
     const std::string remnant = r.all_left_time ? std::string("of the last sample with particles in the grid")
                                                 : fmt::format("of the {:.2f}% still in the grid", 100.0 * (1.0 - r.outflow_mass_share));
-    fmt::print(stderr, "talus: warning: runout: {:.2f}% of the mass left through open faces other than x+ (open: {}; "
-               "{:.2f}% left in all): the front and tail are those {}, not of the flow{}\n",
-               100.0 * other_faces, open, 100.0 * r.outflow_mass_share, remnant,
-               open_bed ? "; z- is the bed of this terrain grid, so the material fell through the ground" : "");
+    warn("runout: {:.2f}% of the mass left through open faces other than x+ (open: {}; "
+         "{:.2f}% left in all): the front and tail are those {}, not of the flow{}",
+         100.0 * other_faces, open, 100.0 * r.outflow_mass_share, remnant,
+         open_bed ? "; z- is the bed of this terrain grid, so the material fell through the ground" : "");
   }
   fmt::print("talus: runout history: {}; result: {}{}\n", summary.runout_path, summary.runout_summary_path,
              summary.deposit_path.empty() ? "" : "; deposit thickness: " + summary.deposit_path);
@@ -180,47 +132,6 @@ std::optional<std::string> scatter_hint(const Scene& scene, const CellSort& sort
       per_pass, threads, kColours);
 }
 
-/// Whether the file at `path` holds the scene as a run writes it to scene.json (as JSON: the layout
-/// may differ).
-bool holds_resolved_scene(const std::string& path, const Scene& scene) {
-  std::ifstream in(path);
-  try {
-    return nlohmann::json::parse(in) == scene_file_json(scene);
-  } catch (const nlohmann::json::exception&) {
-    return false;
-  }
-}
-
-/// Refuses a run that would replace one of its own inputs, before anything is written: the scene
-/// file among the files the run writes or clears in its folder (`talus run proj/scene.json --out proj` replaced the user's scene by the resolved one),
-/// or the work record written over the scene, the checkpoint, one of those files or a frame.
-void require_outputs_spare_inputs(const std::filesystem::path& dir, const std::string& scene_path, const Scene& scene,
-                                  const std::string& restart_path, const std::string& record_path) {
-  for (const std::filesystem::path& output : run_output_files(dir)) {
-    // A resumed run may read the scene.json its first part wrote (`talus run runs/x/scene.json
-    // --restart runs/x/checkpoint.h5`): it matches the checkpoint, and is written back unchanged.
-    // A scene file of the user's own there (the checkpoint copied next to it) is not: it was replaced.
-    const bool resumed_from_its_own_scene = !restart_path.empty() && output.filename() == "scene.json" &&
-                                            holds_resolved_scene(scene_path, scene);
-    if (same_file(scene_path, output) && !resumed_from_its_own_scene)
-      throw input_error(fmt::format("output folder {}: the run would replace the scene file {} by its {}; choose "
-                                    "another folder (--out)",
-                                    dir.string(), scene_path, output.filename().string()));
-    if (!record_path.empty() && same_file(record_path, output))
-      throw input_error(fmt::format("--record-work {}: the run writes its {} there; choose another file", record_path,
-                                    output.filename().string()));
-  }
-  // (a frame's name was accepted, and the record replaced that frame of the series)
-  if (!record_path.empty() && same_file(std::filesystem::path(record_path).parent_path(), dir / "frames"))
-    throw input_error(fmt::format("--record-work {}: the run writes its particle frames in {}; choose another file",
-                                  record_path, (dir / "frames").string()));
-  if (!record_path.empty() && same_file(record_path, scene_path))
-    throw input_error(fmt::format("--record-work {}: that is the scene file; choose another file", record_path));
-  if (!record_path.empty() && !restart_path.empty() && same_file(record_path, restart_path))
-    throw input_error(fmt::format("--record-work {}: that is the checkpoint to resume from; choose another file",
-                                  record_path));
-}
-
 /// A path as a shell word: as it is when it holds only characters no shell reads specially, else in
 /// single quotes (the resume line is copied into a shell; a path with a space split in two there).
 std::string shell_word(const std::string& path) {
@@ -231,18 +142,6 @@ std::string shell_word(const std::string& path) {
   std::string quoted = "'";
   for (char c : path) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
   return quoted + "'";
-}
-
-/// Refuses a folder in the output folder with the name of a file the run writes (particles.pvd/):
-/// an empty one was deleted without a word, and one with files in it stopped the run at its first
-/// write of that file, with frames already written and a temporary file left behind.
-void require_no_folder_in_place_of_an_output(const std::filesystem::path& dir) {
-  std::error_code ec;
-  for (const std::filesystem::path& output : run_output_files(dir))
-    if (std::filesystem::is_directory(output, ec))
-      throw input_error(fmt::format("output folder {}: {} there is a folder, where the run writes a file of that name; "
-                                    "remove it or choose another folder (--out)",
-                                    dir.string(), output.filename().string()));
 }
 
 /// The folder a checkpoint lies in ("." for a bare file name): where a resumed run writes unless
@@ -265,348 +164,360 @@ void require_fresh_folder_for_restart(const std::filesystem::path& dir, const st
                                     dir.string(), output.filename().string()));
 }
 
+/// What a run resumed from a checkpoint (--restart) carries on from it.
+struct Resumed {
+  /// Only the run's progress is kept: the checkpoint's copy of the particles (about 190 B a
+  /// particle of the whole scene, on every rank) was held to the run's end.
+  RunProgress progress;
+  double time = 0.0;                 // the checkpoint's
+  std::vector<std::string> changed;  // the keys a restart may change that this scene changes
+};
+
+/// Reads the checkpoint `restart` (every rank) and restores it into `solver`, checked against the
+/// scene before anything is written; rank 0 names the keys the scene changes.
+Resumed restore_for_run(Solver& solver, const std::string& restart, const Comm& world) {
+  Checkpoint checkpoint;
+  world.agree([&] { checkpoint = read_checkpoint(restart, world); });  // (a rank may not see the file)
+  restore_checkpoint(solver, checkpoint, restart);
+  std::vector<std::string> changed = restart_changes(checkpoint, solver.scene());
+  if (world.root() && !changed.empty()) {
+    // (only another time step changes the bits of what is computed; another end clips the last step)
+    const bool steps_change = std::any_of(changed.begin(), changed.end(),
+                                          [](const std::string& c) { return c.rfind("time.courant:", 0) == 0; });
+    fmt::print("talus: restart with {} changed: {}; the run goes on with this scene's{}\n",
+               changed.size() == 1 ? std::string("1 key") : fmt::format("{} keys", changed.size()),
+               fmt::join(changed, "; "),
+               steps_change ? " (another time.courant: other time steps, other results than without the change)" : "");
+  }
+  return Resumed{checkpoint.run, checkpoint.solver.time, std::move(changed)};
+}
+
+/// What the run would write where it must not, refused before anything is written.
+void check_output_folder(const std::string& dir, const RunCommandOptions& o, const Scene& scene, bool resumed) {
+  require_outputs_spare_inputs(dir, o.scene_path, scene, o.restart, o.record_path);
+  if (resumed && !o.out_dir.empty()) require_fresh_folder_for_restart(dir, o.restart);
+  // Every rank sees the same folder and stops alike (rank 0 reports); --record-work is refused under mpirun.
+  check_writable_folder(dir, "output folder");
+  require_no_folder_in_place_of_an_output(dir);
+  if (!o.record_path.empty()) check_writable_file(o.record_path, "--record-work");
+}
+
+/// One run at a time in a folder: claimed into `lock` before anything in it is cleared (rank 0
+/// claims it for the job and tells the others; driver/folder_lock.hpp).
+void claim_output_folder(const std::string& dir, const Comm& world, std::optional<FolderLock>& lock) {
+  std::string refusal;
+  if (world.root()) try {
+      lock.emplace(dir);
+    } catch (const Error& e) {
+      if (!world.distributed()) throw;
+      refusal = e.what();
+    }
+  if (world.distributed() && !(refusal = world.broadcast(refusal)).empty()) throw input_error(refusal);
+}
+
+/// Rank 0's lines before the first step: the restart, the run's size and where it writes, and
+/// the notes and warnings on it.
+void print_start_banner(const Solver& solver, std::int64_t particles, const MemoryEstimate& memory,
+                        const MachineShare& share, const std::string& dir, const std::string& restart,
+                        const Comm& world) {
+  if (!restart.empty() && world.root())
+    fmt::print("talus: restart from {} at step {}, t = {:.6g} s\n", restart, solver.step_count(), solver.time());
+  const int threads = omp_get_max_threads();
+  if (world.root())
+    fmt::print("talus: {} particles, {}{} thread{}, {} kernels, about {} of memory{}, output in {}\n", particles,
+               world.distributed() ? fmt::format("{} ranks x ", world.size()) : "", threads, threads == 1 ? "" : "s",
+               active_isa(), format_bytes(double(memory.total())),
+               world.distributed() ? fmt::format(" (all ranks; {} on this machine)",
+                                                 format_bytes(double(bytes_on_this_machine(solver.scene(), memory, share))))
+                                   : "",
+               dir);
+  if (world.root() && !world.distributed())
+    if (const auto hint = scatter_hint(solver.scene(), solver.cell_sort(), threads)) fmt::print("{}\n", *hint);
+  if (world.root())  // (the same line as `talus check`'s, app/disk_estimate.hpp)
+    if (const auto w = disk_warning(estimate_disk(solver.scene(), std::size_t(particles), dir), dir)) warn("{}", *w);
+  // Out now, ahead of the progress lines and any error on stderr: a log of both (`> log 2>&1`)
+  // had this banner after the error that ended the run.
+  std::fflush(stdout);
+}
+
+/// How the driver runs it: the command's options, and a resumed run's progress (`resume`).
+RunOptions run_options(const RunCommandOptions& o, const std::string& dir, std::chrono::steady_clock::time_point started,
+                       const RunProgress* resume) {
+  RunOptions options;
+  options.out_dir = dir;
+  options.progress = !o.quiet;
+  options.progress_seconds = o.progress_every > 0.0 ? o.progress_every : isatty(fileno(stderr)) ? 2.0 : 30.0;
+  options.frames_in_background = !o.foreground_frames;
+  options.folder_prepared = true;
+  if (o.stop_after > 0.0)
+    options.deadline = started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                     std::chrono::duration<double>(o.stop_after));
+  if (resume) {
+    options.resume = resume;
+    options.resume_dir = checkpoint_folder(o.restart);
+    options.resume_file = o.restart;
+  }
+  return options;
+}
+
+/// run_scene, with the end of an error written to the record. One rank: the error goes on to
+/// main(), which prints it. Under mpirun this rank may have failed alone while the others wait in
+/// a collective: it names itself and ends the whole job with its exit code (MPI_Abort), so nothing
+/// hangs. The line goes out before the record is written: two ranks that failed in one step both
+/// wrote run.json first, and the first abort cut the other's line, so the log named one rank and
+/// the record another.
+RunSummary run_or_abort_rank(Solver& solver, const RunOptions& options, RunRecord& record, const Comm& world) {
+  try {
+    return run_scene(solver, options);
+  } catch (const std::exception& e) {
+    // (a talus::Error is said as an error, with its exit code; anything else is an internal error, 4, as main() says it)
+    const Error* error = dynamic_cast<const Error*>(&e);
+    if (world.distributed()) {
+      fmt::print(stderr, "talus: {} on rank {} of {}: {}\n", error ? "error" : "internal error", world.rank(),
+                 world.size(), e.what());
+      std::fflush(stderr);
+    }
+    if (error)
+      record.end_with_error(solver, *error);
+    else
+      record.end_with_error(solver, e);
+    if (!world.distributed()) throw;
+    world.abort(error ? error->exit_code() : 4);
+  }
+}
+
+/// --record-work: the record of the whole run, as JSON (tools/scaling_model.py).
+void write_work_record(const WorkRecorder& recorder, const Solver& solver, const RunSummary& summary,
+                       const std::string& path) {
+  nlohmann::json meta = WorkRecorder::threading_meta();
+  meta["source"] = "talus run";
+  meta["scene"] = solver.scene().name;
+  meta["threads"] = omp_get_max_threads();
+  meta["block_cells"] = solver.cell_sort().block_cells();
+  meta["run_wall_seconds"] = summary.wall_seconds;
+  meta["run_particles_end"] = solver.particles().size();
+  write_file_atomically(path, [&](std::ostream& out) { recorder.write_json(out, meta); });
+  fmt::print("talus: work record: {} steps, {}\n", recorder.steps().size(), path);
+}
+
+/// The lines of a run that a signal or --stop-after stopped: where, and how to resume it.
+void print_stop(const RunSummary& summary, std::chrono::steady_clock::time_point started, const std::string& scene_path,
+                const Comm& world) {
+  if (summary.stopped_at_deadline)
+    fmt::print("talus: stopped after {:.1f} s of wall clock (--stop-after) at step {}, t = {:.6g} s; checkpoint {}\n",
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(), summary.steps,
+               summary.time, summary.checkpoint_path);
+  else
+    fmt::print("talus: stopped by signal {} at step {}, t = {:.6g} s; checkpoint {}\n", summary.interrupted_signal,
+               summary.steps, summary.time, summary.checkpoint_path);
+  // (any rank count resumes it; the same one continues bit for bit)
+  fmt::print("talus: resume with: {}talus run {} --restart {}\n",
+             world.distributed() ? fmt::format("mpirun -np {} ", world.size()) : "", shell_word(scene_path),
+             shell_word(summary.checkpoint_path));
+}
+
+/// MLS smoothing's line at the end of a run: what the guard left unsmoothed and how much the fits
+/// changed, or a warning when they did (almost) nothing; and the reuse of the weights.
+void print_smoothing_report(const Solver& solver) {
+  // the share of the particle-passes the guard judged: those of the smoothed bodies
+  const double unsmoothed_share =
+      solver.guarded_total() > 0 ? double(solver.unsmoothed_total()) / double(solver.guarded_total()) : 0.0;
+  const MlsSettings& mls = solver.scene().smoothing.mls;
+  if (unsmoothed_share > 0.5) {
+    // A body of a few particles, or one or two particles thick, gives A too few neighbours (or too
+    // few layers of them) for the basis at any radius: the guard skipped (nearly) every particle,
+    // and the info line's "100%" was easy to read past as if the scene were smoothed.
+    warn("MLS smoothing had {} effect: the guard left {} of the {} particle-passes "
+         "unsmoothed ({:.3g}%, {} passes): too few neighbours within radius_factor {} cells, or too few "
+         "layers of them, for the {} basis (a body of a few particles, or one or two particles thick: leave "
+         "that axis out with solver.smoothing.axes; docs/verification.md, \"MLS strain smoothing\", the "
+         "guard)",
+         unsmoothed_share == 1.0 ? "no" : "almost no", solver.unsmoothed_total(), solver.guarded_total(),
+         100.0 * unsmoothed_share, solver.smoothing_passes(), mls.radius_factor, to_string(mls.basis));
+  } else {
+    fmt::print("talus: MLS smoothing: {} passes; the guard left {} particle-passes unsmoothed ({:.3g}%); the fit "
+               "changed the strain increments by {:.2f} on average, at most {:.2f} (RMS of the change / RMS of the "
+               "increments; near 1 means hourglass modes, docs/verification.md \"MLS radius\")\n",
+               solver.smoothing_passes(), solver.unsmoothed_total(), 100.0 * unsmoothed_share,
+               solver.mean_smoothing_change(), solver.max_smoothing_change());
+  }
+  if (solver.scene().smoothing.mls.variant == MlsVariant::Reused)
+    fmt::print("talus: MLS weights reused: {} of the {} passes fitted (reuse_strain {}), the others reused the "
+               "weights of the last fit ({:.0f} B/particle)\n",
+               solver.smoothing_fits(), solver.smoothing_passes(), solver.scene().smoothing.mls.reuse_strain,
+               double(solver.mls_weight_bytes()) / std::max<double>(1.0, double(solver.particles().size())));
+}
+
+/// What every rank counts at the end of a run (collectives), for rank 0's report.
+struct RunTotals {
+  DistributionStats end;  // the slabs at the end
+  std::int64_t outflow_particles = 0;
+  double outflow_mass = 0.0;
+  double mass = 0.0;  // every rank's and what left through open faces
+};
+
+/// The lines of a run that reached its end: steps and rate, the energy budget, the smoothing, the
+/// outflow, and the files to open.
+void print_run_report(const Solver& solver, const RunSummary& summary, const RunTotals& totals, const std::string& dir,
+                      const std::string& restart, const std::optional<Resumed>& resumed, const Comm& world) {
+  const DistributionStats& end = totals.end;
+  const double scale = summary.energy_scale();
+  // (a resumed run's rate counts the steps it took, not those before its checkpoint)
+  const std::int64_t taken = summary.steps - summary.first_step;
+  fmt::print("talus: done: {} steps to t = {:.6g} s{} in {:.2f} s ({:.2f} M particle-updates/s)\n", summary.steps,
+             summary.time, taken == summary.steps ? "" : fmt::format(" ({} in this run)", taken), summary.wall_seconds,
+             summary.particle_updates / summary.wall_seconds / 1e6);
+  if (solver.stopped_at_max_steps())
+    fmt::print("talus: stopped at time.max_steps = {}, before its end time {:.6g} s\n", solver.scene().max_steps,
+               solver.scene().end_time);
+  if (solver.emptied())
+    fmt::print("talus: every particle had left through the open faces at t = {:.6g} s: the run ended there, before "
+               "its end time {:.6g} s\n", summary.time, solver.scene().end_time);
+  if (world.distributed())
+    fmt::print("talus: {} ranks: slabs out of balance by at most {:.2f} (largest rank's particles / mean), {} rebalances, "
+               "{} particles migrated, {:.3g} MB of node sums exchanged ({:.3g} kB a step)\n",
+               end.ranks, end.max_imbalance, end.rebalances, end.migrated, end.exchange_bytes / 1e6,
+               taken > 0 ? end.exchange_bytes / 1e3 / taken : 0.0);
+  fmt::print("talus: energy budget closes to {:.3e} of the energy available ({:.4g} J of {:.4g} J: the initial kinetic "
+             "and strain energy and the potential energy released)\n",
+             summary.energy_budget_gap(), summary.energy_budget_gap_joules(), summary.energy_scale());
+  if (summary.energy_warning)  // (said as it happened, far up a long log: said again where the run is judged)
+    fmt::print(stderr, "talus: warning: the total energy grew by more than guards.energy_warning_factor = {} of the "
+               "energy available ({:.3g}% {}; {:+.3g}% at the end): the scheme created energy, the results are "
+               "suspect; a smaller time.courant usually helps\n",
+               solver.scene().guards.energy_warning_factor, 100.0 * summary.energy_warning->share,
+               step_ended(summary.energy_warning->step, summary.energy_warning->time),
+               100.0 * summary.energy_budget_gap());
+  if (solver.scene().output.energy_gap_terms) {
+    // the parts of that gap (docs/theory.md, "Where the budget's gap comes from"), on the same scale
+    const EnergyGapParts p = energy_gap_parts(summary.initial, summary.final, summary.final_gap);
+    fmt::print("talus: made of: stress work booked beyond the grid's {:+.3e}, walls {:+.3e}, gravity {:+.3e}, "
+               "transfer loss {:+.3e} (docs/theory.md, \"Where the budget's gap comes from\")\n",
+               p.stress / scale, p.walls / scale, p.gravity / scale, p.transfer / scale);
+  }
+  if (solver.smoother() && solver.smoothing_passes() > 0) print_smoothing_report(solver);
+  if (totals.outflow_particles > 0)
+    fmt::print("talus: {} particles ({:.4g} kg, {:.2f}% of the mass) left through open faces (removed; energy column "
+               "'outflow')\n",
+               totals.outflow_particles, totals.outflow_mass, 100.0 * totals.outflow_mass / totals.mass);
+  // (a resumed run's series holds the frames before the checkpoint too)
+  const std::string written = summary.frames_in_series == summary.frames
+                                  ? ""
+                                  : fmt::format(", {} written by this run", summary.frames);
+  fmt::print("talus: ParaView series: {} ({} frame{}{}); energy history: {}/energy.csv; run record: {}/run.json\n",
+             summary.pvd_path, summary.frames_in_series, summary.frames_in_series == 1 ? "" : "s", written, dir, dir);
+  // (resumed into another folder: its series, energy.csv and runout.csv start at the checkpoint,
+  // which a user opening that folder alone could not tell, docs/reliability.md)
+  if (resumed && !same_file(dir, checkpoint_folder(restart)))
+    fmt::print("talus: {}'s series and histories start at the checkpoint, t = {:.6g} s; the part before it is in {}\n",
+               dir, resumed->time, checkpoint_folder(restart));
+  if (!summary.terrain_path.empty()) fmt::print("talus: terrain surface: {} (open it with the series)\n", summary.terrain_path);
+  if (summary.runout) print_runout(*summary.runout, summary, solver.scene());
+}
+
+void run_command(const RunCommandOptions& o, const std::string& isa) {
+  const auto started = std::chrono::steady_clock::now();  // --stop-after and run.json count from here
+  const std::time_t utc_started = std::time(nullptr);
+  set_threads(o.threads);
+  select_isa_option(isa);
+  // Under mpirun: every rank reads the scene and builds its slab of the solver; rank 0 speaks.
+  const Comm world = Comm::world();
+  if (world.distributed() && !o.record_path.empty())
+    throw input_error("--record-work: the work recorder times one rank's threads; run it without mpirun");
+  Scene scene = read_scene_file(o.scene_path);  // validated before anything is written
+  if (world.root()) print_warnings(scene);
+  const MemoryEstimate memory = estimate_memory(scene);
+  // a scene that cannot fit stops here, before anything is allocated (each rank checks its own
+  // machine; one that refuses stops every rank)
+  const MachineShare share = machine_share(world, o.restart);
+  world.agree([&] { require_memory_fits(scene, memory, share); });
+  std::string dir = o.out_dir.empty() ? "runs/" + scene.name : o.out_dir;
+  Solver solver(std::move(scene), world);
+  std::optional<Resumed> resumed;
+  if (!o.restart.empty()) {  // checked against the scene before anything is written
+    resumed = restore_for_run(solver, o.restart, world);
+    if (o.out_dir.empty()) dir = checkpoint_folder(o.restart);
+  }
+  check_output_folder(dir, o, solver.scene(), resumed.has_value());
+  std::optional<FolderLock> lock;
+  claim_output_folder(dir, world, lock);
+  // Made (or cleared) here, before the run starts: a folder that cannot be used is an error every
+  // rank meets alike (rank 0 prepares it and tells the others), said once, with nothing started.
+  const RunProgress* resume = resumed ? &resumed->progress : nullptr;
+  prepare_output_folder(dir, resume, world);
+  const DistributionStats start = solver.distribution();
+  print_start_banner(solver, start.particles, memory, share, dir, o.restart, world);
+  RunOptions options = run_options(o, dir, started, resume);
+  std::unique_ptr<WorkRecorder> recorder;
+  if (!o.record_path.empty()) {
+    recorder = std::make_unique<WorkRecorder>(1000, o.record_interval, RecordSpan::WholeRun);
+    options.recorder = recorder.get();
+  }
+  RunRecord record(dir, solver,
+                   RunStart{o.scene_path, o.restart, resumed ? resumed->changed : std::vector<std::string>{},
+                            memory.total(), start.particles, started, utc_started},
+                   world);
+  options.heartbeat = [&record](const Solver& s) { record.progress(s); };
+  const RunSummary summary = run_or_abort_rank(solver, options, record, world);
+  RunTotals totals;
+  totals.end = solver.distribution();
+  totals.outflow_particles = solver.outflow_particles();
+  record.end(solver, summary, RunEnd{totals.end.particles, totals.outflow_particles, solver.outflow_faces()});
+  totals.outflow_mass = solver.outflow_mass();
+  double mass = totals.outflow_mass;
+  for (double m : solver.particles().mass) mass += m;
+  totals.mass = world.distributed() ? world.sum_in_rank_order(mass - totals.outflow_mass) + totals.outflow_mass : mass;
+  if (summary.interrupted_signal) exit_code() = 128 + summary.interrupted_signal;
+  if (summary.stopped_at_deadline) exit_code() = kStoppedAtDeadline;
+  if (!world.root()) return;
+  if (recorder) write_work_record(*recorder, solver, summary, o.record_path);
+  if (summary.interrupted_signal || summary.stopped_at_deadline)
+    print_stop(summary, started, o.scene_path, world);
+  else
+    print_run_report(solver, summary, totals, dir, o.restart, resumed, world);
+}
+
 }  // namespace
 
 void add_run_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("run", "Run a scene: write a ParaView series (.pvd + .vtu frames) and an energy history");
-  auto scene_path = std::make_shared<std::string>();
-  auto out_dir = std::make_shared<std::string>();
-  auto threads = std::make_shared<int>(0);
-  auto quiet = std::make_shared<bool>(false);
+  auto o = std::make_shared<RunCommandOptions>();
   auto isa = std::make_shared<std::string>();
-  cmd->add_option("scene", *scene_path, "Scene file (JSON); see docs/scene-reference.md")->required();
+  cmd->add_option("scene", o->scene_path, "Scene file (JSON); see docs/scene-reference.md")->required();
   add_isa_option(cmd, isa);
-  refuse_empty(cmd->add_option("--out", *out_dir, "Output folder (default: runs/<scene name>)"),
+  refuse_empty(cmd->add_option("--out", o->out_dir, "Output folder (default: runs/<scene name>)"),
                "give a folder, or leave --out out for runs/<scene name>");
-  check_range(cmd->add_option("--threads", *threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)"), 1, 4096);
-  cmd->add_flag("--quiet", *quiet, "No progress line");
-  auto progress_every = std::make_shared<double>(0.0);
-  check_range(cmd->add_option("--progress-every", *progress_every,
+  check_range(cmd->add_option("--threads", o->threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)"), 1, 4096);
+  cmd->add_flag("--quiet", o->quiet, "No progress line");
+  check_range(cmd->add_option("--progress-every", o->progress_every,
                               "Seconds between progress lines (default: 2 on a terminal, where the line is rewritten "
                               "in place; 30 into a file or pipe, where each is a new line of the log)"),
               0.1, 86400.0);
-  auto restart = std::make_shared<std::string>();
-  refuse_empty(cmd->add_option("--restart", *restart,
+  refuse_empty(cmd->add_option("--restart", o->restart,
                                "Continue from a checkpoint (e.g. runs/<name>/checkpoint.h5) of this scene (only time.end, "
                                "time.courant, time.max_steps and guards may differ); output goes to the checkpoint's "
                                "folder unless --out is given"),
                "give a checkpoint file, or leave --restart out for a fresh run");
-  auto record_path = std::make_shared<std::string>();
-  auto record_interval = std::make_shared<int>(37);  // prime: does not alias with sort_interval (20) or output cadences
-  CLI::Option* record_work = refuse_empty(cmd->add_option("--record-work", *record_path,
+  CLI::Option* record_work = refuse_empty(cmd->add_option("--record-work", o->record_path,
                                "Record the work of every block and parallel region of every --record-interval-th step, "
                                "as JSON (tools/scaling_model.py, docs/performance.md \"Scaling\"); a record keeps at "
                                "most 1000 steps and 4 M block entries (about 200 MB): past that it keeps every third "
                                "step and triples the interval, so that it spans the whole run"),
                "give a file, or leave --record-work out");
   // (given alone it was ignored without a word)
-  check_range(cmd->add_option("--record-interval", *record_interval, "Steps between the steps --record-work records"), 1,
+  check_range(cmd->add_option("--record-interval", o->record_interval, "Steps between the steps --record-work records"), 1,
               1000000)
       ->capture_default_str()
       ->needs(record_work);
-  auto stop_after = std::make_shared<double>(0.0);
   check_duration(cmd->add_option(
-      "--stop-after", *stop_after,
+      "--stop-after", o->stop_after,
       "Stop once the run has taken this long (wall clock from its start: 3h50m, 90m, 5400s, ...), at the end of "
       "a step, with a checkpoint to resume from, and exit with code 75: for a batch job's time limit, less a "
       "margin for the checkpoint"));
-  auto foreground_frames = std::make_shared<bool>(false);
-  cmd->add_flag("--foreground-frames", *foreground_frames,
+  cmd->add_flag("--foreground-frames", o->foreground_frames,
                 "Write each frame before the next step starts (by default a frame's compression and file write "
                 "run on a thread of their own while the next steps run)");
-  cmd->callback([=]() {
-    const auto started = std::chrono::steady_clock::now();  // --stop-after and run.json count from here
-    const std::time_t utc_started = std::time(nullptr);
-    set_threads(*threads);
-    select_isa_option(*isa);
-    // Under mpirun: every rank reads the scene and builds its slab of the solver; rank 0 speaks.
-    const Comm world = Comm::world();
-    if (world.distributed() && !record_path->empty())
-      throw input_error("--record-work: the work recorder times one rank's threads; run it without mpirun");
-    Scene scene = read_scene_file(*scene_path);  // validated before anything is written
-    if (world.root()) print_warnings(scene);
-    const MemoryEstimate memory = estimate_memory(scene);
-    // a scene that cannot fit stops here, before anything is allocated (each rank checks its own
-    // machine; one that refuses stops every rank)
-    const MachineShare share = machine_share(world, *restart);
-    world.agree([&] { require_memory_fits(scene, memory, share); });
-    std::string dir = out_dir->empty() ? "runs/" + scene.name : *out_dir;
-    Solver solver(std::move(scene), world);
-    std::optional<RunProgress> resumed;
-    double resumed_time = 0.0;
-    std::vector<std::string> changed;  // the keys a restart may change that this scene changes
-    if (!restart->empty()) {  // checked against the scene before anything is written
-      Checkpoint checkpoint;
-      world.agree([&] { checkpoint = read_checkpoint(*restart, world); });  // (a rank may not see the file)
-      restore_checkpoint(solver, checkpoint, *restart);
-      changed = restart_changes(checkpoint, solver.scene());
-      if (world.root() && !changed.empty()) {
-        // (only another time step changes the bits of what is computed; another end clips the last step)
-        const bool steps_change = std::any_of(changed.begin(), changed.end(),
-                                              [](const std::string& c) { return c.rfind("time.courant:", 0) == 0; });
-        fmt::print("talus: restart with {} changed: {}; the run goes on with this scene's{}\n",
-                   changed.size() == 1 ? std::string("1 key") : fmt::format("{} keys", changed.size()),
-                   fmt::join(changed, "; "),
-                   steps_change ? " (another time.courant: other time steps, other results than without the change)" : "");
-      }
-      // Only the run's progress is kept: the checkpoint's copy of the particles (about 190 B a
-      // particle of the whole scene, on every rank) was held to the run's end.
-      resumed = checkpoint.run;
-      resumed_time = checkpoint.solver.time;
-      if (out_dir->empty()) dir = checkpoint_folder(*restart);
-    }
-    require_outputs_spare_inputs(dir, *scene_path, solver.scene(), *restart, *record_path);
-    if (resumed && !out_dir->empty()) require_fresh_folder_for_restart(dir, *restart);
-    // Every rank sees the same folder and stops alike (rank 0 reports); --record-work is refused under mpirun.
-    check_writable_folder(dir, "output folder");
-    require_no_folder_in_place_of_an_output(dir);
-    if (!record_path->empty()) check_writable_file(*record_path, "--record-work");
-    // One run at a time in a folder: claimed before anything in it is cleared (rank 0 claims it for
-    // the job and tells the others; driver/folder_lock.hpp).
-    std::optional<FolderLock> lock;
-    std::string refusal;
-    if (world.root()) try {
-        lock.emplace(dir);
-      } catch (const Error& e) {
-        if (!world.distributed()) throw;
-        refusal = e.what();
-      }
-    if (world.distributed() && !(refusal = world.broadcast(refusal)).empty()) throw input_error(refusal);
-    // Made (or cleared) here, before the run starts: a folder that cannot be used is an error every
-    // rank meets alike (rank 0 prepares it and tells the others), said once, with nothing started.
-    prepare_output_folder(dir, resumed ? &*resumed : nullptr, world);
-    if (resumed && world.root())
-      fmt::print("talus: restart from {} at step {}, t = {:.6g} s\n", *restart, solver.step_count(), solver.time());
-    const int threads = omp_get_max_threads();
-    const DistributionStats start = solver.distribution();
-    if (world.root())
-      fmt::print("talus: {} particles, {}{} thread{}, {} kernels, about {} of memory{}, output in {}\n", start.particles,
-                 world.distributed() ? fmt::format("{} ranks x ", world.size()) : "", threads, threads == 1 ? "" : "s",
-                 active_isa(), format_bytes(double(memory.total())),
-                 world.distributed() ? fmt::format(" (all ranks; {} on this machine)",
-                                                   format_bytes(double(bytes_on_this_machine(solver.scene(), memory, share))))
-                                     : "",
-                 dir);
-    if (world.root() && !world.distributed())
-      if (const auto hint = scatter_hint(solver.scene(), solver.cell_sort(), threads)) fmt::print("{}\n", *hint);
-    if (world.root())  // (the same line as `talus check`'s, app/disk_estimate.hpp)
-      if (const auto w = disk_warning(estimate_disk(solver.scene(), std::size_t(start.particles), dir), dir)) {
-        std::fflush(stdout);
-        fmt::print(stderr, "talus: warning: {}\n", *w);
-      }
-    // Out now, ahead of the progress lines and any error on stderr: a log of both (`> log 2>&1`)
-    // had this banner after the error that ended the run.
-    std::fflush(stdout);
-    RunOptions options;
-    options.out_dir = dir;
-    options.progress = !*quiet;
-    options.progress_seconds = *progress_every > 0.0 ? *progress_every : isatty(fileno(stderr)) ? 2.0 : 30.0;
-    options.frames_in_background = !*foreground_frames;
-    options.folder_prepared = true;
-    if (*stop_after > 0.0)
-      options.deadline = started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                       std::chrono::duration<double>(*stop_after));
-    if (resumed) {
-      options.resume = &*resumed;
-      options.resume_dir = checkpoint_folder(*restart);
-      options.resume_file = *restart;
-    }
-    std::unique_ptr<WorkRecorder> recorder;
-    if (!record_path->empty()) {
-      recorder = std::make_unique<WorkRecorder>(1000, *record_interval, RecordSpan::WholeRun);
-      options.recorder = recorder.get();
-    }
-    RunRecord record(dir, solver, RunStart{*scene_path, *restart, changed, memory.total(), start.particles, started, utc_started}, world);
-    options.heartbeat = [&record](const Solver& s) { record.progress(s); };
-    RunSummary summary;
-    try {
-      summary = run_scene(solver, options);
-    } catch (const Error& e) {
-      if (!world.distributed()) {
-        record.end_with_error(solver, e);
-        throw;
-      }
-      // This rank may have failed alone while the others wait in a collective: it names itself and
-      // ends the whole job with its exit code (MPI_Abort), so nothing hangs. The line goes out
-      // before the record is written: two ranks that failed in one step both wrote run.json first,
-      // and the first abort cut the other's line, so the log named one rank and the record another.
-      fmt::print(stderr, "talus: error on rank {} of {}: {}\n", world.rank(), world.size(), e.what());
-      std::fflush(stderr);
-      record.end_with_error(solver, e);
-      world.abort(e.exit_code());
-    } catch (const std::exception& e) {
-      if (!world.distributed()) {
-        record.end_with_error(solver, e);
-        throw;
-      }
-      fmt::print(stderr, "talus: internal error on rank {} of {}: {}\n", world.rank(), world.size(), e.what());
-      std::fflush(stderr);
-      record.end_with_error(solver, e);
-      world.abort(4);
-    }
-    const DistributionStats end = solver.distribution();
-    const std::int64_t outflow_particles = solver.outflow_particles();
-    record.end(solver, summary, RunEnd{end.particles, outflow_particles, solver.outflow_faces()});
-    const double outflow_mass = solver.outflow_mass();
-    double mass = outflow_mass;
-    for (double m : solver.particles().mass) mass += m;
-    mass = world.distributed() ? world.sum_in_rank_order(mass - outflow_mass) + outflow_mass : mass;
-    if (summary.interrupted_signal) exit_code() = 128 + summary.interrupted_signal;
-    if (summary.stopped_at_deadline) exit_code() = kStoppedAtDeadline;
-    if (!world.root()) return;
-    if (recorder) {
-      nlohmann::json meta = WorkRecorder::threading_meta();
-      meta["source"] = "talus run";
-      meta["scene"] = solver.scene().name;
-      meta["threads"] = omp_get_max_threads();
-      meta["block_cells"] = solver.cell_sort().block_cells();
-      meta["run_wall_seconds"] = summary.wall_seconds;
-      meta["run_particles_end"] = solver.particles().size();
-      std::ofstream out(*record_path);
-      if (!out) throw io_error(fmt::format("cannot write {}", *record_path));
-      recorder->write_json(out, meta);
-      if (!out.flush()) throw io_error(fmt::format("writing {} failed (is the disk full?)", *record_path));
-      fmt::print("talus: work record: {} steps, {}\n", recorder->steps().size(), *record_path);
-    }
-    if (summary.interrupted_signal || summary.stopped_at_deadline) {
-      if (summary.stopped_at_deadline)
-        fmt::print("talus: stopped after {:.1f} s of wall clock (--stop-after) at step {}, t = {:.6g} s; checkpoint {}\n",
-                   std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(), summary.steps,
-                   summary.time, summary.checkpoint_path);
-      else
-        fmt::print("talus: stopped by signal {} at step {}, t = {:.6g} s; checkpoint {}\n", summary.interrupted_signal,
-                   summary.steps, summary.time, summary.checkpoint_path);
-      // (any rank count resumes it; the same one continues bit for bit)
-      fmt::print("talus: resume with: {}talus run {} --restart {}\n",
-                 world.distributed() ? fmt::format("mpirun -np {} ", world.size()) : "", shell_word(*scene_path),
-                 shell_word(summary.checkpoint_path));
-      return;
-    }
-    const double scale = summary.energy_scale();
-    // (a resumed run's rate counts the steps it took, not those before its checkpoint)
-    const std::int64_t taken = summary.steps - summary.first_step;
-    fmt::print("talus: done: {} steps to t = {:.6g} s{} in {:.2f} s ({:.2f} M particle-updates/s)\n", summary.steps,
-               summary.time, taken == summary.steps ? "" : fmt::format(" ({} in this run)", taken), summary.wall_seconds,
-               summary.particle_updates / summary.wall_seconds / 1e6);
-    if (solver.stopped_at_max_steps())
-      fmt::print("talus: stopped at time.max_steps = {}, before its end time {:.6g} s\n", solver.scene().max_steps,
-                 solver.scene().end_time);
-    if (solver.emptied())
-      fmt::print("talus: every particle had left through the open faces at t = {:.6g} s: the run ended there, before "
-                 "its end time {:.6g} s\n", summary.time, solver.scene().end_time);
-    if (world.distributed())
-      fmt::print("talus: {} ranks: slabs out of balance by at most {:.2f} (largest rank's particles / mean), {} rebalances, "
-                 "{} particles migrated, {:.3g} MB of node sums exchanged ({:.3g} kB a step)\n",
-                 end.ranks, end.max_imbalance, end.rebalances, end.migrated, end.exchange_bytes / 1e6,
-                 taken > 0 ? end.exchange_bytes / 1e3 / taken : 0.0);
-    fmt::print("talus: energy budget closes to {:.3e} of the energy available ({:.4g} J of {:.4g} J: the initial kinetic "
-               "and strain energy and the potential energy released)\n",
-               summary.energy_budget_gap(), summary.energy_budget_gap_joules(), summary.energy_scale());
-    if (summary.energy_warning)  // (said as it happened, far up a long log: said again where the run is judged)
-      fmt::print(stderr, "talus: warning: the total energy grew by more than guards.energy_warning_factor = {} of the "
-                 "energy available ({:.3g}% {}; {:+.3g}% at the end): the scheme created energy, the results are "
-                 "suspect; a smaller time.courant usually helps\n",
-                 solver.scene().guards.energy_warning_factor, 100.0 * summary.energy_warning->share,
-                 step_ended(summary.energy_warning->step, summary.energy_warning->time),
-                 100.0 * summary.energy_budget_gap());
-    if (solver.scene().output.energy_gap_terms) {
-      // the parts of that gap (docs/theory.md, "Where the budget's gap comes from"), on the same scale
-      const EnergyGapParts p = energy_gap_parts(summary.initial, summary.final, summary.final_gap);
-      fmt::print("talus: made of: stress work booked beyond the grid's {:+.3e}, walls {:+.3e}, gravity {:+.3e}, "
-                 "transfer loss {:+.3e} (docs/theory.md, \"Where the budget's gap comes from\")\n",
-                 p.stress / scale, p.walls / scale, p.gravity / scale, p.transfer / scale);
-    }
-    if (solver.smoother() && solver.smoothing_passes() > 0) {
-      // the share of the particle-passes the guard judged: those of the smoothed bodies
-      const double unsmoothed_share =
-          solver.guarded_total() > 0 ? double(solver.unsmoothed_total()) / double(solver.guarded_total()) : 0.0;
-      const MlsSettings& mls = solver.scene().smoothing.mls;
-      if (unsmoothed_share > 0.5) {
-        // A body of a few particles, or one or two particles thick, gives A too few neighbours (or too
-        // few layers of them) for the basis at any radius: the guard skipped (nearly) every particle,
-        // and the info line's "100%" was easy to read past as if the scene were smoothed.
-        std::fflush(stdout);
-        fmt::print(stderr, "talus: warning: MLS smoothing had {} effect: the guard left {} of the {} particle-passes "
-                   "unsmoothed ({:.3g}%, {} passes): too few neighbours within radius_factor {} cells, or too few "
-                   "layers of them, for the {} basis (a body of a few particles, or one or two particles thick: leave "
-                   "that axis out with solver.smoothing.axes; docs/verification.md, \"MLS strain smoothing\", the "
-                   "guard)\n",
-                   unsmoothed_share == 1.0 ? "no" : "almost no", solver.unsmoothed_total(), solver.guarded_total(),
-                   100.0 * unsmoothed_share, solver.smoothing_passes(), mls.radius_factor, to_string(mls.basis));
-      } else {
-        fmt::print("talus: MLS smoothing: {} passes; the guard left {} particle-passes unsmoothed ({:.3g}%); the fit "
-                   "changed the strain increments by {:.2f} on average, at most {:.2f} (RMS of the change / RMS of the "
-                   "increments; near 1 means hourglass modes, docs/verification.md \"MLS radius\")\n",
-                   solver.smoothing_passes(), solver.unsmoothed_total(), 100.0 * unsmoothed_share,
-                   solver.mean_smoothing_change(), solver.max_smoothing_change());
-      }
-      if (solver.scene().smoothing.mls.variant == MlsVariant::Reused)
-        fmt::print("talus: MLS weights reused: {} of the {} passes fitted (reuse_strain {}), the others reused the "
-                   "weights of the last fit ({:.0f} B/particle)\n",
-                   solver.smoothing_fits(), solver.smoothing_passes(), solver.scene().smoothing.mls.reuse_strain,
-                   double(solver.mls_weight_bytes()) / std::max<double>(1.0, double(solver.particles().size())));
-    }
-    if (outflow_particles > 0)
-      fmt::print("talus: {} particles ({:.4g} kg, {:.2f}% of the mass) left through open faces (removed; energy column "
-                 "'outflow')\n",
-                 outflow_particles, outflow_mass, 100.0 * outflow_mass / mass);
-    // (a resumed run's series holds the frames before the checkpoint too)
-    const std::string written = summary.frames_in_series == summary.frames
-                                    ? ""
-                                    : fmt::format(", {} written by this run", summary.frames);
-    fmt::print("talus: ParaView series: {} ({} frame{}{}); energy history: {}/energy.csv; run record: {}/run.json\n",
-               summary.pvd_path, summary.frames_in_series, summary.frames_in_series == 1 ? "" : "s", written, dir, dir);
-    // (resumed into another folder: its series, energy.csv and runout.csv start at the checkpoint,
-    // which a user opening that folder alone could not tell, docs/reliability.md)
-    if (resumed && !same_file(dir, checkpoint_folder(*restart)))
-      fmt::print("talus: {}'s series and histories start at the checkpoint, t = {:.6g} s; the part before it is in {}\n",
-                 dir, resumed_time, checkpoint_folder(*restart));
-    if (!summary.terrain_path.empty()) fmt::print("talus: terrain surface: {} (open it with the series)\n", summary.terrain_path);
-    if (summary.runout) print_runout(*summary.runout, summary, solver.scene());
-  });
-}
-
-void add_check_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("check", "Validate a scene file and print what a run would do (writes nothing)");
-  auto scene_path = std::make_shared<std::string>();
-  cmd->add_option("scene", *scene_path, "Scene file (JSON)")->required();
-  cmd->callback([=]() {
-    // Under mpirun every rank checks (an error is printed once, main.cpp); rank 0 alone prints.
-    const Comm world = Comm::world();
-    const Scene scene = read_scene_file(*scene_path);
-    available_memory();  // a bad TALUS_MEMORY_LIMIT stops here, not halfway through the summary
-    Solver::check_ranks(scene, world.size());  // what `mpirun -np N talus run` would refuse
-    const MachineShare share = machine_share(world, "");  // (collective)
-    const MemoryEstimate memory = estimate_memory(scene);
-    // every rank checks its machine, as `talus run` does (rank 0 alone said ok where a rank's
-    // smaller machine then refused the run); the refusal comes after the summary on one rank
-    if (world.distributed()) world.agree([&] { require_memory_fits(scene, memory, share); });
-    if (!world.root()) return;
-    // (where `talus run` writes by default; --out names another folder) The disk's warning is
-    // `talus run`'s (check said ok where the run warned of 215 GB of frames), with the scene's.
-    const std::string out_dir = "runs/" + scene.name;
-    const DiskEstimate disk = estimate_disk(scene, memory.particles, out_dir);
-    std::vector<std::string> more;
-    if (const auto w = disk_warning(disk, out_dir)) more.push_back(*w);
-    const std::size_t warnings = print_warnings(scene, more);
-    print_scene_summary(scene, memory, share, disk, out_dir);
-    // (check said ok, and the run stopped at once: the default folder held this scene file, or
-    // could not be made here)
-    try {
-      require_outputs_spare_inputs(out_dir, *scene_path, scene, "", "");
-      require_no_folder_in_place_of_an_output(out_dir);
-      check_writable_folder(out_dir, "output folder");
-    } catch (const Error& e) {
-      fmt::print("note       talus run without --out would stop: {}\n", e.what());
-    }
-    if (!world.distributed()) require_memory_fits(scene, memory, share);  // (under mpirun: checked above, on every rank)
-    // (a bare "ok" last, on stdout, hid the warnings on stderr: it counts them)
-    const std::string ranks = world.distributed() ? fmt::format("for {} ranks", world.size()) : "";
-    const std::string warned =
-        warnings == 0 ? "" : fmt::format("{} warning{} above, on stderr", warnings, warnings == 1 ? "" : "s");
-    fmt::print("ok{}\n", ranks.empty() && warned.empty() ? std::string()
-                                                           : fmt::format(" ({}{}{})", ranks, ranks.empty() || warned.empty() ? "" : "; ", warned));
-  });
+  cmd->callback([o, isa]() { run_command(*o, *isa); });
 }
 
 }  // namespace talus::app

@@ -4,7 +4,7 @@
 #include "commands.hpp"
 #include "host_info.hpp"
 #include "talus/core/simd_dispatch.hpp"
-#include "talus/io/vtu_writer.hpp"
+#include "talus/io/atomic_file.hpp"
 #include "talus/solver/work_recorder.hpp"
 
 #include <fmt/core.h>

@@ -3,7 +3,9 @@
 #include "talus/core/error.hpp"
 #include "talus/diagnostics/runout.hpp"
 #include "talus/driver/run_outputs.hpp"
+#include "talus/driver/warning.hpp"
 #include "talus/io/runout_output.hpp"
+#include "talus/io/atomic_file.hpp"
 #include "talus/io/vtu_writer.hpp"
 #include "talus/particles/particle_migration.hpp"
 #include "talus/scene/scene_json.hpp"
@@ -261,7 +263,6 @@ class RunLoop {
     progress_.energy_warning = summary_.energy_warning;
     if (progress_.runout_first_row.empty()) progress_.runout_first_row = runout_.first_row();
     checkpoint_.write(solver_, progress_);
-    ++summary_.checkpoints;
     checkpoint_on_disk_ = CheckpointMark{solver_.step_count(), solver_.time()};
   }
   /// The state the folder's checkpoint.h5 holds, if it holds one of this run (its last, or the one
@@ -380,10 +381,10 @@ void RunLoop::start() {
   const double run_mass = comm_.sum_in_rank_order(local_mass) + solver_.outflow_mass();
   if (resuming_) {
     if (comm_.root() && frames_.kept_frames_in_older_order())
-      fmt::print(stderr, "talus: warning: the frames before the checkpoint hold stress and strain in the order of an "
-                 "earlier build (xx yy zz yz xz xy, unnamed); the frames this run writes use VTK's (xx yy zz xy yz xz, "
-                 "named): the shear components of the two do not match, so run the scene from the start for a uniform "
-                 "series\n");
+      warn("the frames before the checkpoint hold stress and strain in the order of an "
+           "earlier build (xx yy zz yz xz xy, unnamed); the frames this run writes use VTK's (xx yy zz xy yz xz, "
+           "named): the shear components of the two do not match, so run the scene from the start for a uniform "
+           "series");
     // The run's own folder with some or all of the checkpoint's frames deleted, or its energy.csv
     // lost: the restart goes on, but says what its outputs lack. (Into another folder the frames and
     // rows before the checkpoint stay where they are: nothing is missing. The test was "a frame is
@@ -391,13 +392,13 @@ void RunLoop::start() {
     if (comm_.root() && resumed_in_place_ && frames_.missing_kept_frames() > 0) {
       std::string folders;
       for (const fs::path& f : frames_.missing_from()) folders += (folders.empty() ? "" : ", ") + f.string();
-      fmt::print(stderr, "talus: warning: {} of the {} frames the checkpoint lists are missing from {}: the series has "
-                 "gaps there\n",
-                 frames_.missing_kept_frames(), progress_.frame_times.size(), folders);
+      warn("{} of the {} frames the checkpoint lists are missing from {}: the series has "
+           "gaps there",
+           frames_.missing_kept_frames(), progress_.frame_times.size(), folders);
     }
     if (comm_.root() && resumed_in_place_ && history_.kept_rows() == 0)
-      fmt::print(stderr, "talus: warning: {} held no row up to the checkpoint's step {}: the energy history starts at "
-                 "the restart\n", (dir_ / "energy.csv").string(), solver_.step_count());
+      warn("{} held no row up to the checkpoint's step {}: the energy history starts at "
+           "the restart", (dir_ / "energy.csv").string(), solver_.step_count());
     summary_.initial = progress_.initial;
     energy_guard_ = EnergyGuard(scene_, run_mass, progress_.initial);
     energy_guard_.set_max_released(progress_.energy_max_released);
@@ -500,14 +501,13 @@ void RunLoop::warn_of_energy_growth(const EnergyBudget& e) {
   summary_.energy_warning = EnergyWarning{solver_.step_count(), solver_.time(), share};
   const FastestParticle fastest = fastest_particle();  // (every rank: the same verdict)
   if (!comm_.root()) return;
-  fmt::print(stderr,
-             "talus: warning: {}: the total energy grew by {:.4g} J, {:.3g}% of the energy available (more than "
-             "guards.energy_warning_factor = {}): the scheme is creating energy, the results are suspect; fastest: "
-             "{} at ({:.4g}, {:.4g}, {:.4g}) m, {:.4g} m/s. A smaller time.courant usually "
-             "helps (docs/reliability.md, \"Instability guards\")\n",
-             step_ended(solver_.step_count(), solver_.time()), e.total() - summary_.initial.total(), 100.0 * share,
-             factor, fastest.label(scene_), fastest.x[0], fastest.x[1], fastest.x[2],
-             std::sqrt(std::max(fastest.speed2, 0.0)));
+  warn("{}: the total energy grew by {:.4g} J, {:.3g}% of the energy available (more than "
+       "guards.energy_warning_factor = {}): the scheme is creating energy, the results are suspect; fastest: "
+       "{} at ({:.4g}, {:.4g}, {:.4g}) m, {:.4g} m/s. A smaller time.courant usually "
+       "helps (docs/reliability.md, \"Instability guards\")",
+       step_ended(solver_.step_count(), solver_.time()), e.total() - summary_.initial.total(), 100.0 * share,
+       factor, fastest.label(scene_), fastest.x[0], fastest.x[1], fastest.x[2],
+       std::sqrt(std::max(fastest.speed2, 0.0)));
 }
 
 bool RunLoop::take_snapshot() {

@@ -1,6 +1,8 @@
 #include "talus/driver/run_outputs.hpp"
+#include "talus/driver/warning.hpp"
 
 #include "talus/core/error.hpp"
+#include "talus/io/atomic_file.hpp"
 #include "talus/io/runout_output.hpp"
 #include "talus/particles/particle_migration.hpp"
 
@@ -306,11 +308,11 @@ RunoutFiles::RunoutFiles(const Scene& scene, const fs::path& dir, std::optional<
     }
     if (first) monitor_->resume(*first, *last);
     if (!scene.runout.has_gate && (!first || first->step > 0))
-      fmt::print(stderr, "talus: warning: {} lacks the runout rows from t = 0 (the initial front is the gate when "
-                 "diagnostics.runout.gate_x is not set): this run's runout is measured from {}; set gate_x, or "
-                 "resume in the folder that holds the rows from the start\n",
-                 ((resume_dir.empty() || same_file(resume_dir, dir) ? dir : resume_dir) / "runout.csv").string(),
-                 first ? fmt::format("the front at step {}", first->step) : std::string("the front at the restart"));
+      warn("{} lacks the runout rows from t = 0 (the initial front is the gate when "
+           "diagnostics.runout.gate_x is not set): this run's runout is measured from {}; set gate_x, or "
+           "resume in the folder that holds the rows from the start",
+           ((resume_dir.empty() || same_file(resume_dir, dir) ? dir : resume_dir) / "runout.csv").string(),
+           first ? fmt::format("the front at step {}", first->step) : std::string("the front at the restart"));
   }
   file_.open(history_path_, resume_step ? std::ios::app : std::ios::trunc);
   if (!file_) throw io_error(fmt::format("cannot write {}", history_path_));
@@ -401,7 +403,6 @@ FrameSeries::FrameSeries(const fs::path& dir, bool compress, RunProgress& progre
         missing_from_.push_back(written_in / "frames");
     }
   }
-  kept_frames_ = entries.size();
   if (!entries.empty()) {
     kept_frames_in_older_order_ = frame_stress_in_vtk_order((dir / entries.back().second).string()) == false;
     pvd_.assign(std::move(entries));

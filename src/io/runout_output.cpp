@@ -1,6 +1,7 @@
 #include "talus/io/runout_output.hpp"
 
 #include "talus/core/error.hpp"
+#include "talus/io/atomic_file.hpp"
 #include "talus/io/vtu_writer.hpp"
 
 #include <fmt/core.h>

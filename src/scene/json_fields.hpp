@@ -111,7 +111,6 @@ class ObjectReader {
     for (int d = 0; d < 3; ++d) v[d] = check_number(j[d], fmt::format("{}[{}]", key_path(key), d), lo, hi, false, false);
     return v;
   }
-  Vec3 vec3_or(const std::string& key, const Vec3& fallback) { return has(key) ? vec3(key) : fallback; }
 
   ObjectReader object(const std::string& key) { return ObjectReader(raw(key), key_path(key)); }
 

@@ -3,6 +3,7 @@
 #include "../solver/scene_fixtures.hpp"
 #include "talus/driver/run_driver.hpp"
 #include "talus/driver/run_outputs.hpp"
+#include "talus/io/atomic_file.hpp"
 #include "talus/io/vtu_writer.hpp"
 #include "vtk_xml_headers.hpp"
 #include "talus/solver/solver.hpp"

@@ -95,7 +95,6 @@ struct RunSummary {
   std::optional<EnergyWarning> energy_warning;
   std::string pvd_path;
   std::string checkpoint_path;  // <out_dir>/checkpoint.h5
-  std::size_t checkpoints = 0;  // checkpoints written by this call
   int interrupted_signal = 0;   // SIGINT/SIGTERM/SIGUSR1 caught: the run stopped after writing a checkpoint
   bool stopped_at_deadline = false;  // RunOptions::deadline passed: the run stopped after writing a checkpoint
   std::optional<RunoutResult> runout;  // with diagnostics.runout: the front after the last step

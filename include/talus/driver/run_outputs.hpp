@@ -163,11 +163,9 @@ class FrameSeries {
   /// A resumed series whose kept frames hold their stress and strain in the solver's Voigt order
   /// (written by a build before 2026-12-04): the new frames use VTK's order, so the series mixes them.
   bool kept_frames_in_older_order() const { return kept_frames_in_older_order_; }
-  /// A resumed series: the checkpoint's earlier frames found in the folder, and those it lists that
-  /// are not there (a folder of the run's own with frames deleted: the series has gaps).
-  std::size_t kept_frames() const { return kept_frames_; }
-  /// Those found neither here nor in the folder they were written in (RunProgress::frame_folders),
-  /// and the frames folders they are missing from.
+  /// A resumed series: the frames the checkpoint lists that are found neither here nor in the folder
+  /// they were written in (RunProgress::frame_folders; a folder of the run's own with frames
+  /// deleted: the series has gaps), and the frames folders they are missing from.
   std::size_t missing_kept_frames() const { return missing_kept_frames_; }
   const std::vector<std::filesystem::path>& missing_from() const { return missing_from_; }
   /// The seconds the writer's thread spent on the frames completed so far, in the background (0
@@ -180,7 +178,7 @@ class FrameSeries {
 
   std::filesystem::path dir_;
   bool kept_frames_in_older_order_ = false;
-  std::size_t kept_frames_ = 0, missing_kept_frames_ = 0;
+  std::size_t missing_kept_frames_ = 0;
   std::vector<std::filesystem::path> missing_from_;
   bool compress_;
   bool background_;

@@ -97,7 +97,4 @@ class PvdIndex {
 /// through a temporary file and a rename; `what` names the file in the error ("particle frame").
 void write_vtu_atomically(vtkUnstructuredGrid* grid, const std::string& path, bool compress, const char* what);
 
-/// Write `text` to `path` through a temporary file and a rename (atomic on POSIX file systems).
-void write_file_atomically(const std::string& path, const std::string& text);
-
 }  // namespace talus
