@@ -12,6 +12,9 @@ with the closed forms of docs/drucker-prager.md drawn dashed over the computed c
 Usage (from the repository root):
   /usr/bin/python3 tools/plot_element_tests.py --talus build/talus
   /usr/bin/python3 tools/plot_element_tests.py --no-run --csv-dir DIR   # plot CSVs already written
+
+The CSVs go to OUT_DIR/element_tests (--out-dir, default docs/verification) unless --csv-dir says
+otherwise: beside the plots they were made for, not in the build tree, which a clean rebuild removes.
 """
 import argparse
 import csv
@@ -165,11 +168,12 @@ def plot_dilatancy(specs, csv_dir, png):
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--talus", default=os.path.join(ROOT, "build", "talus"), help="talus program")
-    p.add_argument("--csv-dir", help="where the CSVs are written / read (default: next to --talus)")
+    p.add_argument("--csv-dir", help="where the CSVs are written / read (default: OUT_DIR/element_tests, beside the "
+                                     "plots; it was next to --talus, inside the build tree)")
     p.add_argument("--no-run", action="store_true", help="only plot CSVs already in --csv-dir")
     p.add_argument("--out-dir", default=os.path.join(ROOT, "docs", "verification"))
     a = p.parse_args()
-    csv_dir = a.csv_dir or os.path.join(os.path.dirname(os.path.abspath(a.talus)), "element_tests")
+    csv_dir = a.csv_dir or os.path.join(a.out_dir, "element_tests")
     spec_dir = os.path.join(ROOT, "inputs", "element_tests")
     hardening = sorted(glob.glob(os.path.join(spec_dir, "fig13a_*.json")))
     dilatancy = sorted(glob.glob(os.path.join(spec_dir, "fig13b_*.json")))

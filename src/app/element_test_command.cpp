@@ -36,15 +36,33 @@ void write_csv(const std::string& out_file, Write write) {
   write_file_atomically(out_file, text.str());
 }
 
+/// The largest |tau/p / mu(I) - 1| the mu(I) element test passes with: the target docs/mu-i.md §5 states
+/// (the shipped spec reaches 3.3e-16).
+constexpr double kMuIShearTolerance = 1e-10;
+
 void run_mu_i_test_command(const MuIShearSpec& spec, const std::string& out_file) {
   const std::vector<MuIShearPoint> points = run_mu_i_shear_test(spec);
   if (const std::string shortfall = mu_i_shear_strain_shortfall(spec); !shortfall.empty())
     warn("{}", shortfall);
   write_csv(out_file, [&](std::ostream& out) { write_mu_i_shear_csv(out, points); });
-  double worst = 0.0;
-  for (const MuIShearPoint& p : points) worst = std::fmax(worst, std::abs(p.relative_error));
+  const MuIShearPoint* worst = nullptr;  // the first NaN, else the largest error
+  for (const MuIShearPoint& p : points)
+    if (!worst || !(std::abs(p.relative_error) <= std::abs(worst->relative_error))) {
+      worst = &p;
+      if (std::isnan(p.relative_error)) break;
+    }
+  const double largest = worst ? std::abs(worst->relative_error) : 0.0;
   fmt::print("element-test: mu(I) simple shear at {} inertial number{}, largest |tau/p / mu(I) - 1| = {:.2e}, wrote {}\n",
-             points.size(), points.size() == 1 ? "" : "s", worst, out_file);
+             points.size(), points.size() == 1 ? "" : "s", largest, out_file);
+  // mu_2 = 1e6 or p = 1e8 Pa (the shipped strain) wrote tau/p up to 99% below mu(I) with exit code 0.
+  if (worst && !(largest <= kMuIShearTolerance))
+    throw instability_error(fmt::format(
+        "element-test: mu(I) simple shear: |tau/p / mu(I) - 1| = {:.3g} at I = {:.6g} (tau/p = {:.6g}, mu(I) = {:.6g}) is "
+        "above the tolerance {}: the sample had not reached steady flow (|d tau|/tau in its last increment: {:.3g}); the "
+        "CSV is kept in {} to look at; more path.increments or a larger path.strain_increment reach it (docs/mu-i.md "
+        "§5)",
+        largest, worst->inertial_number, worst->friction, worst->friction_analytic, kMuIShearTolerance,
+        worst->last_change, out_file));
 }
 
 void run_element_test_command(const std::string& spec_file, const std::string& out_file) {

@@ -9,6 +9,7 @@
 #include "talus/io/vtu_writer.hpp"
 #include "talus/particles/particle_migration.hpp"
 #include "talus/scene/scene_json.hpp"
+#include "talus/solver/dilation_check.hpp"
 #include "talus/solver/stability_guards.hpp"
 
 #include <fmt/core.h>
@@ -300,6 +301,8 @@ class RunLoop {
   EnergyGuard energy_guard_;
   FastestParticle fastest_particle() const;  // over every rank (collective)
   void warn_of_energy_growth(const EnergyBudget& e);
+  void check_particles_and_dilation();
+  bool dilation_warned_ = false;
   Snapshot snapshot_;
   ProgressLine progress_line_;
   SignalCatcher signals_;
@@ -450,9 +453,9 @@ bool RunLoop::step_and_write() {
                              solver_.step_count() - snapshot_.step >= scene_.guards.snapshot_interval);
   // What is written or kept as the last good state is checked in every field first (the solver
   // scans them only every few steps, stability_guards.hpp).
-  // (Solver::check_particles: one parallel region)
+  // (Solver::check_particles: one parallel region; it also looks for unbounded dilation)
   if (snapshot_due)
-    recording_.parallel_part(LoopRecording::Part::Snapshot, [&] { solver_.check_particles(); return true; }, 1);
+    recording_.parallel_part(LoopRecording::Part::Snapshot, [&] { check_particles_and_dilation(); return true; }, 1);
   if (frame_due) {
     write_frame();
     frame_schedule_.advance_past(t);
@@ -508,6 +511,18 @@ void RunLoop::warn_of_energy_growth(const EnergyBudget& e) {
        step_ended(solver_.step_count(), solver_.time()), e.total() - summary_.initial.total(), 100.0 * share,
        factor, fastest.label(scene_), fastest.x[0], fastest.x[1], fastest.x[2],
        std::sqrt(std::max(fastest.speed2, 0.0)));
+}
+
+// Solver::check_particles, and a granular particle dilating without bound, the separation rule being
+// off: a hunt's column loosened to V/V0 = 274 and its time step collapsed without a word. Said once,
+// where the check first finds one (every rank says its own: the check is per rank, and a collective for
+// a warning was not worth it).
+void RunLoop::check_particles_and_dilation() {
+  const std::string dilation = check_particle_fields_and_dilation(
+      solver_.particles(), scene_, solver_.step_count() - 1, solver_.time() - solver_.last_dt());
+  if (dilation_warned_ || dilation.empty()) return;
+  dilation_warned_ = true;
+  fmt::print(stderr, "talus: warning: {}\n", dilation);
 }
 
 bool RunLoop::take_snapshot() {

@@ -76,6 +76,27 @@ SmallVector elastic_held_strains(const Control& control, const Sym6& d_eps, cons
   return held.fullPivLu().solve(load);
 }
 
+/// The held strain increments of a purely volumetric increment (every normal strain equal to the driven
+/// one, no shear): the answer where the stress sits at the tension cut-off with no deviator, which
+/// Newton cannot find from the cut-off/cone corner (the corner's held stresses do not change along
+/// the deviator's length, so the tangent is singular there). Zero for a driven shear.
+SmallVector volumetric_held_strains(const Control& control, const Sym6& d_eps) {
+  SmallVector u = SmallVector::Zero(control.held_count);
+  if (control.driven < 3)
+    for (int a = 0; a < control.held_count; ++a)
+      if (control.held[a] < 3) u[a] = d_eps[control.driven];
+  return u;
+}
+
+/// The largest held strain increment, as a multiple of the driven one, that an increment's answer
+/// may have. Elastic, cone, apex and cut-off answers stay within a few times the driven increment
+/// (lateral over axial: nu for elasticity, at most 2 on the cone with psi <= phi, 1 at the cut-off).
+/// A Newton step that left this reach followed a tangent that was nearly singular (the corner
+/// above) and, at uniaxial extension onto a cut-off of 0, ended where the held strains were 1e17
+/// and the stress rounded to exactly 0: a "converged" row of nonsense whose size depended on the
+/// number of increments.
+constexpr double kHeldStrainReach = 100.0;
+
 }  // namespace
 
 const char* regime_name(DruckerPragerResult::Regime regime) {
@@ -151,8 +172,11 @@ std::vector<ElementTestPoint> run_element_test(const ElementTestSpec& spec) {
           std::max({stress_n.cwiseAbs().maxCoeff(), spec.pressure, model.initial_strength(),
                     spec.material.young * std::abs(d_eps[control.driven])});
       const double tolerance = 1e-12 * scale;
+      const double reach = kHeldStrainReach * std::abs(d_eps[control.driven]);
       SmallVector residual;
-      // Newton on the held strains from `start`; false when 50 iterations do not converge.
+      double farthest = 0.0;  // the largest held strain a refused answer had (for the message)
+      // Newton on the held strains from `start`; false when 50 iterations do not converge, or when
+      // the answer lies beyond the reach (each step is shortened to it; see kHeldStrainReach).
       auto solve_from = [&](const SmallVector& start) {
         unknown = start;
         evaluate(unknown, residual);
@@ -168,7 +192,10 @@ std::vector<ElementTestPoint> run_element_test(const ElementTestSpec& spec) {
             evaluate(u, shifted_residual);
             jacobian.col(j) = (shifted_residual - residual) / h;
           }
-          const SmallVector newton_step = jacobian.fullPivLu().solve(-residual);
+          SmallVector newton_step = jacobian.fullPivLu().solve(-residual);
+          const double length = newton_step.cwiseAbs().maxCoeff();
+          if (!(length <= reach)) newton_step *= reach / length;  // (a NaN step: zero, and no progress)
+          if (!newton_step.allFinite()) newton_step.setZero();
           // Backtracking: halve the step until the residual decreases (guards against kinks
           // between regimes inside one increment).
           double t = 1.0;
@@ -183,15 +210,25 @@ std::vector<ElementTestPoint> run_element_test(const ElementTestSpec& spec) {
           unknown = candidate;
           residual = candidate_residual;
         }
-        return true;
+        const double size = m > 0 ? unknown.cwiseAbs().maxCoeff() : 0.0;
+        if (size <= reach) return true;
+        farthest = std::max(farthest, size);
+        return false;
       };
       // The previous increment's held strains, which a monotonic path continues. At a reversal they
       // point the wrong way: an unloading step started from the loading's lateral expansion landed at
       // the apex, where the tangent is zero, and failed although its answer is elastic. Then the
-      // elastic answer, and zero.
+      // elastic answer, zero, and the volumetric answer of the cut-off (volumetric_held_strains).
       const SmallVector previous = unknown;
       if (!solve_from(previous) && !solve_from(elastic_held_strains(control, d_eps, spec.material)) &&
-          !solve_from(SmallVector::Zero(m))) {
+          !solve_from(SmallVector::Zero(m)) && !solve_from(volumetric_held_strains(control, d_eps))) {
+        if (farthest > 0.0)
+          throw instability_error(fmt::format(
+              "element test: mixed control found no bounded answer at increment {}: the held strains ran to {:.6g}, "
+              "more than {} times the driven strain increment {:.6g} (a nearly singular tangent, as at the tension "
+              "cut-off's corner); no row is trustworthy from here; more increments (path.increments = {}) make each "
+              "step smaller",
+              step, farthest, kHeldStrainReach, std::abs(d_eps[control.driven]), spec.increments));
         evaluate(previous, residual);
         throw instability_error(fmt::format(
             "element test: mixed control did not converge at increment {} (held-stress residual {:.6g} Pa from the "

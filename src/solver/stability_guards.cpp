@@ -1,4 +1,5 @@
 #include "talus/solver/stability_guards.hpp"
+#include "talus/solver/dilation_check.hpp"
 
 #include "talus/core/error.hpp"
 
@@ -6,6 +7,7 @@
 #include <span>
 
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -35,7 +37,34 @@ std::string where(const ParticleStore& P, std::size_t p) {
 
 }  // namespace
 
-void check_particle_fields(const ParticleStore& P, const Scene& scene, std::int64_t step, double time) {
+namespace {
+
+// V/V0 beyond which a particle counts as dilated without bound, per body: kDilationWarningRatio for the
+// granular bodies whose separation rule is off; infinity for the rest (never passed).
+std::vector<double> dilation_bounds(const Scene& scene) {
+  std::vector<double> bound(scene.bodies.size(), std::numeric_limits<double>::infinity());
+  for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
+    const MaterialSpec& m = scene.materials[scene.bodies[b].material];
+    const bool granular = m.model == MaterialModel::DruckerPrager || m.model == MaterialModel::MuI;
+    if (granular && !(m.granular.separation_volume_ratio > 0.0)) bound[b] = kDilationWarningRatio;
+  }
+  return bound;
+}
+
+std::string dilation_line(const ParticleStore& P, const Scene& scene, std::size_t p, double ratio, double seeded,
+                          std::int64_t step, double time) {
+  const MaterialSpec& m = scene.materials[scene.bodies[static_cast<std::size_t>(P.body[p])].material];
+  return fmt::format(
+      "{}: {} has dilated to {:.3g} times its seeded volume (density {:.3g} kg/m³, seeded at {:.6g}) with "
+      "materials.{}.separation_volume_ratio = 0 (off): nothing bounds a granular particle's dilation then, and its "
+      "falling wave speed and growing volume shrink the time step; a separation_volume_ratio (default 1.5) sets such "
+      "particles stress-free (docs/drucker-prager.md §7b)",
+      step_started(step, time), particle_label(P, scene, p), ratio, P.mass[p] / P.volume[p], seeded, m.name);
+}
+
+// check_particle_fields, and with `dilation` the first dilated particle's line (dilation_bounds).
+std::string scan_particle_fields(const ParticleStore& P, const Scene& scene, std::int64_t step, double time,
+                                 bool dilation) {
   const std::size_t n = P.size();
   // Finite values: x * 0 is NaN exactly when x is NaN or Inf; the slow search for the first bad
   // particle runs only when a scan fails. One parallel region scans every array in use and the volume
@@ -56,13 +85,19 @@ void check_particle_fields(const ParticleStore& P, const Scene& scene, std::int6
   std::vector<double> seeded_density(scene.bodies.size());
   for (std::size_t b = 0; b < scene.bodies.size(); ++b) seeded_density[b] = scene.materials[scene.bodies[b].material].density;
   const auto compressed = [&](std::size_t p) { return P.volume[p] * seeded_density[P.body[p]] < min_ratio * P.mass[p]; };
-  int inverted = 0, crushed = 0;
+  // and, asked, against kDilationWarningRatio times it where nothing else bounds it (a warning)
+  const std::vector<double> dilation_bound =
+      dilation ? dilation_bounds(scene) : std::vector<double>(scene.bodies.size(), std::numeric_limits<double>::infinity());
+  const auto dilated = [&](std::size_t p) {
+    return P.volume[p] * seeded_density[P.body[p]] > dilation_bound[P.body[p]] * P.mass[p];
+  };
+  int inverted = 0, crushed = 0, loosened = 0;
   // Eight probes, each summing every eighth element: one probe was a chain of dependent additions,
   // an element per addition's latency (the scan took a fifth of a default-flume step); eight
   // independent ones fill a vector register. Any NaN or Inf still makes its probe NaN.
   constexpr std::size_t kProbes = 8;
   const std::size_t groups = (n + kProbes - 1) / kProbes;
-#pragma omp parallel reduction(| : inverted, crushed)
+#pragma omp parallel reduction(| : inverted, crushed, loosened)
   {
     for (std::size_t a = 0; a < arrays.size(); ++a) {
       const double* data = arrays[a]->data();
@@ -87,6 +122,7 @@ void check_particle_fields(const ParticleStore& P, const Scene& scene, std::int6
     for (std::size_t p = 0; p < n; ++p) {
       inverted |= P.volume[p] > 0.0 ? 0 : 1;
       crushed |= compressed(p) ? 1 : 0;
+      loosened |= dilated(p) ? 1 : 0;
     }
   }
   for (std::size_t a = 0; a < arrays.size(); ++a) {
@@ -112,6 +148,24 @@ void check_particle_fields(const ParticleStore& P, const Scene& scene, std::int6
             "guards.min_volume_ratio = {} (density {:.3g} kg/m^3); {}",
             step_started(step, time), particle_label(P, scene, p), P.volume[p], ratio, min_ratio, P.mass[p] / P.volume[p], where(P, p)));
       }
+  if (loosened)
+    for (std::size_t p = 0; p < n; ++p)
+      if (dilated(p)) {
+        const double seeded = seeded_density[P.body[p]];
+        return dilation_line(P, scene, p, P.volume[p] * seeded / P.mass[p], seeded, step, time);
+      }
+  return {};
+}
+
+}  // namespace
+
+void check_particle_fields(const ParticleStore& P, const Scene& scene, std::int64_t step, double time) {
+  scan_particle_fields(P, scene, step, time, false);
+}
+
+std::string check_particle_fields_and_dilation(const ParticleStore& P, const Scene& scene, std::int64_t step,
+                                               double time) {
+  return scan_particle_fields(P, scene, step, time, true);
 }
 
 void check_step_displacement(const ParticleStore& P, const std::array<std::span<double>, 3>& displacement,

@@ -90,7 +90,8 @@ TEST_F(MuICli, BadElementTestParameterExitsTwoNamingTheKey) {
 
 // A spec whose total shear strain is below the elastic approach to mu(I_max) p (p = 100 MPa with the
 // shipped strain of 0.1: 15 needed) leaves the samples elastic and tau/p 99% low with every number
-// finite: the command warns, naming the keys; the shipped spec (0.00015 needed) gets no warning.
+// finite: the command warns, naming the keys, and, the error being above the tolerance 1e-10, exits 3
+// with the CSV kept (it exited 0); the shipped spec (0.00015 needed) gets no warning.
 TEST_F(MuICli, AStrainTooSmallToReachSteadyFlowIsWarnedAbout) {
   const std::string shipped = slurp(kInputs + "element_tests/mu_i_simple_shear.json");
   const std::string key = "\"pressure\": 1.0e3";
@@ -99,14 +100,42 @@ TEST_F(MuICli, AStrainTooSmallToReachSteadyFlowIsWarnedAbout) {
   stiff.replace(stiff.find(key), key.size(), "\"pressure\": 1.0e8");
   const fs::path csv = dir_ / "x.csv";
   const Result warned = run("element-test \"" + write("p1e8.json", stiff).string() + "\" --out \"" + csv.string() + "\"");
-  EXPECT_EQ(warned.exit_code, 0) << warned.err;
-  EXPECT_EQ(std::count(warned.err.begin(), warned.err.end(), '\n'), 1) << warned.err;
+  EXPECT_EQ(warned.exit_code, 3) << warned.err;
+  EXPECT_EQ(std::count(warned.err.begin(), warned.err.end(), '\n'), 2) << warned.err;
   EXPECT_NE(warned.err.find("talus: warning: path.increments x path.strain_increment = 0.1 is below the shear strain 15"),
             std::string::npos)
       << warned.err;
+  EXPECT_NE(warned.err.find("talus: error: element-test: mu(I) simple shear: |tau/p / mu(I) - 1| = 0.99"),
+            std::string::npos)
+      << warned.err;
+  EXPECT_NE(warned.err.find("is above the tolerance 1e-10: the sample had not reached steady flow"), std::string::npos)
+      << warned.err;
+  EXPECT_TRUE(fs::exists(csv));  // kept, and said so
+  EXPECT_NE(warned.err.find("the CSV is kept in " + csv.string()), std::string::npos) << warned.err;
   const Result quiet = run("element-test \"" + kInputs + "element_tests/mu_i_simple_shear.json\" --out \"" + csv.string() + "\"");
   EXPECT_EQ(quiet.exit_code, 0) << quiet.err;
   EXPECT_EQ(quiet.err, "");
+}
+
+// mu_2 = 1e6 (a hunt's): mu(I) p reaches 7.8e8 Pa, far beyond the elastic approach of the shipped
+// strain, and the approach contracts by mu'B / (1 + mu'B), nearly 1, a step: tau/p was written up to
+// 100% below mu(I) after the shortfall's warning, with exit code 0. Now exit 3, the CSV kept.
+TEST_F(MuICli, AnErrorAboveTheToleranceExitsThreeAndKeepsTheCsv) {
+  const std::string shipped = slurp(kInputs + "element_tests/mu_i_simple_shear.json");
+  const std::string key = "\"mu_2\": 0.6434683848584607";
+  ASSERT_NE(shipped.find(key), std::string::npos);
+  std::string steep = shipped;
+  steep.replace(steep.find(key), key.size(), "\"mu_2\": 1e6");
+  const fs::path csv = dir_ / "mu2.csv";
+  const Result r = run("element-test \"" + write("mu2.json", steep).string() + "\" --out \"" + csv.string() + "\"");
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 2) << r.err;
+  EXPECT_NE(r.err.find("talus: warning: path.increments x path.strain_increment = 0.1 is below"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("talus: error: element-test: mu(I) simple shear: |tau/p / mu(I) - 1| = "), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("above the tolerance 1e-10"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(csv));
 }
 
 // J2 squares the stress: at p = 1e-300 Pa the steady shear stress squared to zero and the CSV was

@@ -101,6 +101,28 @@ TEST(ElementTest, MixedControlHoldsLateralStressThroughEveryRegime) {
   EXPECT_NEAR(max_tension, 3.0 * p.tension_cutoff, 1e-9 * p.tension_cutoff);
 }
 
+// Uniaxial extension onto a tension cut-off of 0 (/tmp/hunt3/q_200.json): the answer is stress-free
+// with every normal strain equal to the axial one (the cut-off's flow is volumetric, and any deviator
+// would show in the held stresses). Newton from the cut-off/cone corner followed a nearly singular
+// tangent to held strains of 1e17..1e19, where the stress rounded to exactly 0, and the test wrote
+// eps_xx = 2.05e19 with exit 0; how far it went depended on the increments (right only at 20 000).
+TEST(ElementTest, UniaxialExtensionOntoAZeroCutoffIsStressFreeWhateverTheIncrements) {
+  DruckerPragerParameters p = material(10.0);
+  p.dilatancy_angle_deg = 0.0;
+  p.tension_cutoff = 0.0;
+  for (const int increments : {20, 200, 2000}) {
+    const auto pts = run_element_test(element_spec(ElementPath::UniaxialCompression, p, 0.0, {-0.02}, increments));
+    ASSERT_EQ(pts.size(), static_cast<std::size_t>(increments) + 1);
+    const ElementTestPoint& last = pts.back();
+    EXPECT_NEAR(last.strain[YY], 0.02, 1e-15) << increments;
+    EXPECT_NEAR(last.strain[XX], 0.02, 1e-12) << increments;
+    EXPECT_NEAR(last.strain[ZZ], 0.02, 1e-12) << increments;
+    EXPECT_LE(last.stress.cwiseAbs().maxCoeff(), 1e-9) << increments;
+    EXPECT_LT(last.equivalent_plastic_strain, 1e-3) << increments;
+    EXPECT_EQ(last.regime, Regime::TensionCutoff) << increments;
+  }
+}
+
 // A reversal: the first unloading step, started from the loading's lateral expansion, landed at
 // the apex (zero tangent) and the test stopped "did not converge at increment 51", although the
 // answer is near-elastic. It starts again from the elastic answer.

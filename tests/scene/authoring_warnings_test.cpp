@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 
 namespace talus {
@@ -106,6 +107,36 @@ TEST(AuthoringWarnings, ValuesThatLookLikeTheWrongUnitAreWarnedAbout) {
     EXPECT_EQ(warnings_with(s, "kg/m³ is"), 0) << name;
     EXPECT_EQ(warnings_with(s, "self-weight"), 0) << name;
   }
+}
+
+// A hunt's mistakes that no range refuses: a μ(I) solid fraction of 1 (density = grain_density) or 0.04
+// (density 100), gravity pointing up on a flat grid, and μ(I) on a flat grid tilted beyond atan mu_2,
+// where no steady flow exists. Each is one line; the shipped scenes get none of them.
+TEST(AuthoringWarnings, AMuIPackingGravityUpAndAnInclineBeyondMu2AreWarnedAbout) {
+  const Scene bagnold = shipped("inclined_flow_bagnold.json");  // glass beads, solid fraction 0.6, tan θ = 0.445
+  for (const char* what : {"solid fraction", "points up", "accelerates without end"})
+    EXPECT_EQ(warnings_with(bagnold, what), 0) << what;
+  Scene packed = bagnold;
+  packed.materials[0].density = 2450.0;
+  EXPECT_EQ(warnings_with(packed, "materials.beads: density / grain_density = 2450 / 2450 = 1, the packing's solid "
+                                  "fraction, is outside [0.5, 0.74]"),
+            1);
+  packed.materials[0].density = 100.0;
+  EXPECT_EQ(warnings_with(packed, "density / grain_density = 100 / 2450 = 0.0408"), 1);
+  packed.materials[0].density = 1250.0;  // 0.51
+  EXPECT_EQ(warnings_with(packed, "solid fraction"), 0);
+  Scene steep = bagnold;
+  const double g = steep.gravity.norm(), theta = std::atan(0.7);
+  steep.gravity = {g * std::sin(theta), 0.0, -g * std::cos(theta)};
+  EXPECT_EQ(warnings_with(steep, "tilts the flat grid by 34.99 degrees: tan θ = 0.7 is above materials.beads.mu_2 = "
+                                 "0.6435, the most friction μ(I) gives"),
+            1);
+  Scene up = shipped("benchmarks/sand_slide_incline.json");
+  up.gravity[2] = 9.81;
+  EXPECT_EQ(warnings_with(up, "gravity[2] = 9.81 > 0 on a flat grid points up"), 1);
+  for (const char* name : kShippedScenes)
+    for (const char* what : {"solid fraction", "points up", "accelerates without end"})
+      EXPECT_EQ(warnings_with(shipped(name), what), 0) << name << ": " << what;
 }
 
 // young = 5e3 Pa for a 5 m slab of density 1800: rho g H / E = 18 (the first-step warning, about the

@@ -626,6 +626,30 @@ class EnergyGuardDemo(unittest.TestCase):
         self.assertEqual(os.listdir(out), ["energy_guard_kink.png"])
 
 
+class ElementTestPlots(unittest.TestCase):
+    def test_the_csvs_go_beside_the_plots_not_into_the_build_tree(self):
+        # --csv-dir defaulted to element_tests/ next to --talus: build/element_tests, which a clean
+        # rebuild removes and which no one looks for beside docs/verification/*.png
+        work = tempfile.mkdtemp(prefix="talus_element_plots_")
+        try:
+            bin_dir, out = os.path.join(work, "build"), os.path.join(work, "out")
+            os.makedirs(bin_dir)
+            wrapper = os.path.join(bin_dir, "talus")  # a build tree of its own: the real program, called
+            with open(wrapper, "w") as f:
+                f.write(f'#!/bin/sh\nexec "{os.path.abspath(TALUS)}" "$@"\n')
+            os.chmod(wrapper, 0o755)
+            code, stdout, err = tool("plot_element_tests.py", "--talus", wrapper, "--out-dir", out)
+            self.assertEqual(code, 0, err)
+            self.assertFalse(os.path.exists(os.path.join(bin_dir, "element_tests")), os.listdir(bin_dir))
+            csvs = sorted(os.listdir(os.path.join(out, "element_tests")))
+            self.assertIn("fig13a_uniaxial_perfect.csv", csvs)
+            self.assertIn("fig13b_simple_shear_psi00.csv", csvs)
+            self.assertTrue(os.path.isfile(os.path.join(out, "dp_hardening.png")))
+            self.assertIn(f"(CSVs in {os.path.join(out, 'element_tests')})", stdout)
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+
+
 if __name__ == "__main__":
     if len(sys.argv) < 2:
         sys.exit("usage: plot_tools_test.py TALUS")
