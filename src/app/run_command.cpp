@@ -3,6 +3,7 @@
 #include "commands.hpp"
 #include "disk_estimate.hpp"
 #include "option_checks.hpp"
+#include "run_folder.hpp"
 #include "run_record.hpp"
 #include "talus/core/simd_dispatch.hpp"
 #include "talus/core/error.hpp"
@@ -286,11 +287,18 @@ void add_run_command(CLI::App& app) {
                               "in place; 30 into a file or pipe, where each is a new line of the log)"),
               0.1, 86400.0);
   auto restart = std::make_shared<std::string>();
-  refuse_empty(cmd->add_option("--restart", *restart,
-                               "Continue from a checkpoint (e.g. runs/<name>/checkpoint.h5) of this scene (only time.end, "
-                               "time.courant, time.max_steps and guards may differ); output goes to the checkpoint's "
-                               "folder unless --out is given"),
-               "give a checkpoint file, or leave --restart out for a fresh run");
+  CLI::Option* restart_option = refuse_empty(
+      cmd->add_option("--restart", *restart,
+                      "Continue from a checkpoint (e.g. runs/<name>/checkpoint.h5) of this scene (only time.end, "
+                      "time.courant, time.max_steps, guards, output.checkpoint_interval, description and comment may "
+                      "differ); output goes to the checkpoint's folder unless --out is given"),
+      "give a checkpoint file, or leave --restart out for a fresh run");
+  auto overwrite = std::make_shared<bool>(false);
+  cmd->add_flag("--overwrite", *overwrite,
+                "Start afresh in an output folder that holds an unfinished run (interrupted, unstable, failed or "
+                "killed) with its checkpoint.h5, deleting them (without it such a run is refused, naming the resume "
+                "command)")
+      ->excludes(restart_option);
   auto record_path = std::make_shared<std::string>();
   auto record_interval = std::make_shared<int>(37);  // prime: does not alias with sort_interval (20) or output cadences
   CLI::Option* record_work = refuse_empty(cmd->add_option("--record-work", *record_path,
@@ -337,18 +345,12 @@ void add_run_command(CLI::App& app) {
     std::vector<std::string> changed;  // the keys a restart may change that this scene changes
     if (!restart->empty()) {  // checked against the scene before anything is written
       Checkpoint checkpoint;
-      world.agree([&] { checkpoint = read_checkpoint(*restart, world); });  // (a rank may not see the file)
+      world.agree([&] {  // (a rank may not see the file)
+        require_checkpoint_file(*restart);
+        checkpoint = read_checkpoint(*restart, world);
+      });
       restore_checkpoint(solver, checkpoint, *restart);
-      changed = restart_changes(checkpoint, solver.scene());
-      if (world.root() && !changed.empty()) {
-        // (only another time step changes the bits of what is computed; another end clips the last step)
-        const bool steps_change = std::any_of(changed.begin(), changed.end(),
-                                              [](const std::string& c) { return c.rfind("time.courant:", 0) == 0; });
-        fmt::print("talus: restart with {} changed: {}; the run goes on with this scene's{}\n",
-                   changed.size() == 1 ? std::string("1 key") : fmt::format("{} keys", changed.size()),
-                   fmt::join(changed, "; "),
-                   steps_change ? " (another time.courant: other time steps, other results than without the change)" : "");
-      }
+      changed = restart_changes(checkpoint, solver.scene());  // (said once the restart is accepted, below)
       // Only the run's progress is kept: the checkpoint's copy of the particles (about 190 B a
       // particle of the whole scene, on every rank) was held to the run's end.
       resumed = checkpoint.run;
@@ -360,7 +362,7 @@ void add_run_command(CLI::App& app) {
     // Every rank sees the same folder and stops alike (rank 0 reports); --record-work is refused under mpirun.
     check_writable_folder(dir, "output folder");
     require_no_folder_in_place_of_an_output(dir);
-    if (!record_path->empty()) check_writable_file(*record_path, "--record-work");
+    if (!record_path->empty()) check_writable_file(*record_path, "--record-work", dir);
     // One run at a time in a folder: claimed before anything in it is cleared (rank 0 claims it for
     // the job and tells the others; driver/folder_lock.hpp).
     std::optional<FolderLock> lock;
@@ -372,11 +374,18 @@ void add_run_command(CLI::App& app) {
         refusal = e.what();
       }
     if (world.distributed() && !(refusal = world.broadcast(refusal)).empty()) throw input_error(refusal);
+    if (!resumed) world.agree([&] { require_no_unfinished_run(dir, *overwrite); });
     // Made (or cleared) here, before the run starts: a folder that cannot be used is an error every
     // rank meets alike (rank 0 prepares it and tells the others), said once, with nothing started.
     prepare_output_folder(dir, resumed ? &*resumed : nullptr, world);
-    if (resumed && world.root())
+    if (resumed && world.root()) {
+      if (const auto line = restart_changes_line(changed)) fmt::print("{}\n", *line);
       fmt::print("talus: restart from {} at step {}, t = {:.6g} s\n", *restart, solver.step_count(), solver.time());
+      if (const auto w = rewind_warning(dir, resumed_time, resumed->frame_times.size()); w && same_file(dir, checkpoint_folder(*restart))) {
+        std::fflush(stdout);
+        fmt::print(stderr, "talus: warning: {}\n", *w);
+      }
+    }
     const int threads = omp_get_max_threads();
     const DistributionStats start = solver.distribution();
     if (world.root())
@@ -561,6 +570,7 @@ void add_run_command(CLI::App& app) {
     if (resumed && !same_file(dir, checkpoint_folder(*restart)))
       fmt::print("talus: {}'s series and histories start at the checkpoint, t = {:.6g} s; the part before it is in {}\n",
                  dir, resumed_time, checkpoint_folder(*restart));
+    if (const auto note = older_checkpoint_note(dir, summary.time)) fmt::print("{}\n", *note);
     if (!summary.terrain_path.empty()) fmt::print("talus: terrain surface: {} (open it with the series)\n", summary.terrain_path);
     if (summary.runout) print_runout(*summary.runout, summary, solver.scene());
   });
