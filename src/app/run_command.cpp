@@ -319,6 +319,7 @@ void add_run_command(CLI::App& app) {
       "a step, with a checkpoint to resume from, and exit with code 75: for a batch job's time limit, less a "
       "margin for the checkpoint"));
   auto foreground_frames = std::make_shared<bool>(false);
+  cmd->footer(run_help_footer());
   cmd->add_flag("--foreground-frames", *foreground_frames,
                 "Write each frame before the next step starts (by default a frame's compression and file write "
                 "run on a thread of their own while the next steps run)");
@@ -332,12 +333,14 @@ void add_run_command(CLI::App& app) {
     if (world.distributed() && !record_path->empty())
       throw input_error("--record-work: the work recorder times one rank's threads; run it without mpirun");
     Scene scene = read_scene_file(*scene_path);  // validated before anything is written
-    if (world.root()) print_warnings(scene);
+    if (world.root()) print_warnings(scene, threads_warning(*threads));
     const MemoryEstimate memory = estimate_memory(scene);
     // a scene that cannot fit stops here, before anything is allocated (each rank checks its own
     // machine; one that refuses stops every rank)
     const MachineShare share = machine_share(world, *restart);
     world.agree([&] { require_memory_fits(scene, memory, share); });
+    if (world.root())
+      if (const auto w = memory_bound_warning(memory, share)) fmt::print(stderr, "talus: warning: {}\n", *w);
     std::string dir = out_dir->empty() ? "runs/" + scene.name : *out_dir;
     Solver solver(std::move(scene), world);
     std::optional<RunProgress> resumed;
@@ -580,6 +583,9 @@ void add_check_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("check", "Validate a scene file and print what a run would do (writes nothing)");
   auto scene_path = std::make_shared<std::string>();
   cmd->add_option("scene", *scene_path, "Scene file (JSON)")->required();
+  cmd->footer("The memory available is the smaller of MemAvailable and a cgroup's (container, batch job) limit; the "
+              "environment variable TALUS_MEMORY_LIMIT (bytes, or with a K/M/G/T suffix) sets it instead, e.g. a "
+              "share of a node for one run. A scene that does not fit is refused (exit code 2), as talus run refuses it.");
   cmd->callback([=]() {
     // Under mpirun every rank checks (an error is printed once, main.cpp); rank 0 alone prints.
     const Comm world = Comm::world();
@@ -598,6 +604,7 @@ void add_check_command(CLI::App& app) {
     const DiskEstimate disk = estimate_disk(scene, memory.particles, out_dir);
     std::vector<std::string> more;
     if (const auto w = disk_warning(disk, out_dir)) more.push_back(*w);
+    if (const auto w = memory_bound_warning(memory, share)) more.push_back(*w);
     const std::size_t warnings = print_warnings(scene, more);
     print_scene_summary(scene, memory, share, disk, out_dir);
     // (check said ok, and the run stopped at once: the default folder held this scene file, or

@@ -1,5 +1,7 @@
 #include "run_folder.hpp"
 
+#include "host_info.hpp"
+
 #include "talus/core/error.hpp"
 #include "talus/io/checkpoint.hpp"
 
@@ -137,6 +139,33 @@ std::optional<std::string> restart_changes_line(const std::vector<std::string>& 
                      changed.size() == 1 ? std::string("1 key") : fmt::format("{} keys", changed.size()),
                      fmt::join(changed, "; "),
                      steps_change ? " (another time.courant: other time steps, other results than without the change)" : "");
+}
+
+std::vector<std::string> threads_warning(int threads) {
+  const auto over = threads > 0 ? oversubscription(threads) : std::nullopt;
+  if (!over) return {};
+  return {fmt::format("--threads {}: {}: the threads take turns on the CPUs and wait for each other at every "
+                     "barrier, so the run is slower than on {} threads; give --threads {} or fewer",
+                     threads, *over, cpus_allowed(), cpus_allowed())};
+}
+
+std::string run_help_footer() {
+  return "Files written in the output folder (README.md, \"What a run writes\"):\n"
+         "  particles.pvd, frames/particles_NNNNNN.vtu (.pvtu and one piece per rank under mpirun)  the ParaView series\n"
+         "  energy.csv    the energy history        scene.json  the scene as run (resolved)\n"
+         "  run.json      the run's record: build, command, host, status (running, completed, interrupted, unstable, failed)\n"
+         "  checkpoint.h5 the state to resume from (output.checkpoint_interval, a signal, --stop-after, an instability;\n"
+         "                checkpoint_earlier.h5 the one before it after an instability)\n"
+         "  runout.csv, runout.json, deposit.csv  with diagnostics.runout;  terrain.vtu  on a terrain grid\n"
+         "A fresh run clears these files; one into a folder whose unfinished run left a checkpoint is refused unless\n"
+         "--overwrite is given.\n"
+         "Exit codes:\n"
+         "  0    the run completed (or stopped at time.max_steps, or every particle left the grid)\n"
+         "  2    bad input (scene, options, output folder, memory) or an I/O error, with one line on stderr\n"
+         "  3    a stability guard stopped the run; its last good state is written as a frame and a checkpoint\n"
+         "  4    an internal error\n"
+         "  75   stopped by --stop-after, with a checkpoint\n"
+         "  128+N  stopped by signal N (130 Ctrl-C, 143 SIGTERM, 138 SIGUSR1), with a checkpoint";
 }
 
 }  // namespace talus::app
