@@ -76,6 +76,21 @@ TEST(Cli, HelpNamesExitCodesFilesAndTheMemoryLimit) {
   }
 }
 
+// `talus check` takes run's --out and --threads (swap `run` for `check` on a command line): the disk
+// line names that folder, and more threads than CPUs are warned about, as `talus run --threads` is.
+TEST(Cli, CheckTakesRunsOutAndThreads) {
+  const fs::path dir = temp_dir("check_out");
+  const Result checked = run("check " + kInputs + "elastic_block_slide.json --out " + (dir / "mine").string() + " --threads 4096");
+  EXPECT_EQ(checked.exit_code, 0) << checked.output;
+  EXPECT_NE(checked.output.find("disk       "), std::string::npos) << checked.output;
+  EXPECT_NE(checked.output.find((dir / "mine").string()), std::string::npos) << checked.output;
+  EXPECT_NE(checked.output.find("talus: warning: --threads 4096: 4096 threads on the"), std::string::npos) << checked.output;
+  EXPECT_NE(checked.output.find("oversubscribed"), std::string::npos) << checked.output;
+  EXPECT_FALSE(fs::exists(dir / "mine"));
+  const Result plain = run("check " + kInputs + "elastic_block_slide.json --threads 1");
+  EXPECT_EQ(plain.output.find("oversubscribed"), std::string::npos) << plain.output;
+}
+
 // --version names the build (app/build_info.cpp): the commit of the source tree it was built from,
 // the compiler, and the vector paths; the bench's JSON records the same under "build".
 TEST(Cli, VersionNamesTheCommitAndTheVectorPaths) {

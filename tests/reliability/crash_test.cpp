@@ -327,6 +327,11 @@ TEST(Crash, AFreshRunIntoAnUnfinishedRunsFolderIsRefusedUnlessOverwrite) {
   EXPECT_NE(text.find("--overwrite"), std::string::npos) << text;
   EXPECT_EQ(test::read_text(out / "run.json"), record_text);
   EXPECT_EQ(test::read_text(out / "checkpoint.h5"), checkpoint_bytes);
+  // `talus check --out` says so too, and still ends with ok
+  const auto [checked, check_text] = run_captured("check " + ref.scene.string() + " --out " + out.string());
+  EXPECT_EQ(checked, 0) << check_text;
+  EXPECT_NE(check_text.find("note       talus run with this --out would stop: output folder " + out.string() + " holds an interrupted run"),
+            std::string::npos) << check_text;
   // --overwrite goes with a fresh run only
   const auto [both, both_text] = run_captured("run " + ref.scene.string() + " --out " + out.string() + " --overwrite --restart " +
                                               (out / "checkpoint.h5").string());
