@@ -87,7 +87,8 @@ def run_one(talus, scene, run_dir, threads, lock=None):
         f.write(text)
     if os.path.exists(done):
         os.remove(done)
-    cmd = [talus, "run", path, "--out", run_dir, "--threads", str(threads), "--quiet"]
+    # (--overwrite: an unfinished run there, with its checkpoint, is run again from the start)
+    cmd = [talus, "run", path, "--out", run_dir, "--overwrite", "--threads", str(threads), "--quiet"]
     if lock:  # a shared lock per run (not for the whole study) on a machine whose users time things
         cmd = ["flock", "-s", lock, *cmd]
     r = subprocess.run(cmd, capture_output=True, text=True)

@@ -149,7 +149,8 @@ def run_flume(talus, runs, name, cell, threads=1, scene_args=(), rerun=False):
             subprocess.run([sys.executable, os.path.join(ROOT, "tools", "make_flume_scene.py"), "--cell", str(cell),
                             *map(str, scene_args), "--name", name], check=True, stdout=f)
         t0 = time.perf_counter()
-        run_talus(talus, "run", scene, "--out", run_dir, threads=threads)
+        # (--overwrite: an unfinished run there, with its checkpoint, is run again from the start)
+        run_talus(talus, "run", scene, "--out", run_dir, "--overwrite", threads=threads)
         with open(wall_path, "w") as f:
             f.write(f"{time.perf_counter() - t0:.1f}\n")
     with open(os.path.join(run_dir, "runout.json")) as f:

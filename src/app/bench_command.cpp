@@ -357,9 +357,7 @@ void add_provenance(nlohmann::json& j) {
 /// A rate measured with more threads than this process has CPUs is the oversubscription's, not the
 /// machine's: said beside it (the JSON's host.cpus_allowed records it too).
 void note_oversubscription(int threads) {
-  if (threads > cpus_allowed())
-    fmt::print("  note: {} threads on the {} CPU{} this process may use: oversubscribed, the rate is not this machine's\n",
-               threads, cpus_allowed(), cpus_allowed() == 1 ? "" : "s");
+  if (const auto note = oversubscription(threads)) fmt::print("  note: {}, the rate is not this machine's\n", *note);
 }
 
 /// The update scene: the constitutive update alone, as BodyMaterials runs it per particle (objective

@@ -3,6 +3,7 @@
 #include "disk_estimate.hpp"
 #include "option_checks.hpp"
 #include "run_checks.hpp"
+#include "run_folder.hpp"
 #include "talus/core/comm.hpp"
 #include "talus/core/error.hpp"
 #include "talus/driver/run_outputs.hpp"
@@ -57,6 +58,16 @@ void add_check_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("check", "Validate a scene file and print what a run would do (writes nothing)");
   auto scene_path = std::make_shared<std::string>();
   cmd->add_option("scene", *scene_path, "Scene file (JSON)")->required();
+  // (taken as `talus run` takes them, so that `run` can be swapped for `check` on a command line)
+  auto out_dir = std::make_shared<std::string>();
+  auto threads = std::make_shared<int>(0);
+  refuse_empty(cmd->add_option("--out", *out_dir, "The output folder talus run would use (default: runs/<scene name>): "
+                                                  "the disk estimate and the folder's checks are of it"),
+               "give a folder, or leave --out out for runs/<scene name>");
+  check_range(cmd->add_option("--threads", *threads, "As talus run's: checked against the CPUs available"), 1, 4096);
+  cmd->footer("The memory available is the smaller of MemAvailable and a cgroup's (container, batch job) limit; the "
+              "environment variable TALUS_MEMORY_LIMIT (bytes, or with a K/M/G/T suffix) sets it instead, e.g. a "
+              "share of a node for one run. A scene that does not fit is refused (exit code 2), as talus run refuses it.");
   cmd->callback([=]() {
     // Under mpirun every rank checks (an error is printed once, main.cpp); rank 0 alone prints.
     const Comm world = Comm::world();
@@ -71,20 +82,23 @@ void add_check_command(CLI::App& app) {
     if (!world.root()) return;
     // (where `talus run` writes by default; --out names another folder) The disk's warning is
     // `talus run`'s (check said ok where the run warned of 215 GB of frames), with the scene's.
-    const std::string out_dir = "runs/" + scene.name;
-    const DiskEstimate disk = estimate_disk(scene, memory.particles, out_dir);
+    const std::string dir = out_dir->empty() ? "runs/" + scene.name : *out_dir;
+    const DiskEstimate disk = estimate_disk(scene, memory.particles, dir);
     std::vector<std::string> more;
-    if (const auto w = disk_warning(disk, out_dir)) more.push_back(*w);
+    if (const auto w = disk_warning(disk, dir)) more.push_back(*w);
+    if (const auto w = memory_bound_warning(memory, share)) more.push_back(*w);
+    for (const std::string& w : threads_warning(*threads)) more.push_back(w);
     const std::size_t warnings = print_warnings(scene, more);
-    print_scene_summary(scene, memory, share, disk, out_dir);
+    print_scene_summary(scene, memory, share, disk, dir);
     // (check said ok, and the run stopped at once: the default folder held this scene file, or
     // could not be made here)
     try {
-      require_outputs_spare_inputs(out_dir, *scene_path, scene, "", "");
-      require_no_folder_in_place_of_an_output(out_dir);
-      check_writable_folder(out_dir, "output folder");
+      require_outputs_spare_inputs(dir, *scene_path, scene, "", "");
+      require_no_folder_in_place_of_an_output(dir);
+      check_writable_folder(dir, "output folder");
+      require_no_unfinished_run(dir, false);
     } catch (const Error& e) {
-      fmt::print("note       talus run without --out would stop: {}\n", e.what());
+      fmt::print("note       talus run {} would stop: {}\n", out_dir->empty() ? "without --out" : "with this --out", e.what());
     }
     if (!world.distributed()) require_memory_fits(scene, memory, share);  // (under mpirun: checked above, on every rank)
     // (a bare "ok" last, on stdout, hid the warnings on stderr: it counts them)

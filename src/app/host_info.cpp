@@ -1,5 +1,7 @@
 #include "host_info.hpp"
 
+#include <fmt/core.h>
+
 #include <omp.h>
 #include <unistd.h>
 
@@ -22,6 +24,12 @@ std::string host_name() {
 }
 
 int cpus_allowed() { return omp_get_num_procs(); }
+
+std::optional<std::string> oversubscription(int threads) {
+  const int cpus = cpus_allowed();
+  if (threads <= cpus) return std::nullopt;
+  return fmt::format("{} threads on the {} CPU{} this process may use: oversubscribed", threads, cpus, cpus == 1 ? "" : "s");
+}
 
 nlohmann::ordered_json host_json() {
   return {{"name", host_name()},

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <ctime>
+#include <optional>
 #include <string>
 
 namespace talus::app {
@@ -15,6 +16,9 @@ std::string cpu_model();
 std::string host_name();
 /// The CPUs this process may run on: fewer than the host's under mpirun's binding or taskset.
 int cpus_allowed();
+/// More threads than this process has CPUs: "8 threads on the 2 CPUs this process may use:
+/// oversubscribed" (the bench's note and the run's warning say it), or nothing.
+std::optional<std::string> oversubscription(int threads);
 /// The host as a figure's record names it (run.json and the bench's JSON): name, CPU model, logical
 /// CPUs online, and those this process may run on.
 nlohmann::ordered_json host_json();

@@ -27,6 +27,11 @@ std::string parse_error_line(CLI::App& app, const CLI::ParseError& e) {
   const std::vector<CLI::App*> given = app.get_subcommands();  // require_subcommand(1): at most one
   if (!given.empty()) {
     const std::string name = given.front()->get_name();
+    // (`talus run --version` said "scene is required"; `talus run s.json --version`, "has no option")
+    const std::vector<std::string>& words = talus::app::command_line();
+    if (words.size() > 1 && std::find(words.begin() + 1, words.end(), "--version") != words.end() &&
+        !given.front()->get_option_no_throw("--version"))
+      return fmt::format("--version belongs to talus itself, not to talus {}: use talus --version", name);
     // An option before the command (`talus --threads 2 run scene.json`): CLI11 left it to the
     // program and listed its words backwards ("not expected: 2 --threads"), or reported a later
     // error (`talus --bogus check` said "scene is required"). Every option belongs to a command.

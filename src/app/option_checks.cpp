@@ -9,11 +9,18 @@
 
 namespace talus::app {
 
-void check_writable_file(const std::string& path, std::string_view option) {
+void check_writable_file(const std::string& path, std::string_view option, const std::string& made_folder) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (fs::is_directory(path, ec)) throw input_error(fmt::format("{} {}: is a folder, not a file", option, path));
   const fs::path parent = fs::path(path).parent_path().empty() ? fs::path(".") : fs::path(path).parent_path();
+  // (`talus run s.json --out new --record-work new/work.json` was refused: "the folder new does not exist")
+  const auto normal = [](const fs::path& p) {
+    std::error_code e;
+    fs::path n = fs::weakly_canonical(fs::absolute(p, e), e).lexically_normal();
+    return n.has_filename() || !n.has_relative_path() ? n : n.parent_path();  // ("new/" is "new")
+  };
+  if (!made_folder.empty() && !fs::exists(made_folder, ec) && normal(parent) == normal(made_folder)) return;
   if (!fs::is_directory(parent, ec))
     throw input_error(fs::exists(parent, ec)
                           ? fmt::format("{} {}: cannot write there: {} is a file, not a folder", option, path, parent.string())

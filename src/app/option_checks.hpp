@@ -71,7 +71,9 @@ inline CLI::Option* refuse_empty(CLI::Option* option, const std::string& instead
 /// Refuses, before any work, an output file that cannot be written: its folder missing or not
 /// writable, or the path itself a folder. `option` names the option in the message ("--json").
 /// A command that learns this only when it writes has done all its work for nothing.
-void check_writable_file(const std::string& path, std::string_view option);
+/// `made_folder`, when given, is a folder the command makes itself before it writes the file (a
+/// run's --out, checked with check_writable_folder): a file in it is accepted while it is not there yet.
+void check_writable_file(const std::string& path, std::string_view option, const std::string& made_folder = {});
 
 /// Refuses, before any work, an output folder that cannot be made or written: the nearest part of
 /// its path that exists must be a writable folder (`--out results.csv/run` or a read-only tree

@@ -3,6 +3,7 @@
 #include "disk_estimate.hpp"
 #include "option_checks.hpp"
 #include "run_checks.hpp"
+#include "run_folder.hpp"
 #include "run_record.hpp"
 #include "talus/core/simd_dispatch.hpp"
 #include "talus/core/error.hpp"
@@ -56,6 +57,7 @@ struct RunCommandOptions {
   int record_interval = 37;  // prime: does not alias with sort_interval (20) or output cadences
   double stop_after = 0.0;
   bool foreground_frames = false;
+  bool overwrite = false;  // start afresh in a folder that holds an unfinished run
 };
 
 // The end-of-run lines of a scene with runout diagnostics (docs/flume.md).
@@ -177,18 +179,12 @@ struct Resumed {
 /// scene before anything is written; rank 0 names the keys the scene changes.
 Resumed restore_for_run(Solver& solver, const std::string& restart, const Comm& world) {
   Checkpoint checkpoint;
-  world.agree([&] { checkpoint = read_checkpoint(restart, world); });  // (a rank may not see the file)
+  world.agree([&] {  // (a rank may not see the file)
+    require_checkpoint_file(restart);
+    checkpoint = read_checkpoint(restart, world);
+  });
   restore_checkpoint(solver, checkpoint, restart);
-  std::vector<std::string> changed = restart_changes(checkpoint, solver.scene());
-  if (world.root() && !changed.empty()) {
-    // (only another time step changes the bits of what is computed; another end clips the last step)
-    const bool steps_change = std::any_of(changed.begin(), changed.end(),
-                                          [](const std::string& c) { return c.rfind("time.courant:", 0) == 0; });
-    fmt::print("talus: restart with {} changed: {}; the run goes on with this scene's{}\n",
-               changed.size() == 1 ? std::string("1 key") : fmt::format("{} keys", changed.size()),
-               fmt::join(changed, "; "),
-               steps_change ? " (another time.courant: other time steps, other results than without the change)" : "");
-  }
+  std::vector<std::string> changed = restart_changes(checkpoint, solver.scene());  // (said once accepted: the banner)
   return Resumed{checkpoint.run, checkpoint.solver.time, std::move(changed)};
 }
 
@@ -199,7 +195,7 @@ void check_output_folder(const std::string& dir, const RunCommandOptions& o, con
   // Every rank sees the same folder and stops alike (rank 0 reports); --record-work is refused under mpirun.
   check_writable_folder(dir, "output folder");
   require_no_folder_in_place_of_an_output(dir);
-  if (!o.record_path.empty()) check_writable_file(o.record_path, "--record-work");
+  if (!o.record_path.empty()) check_writable_file(o.record_path, "--record-work", dir);
 }
 
 /// One run at a time in a folder: claimed into `lock` before anything in it is cleared (rank 0
@@ -219,9 +215,13 @@ void claim_output_folder(const std::string& dir, const Comm& world, std::optiona
 /// the notes and warnings on it.
 void print_start_banner(const Solver& solver, std::int64_t particles, const MemoryEstimate& memory,
                         const MachineShare& share, const std::string& dir, const std::string& restart,
-                        const Comm& world) {
-  if (!restart.empty() && world.root())
+                        const Resumed* resumed, const Comm& world) {
+  if (resumed && world.root()) {
+    if (const auto line = restart_changes_line(resumed->changed)) fmt::print("{}\n", *line);
     fmt::print("talus: restart from {} at step {}, t = {:.6g} s\n", restart, solver.step_count(), solver.time());
+    if (same_file(dir, checkpoint_folder(restart)))
+      if (const auto w = rewind_warning(dir, resumed->time, resumed->progress.frame_times.size())) warn("{}", *w);
+  }
   const int threads = omp_get_max_threads();
   if (world.root())
     fmt::print("talus: {} particles, {}{} thread{}, {} kernels, about {} of memory{}, output in {}\n", particles,
@@ -411,6 +411,7 @@ void print_run_report(const Solver& solver, const RunSummary& summary, const Run
   if (resumed && !same_file(dir, checkpoint_folder(restart)))
     fmt::print("talus: {}'s series and histories start at the checkpoint, t = {:.6g} s; the part before it is in {}\n",
                dir, resumed->time, checkpoint_folder(restart));
+  if (const auto note = older_checkpoint_note(dir, summary.time)) fmt::print("{}\n", *note);
   if (!summary.terrain_path.empty()) fmt::print("talus: terrain surface: {} (open it with the series)\n", summary.terrain_path);
   if (summary.runout) print_runout(*summary.runout, summary, solver.scene());
 }
@@ -425,12 +426,14 @@ void run_command(const RunCommandOptions& o, const std::string& isa) {
   if (world.distributed() && !o.record_path.empty())
     throw input_error("--record-work: the work recorder times one rank's threads; run it without mpirun");
   Scene scene = read_scene_file(o.scene_path);  // validated before anything is written
-  if (world.root()) print_warnings(scene);
+  if (world.root()) print_warnings(scene, threads_warning(o.threads));
   const MemoryEstimate memory = estimate_memory(scene);
   // a scene that cannot fit stops here, before anything is allocated (each rank checks its own
   // machine; one that refuses stops every rank)
   const MachineShare share = machine_share(world, o.restart);
   world.agree([&] { require_memory_fits(scene, memory, share); });
+  if (world.root())
+    if (const auto w = memory_bound_warning(memory, share)) warn("{}", *w);
   std::string dir = o.out_dir.empty() ? "runs/" + scene.name : o.out_dir;
   Solver solver(std::move(scene), world);
   std::optional<Resumed> resumed;
@@ -441,12 +444,13 @@ void run_command(const RunCommandOptions& o, const std::string& isa) {
   check_output_folder(dir, o, solver.scene(), resumed.has_value());
   std::optional<FolderLock> lock;
   claim_output_folder(dir, world, lock);
+  if (!resumed) world.agree([&] { require_no_unfinished_run(dir, o.overwrite); });
   // Made (or cleared) here, before the run starts: a folder that cannot be used is an error every
   // rank meets alike (rank 0 prepares it and tells the others), said once, with nothing started.
   const RunProgress* resume = resumed ? &resumed->progress : nullptr;
   prepare_output_folder(dir, resume, world);
   const DistributionStats start = solver.distribution();
-  print_start_banner(solver, start.particles, memory, share, dir, o.restart, world);
+  print_start_banner(solver, start.particles, memory, share, dir, o.restart, resumed ? &*resumed : nullptr, world);
   RunOptions options = run_options(o, dir, started, resume);
   std::unique_ptr<WorkRecorder> recorder;
   if (!o.record_path.empty()) {
@@ -493,11 +497,17 @@ void add_run_command(CLI::App& app) {
                               "Seconds between progress lines (default: 2 on a terminal, where the line is rewritten "
                               "in place; 30 into a file or pipe, where each is a new line of the log)"),
               0.1, 86400.0);
-  refuse_empty(cmd->add_option("--restart", o->restart,
-                               "Continue from a checkpoint (e.g. runs/<name>/checkpoint.h5) of this scene (only time.end, "
-                               "time.courant, time.max_steps and guards may differ); output goes to the checkpoint's "
-                               "folder unless --out is given"),
-               "give a checkpoint file, or leave --restart out for a fresh run");
+  CLI::Option* restart_option = refuse_empty(
+      cmd->add_option("--restart", o->restart,
+                      "Continue from a checkpoint (e.g. runs/<name>/checkpoint.h5) of this scene (only time.end, "
+                      "time.courant, time.max_steps, guards, output.checkpoint_interval, description and comment may "
+                      "differ); output goes to the checkpoint's folder unless --out is given"),
+      "give a checkpoint file, or leave --restart out for a fresh run");
+  cmd->add_flag("--overwrite", o->overwrite,
+                "Start afresh in an output folder that holds an unfinished run (interrupted, unstable, failed or "
+                "killed) with its checkpoint.h5, deleting them (without it such a run is refused, naming the resume "
+                "command)")
+      ->excludes(restart_option);
   CLI::Option* record_work = refuse_empty(cmd->add_option("--record-work", o->record_path,
                                "Record the work of every block and parallel region of every --record-interval-th step, "
                                "as JSON (tools/scaling_model.py, docs/performance.md \"Scaling\"); a record keeps at "
@@ -514,6 +524,7 @@ void add_run_command(CLI::App& app) {
       "Stop once the run has taken this long (wall clock from its start: 3h50m, 90m, 5400s, ...), at the end of "
       "a step, with a checkpoint to resume from, and exit with code 75: for a batch job's time limit, less a "
       "margin for the checkpoint"));
+  cmd->footer(run_help_footer());
   cmd->add_flag("--foreground-frames", o->foreground_frames,
                 "Write each frame before the next step starts (by default a frame's compression and file write "
                 "run on a thread of their own while the next steps run)");

@@ -12,6 +12,7 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <unistd.h>
 #include <limits>
 #include <memory>
 #include <set>
@@ -192,6 +193,21 @@ nlohmann::json changeable_part(const nlohmann::json& scene, bool keep) {
   static const char* const kTimeKeys[] = {"end", "courant", "max_steps"};
   nlohmann::json part = keep ? nlohmann::json::object() : scene;
   if (!scene.is_object()) return part;
+  // The scene's notes, and how often checkpoints are written (a completed run without periodic
+  // checkpoints could never be extended: the interval it would need was a change refused)
+  for (const char* key : {"description", "comment"})
+    if (scene.contains(key)) {
+      if (keep)
+        part[key] = scene[key];
+      else
+        part.erase(key);
+    }
+  if (auto o = scene.find("output"); o != scene.end() && o->is_object() && o->contains("checkpoint_interval")) {
+    if (keep)
+      part["output"]["checkpoint_interval"] = (*o)["checkpoint_interval"];
+    else
+      part["output"].erase("checkpoint_interval");
+  }
   if (auto t = scene.find("time"); t != scene.end() && t->is_object())
     for (const char* key : kTimeKeys) {
       if (!t->contains(key)) continue;
@@ -404,12 +420,34 @@ int checkpoint_ranks(const std::string& path) {
   }
 }
 
+std::optional<std::pair<double, std::int64_t>> checkpoint_time_and_step(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return std::nullopt;
+  try {
+    H5::Exception::dontPrint();
+    H5::H5File file(path, H5F_ACC_RDONLY);
+    H5::Group s = file.openGroup("/solver");
+    return std::make_pair(read_attribute<double>(s, "time"), read_attribute<std::int64_t>(s, "step"));
+  } catch (const H5::Exception&) {
+    return std::nullopt;
+  }
+}
+
 Checkpoint read_checkpoint(const std::string& path, const Comm& comm) {
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw input_error(fmt::format("cannot open checkpoint {}", path));
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw input_error(fmt::format("cannot open checkpoint {}: {}", path,
+                                  !std::filesystem::exists(path, ec)       ? "no such file"
+                                  : std::filesystem::is_directory(path, ec) ? "it is a folder, not a file"
+                                                                            : "not a regular file"));
   Checkpoint c;
   try {
     H5::Exception::dontPrint();
+    // (a file of another kind said "is not readable: H5Fopen failed")
+    if (::access(path.c_str(), R_OK) != 0)
+      throw input_error(fmt::format("cannot open checkpoint {}: no read permission", path));
+    if (H5Fis_hdf5(path.c_str()) <= 0)
+      throw input_error(fmt::format("checkpoint {} is not an HDF5 file (a talus checkpoint is one: runs/<name>/checkpoint.h5)", path));
     H5::H5File file(path, H5F_ACC_RDONLY);
     H5::Group root = file.openGroup("/");
     if (!root.attrExists("format") || read_string_attribute(root, "format") != kFormat)
@@ -569,7 +607,7 @@ ParticleStore checked_particles(const Solver& solver, const Checkpoint& c, const
     }
     if (!diff.empty()) throw input_error(fmt::format(
         "checkpoint {} belongs to another scene (\"{}\", hash {}; this scene \"{}\" hashes to {}){}: a restart needs "
-        "the scene the checkpoint was written with (only time.end, time.courant, time.max_steps and guards.* may change)",
+        "the scene the checkpoint was written with (only time.end, time.courant, time.max_steps, guards.*, output.checkpoint_interval, description and comment may change)",
         path, c.scene_name, c.scene_hash, solver.scene().name, hash, diff == "?" ? "" : ", first difference at " + diff));
   }
   const std::size_t n = c.id.size();

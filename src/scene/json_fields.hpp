@@ -103,12 +103,12 @@ class ObjectReader {
   }
 
   Vec3 vec3(const std::string& key, double lo = -std::numeric_limits<double>::max(),
-            double hi = std::numeric_limits<double>::max()) {
+            double hi = std::numeric_limits<double>::max(), bool open_lo = false) {
     const Json& j = raw(key);
     if (!j.is_array() || j.size() != 3)
       throw input_error(fmt::format("{} must be an array of 3 numbers, got {}", key_path(key), j.dump()));
     Vec3 v;
-    for (int d = 0; d < 3; ++d) v[d] = check_number(j[d], fmt::format("{}[{}]", key_path(key), d), lo, hi, false, false);
+    for (int d = 0; d < 3; ++d) v[d] = check_number(j[d], fmt::format("{}[{}]", key_path(key), d), lo, hi, open_lo, false);
     return v;
   }
 
@@ -154,7 +154,11 @@ class ObjectReader {
 
   static double check_number(const Json& j, const std::string& path, double lo, double hi, bool open_lo, bool open_hi) {
     const auto range = interval(lo, hi, open_lo, open_hi);
-    if (!j.is_number()) throw input_error(fmt::format("{} must be a number in {}, got {}", path, range, j.dump()));
+    // ("must be a number in (-inf, inf)" for a key with no range: a finite number is what it takes)
+    const bool unbounded = lo <= -kUnbounded && hi >= kUnbounded;
+    if (!j.is_number())
+      throw input_error(fmt::format("{} must be {}, got {}", path, unbounded ? "a finite number" : "a number in " + range,
+                                    j.dump()));
     const double v = j.get<double>();
     const bool ok = std::isfinite(v) && (open_lo ? v > lo : v >= lo) && (open_hi ? v < hi : v <= hi);
     // young = 1e308 was refused as "outside (0, inf)": say which limit it broke.
@@ -323,6 +327,14 @@ inline Json parse_json(const std::string& text, const std::string& source) {
         const auto column = where - (line_start == std::string::npos ? 0 : line_start + 1) + 1;
         what += fmt::format(" at line {}, column {} (beyond the largest double, 1.8e308)", line, column);
       }
+    }
+    // A comment (`// ...`, `/* ... */`), as in JSONC or a C++ habit: said so, with where notes go.
+    if (const auto* parse = dynamic_cast<const Json::parse_error*>(&e); parse && parse->byte >= 1) {
+      const std::size_t at = std::min<std::size_t>(parse->byte - 1, text.size());
+      const std::size_t slash = text.find('/', at == 0 ? 0 : at - 1);
+      if (slash != std::string::npos && slash <= at && slash + 1 < text.size() &&
+          (text[slash + 1] == '/' || text[slash + 1] == '*'))
+        what += "; JSON has no comments: put notes in a \"comment\" key (any value, ignored)";
     }
     throw input_error(fmt::format("{}: malformed JSON: {}", source, what));
   }

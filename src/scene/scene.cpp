@@ -8,6 +8,7 @@
 #include "talus/shape/linear.hpp"
 
 #include "terrain_warnings.hpp"
+#include "usage_warnings.hpp"
 
 #include <fmt/core.h>
 
@@ -339,6 +340,7 @@ std::vector<std::string> scene_warnings(const Scene& scene) {
         radius, kMlsStableRadiusFactor));
   for (std::string& w : seeding_warnings(scene.grid, scene.bodies, body_label(scene))) warnings.push_back(std::move(w));
   for (std::string& w : terrain_warnings(scene.grid, scene.courant)) warnings.push_back(std::move(w));
+  for (std::string& w : usage_warnings(scene)) warnings.push_back(std::move(w));
   // On a terrain grid z- is the bed itself, not a face below it: open, it removes whatever settles
   // on the ground (a slide fell through it whole, and only runout.json's outflow share told).
   if (scene.grid.has_terrain() && scene.walls[2][0].type == WallType::Open)

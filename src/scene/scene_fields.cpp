@@ -115,7 +115,7 @@ Table<SceneDraft> make_grid_table() {
           {{"type", "array"}, {"items", {{"type", "number"}, {"exclusiveMinimum", 0}}}, {"minItems", 3}, {"maxItems", 3}},
           [](ObjectReader& r, SceneDraft& d) {
             GridGeometry& g = d.scene.grid;
-            const Vec3 size = r.vec3("size", 0.0, kHuge);
+            const Vec3 size = r.vec3("size", 0.0, kHuge, /*open_lo=*/true);  // (0 was refused as no multiple, after "[0, inf)")
             for (int a = 0; a < 3; ++a) {
               const double n = size[a] / g.h;
               // The limit first: past about 9.2e18 cells llround has no result (a cell_size of 1e-20 was
@@ -675,6 +675,11 @@ WallSpec read_wall(const Json& j, const std::string& path) {
   r.refuse_unknown({"type", "friction_coefficient"});
   w.type = wall_type(r.string("type"), r.key_path("type"));
   if (w.type == WallType::Friction) w.friction_coefficient = r.number("friction_coefficient", 0.0, 100.0);
+  // (finish() said only "unknown key ...friction_coefficient (keys read here: type)")
+  if (w.type != WallType::Friction && r.has("friction_coefficient"))
+    throw input_error(fmt::format("{} belongs to \"type\": \"friction\" faces; this face is \"{}\": make it "
+                                  "\"friction\", or leave friction_coefficient out",
+                                  r.key_path("friction_coefficient"), r.string("type")));
   r.finish();
   return w;
 }
@@ -901,12 +906,18 @@ Field<SceneDraft> entries(Field<SceneDraft> f, const Table<M>& table, const std:
 Field<SceneDraft> materials_field() {
   const Table<MaterialSpec>& materials = material_table();
   Field<SceneDraft> f = custom<SceneDraft>(
-      "materials", "object", "required", "at least one", "the materials, by name",
-      {{"type", "object"}, {"minProperties", 1}, {"additionalProperties", schema_of(materials)}},
+      "materials", "object", "required", "at least one; names not empty", "the materials, by name",
+      {{"type", "object"},
+       {"minProperties", 1},
+       {"propertyNames", {{"minLength", 1}}},
+       {"additionalProperties", schema_of(materials)}},
       [](ObjectReader& r, SceneDraft& d) {
         ObjectReader mats = r.object("materials");
         const Json& mj = r.raw("materials");
         for (auto it = mj.begin(); it != mj.end(); ++it) {
+          // (a body's "material": "" then named it, and messages said materials. for its keys)
+          if (it.key().empty())
+            throw input_error("materials has a material named \"\": give it a name (bodies refer to it by that name)");
           mats.allow(it.key());
           d.material_index[it.key()] = static_cast<int>(d.scene.materials.size());
           MaterialSpec m;

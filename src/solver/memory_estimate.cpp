@@ -292,6 +292,18 @@ void require_memory_fits(const Scene& scene, const MemoryEstimate& e, const Mach
       share.ranks <= 1 ? "a machine with more memory" : "more machines or machines with more memory"));
 }
 
+std::optional<std::string> memory_bound_warning(const MemoryEstimate& e, const MachineShare& share) {
+  if (share.ranks > 1 || e.grid_bytes_bound <= e.grid_bytes) return std::nullopt;
+  const std::optional<std::size_t> available = available_memory();
+  const std::size_t bound = e.particle_bytes + e.grid_bytes_bound;
+  if (!available || bound <= *available || e.total() > *available) return std::nullopt;
+  return fmt::format(
+      "memory: about {} at the start, but up to {} if the flow covers the whole grid, more than the {} available{}: a "
+      "flow that spreads over the grid may run out of memory; a smaller grid or a larger grid.cell_size keeps it within",
+      format_bytes(double(e.total())), format_bytes(double(bound)), format_bytes(double(*available)),
+      std::getenv("TALUS_MEMORY_LIMIT") ? " (TALUS_MEMORY_LIMIT)" : "");
+}
+
 std::string format_bytes(double bytes) {
   if (bytes >= 1e12) return fmt::format("{:.2f} TB", bytes / 1e12);
   if (bytes >= 1e9) return fmt::format("{:.2f} GB", bytes / 1e9);

@@ -57,6 +57,40 @@ TEST(Cli, HelpAndVersion) {
   EXPECT_EQ(extra.output, "talus: error: --version takes nothing else; got 'extra' (see talus --help)\n");
 }
 
+// What a first-day user looked for in --help: the exit codes and files of a run, what sets the memory
+// check's limit; and `talus run --version`, which answered "scene is required".
+TEST(Cli, HelpNamesExitCodesFilesAndTheMemoryLimit) {
+  const Result run_help = run("run --help");
+  EXPECT_EQ(run_help.exit_code, 0);
+  for (const char* line : {"Exit codes:", "  75   stopped by --stop-after", "  128+N  stopped by signal N", "  3    a stability guard",
+                           "run.json", "checkpoint.h5", "energy.csv", "--overwrite"})
+    EXPECT_NE(run_help.output.find(line), std::string::npos) << line << "\n" << run_help.output;
+  const Result check_help = run("check --help");
+  EXPECT_EQ(check_help.exit_code, 0);
+  EXPECT_NE(check_help.output.find("TALUS_MEMORY_LIMIT"), std::string::npos) << check_help.output;
+  for (const char* args : {"run --version", "run scene.json --version", "check --version"}) {
+    const Result version = run(args);
+    EXPECT_EQ(version.exit_code, 2) << args;
+    EXPECT_NE(version.output.find("--version belongs to talus itself"), std::string::npos) << args << ": " << version.output;
+    EXPECT_NE(version.output.find("use talus --version"), std::string::npos) << version.output;
+  }
+}
+
+// `talus check` takes run's --out and --threads (swap `run` for `check` on a command line): the disk
+// line names that folder, and more threads than CPUs are warned about, as `talus run --threads` is.
+TEST(Cli, CheckTakesRunsOutAndThreads) {
+  const fs::path dir = temp_dir("check_out");
+  const Result checked = run("check " + kInputs + "elastic_block_slide.json --out " + (dir / "mine").string() + " --threads 4096");
+  EXPECT_EQ(checked.exit_code, 0) << checked.output;
+  EXPECT_NE(checked.output.find("disk       "), std::string::npos) << checked.output;
+  EXPECT_NE(checked.output.find((dir / "mine").string()), std::string::npos) << checked.output;
+  EXPECT_NE(checked.output.find("talus: warning: --threads 4096: 4096 threads on the"), std::string::npos) << checked.output;
+  EXPECT_NE(checked.output.find("oversubscribed"), std::string::npos) << checked.output;
+  EXPECT_FALSE(fs::exists(dir / "mine"));
+  const Result plain = run("check " + kInputs + "elastic_block_slide.json --threads 1");
+  EXPECT_EQ(plain.output.find("oversubscribed"), std::string::npos) << plain.output;
+}
+
 // --version names the build (app/build_info.cpp): the commit of the source tree it was built from,
 // the compiler, and the vector paths; the bench's JSON records the same under "build".
 TEST(Cli, VersionNamesTheCommitAndTheVectorPaths) {

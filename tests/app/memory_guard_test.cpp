@@ -145,6 +145,33 @@ TEST(MemoryGuard, EstimateCountsTheBookkeepingOfAHugeGrid) {
   fs::remove_all(dir);
 }
 
+// A start that fits, and a grid whose whole would not: `talus check` printed a plain "ok" beside
+// "up to 79.74 GB if the flow covers the whole grid; 19.98 GB available". It warns now, as the run does.
+TEST(MemoryGuard, AGridWhoseWholeWouldNotFitIsWarnedAbout) {
+  const fs::path dir = temp_dir("grid_bound");
+  std::ofstream(dir / "long.json") << R"({ "name": "g", "grid": { "origin": [0, 0, 0], "size": [300, 1.0, 1.0], "cell_size": 0.01 },
+      "time": { "end": 1.0, "max_steps": 2 },
+      "materials": { "sand": { "model": "drucker_prager", "density": 1600, "young": 2e6, "poisson": 0.3,
+                               "friction_angle": 30, "cohesion": 10 } },
+      "bodies": [ { "name": "column", "material": "sand", "box": { "min": [0, 0, 0], "max": [0.2, 0.2, 0.2] } } ],
+      "output": { "frame_interval": 0 } })";
+  const std::string scene = (dir / "long.json").string();
+  const talus::MemoryEstimate e = talus::estimate_memory(talus::read_scene_file(scene));
+  const double bound = double(e.particle_bytes + e.grid_bytes_bound);
+  ASSERT_LT(2.0 * double(e.total()), bound);
+  const std::string between = std::to_string(static_cast<long long>(0.5 * (double(e.total()) + bound)));
+  const ProgramRun warned = run_talus({"check", scene}, between.c_str());
+  EXPECT_EQ(warned.exit_code, 0) << warned.output;
+  EXPECT_NE(warned.output.find("talus: warning: memory: about "), std::string::npos) << warned.output;
+  EXPECT_NE(warned.output.find("if the flow covers the whole grid, more than the"), std::string::npos) << warned.output;
+  EXPECT_NE(warned.output.find("ok (1 warning above, on stderr)"), std::string::npos) << warned.output;
+  const std::string above = std::to_string(static_cast<long long>(2.0 * bound));
+  const ProgramRun quiet = run_talus({"check", scene}, above.c_str());
+  EXPECT_EQ(quiet.exit_code, 0) << quiet.output;
+  EXPECT_EQ(quiet.output.find("memory: about"), std::string::npos) << quiet.output;
+  fs::remove_all(dir);
+}
+
 TEST(MemoryGuard, ASceneThatDoesNotFitStopsAtOnceWithOneLine) {
   const fs::path dir = temp_dir("too_big");
   const fs::path out = dir / "out";

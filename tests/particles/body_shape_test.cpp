@@ -83,7 +83,7 @@ TEST(PrismBody, BadPrismsAreRefusedNamingTheKey) {
       // a ring closed as GIS tools write it: it said "edge 0 (points 0 to 1) touches edge 2 (points 2 to 3)"
       {R"({"points": [[0.1, 0.1], [0.5, 0.1], [0.3, 0.5], [0.1, 0.1]], "y": [0.2, 0.8]})",
        "bodies[0].prism.points: the last point, [0.1, 0.1], repeats the first; leave it out"},
-      {R"({"points": [[0.1, 0.1], [0.5, 0.1], [0.5, "a"]], "y": [0.2, 0.8]})", "bodies[0].prism.points[2][1] must be a number"},
+      {R"({"points": [[0.1, 0.1], [0.5, 0.1], [0.5, "a"]], "y": [0.2, 0.8]})", "bodies[0].prism.points[2][1] must be a finite number"},
       {R"({"points": [[0.1, 0.1], [0.5, 0.1], [0.5, 0.5]], "y": [0.8, 0.2]})", "bodies[0].prism.y = [0.8, 0.2] must have y0 < y1"},
       {R"({"points": [[0.1, 0.1], [1.5, 0.1], [0.5, 0.5]], "y": [0.2, 0.8]})", "bodies[0].prism [0.1, 1.5] along axis 0 lies partly outside the grid"},
       {R"({"points": [[0.1, 0.1], [0.5, 0.1], [0.5, 0.5]], "y": [0.2, 0.8], "z": 1})", "unknown key bodies[0].prism.z"},

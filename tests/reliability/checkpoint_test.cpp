@@ -322,20 +322,24 @@ TEST(Checkpoint, RefusesAnotherSceneAnotherVersionAndBadFiles) {
   // the two values, which "/time/end (differs)" did not give
   EXPECT_NE(msg.find("first difference at /gravity/2: checkpoint -9.81, this scene -9"), std::string::npos) << msg;
   EXPECT_EQ(msg.find('\n'), std::string::npos);
-  // a long value is cut short, on the same line
+  // a long value is cut short, on the same line (a body's name: a restart may change the description)
   other = scene;
-  other.description = std::string(200, 'a') + "\nb";
+  other.bodies[0].name = std::string(200, 'a') + "\nb";
   EXPECT_EQ(restore_error(other, path, &msg), Error::Kind::Input);
-  EXPECT_NE(msg.find("/description: checkpoint \"\", this scene \"" + std::string(36, 'a') + "..."), std::string::npos) << msg;
+  EXPECT_NE(msg.find("/bodies/0/name: checkpoint \"" + scene.bodies[0].name + "\", this scene \"" + std::string(36, 'a') + "..."),
+            std::string::npos) << msg;
   EXPECT_EQ(msg.find(std::string(37, 'a')), std::string::npos) << msg;
   EXPECT_EQ(msg.find('\n'), std::string::npos);
 
   EXPECT_EQ(restore_error(scene, (dir / "missing.h5").string(), &msg), Error::Kind::Input);
-  EXPECT_NE(msg.find("cannot open checkpoint"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("cannot open checkpoint " + (dir / "missing.h5").string() + ": no such file"), std::string::npos) << msg;
+  EXPECT_EQ(restore_error(scene, dir.string(), &msg), Error::Kind::Input);
+  EXPECT_NE(msg.find(": it is a folder, not a file"), std::string::npos) << msg;
 
+  // (said "is not readable: H5Fopen failed")
   std::ofstream((dir / "junk.h5").string()) << "not hdf5 at all";
   EXPECT_EQ(restore_error(scene, (dir / "junk.h5").string(), &msg), Error::Kind::Input);
-  EXPECT_NE(msg.find("not readable"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("checkpoint " + (dir / "junk.h5").string() + " is not an HDF5 file"), std::string::npos) << msg;
 
   {  // the same file, claiming another talus version
     H5::H5File file(path, H5F_ACC_RDWR);
@@ -396,6 +400,28 @@ TEST(Checkpoint, ARestartMayChangeTheEndTheTimeStepAndTheGuards) {
   too_few.max_steps = 1;  // the checkpoint is after step 2
   EXPECT_EQ(restore_error(too_few, path, &msg), Error::Kind::Input);
   EXPECT_NE(msg.find("time.max_steps = 1 is below the checkpoint's step, 2"), std::string::npos) << msg;
+  test::fs::remove_all(dir);
+}
+
+// How often checkpoints are written, and the scene's notes, may change too: a completed run without
+// periodic checkpoints could not be extended later, since the interval it needed was a change refused.
+TEST(Checkpoint, ARestartMayChangeTheCheckpointIntervalAndTheDescription) {
+  const auto dir = test::temp_dir("interval");
+  const Scene scene = test::tumbling_block_scene(0.05);
+  Solver solver(scene);
+  solver.step();
+  const std::string path = (dir / "c.h5").string();
+  write_checkpoint(path, solver, RunProgress{});
+  const Checkpoint checkpoint = read_checkpoint(path);
+  Scene changed = scene;
+  changed.output.checkpoint_interval = 0.01;
+  changed.description = "extended";
+  Solver resumed(changed);
+  ASSERT_NO_THROW(restore_checkpoint(resumed, checkpoint, path));
+  const std::vector<std::string> lines = restart_changes(checkpoint, changed);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_EQ(lines[0], "description: \"\" in the checkpoint's scene, \"extended\" here");
+  EXPECT_EQ(lines[1], "output.checkpoint_interval: 0 in the checkpoint's scene, 0.01 here");
   test::fs::remove_all(dir);
 }
 

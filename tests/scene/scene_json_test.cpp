@@ -25,6 +25,7 @@ const char* kMinimal = R"({
 })";
 
 using test::replace_once;
+using test::warnings_with;
 
 std::string error_of(const std::string& text) { return test::scene_error_of(text); }
 
@@ -413,6 +414,43 @@ TEST(SceneJson, EmptyBodyIsRefusedWhenSeeding) {
     EXPECT_EQ(e.exit_code(), 2);
     EXPECT_NE(std::string(e.what()).find("bodies[0] (\"b\") holds no particle"), std::string::npos) << e.what();
   }
+}
+
+// A first-day user's scenes: a material no body uses, checkpoints due more often than a step, a
+// material named "", and the messages that told them too little.
+TEST(SceneJson, AnUnusedMaterialAndCheckpointsAtEveryStepAreWarnedAbout) {
+  const std::string ok = kMinimal;
+  EXPECT_EQ(warnings_with(parse_scene(ok, "t"), "is used by no body"), 0);
+  const std::string two = replace_once(ok, "\"materials\": { ", "\"materials\": { \"spare\": { \"density\": 1000, \"young\": 1e6, \"poisson\": 0.3 }, ");
+  EXPECT_EQ(warnings_with(parse_scene(two, "t"), "materials.spare is used by no body"), 1);
+  const Scene scene = parse_scene(ok, "t");
+  const double dt = scene.initial_time_step();
+  const auto with_interval = [&](double interval) {
+    return parse_scene(replace_once(ok, "\"time\"", fmt::format("\"output\": {{ \"checkpoint_interval\": {} }}, \"time\"", interval)), "t");
+  };
+  EXPECT_EQ(warnings_with(with_interval(0.5 * dt), "is shorter than the time step"), 1);
+  EXPECT_EQ(warnings_with(with_interval(10.0 * dt), "is shorter than the time step"), 0);
+  EXPECT_EQ(warnings_with(with_interval(0.0), "is shorter than the time step"), 0);
+}
+
+TEST(SceneJson, FirstDayMessagesSayTheTrueRangeAndWhereAKeyBelongs) {
+  const std::string ok = kMinimal;
+  test::expect_variant_error(ok, "\"materials\": { \"m\"", "\"materials\": { \"\"",
+                             "materials has a material named \"\": give it a name");
+  // 0 was refused too, after "outside the allowed range [0, inf)"
+  test::expect_variant_error(ok, "\"size\": [1, 1, 1]", "\"size\": [-1.2, 1, 1]",
+                             "grid.size[0] = -1.2 is outside the allowed range (0, inf)");
+  test::expect_variant_error(ok, "\"size\": [1, 1, 1]", "\"size\": [0, 1, 1]",
+                             "grid.size[0] = 0 is outside the allowed range (0, inf)");
+  test::expect_variant_error(ok, "\"size\": [1, 1, 1]", "\"size\": [1, 1, 1], \"origin\": [\"a\", 0, 0]",
+                             "grid.origin[0] must be a finite number, got \"a\"");
+  test::expect_variant_error(ok, "\"time\"", "\"boundaries\": { \"x-\": { \"type\": \"slip\", \"friction_coefficient\": 0.3 } }, \"time\"",
+                             "boundaries.x-.friction_coefficient belongs to \"type\": \"friction\" faces; this face is \"slip\"");
+  test::expect_variant_error(ok, "\"time\": { \"end\": 0.1 },", "\"time\": { \"end\": 0.1 },\n  // the materials\n",
+                             "JSON has no comments: put notes in a \"comment\" key");
+  test::expect_variant_error(ok, "\"time\": { \"end\": 0.1 },", "\"time\": { \"end\": 0.1 }, /* the materials */",
+                             "JSON has no comments");
+  EXPECT_EQ(error_of(replace_once(ok, "\"time\"", "\"time\" \"x\"")).find("comments"), std::string::npos);
 }
 
 }  // namespace

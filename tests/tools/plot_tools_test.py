@@ -248,6 +248,14 @@ FAKE_TALUS = """#!/usr/bin/python3
 import json, os, sys
 args = sys.argv[1:]
 out = args[args.index("--out") + 1]
+# as talus refuses a fresh run into an unfinished run's folder with its checkpoint, unless --overwrite
+try:
+    with open(os.path.join(out, "run.json")) as f:
+        status = json.load(f).get("status")
+except OSError:
+    status = None
+if status not in (None, "completed") and os.path.exists(os.path.join(out, "checkpoint.h5")) and "--overwrite" not in args:
+    sys.exit("talus: error: output folder holds an unfinished run; give --overwrite")
 with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "calls"), "a") as f:
     f.write(out + "\\n")
 with open(args[1]) as f:
@@ -325,7 +333,7 @@ class UnfinishedRuns(unittest.TestCase):
         runs = os.path.join(self.work, "runs")
         run = os.path.join(runs, "flume")
         write_record(run, "interrupted")
-        for name in ("runout.json", "runout.csv", "energy.csv"):  # as --stop-after leaves them
+        for name in ("runout.json", "runout.csv", "energy.csv", "checkpoint.h5"):  # as --stop-after leaves them
             with open(os.path.join(run, name), "w") as f:
                 f.write("{}" if name.endswith("json") else "time,front\n0,1\n")
         result = talus_plot.run_flume(fake, runs, "flume", 0.05)
@@ -351,7 +359,8 @@ class UnfinishedRuns(unittest.TestCase):
         scene, o = collapse_study.scene_for("dp", 0.5, 10, [])
         run = os.path.join(self.work, "dp_a0.5_n10")
         self.assertEqual(collapse_study.run_one(fake, scene, run, 1), "ran")
-        write_record(run, "interrupted")  # Ctrl-C'd: runout.json and the same scene are there
+        write_record(run, "interrupted")  # Ctrl-C'd: runout.json, the same scene and a checkpoint are there
+        open(os.path.join(run, "checkpoint.h5"), "w").close()
         self.assertEqual(collapse_study.run_one(fake, scene, run, 1), "ran")
         self.assertEqual(collapse_study.run_one(fake, scene, run, 1), "reused")
         self.assertEqual(calls(fake), [run, run])

@@ -106,6 +106,10 @@ Checkpoint read_checkpoint(const std::string& path, const Comm& comm = Comm());
 /// read as one (read_checkpoint then says why): what a restart's memory check needs to know first.
 int checkpoint_ranks(const std::string& path);
 
+/// The time and step a checkpoint holds (its /solver attributes, read alone: no particle is read),
+/// or nothing when the file cannot be read as one.
+std::optional<std::pair<double, std::int64_t>> checkpoint_time_and_step(const std::string& path);
+
 /// Refuse a checkpoint of another talus version or another scene (input Error, one line, naming
 /// the first key that differs), then put its state into `solver` (built from the same scene).
 /// Any rank count can restart any checkpoint: on the saved number of ranks each rank takes its

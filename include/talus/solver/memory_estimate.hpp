@@ -66,6 +66,12 @@ std::size_t bytes_on_this_machine(const Scene& scene, const MemoryEstimate& esti
 /// available memory, with the figures and what to change. Does nothing when the available memory is unknown.
 void require_memory_fits(const Scene& scene, const MemoryEstimate& estimate, const MachineShare& share = {});
 
+/// The warning when the start fits but a flow that covers the whole grid (grid_bytes_bound) would
+/// not: `talus check` printed a plain "ok" beside "up to 79.74 GB ...; 19.98 GB available". Nothing
+/// when it fits, or the available memory is unknown. One process only (a distributed run splits
+/// the grid among its ranks).
+std::optional<std::string> memory_bound_warning(const MemoryEstimate& estimate, const MachineShare& share = {});
+
 /// Bytes as "1.23 GB" (powers of 1000, as `talus check` prints them).
 std::string format_bytes(double bytes);
 
