@@ -5,7 +5,12 @@
 
 #include <cstddef>
 #include <ctime>
+#include <optional>
 #include <string>
+
+namespace talus {
+class Comm;
+}
 
 namespace talus::app {
 
@@ -15,6 +20,21 @@ std::string cpu_model();
 std::string host_name();
 /// The CPUs this process may run on: fewer than the host's under mpirun's binding or taskset.
 int cpus_allowed();
+/// The host's logical CPUs online.
+int logical_cpus();
+
+/// The threads of each rank of a command that runs kernels (run, check, bench; collective under
+/// mpirun): `threads` when given (--threads), else OMP_NUM_THREADS, else the CPUs this process may use;
+/// under mpirun, shared among the ranks on this host that may use the same CPUs, at least 1 (each
+/// rank took them all: 3 ranks on 2 CPUs ran 250 times slower than on one thread each). Sets
+/// OpenMP's thread count (set_threads) and returns it.
+int set_rank_threads(int threads, const Comm& world);
+/// On rank 0, the warning (without "talus: warning: ") when the threads of the ranks on a host
+/// (`threads` each, every rank's own) exceed its logical CPUs: each thread then waits for a CPU and
+/// the run is slower, not faster. Under mpirun (collective); nullopt on one process (which the bench's
+/// note and the run's own line judge against its own CPUs), on the other ranks, and when no host is.
+std::optional<std::string> host_oversubscription(const Comm& world, int threads);
+
 /// The host as a figure's record names it (run.json and the bench's JSON): name, CPU model, logical
 /// CPUs online, and those this process may run on.
 nlohmann::ordered_json host_json();

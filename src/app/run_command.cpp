@@ -2,6 +2,7 @@
 #include "commands.hpp"
 #include "disk_estimate.hpp"
 #include "option_checks.hpp"
+#include "host_info.hpp"
 #include "run_checks.hpp"
 #include "run_record.hpp"
 #include "talus/core/simd_dispatch.hpp"
@@ -219,7 +220,7 @@ void claim_output_folder(const std::string& dir, const Comm& world, std::optiona
 /// the notes and warnings on it.
 void print_start_banner(const Solver& solver, std::int64_t particles, const MemoryEstimate& memory,
                         const MachineShare& share, const std::string& dir, const std::string& restart,
-                        const Comm& world) {
+                        const std::optional<std::string>& oversubscribed, const Comm& world) {
   if (!restart.empty() && world.root())
     fmt::print("talus: restart from {} at step {}, t = {:.6g} s\n", restart, solver.step_count(), solver.time());
   const int threads = omp_get_max_threads();
@@ -231,6 +232,7 @@ void print_start_banner(const Solver& solver, std::int64_t particles, const Memo
                                                  format_bytes(double(bytes_on_this_machine(solver.scene(), memory, share))))
                                    : "",
                dir);
+  if (world.root() && oversubscribed) warn("{}", *oversubscribed);
   if (world.root() && !world.distributed())
     if (const auto hint = scatter_hint(solver.scene(), solver.cell_sort(), threads)) fmt::print("{}\n", *hint);
   if (world.root())  // (the same line as `talus check`'s, app/disk_estimate.hpp)
@@ -302,7 +304,7 @@ void write_work_record(const WorkRecorder& recorder, const Solver& solver, const
 
 /// The lines of a run that a signal or --stop-after stopped: where, and how to resume it.
 void print_stop(const RunSummary& summary, std::chrono::steady_clock::time_point started, const std::string& scene_path,
-                const Comm& world) {
+                int threads_option, const Comm& world) {
   if (summary.stopped_at_deadline)
     fmt::print("talus: stopped after {:.1f} s of wall clock (--stop-after) at step {}, t = {:.6g} s; checkpoint {}\n",
                std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(), summary.steps,
@@ -311,9 +313,10 @@ void print_stop(const RunSummary& summary, std::chrono::steady_clock::time_point
     fmt::print("talus: stopped by signal {} at step {}, t = {:.6g} s; checkpoint {}\n", summary.interrupted_signal,
                summary.steps, summary.time, summary.checkpoint_path);
   // (any rank count resumes it; the same one continues bit for bit)
-  fmt::print("talus: resume with: {}talus run {} --restart {}\n",
+  // (with the --threads it was started with: under mpirun the default is another count)
+  fmt::print("talus: resume with: {}talus run {} --restart {}{}\n",
              world.distributed() ? fmt::format("mpirun -np {} ", world.size()) : "", shell_word(scene_path),
-             shell_word(summary.checkpoint_path));
+             shell_word(summary.checkpoint_path), threads_option > 0 ? fmt::format(" --threads {}", threads_option) : "");
 }
 
 /// MLS smoothing's line at the end of a run: what the guard left unsmoothed and how much the fits
@@ -418,10 +421,11 @@ void print_run_report(const Solver& solver, const RunSummary& summary, const Run
 void run_command(const RunCommandOptions& o, const std::string& isa) {
   const auto started = std::chrono::steady_clock::now();  // --stop-after and run.json count from here
   const std::time_t utc_started = std::time(nullptr);
-  set_threads(o.threads);
-  select_isa_option(isa);
   // Under mpirun: every rank reads the scene and builds its slab of the solver; rank 0 speaks.
   const Comm world = Comm::world();
+  const int threads = set_rank_threads(o.threads, world);  // (collective)
+  const std::optional<std::string> oversubscribed = host_oversubscription(world, threads);  // (collective)
+  select_isa_option(isa);
   if (world.distributed() && !o.record_path.empty())
     throw input_error("--record-work: the work recorder times one rank's threads; run it without mpirun");
   Scene scene = read_scene_file(o.scene_path);  // validated before anything is written
@@ -446,7 +450,7 @@ void run_command(const RunCommandOptions& o, const std::string& isa) {
   const RunProgress* resume = resumed ? &resumed->progress : nullptr;
   prepare_output_folder(dir, resume, world);
   const DistributionStats start = solver.distribution();
-  print_start_banner(solver, start.particles, memory, share, dir, o.restart, world);
+  print_start_banner(solver, start.particles, memory, share, dir, o.restart, oversubscribed, world);
   RunOptions options = run_options(o, dir, started, resume);
   std::unique_ptr<WorkRecorder> recorder;
   if (!o.record_path.empty()) {
@@ -472,7 +476,7 @@ void run_command(const RunCommandOptions& o, const std::string& isa) {
   if (!world.root()) return;
   if (recorder) write_work_record(*recorder, solver, summary, o.record_path);
   if (summary.interrupted_signal || summary.stopped_at_deadline)
-    print_stop(summary, started, o.scene_path, world);
+    print_stop(summary, started, o.scene_path, o.threads, world);
   else
     print_run_report(solver, summary, totals, dir, o.restart, resumed, world);
 }
@@ -487,7 +491,8 @@ void add_run_command(CLI::App& app) {
   add_isa_option(cmd, isa);
   refuse_empty(cmd->add_option("--out", o->out_dir, "Output folder (default: runs/<scene name>)"),
                "give a folder, or leave --out out for runs/<scene name>");
-  check_range(cmd->add_option("--threads", o->threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)"), 1, 4096);
+  check_range(cmd->add_option("--threads", o->threads, "OpenMP threads (default: OMP_NUM_THREADS, else the CPUs this process may use; under mpirun "
+                                                             "shared among the ranks on the host that may use them)"), 1, 4096);
   cmd->add_flag("--quiet", o->quiet, "No progress line");
   check_range(cmd->add_option("--progress-every", o->progress_every,
                               "Seconds between progress lines (default: 2 on a terminal, where the line is rewritten "
