@@ -275,8 +275,12 @@ RunSummary run_or_abort_rank(Solver& solver, const RunOptions& options, RunRecor
     // (a talus::Error is said as an error, with its exit code; anything else is an internal error, 4, as main() says it)
     const Error* error = dynamic_cast<const Error*>(&e);
     if (world.distributed()) {
-      fmt::print(stderr, "talus: {} on rank {} of {}: {}\n", error ? "error" : "internal error", world.rank(),
-                 world.size(), e.what());
+      // (the energy guard's breach is of the global ledger: no rank's own)
+      if (dynamic_cast<const LedgerInstability*>(&e))
+        fmt::print(stderr, "talus: error (energy guard, all ranks): {}\n", e.what());
+      else
+        fmt::print(stderr, "talus: {} on rank {} of {}: {}\n", error ? "error" : "internal error", world.rank(),
+                   world.size(), e.what());
       std::fflush(stderr);
     }
     if (error)
