@@ -29,10 +29,13 @@
 #include <algorithm>
 #include <cctype>
 #include <chrono>
+#include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <ctime>
 #include <ostream>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -228,7 +231,7 @@ void print_start_banner(const Solver& solver, std::int64_t particles, const Memo
     fmt::print("talus: {} particles, {}{} thread{}, {} kernels, about {} of memory{}, output in {}\n", particles,
                world.distributed() ? fmt::format("{} ranks x ", world.size()) : "", threads, threads == 1 ? "" : "s",
                active_isa(), format_bytes(double(memory.total())),
-               world.distributed() ? fmt::format(" (all ranks; {} on this machine)",
+               world.distributed() ? fmt::format(" (all ranks; {} on this machine, where rank 0 gathers every particle)",
                                                  format_bytes(double(bytes_on_this_machine(solver.scene(), memory, share))))
                                    : "",
                dir);
@@ -306,6 +309,17 @@ void write_work_record(const WorkRecorder& recorder, const Solver& solver, const
   fmt::print("talus: work record: {} steps, {}\n", recorder.steps().size(), path);
 }
 
+/// The name of a signal that stops a run (driver/run_driver.cpp SignalCatcher: "stopped by signal
+/// 10" left the user to look 10 up).
+std::string signal_name(int signal) {
+  switch (signal) {
+    case SIGINT: return "SIGINT";
+    case SIGTERM: return "SIGTERM";
+    case SIGUSR1: return "SIGUSR1";
+    default: return strsignal(signal);
+  }
+}
+
 /// The lines of a run that a signal or --stop-after stopped: where, and how to resume it.
 void print_stop(const RunSummary& summary, std::chrono::steady_clock::time_point started, const std::string& scene_path,
                 int threads_option, const Comm& world) {
@@ -314,8 +328,8 @@ void print_stop(const RunSummary& summary, std::chrono::steady_clock::time_point
                std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(), summary.steps,
                summary.time, summary.checkpoint_path);
   else
-    fmt::print("talus: stopped by signal {} at step {}, t = {:.6g} s; checkpoint {}\n", summary.interrupted_signal,
-               summary.steps, summary.time, summary.checkpoint_path);
+    fmt::print("talus: stopped by signal {} ({}) at step {}, t = {:.6g} s; checkpoint {}\n", summary.interrupted_signal,
+               signal_name(summary.interrupted_signal), summary.steps, summary.time, summary.checkpoint_path);
   // (any rank count resumes it; the same one continues bit for bit)
   // (with the --threads it was started with: under mpirun the default is another count)
   fmt::print("talus: resume with: {}talus run {} --restart {}{}\n",
@@ -371,9 +385,12 @@ void print_run_report(const Solver& solver, const RunSummary& summary, const Run
   const double scale = summary.energy_scale();
   // (a resumed run's rate counts the steps it took, not those before its checkpoint)
   const std::int64_t taken = summary.steps - summary.first_step;
-  fmt::print("talus: done: {} steps to t = {:.6g} s{} in {:.2f} s ({:.2f} M particle-updates/s)\n", summary.steps,
+  // (below 0.1 M/s with three significant digits, without an exponent: a small run printed "0.00")
+  const double rate = summary.particle_updates / summary.wall_seconds / 1e6;
+  const int digits = rate > 0.0 && rate < 0.1 ? std::min(9, 1 - int(std::floor(std::log10(rate))) + 1) : 2;
+  fmt::print("talus: done: {} steps to t = {:.6g} s{} in {:.2f} s ({:.{}f} M particle-updates/s)\n", summary.steps,
              summary.time, taken == summary.steps ? "" : fmt::format(" ({} in this run)", taken), summary.wall_seconds,
-             summary.particle_updates / summary.wall_seconds / 1e6);
+             rate, digits);
   if (solver.stopped_at_max_steps())
     fmt::print("talus: stopped at time.max_steps = {}, before its end time {:.6g} s\n", solver.scene().max_steps,
                solver.scene().end_time);
