@@ -11,6 +11,7 @@
 #include "talus/core/error.hpp"
 #include "talus/core/version.hpp"
 #include "talus/driver/run_outputs.hpp"
+#include "talus/driver/warning.hpp"
 #include "talus/io/atomic_file.hpp"
 #include "talus/scene/scene_json.hpp"
 #include "talus/material/drucker_prager.hpp"
@@ -726,7 +727,9 @@ void run_bench(const BenchOptions& o) {
     run_update_bench(o);
     return;
   }
-  set_threads(o.threads);
+  // (under mpirun: the default shared among a host's ranks; a host with more threads than CPUs is said once)
+  if (const auto oversubscribed = host_oversubscription(world, set_rank_threads(o.threads, world)))
+    warn("{}", *oversubscribed);
   phase_clock() = o.cpu_time ? PhaseClock::ProcessCpu : PhaseClock::Wall;
   // What the process holds before the scene exists (the program and its libraries, ~25 MB): the
   // per-particle figure without it is what a larger run costs per particle.
@@ -791,7 +794,9 @@ void add_bench_command(CLI::App& app) {
                               "(solver.smoothing.reuse_strain; 0: every step that strains)"),
               0.0, 1.0)
       ->capture_default_str();
-  check_range(cmd->add_option("--threads", o->threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)"), 1, 4096);
+  check_range(cmd->add_option("--threads", o->threads, "OpenMP threads (default: OMP_NUM_THREADS, else the CPUs this process "
+                                                                  "may use; under mpirun shared among the ranks on the host "
+                                                                  "that may use them)"), 1, 4096);
   check_range(cmd->add_option("--steps", o->steps, "Timed steps (after one untimed step)"), 1, 1000000)
       ->capture_default_str();
   refuse_empty(cmd->add_option("--json", o->json_path, "Also write the results as JSON to this file"),

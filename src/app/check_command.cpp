@@ -1,6 +1,7 @@
 // `talus check SCENE`: validate a scene and print what a run would do, writing nothing.
 #include "commands.hpp"
 #include "disk_estimate.hpp"
+#include "host_info.hpp"
 #include "option_checks.hpp"
 #include "run_checks.hpp"
 #include "run_folder.hpp"
@@ -75,6 +76,9 @@ void add_check_command(CLI::App& app) {
     available_memory();  // a bad TALUS_MEMORY_LIMIT stops here, not halfway through the summary
     Solver::check_ranks(scene, world.size());  // what `mpirun -np N talus run` would refuse
     const MachineShare share = machine_share(world, "");  // (collective)
+    // the threads a run would take by default (under mpirun: shared among a host's ranks), and a host
+    // they would oversubscribe (OMP_NUM_THREADS beyond its CPUs), said with the scene's warnings
+    const std::optional<std::string> oversubscribed = host_oversubscription(world, set_rank_threads(*threads, world));
     const MemoryEstimate memory = estimate_memory(scene);
     // every rank checks its machine, as `talus run` does (rank 0 alone said ok where a rank's
     // smaller machine then refused the run); the refusal comes after the summary on one rank
@@ -87,7 +91,9 @@ void add_check_command(CLI::App& app) {
     std::vector<std::string> more;
     if (const auto w = disk_warning(disk, dir)) more.push_back(*w);
     if (const auto w = memory_bound_warning(memory, share)) more.push_back(*w);
-    for (const std::string& w : threads_warning(*threads)) more.push_back(w);
+    if (!world.distributed())  // (under mpirun: the host's count, below)
+      for (const std::string& w : threads_warning(*threads)) more.push_back(w);
+    if (oversubscribed) more.push_back(*oversubscribed);
     const std::size_t warnings = print_warnings(scene, more);
     print_scene_summary(scene, memory, share, disk, dir);
     // (check said ok, and the run stopped at once: the default folder held this scene file, or

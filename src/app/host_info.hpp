@@ -8,6 +8,10 @@
 #include <optional>
 #include <string>
 
+namespace talus {
+class Comm;
+}
+
 namespace talus::app {
 
 /// The CPU's model name from /proc/cpuinfo ("unknown" where there is none).
@@ -19,6 +23,22 @@ int cpus_allowed();
 /// More threads than this process has CPUs: "8 threads on the 2 CPUs this process may use:
 /// oversubscribed" (the bench's note and the run's warning say it), or nothing.
 std::optional<std::string> oversubscription(int threads);
+
+/// The host's logical CPUs online.
+int logical_cpus();
+
+/// The threads of each rank of a command that runs kernels (run, check, bench; collective under
+/// mpirun): `threads` when given (--threads), else OMP_NUM_THREADS, else the CPUs this process may use;
+/// under mpirun, shared among the ranks on this host that may use the same CPUs, at least 1 (each
+/// rank took them all: 3 ranks on 2 CPUs ran 250 times slower than on one thread each). Sets
+/// OpenMP's thread count (set_threads) and returns it.
+int set_rank_threads(int threads, const Comm& world);
+/// On rank 0, the warning (without "talus: warning: ") when the threads of the ranks on a host
+/// (`threads` each, every rank's own) exceed its logical CPUs: each thread then waits for a CPU and
+/// the run is slower, not faster. Under mpirun (collective); nullopt on one process (which the bench's
+/// note and the run's own line judge against its own CPUs), on the other ranks, and when no host is.
+std::optional<std::string> host_oversubscription(const Comm& world, int threads);
+
 /// The host as a figure's record names it (run.json and the bench's JSON): name, CPU model, logical
 /// CPUs online, and those this process may run on.
 nlohmann::ordered_json host_json();

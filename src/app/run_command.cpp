@@ -2,6 +2,7 @@
 #include "commands.hpp"
 #include "disk_estimate.hpp"
 #include "option_checks.hpp"
+#include "host_info.hpp"
 #include "run_checks.hpp"
 #include "run_folder.hpp"
 #include "run_record.hpp"
@@ -29,10 +30,13 @@
 #include <algorithm>
 #include <cctype>
 #include <chrono>
+#include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <ctime>
 #include <ostream>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -215,7 +219,8 @@ void claim_output_folder(const std::string& dir, const Comm& world, std::optiona
 /// the notes and warnings on it.
 void print_start_banner(const Solver& solver, std::int64_t particles, const MemoryEstimate& memory,
                         const MachineShare& share, const std::string& dir, const std::string& restart,
-                        const Resumed* resumed, const Comm& world) {
+                        const Resumed* resumed, const std::optional<std::string>& oversubscribed,
+                        const Comm& world) {
   if (resumed && world.root()) {
     if (const auto line = restart_changes_line(resumed->changed)) fmt::print("{}\n", *line);
     fmt::print("talus: restart from {} at step {}, t = {:.6g} s\n", restart, solver.step_count(), solver.time());
@@ -227,10 +232,11 @@ void print_start_banner(const Solver& solver, std::int64_t particles, const Memo
     fmt::print("talus: {} particles, {}{} thread{}, {} kernels, about {} of memory{}, output in {}\n", particles,
                world.distributed() ? fmt::format("{} ranks x ", world.size()) : "", threads, threads == 1 ? "" : "s",
                active_isa(), format_bytes(double(memory.total())),
-               world.distributed() ? fmt::format(" (all ranks; {} on this machine)",
+               world.distributed() ? fmt::format(" (all ranks; {} on this machine, where rank 0 gathers every particle)",
                                                  format_bytes(double(bytes_on_this_machine(solver.scene(), memory, share))))
                                    : "",
                dir);
+  if (world.root() && oversubscribed) warn("{}", *oversubscribed);
   if (world.root() && !world.distributed())
     if (const auto hint = scatter_hint(solver.scene(), solver.cell_sort(), threads)) fmt::print("{}\n", *hint);
   if (world.root())  // (the same line as `talus check`'s, app/disk_estimate.hpp)
@@ -273,8 +279,12 @@ RunSummary run_or_abort_rank(Solver& solver, const RunOptions& options, RunRecor
     // (a talus::Error is said as an error, with its exit code; anything else is an internal error, 4, as main() says it)
     const Error* error = dynamic_cast<const Error*>(&e);
     if (world.distributed()) {
-      fmt::print(stderr, "talus: {} on rank {} of {}: {}\n", error ? "error" : "internal error", world.rank(),
-                 world.size(), e.what());
+      // (the energy guard's breach is of the global ledger: no rank's own)
+      if (dynamic_cast<const LedgerInstability*>(&e))
+        fmt::print(stderr, "talus: error (energy guard, all ranks): {}\n", e.what());
+      else
+        fmt::print(stderr, "talus: {} on rank {} of {}: {}\n", error ? "error" : "internal error", world.rank(),
+                   world.size(), e.what());
       std::fflush(stderr);
     }
     if (error)
@@ -300,20 +310,32 @@ void write_work_record(const WorkRecorder& recorder, const Solver& solver, const
   fmt::print("talus: work record: {} steps, {}\n", recorder.steps().size(), path);
 }
 
+/// The name of a signal that stops a run (driver/run_driver.cpp SignalCatcher: "stopped by signal
+/// 10" left the user to look 10 up).
+std::string signal_name(int signal) {
+  switch (signal) {
+    case SIGINT: return "SIGINT";
+    case SIGTERM: return "SIGTERM";
+    case SIGUSR1: return "SIGUSR1";
+    default: return strsignal(signal);
+  }
+}
+
 /// The lines of a run that a signal or --stop-after stopped: where, and how to resume it.
 void print_stop(const RunSummary& summary, std::chrono::steady_clock::time_point started, const std::string& scene_path,
-                const Comm& world) {
+                int threads_option, const Comm& world) {
   if (summary.stopped_at_deadline)
     fmt::print("talus: stopped after {:.1f} s of wall clock (--stop-after) at step {}, t = {:.6g} s; checkpoint {}\n",
                std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(), summary.steps,
                summary.time, summary.checkpoint_path);
   else
-    fmt::print("talus: stopped by signal {} at step {}, t = {:.6g} s; checkpoint {}\n", summary.interrupted_signal,
-               summary.steps, summary.time, summary.checkpoint_path);
+    fmt::print("talus: stopped by signal {} ({}) at step {}, t = {:.6g} s; checkpoint {}\n", summary.interrupted_signal,
+               signal_name(summary.interrupted_signal), summary.steps, summary.time, summary.checkpoint_path);
   // (any rank count resumes it; the same one continues bit for bit)
-  fmt::print("talus: resume with: {}talus run {} --restart {}\n",
+  // (with the --threads it was started with: under mpirun the default is another count)
+  fmt::print("talus: resume with: {}talus run {} --restart {}{}\n",
              world.distributed() ? fmt::format("mpirun -np {} ", world.size()) : "", shell_word(scene_path),
-             shell_word(summary.checkpoint_path));
+             shell_word(summary.checkpoint_path), threads_option > 0 ? fmt::format(" --threads {}", threads_option) : "");
 }
 
 /// MLS smoothing's line at the end of a run: what the guard left unsmoothed and how much the fits
@@ -364,9 +386,12 @@ void print_run_report(const Solver& solver, const RunSummary& summary, const Run
   const double scale = summary.energy_scale();
   // (a resumed run's rate counts the steps it took, not those before its checkpoint)
   const std::int64_t taken = summary.steps - summary.first_step;
-  fmt::print("talus: done: {} steps to t = {:.6g} s{} in {:.2f} s ({:.2f} M particle-updates/s)\n", summary.steps,
+  // (below 0.1 M/s with three significant digits, without an exponent: a small run printed "0.00")
+  const double rate = summary.particle_updates / summary.wall_seconds / 1e6;
+  const int digits = rate > 0.0 && rate < 0.1 ? std::min(9, 1 - int(std::floor(std::log10(rate))) + 1) : 2;
+  fmt::print("talus: done: {} steps to t = {:.6g} s{} in {:.2f} s ({:.{}f} M particle-updates/s)\n", summary.steps,
              summary.time, taken == summary.steps ? "" : fmt::format(" ({} in this run)", taken), summary.wall_seconds,
-             summary.particle_updates / summary.wall_seconds / 1e6);
+             rate, digits);
   if (solver.stopped_at_max_steps())
     fmt::print("talus: stopped at time.max_steps = {}, before its end time {:.6g} s\n", solver.scene().max_steps,
                solver.scene().end_time);
@@ -419,14 +444,15 @@ void print_run_report(const Solver& solver, const RunSummary& summary, const Run
 void run_command(const RunCommandOptions& o, const std::string& isa) {
   const auto started = std::chrono::steady_clock::now();  // --stop-after and run.json count from here
   const std::time_t utc_started = std::time(nullptr);
-  set_threads(o.threads);
-  select_isa_option(isa);
   // Under mpirun: every rank reads the scene and builds its slab of the solver; rank 0 speaks.
   const Comm world = Comm::world();
+  const int threads = set_rank_threads(o.threads, world);  // (collective)
+  const std::optional<std::string> oversubscribed = host_oversubscription(world, threads);  // (collective)
+  select_isa_option(isa);
   if (world.distributed() && !o.record_path.empty())
     throw input_error("--record-work: the work recorder times one rank's threads; run it without mpirun");
   Scene scene = read_scene_file(o.scene_path);  // validated before anything is written
-  if (world.root()) print_warnings(scene, threads_warning(o.threads));
+  if (world.root()) print_warnings(scene, world.distributed() ? std::vector<std::string>{} : threads_warning(o.threads));
   const MemoryEstimate memory = estimate_memory(scene);
   // a scene that cannot fit stops here, before anything is allocated (each rank checks its own
   // machine; one that refuses stops every rank)
@@ -450,7 +476,8 @@ void run_command(const RunCommandOptions& o, const std::string& isa) {
   const RunProgress* resume = resumed ? &resumed->progress : nullptr;
   prepare_output_folder(dir, resume, world);
   const DistributionStats start = solver.distribution();
-  print_start_banner(solver, start.particles, memory, share, dir, o.restart, resumed ? &*resumed : nullptr, world);
+  print_start_banner(solver, start.particles, memory, share, dir, o.restart, resumed ? &*resumed : nullptr,
+                     oversubscribed, world);
   RunOptions options = run_options(o, dir, started, resume);
   std::unique_ptr<WorkRecorder> recorder;
   if (!o.record_path.empty()) {
@@ -476,7 +503,7 @@ void run_command(const RunCommandOptions& o, const std::string& isa) {
   if (!world.root()) return;
   if (recorder) write_work_record(*recorder, solver, summary, o.record_path);
   if (summary.interrupted_signal || summary.stopped_at_deadline)
-    print_stop(summary, started, o.scene_path, world);
+    print_stop(summary, started, o.scene_path, o.threads, world);
   else
     print_run_report(solver, summary, totals, dir, o.restart, resumed, world);
 }
@@ -491,7 +518,8 @@ void add_run_command(CLI::App& app) {
   add_isa_option(cmd, isa);
   refuse_empty(cmd->add_option("--out", o->out_dir, "Output folder (default: runs/<scene name>)"),
                "give a folder, or leave --out out for runs/<scene name>");
-  check_range(cmd->add_option("--threads", o->threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)"), 1, 4096);
+  check_range(cmd->add_option("--threads", o->threads, "OpenMP threads (default: OMP_NUM_THREADS, else the CPUs this process may use; under mpirun "
+                                                             "shared among the ranks on the host that may use them)"), 1, 4096);
   cmd->add_flag("--quiet", o->quiet, "No progress line");
   check_range(cmd->add_option("--progress-every", o->progress_every,
                               "Seconds between progress lines (default: 2 on a terminal, where the line is rewritten "

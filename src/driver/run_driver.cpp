@@ -282,6 +282,10 @@ class RunLoop {
   /// Keeps the current state as the last good one; false when the scene keeps none.
   bool take_snapshot();
   [[noreturn]] void fail(const Error& e);
+  /// fail() of a distributed run, on the rank that met the instability (the others may wait in a
+  /// collective, so nothing is gathered): runout.json from runout.csv's last row, marked unstable,
+  /// and the error's line says what checkpoint.h5 holds.
+  [[noreturn]] void fail_distributed(const Error& e);
   void finish();
 
   Solver& solver_;
@@ -330,7 +334,8 @@ RunSummary RunLoop::run() {
     } catch (const Error& e) {
       // A distributed run cannot go back together to its last good state (the other ranks may be
       // waiting in a collective): the error ends the job (run_command.cpp).
-      if (e.kind() != Error::Kind::Instability || comm_.distributed()) throw;
+      if (e.kind() != Error::Kind::Instability) throw;
+      if (comm_.distributed()) fail_distributed(e);
       fail(e);
     }
     if (comm_.distributed()) frames_.list_finished_frame(solver_);
@@ -479,7 +484,11 @@ void RunLoop::write_history_row() {
   // rank 0 stops the job with it.
   if (energy_guard_.breached(e, outflow_gravity)) {
     const FastestParticle fastest = fastest_particle();
-    if (comm_.root()) energy_guard_.fail(e, fastest, scene_, solver_.step_count(), solver_.time());
+    if (comm_.root()) try {
+        energy_guard_.fail(e, fastest, scene_, solver_.step_count(), solver_.time());
+      } catch (const Error& breach) {
+        throw LedgerInstability(breach.what());  // (the global ledger's, not rank 0's)
+      }
     return;
   }
   warn_of_energy_growth(e);
@@ -572,6 +581,22 @@ void RunLoop::fail(const Error& e) {
   } catch (const Error& io) {
     message += fmt::format(" | the last good state could not be written: {}{}", io.what(), earlier);
   }
+  throw instability_error(message);
+}
+
+void RunLoop::fail_distributed(const Error& e) {
+  std::string message = e.what();
+  try {
+    history_.flush();
+    runout_.finish_unstable();
+  } catch (const Error& io) {
+    message += fmt::format(" | runout.json could not be written: {}", io.what());
+  }
+  // (a distributed run keeps no last good state in memory: take_snapshot)
+  if (checkpoint_on_disk_)
+    message += fmt::format(" | checkpoint.h5 holds the last periodic checkpoint ({}): --restart resumes from it",
+                           step_ended(checkpoint_on_disk_->step, checkpoint_on_disk_->time));
+  if (dynamic_cast<const LedgerInstability*>(&e)) throw LedgerInstability(message);
   throw instability_error(message);
 }
 

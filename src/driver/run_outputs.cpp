@@ -326,9 +326,37 @@ std::string RunoutFiles::first_row() const {
 void RunoutFiles::write(const Solver& solver) {
   if (!monitor_) return;
   const AllParticles all(comm_, solver.particles());
-  if (!comm_.root()) return;
-  file_ << runout_csv_row(monitor_->sample(all.get(), solver.time(), solver.step_count())) << "\n";
-  file_.flush();
+  std::string row;
+  if (comm_.root()) {
+    row = runout_csv_row(monitor_->sample(all.get(), solver.time(), solver.step_count()));
+    file_ << row << "\n";
+    file_.flush();
+  }
+  if (!comm_.distributed()) return;
+  // Every rank keeps the first and last rows, as written, and what had gone through open faces
+  // then: a rank that an instability stops writes runout.json from them alone (finish_unstable).
+  // (collective; nothing of the run's results changes)
+  left_ = solver.outflow_mass();
+  left_x_plus_ = solver.outflow_mass_x_plus();
+  const std::string rows = comm_.broadcast(comm_.root() ? runout_csv_row(monitor_->first()) + "\n" + row : std::string());
+  if (comm_.root()) return;
+  const std::size_t cut = rows.find('\n');
+  const auto first = parse_runout_csv_row(rows.substr(0, cut)), last = parse_runout_csv_row(rows.substr(cut + 1));
+  if (first && last) monitor_->resume(*first, *last);
+}
+
+void RunoutFiles::finish_unstable() const {
+  if (!monitor_ || !monitor_->has_samples()) return;
+  RunoutResult r = monitor_->result();
+  r.status = "unstable";
+  r.final = false;
+  const double total = monitor_->last().mass + left_;
+  if (total > 0.0) {
+    r.outflow_mass_share = left_ / total;
+    r.outflow_mass_share_x_plus = left_x_plus_ / total;
+  }
+  r.limited_by_outflow = r.outflow_mass_share_x_plus > 1.0 - scene_.runout.front_quantile;
+  write_file_atomically((dir_ / "runout.json").string(), runout_result_json(r) + "\n");
 }
 
 RunoutFiles::Outcome RunoutFiles::finish(Solver& solver, const std::string& status) const {

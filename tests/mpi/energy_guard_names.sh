@@ -21,5 +21,8 @@ rc=$?
 grep "^talus" "$work/run.log"
 [ "$rc" -eq 3 ] || { echo "FAIL: exit code $rc, expected 3"; exit 1; }
 grep -q 'energy_growth_factor' "$work/run.log" || { echo "FAIL: not the energy guard"; exit 1; }
+# (a breach of the global ledger: said as all ranks', not rank 0's, which holds the block at rest)
+grep -q '^talus: error (energy guard, all ranks): ' "$work/run.log" || { echo "FAIL: not said as all ranks' error"; exit 1; }
+grep -q 'on rank 0 of' "$work/run.log" && { echo "FAIL: blamed on rank 0"; exit 1; }
 grep -q 'fastest: particle [0-9]* (body "fast")' "$work/run.log" || { echo "FAIL: the fastest particle is not the fast body's"; exit 1; }
 echo "ok: the energy guard named the fast body on rank 1"

@@ -26,7 +26,7 @@ grep "^talus" "$work/part.log"
 if [ "$rc" -eq 0 ]; then echo "skipped: the run finished within ${limit} s"; exit 0; fi
 [ "$rc" -eq 75 ] || { echo "FAIL: exit code $rc, expected 75"; exit 1; }
 grep -q '"status": "interrupted"' "$work/part/run.json" || { echo "FAIL: run.json does not say interrupted"; fail=1; }
-grep -q 'resume with: mpirun -np' "$work/part.log" || { echo "FAIL: no resume line"; fail=1; }
+grep -q 'resume with: mpirun -np .* --threads 1$' "$work/part.log" || { echo "FAIL: no resume line with --threads 1"; fail=1; }
 run --restart "$work/part/checkpoint.h5" > "$work/resume.log" 2>&1 || { echo "FAIL: the restart: $(tail -3 "$work/resume.log")"; exit 1; }
 cmp -s "$work/whole/energy.csv" "$work/part/energy.csv" || { echo "FAIL: energy.csv differs from the uninterrupted run's"; fail=1; }
 diff -rq "$work/whole/frames" "$work/part/frames" > /dev/null || { echo "FAIL: the frames differ from the uninterrupted run's"; fail=1; }

@@ -3,7 +3,7 @@
 # instability's code 3, and the ParaView series lists the frames written before it, each with its
 # .pvtu, so that it opens. Two cases: a breach in the first step (the first frame is listed before the
 # first step: before 2026-12-05 there was no .pvd at all) and one after six frames. Either way run.json
-# says "unstable" with the error's message. (ctest Mpi.UnstableRunKeepsItsSeries)
+# says "unstable" with the error's message, and so does runout.json. (ctest Mpi.UnstableRunKeepsItsSeries)
 set -uo pipefail
 mpirun_cmd=$1; talus=$2; ranks=$3
 work=$(mktemp -d)
@@ -16,7 +16,8 @@ scene() {  # $1: the block's speed along x [m/s]; a pull of 200 m/s2 along x spe
   "bodies": [ { "name": "block", "material": "rubber", "box": { "min": [0.1, 0.1, 0.0], "max": [0.3, 0.3, 0.2] },
                 "particles_per_cell": 2, "velocity": [$1, 0.0, 0.0] } ],
   "boundaries": { "z-": { "type": "friction", "friction_coefficient": 0.3 } },
-  "guards": { "max_step_displacement": 0.08 }, "output": { "frame_interval": 0.01 } }
+  "guards": { "max_step_displacement": 0.08 }, "output": { "frame_interval": 0.01, "checkpoint_interval": 0.02 },
+  "diagnostics": { "runout": {} } }
 JSON
 }
 fail=0
@@ -39,6 +40,13 @@ check() {  # $1: case name, $2: speed, $3: the fewest frames the .pvd must list
   # run.json: the rank that failed wrote how the run ended, whichever rank it was
   grep -q '"status": "unstable"' "$work/$1/run.json" || { echo "FAIL ($1): run.json does not say unstable"; cat "$work/$1/run.json"; fail=1; }
   grep -q '"message": ".*CFL breach' "$work/$1/run.json" || { echo "FAIL ($1): run.json has not the error's message"; fail=1; }
+  # runout.json, from runout.csv's last row, marked unstable (a distributed run wrote none), and the
+  # line says what checkpoint.h5 holds once a periodic one was written
+  grep -q '"status": "unstable"' "$work/$1/runout.json" 2>/dev/null || { echo "FAIL ($1): no runout.json saying unstable"; fail=1; }
+  if [ -f "$work/$1/checkpoint.h5" ]; then
+    grep -q "checkpoint.h5 holds the last periodic checkpoint (.*): --restart resumes from it" "$work/$1.log" ||
+      { echo "FAIL ($1): the error does not say what checkpoint.h5 holds"; fail=1; }
+  fi
   echo "ok ($1): exit code 3, $count frames listed, each on disk, run.json says unstable (rank $(grep -o '"rank": [0-9]*' "$work/$1/run.json" | grep -o '[0-9]*$'))"
 }
 check first_step 30.0 1

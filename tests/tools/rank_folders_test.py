@@ -2,7 +2,8 @@
 """The tools read the output folder of a run on several ranks as they read a 1-rank one: the frames
 through particles.pvd (a frame of an N-rank run is a .pvtu and N pieces, and one piece is not the
 frame), and the ranks and outflow from run.json (tools/compare_ranks.py took them from a talus.log
-that talus never writes, and so called a 2-rank run 1 rank with nothing lost through open faces).
+that talus never writes, and so called a 2-rank run 1 rank with nothing lost through open faces),
+and compare_ranks.py --frames compares the frames of any scene, particle by particle.
 
     python3 tests/tools/rank_folders_test.py TALUS MPIEXEC     (ctest: Mpi.ToolsReadTheRunFoldersOfRanks)
 """
@@ -70,6 +71,41 @@ class RankFolders(unittest.TestCase):
             self.assertEqual(row["kept_plus_out"], row["particles"] + outflow)
             self.assertIsNotNone(row["wall"])
         self.assertEqual(rows[0]["kept_plus_out"], rows[1]["kept_plus_out"])
+
+    def test_compare_ranks_compares_the_frames_of_any_scene(self):
+        # a scene without diagnostics.runout (its runout.json removed): refused with the way out,
+        # and --frames compares the frames particle by particle and the last energy row
+        other = os.path.join(self.work, "no_runout")
+        shutil.copytree(self.two, other)
+        os.remove(os.path.join(other, "runout.json"))
+        tool = [sys.executable, os.path.join(ROOT, "tools", "compare_ranks.py")]
+        r = subprocess.run(tool + [self.one, other], capture_output=True, text=True)
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("--frames", r.stderr)
+        r = subprocess.run(tool + ["--frames", self.one, other], capture_output=True, text=True, check=True)
+        rows = json.loads(r.stdout)
+        self.assertEqual([row["ranks"] for row in rows], [1, 2])
+        two = rows[1]
+        self.assertGreater(two["frames"], 1)
+        self.assertEqual(two["frames_matched"], two["frames"])
+        self.assertEqual(two["unmatched_particles"], 0)  # the same particles in every frame (outflow alike)
+        self.assertEqual(two["duplicate_ids"], 0)
+        self.assertLess(two["max_dx"], 1e-9)  # the 1-rank result to round-off
+        self.assertLess(abs(two["total_diff"]), 1e-9)
+        self.assertAlmostEqual(two["energy_time"], 0.3, delta=1e-9)
+        r = subprocess.run(tool + ["--frames", "--markdown", self.one, other], capture_output=True, text=True,
+                           check=True)
+        self.assertIn(f"| 2 | {two['frames']} of {two['frames']} |", r.stdout)
+        # a run that ended earlier (its last energy rows cut) is refused in one line
+        energy = os.path.join(other, "energy.csv")
+        with open(energy) as f:
+            lines = f.readlines()
+        with open(energy, "w") as f:
+            f.writelines(lines[:-3])
+        r = subprocess.run(tool + ["--frames", self.one, other], capture_output=True, text=True)
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("compare runs that ended at the same time", r.stderr)
+        shutil.rmtree(other)
 
     def test_compare_ranks_refuses_runs_of_another_scene_or_time(self):
         other = os.path.join(self.work, "other")

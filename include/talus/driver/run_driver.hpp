@@ -14,6 +14,7 @@
 //   deposit.csv          the deposit thickness raster at the end (only with diagnostics.runout)
 //   terrain.vtu          the terrain surface, written once (only when the scene has a terrain)
 //   run.json             the run's record (written by `talus run`, app/run_record.hpp, not by run_scene)
+#include "talus/core/error.hpp"
 #include "talus/diagnostics/runout.hpp"
 #include "talus/io/checkpoint.hpp"
 #include "talus/solver/solver.hpp"
@@ -108,5 +109,13 @@ struct RunSummary {
 /// to the end. An instability (Error of kind Instability) is rethrown after the last good state has
 /// been written as a frame and a checkpoint; its message then says where.
 RunSummary run_scene(Solver& solver, const RunOptions& options);
+
+/// The energy guard's instability (guards.energy_growth_factor): a breach of the global energy
+/// ledger, which every rank holds alike, so that under mpirun it is said as the job's ("energy guard,
+/// all ranks"), not as the rank's that happened to report it (rank 0, which may hold no particle).
+class LedgerInstability : public Error {
+ public:
+  explicit LedgerInstability(const std::string& message) : Error(Kind::Instability, message) {}
+};
 
 }  // namespace talus

@@ -113,6 +113,11 @@ class RunoutFiles {
   /// runout.json (the front after the last step, with `status`: run.json's completed, interrupted or
   /// unstable), and deposit.csv when the run completed (collective; the outcome is rank 0's).
   Outcome finish(Solver& solver, const std::string& status) const;
+  /// runout.json of a distributed run that an instability on this rank ends, from the last row of
+  /// runout.csv (the last good state there is: the other ranks may wait in a collective, so nothing
+  /// is gathered), with status "unstable". Any rank: write() gives every rank the first and last rows
+  /// and the mass gone through open faces at the last. Does nothing before the first row.
+  void finish_unstable() const;
   const std::string& history_path() const { return history_path_; }
 
  private:
@@ -122,6 +127,7 @@ class RunoutFiles {
   std::optional<RunoutMonitor> monitor_;
   std::string history_path_;
   std::ofstream file_;
+  double left_ = 0.0, left_x_plus_ = 0.0;  // a distributed run: gone through open faces at the last row
 };
 
 /// The particle frames and the ParaView series that lists them.
