@@ -138,18 +138,6 @@ std::optional<std::string> scatter_hint(const Scene& scene, const CellSort& sort
       per_pass, threads, kColours);
 }
 
-/// A path as a shell word: as it is when it holds only characters no shell reads specially, else in
-/// single quotes (the resume line is copied into a shell; a path with a space split in two there).
-std::string shell_word(const std::string& path) {
-  const bool plain = !path.empty() && std::all_of(path.begin(), path.end(), [](char c) {
-    return std::isalnum(static_cast<unsigned char>(c)) || std::string_view("_-./+:=,@%").find(c) != std::string_view::npos;
-  });
-  if (plain) return path;
-  std::string quoted = "'";
-  for (char c : path) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return quoted + "'";
-}
-
 /// The folder a checkpoint lies in ("." for a bare file name): where a resumed run writes unless
 /// --out says otherwise, and where the outputs before the checkpoint are.
 std::string checkpoint_folder(const std::string& restart_path) {

@@ -41,17 +41,6 @@ std::optional<double> record_number(const nlohmann::json& record, const char* po
   return record.at(at).get<double>();
 }
 
-/// A path as a shell word (as the run's own resume line writes it).
-std::string as_shell_word(const std::string& path) {
-  const bool plain = !path.empty() && std::all_of(path.begin(), path.end(), [](char c) {
-    return std::isalnum(static_cast<unsigned char>(c)) || std::string_view("_-./+:=,@%").find(c) != std::string_view::npos;
-  });
-  if (plain) return path;
-  std::string quoted = "'";
-  for (char c : path) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return quoted + "'";
-}
-
 /// What a status says of the run that left it, after "holds ".
 std::string unfinished_run(const std::string& status) {
   if (status == "interrupted") return "an interrupted run";
@@ -82,8 +71,8 @@ void require_no_unfinished_run(const fs::path& dir, bool overwrite) {
       "output folder {} holds {}, whose {} (t = {}) a fresh run would delete; resume it with: talus run {} --restart {}; "
       "or give --overwrite to start afresh there",
       dir.string(), unfinished_run(status), checkpoint.filename().string(),
-      at ? fmt::format("{:.6g} s, step {}", at->first, at->second) : std::string("unreadable"), as_shell_word(scene),
-      as_shell_word(checkpoint.string())));
+      at ? fmt::format("{:.6g} s, step {}", at->first, at->second) : std::string("unreadable"), shell_word(scene),
+      shell_word(checkpoint.string())));
 }
 
 void require_checkpoint_file(const std::string& restart_path) {
@@ -166,6 +155,16 @@ std::string run_help_footer() {
          "  4    an internal error\n"
          "  75   stopped by --stop-after, with a checkpoint\n"
          "  128+N  stopped by signal N (130 Ctrl-C, 143 SIGTERM, 138 SIGUSR1), with a checkpoint";
+}
+
+std::string shell_word(const std::string& path) {
+  const bool plain = !path.empty() && std::all_of(path.begin(), path.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || std::string_view("_-./+:=,@%").find(c) != std::string_view::npos;
+  });
+  if (plain) return path;
+  std::string quoted = "'";
+  for (char c : path) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
 }
 
 }  // namespace talus::app

@@ -43,4 +43,8 @@ std::vector<std::string> threads_warning(int threads);
 /// What `talus run --help` says after the options: the files a run writes and its exit codes.
 std::string run_help_footer();
 
+/// A path as a shell word: as it is when it holds only characters no shell reads specially, else in
+/// single quotes (a resume line is copied into a shell; a path with a space split in two there).
+std::string shell_word(const std::string& path);
+
 }  // namespace talus::app
