@@ -477,6 +477,7 @@ void run_command(const RunCommandOptions& o, const std::string& isa) {
                             memory.total(), start.particles, started, utc_started},
                    world);
   options.heartbeat = [&record](const Solver& s) { record.progress(s); };
+  options.on_energy_warning = [&record](const EnergyWarning& w) { record.energy_warning(w); };
   const RunSummary summary = run_or_abort_rank(solver, options, record, world);
   RunTotals totals;
   totals.end = solver.distribution();

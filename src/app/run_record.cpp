@@ -109,11 +109,16 @@ void RunRecord::end_common(const Solver& solver, std::string_view status, const 
   record_["finished"] = utc_text(std::time(nullptr));
   record_["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
   record_["end"] = {{"step", solver.step_count()}, {"time", solver.time()}};
+  if (energy_warning_)  // where the growth first passed guards.energy_warning_factor
+    record_["end"]["energy_growth_warning"] = {{"step", energy_warning_->step},
+                                               {"time", energy_warning_->time},
+                                               {"share_of_energy_available", energy_warning_->share}};
   // (this process's: rank 0's in a distributed run, or the rank that failed)
   record_["peak_resident_bytes"] = peak_rss_bytes();
 }
 
 void RunRecord::end(const Solver& solver, const RunSummary& summary, const RunEnd& counts) {
+  if (summary.energy_warning) energy_warning_ = summary.energy_warning;
   const bool interrupted = summary.interrupted_signal != 0 || summary.stopped_at_deadline;
   end_common(solver, interrupted ? "interrupted" : "completed",
              summary.stopped_at_deadline ? "stopped at its --stop-after time after writing a checkpoint"
@@ -139,10 +144,6 @@ void RunRecord::end(const Solver& solver, const RunSummary& summary, const RunEn
     end["energy_budget_gap_joules"] = summary.energy_budget_gap_joules();
     end["energy_available_joules"] = summary.energy_scale();
   }
-  if (summary.energy_warning)  // where the growth first passed guards.energy_warning_factor
-    end["energy_growth_warning"] = {{"step", summary.energy_warning->step},
-                                    {"time", summary.energy_warning->time},
-                                    {"share_of_energy_available", summary.energy_warning->share}};
   end["outflow_particles"] = counts.outflow_particles;
   // Where they left: each open face's particles and mass (a face that is not open lets nothing out)
   nlohmann::ordered_json by_face = nlohmann::ordered_json::object();

@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <ctime>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 #include <string_view>
@@ -59,6 +60,10 @@ class RunRecord {
   /// While the run goes on (RunOptions::heartbeat): "progress" says the step and time reached and
   /// when. Rank 0 writes; a record it cannot write now is left as it was (the run goes on).
   void progress(const Solver& solver);
+  /// Where the energy growth first passed guards.energy_warning_factor (RunOptions::on_energy_warning):
+  /// kept for "end", whichever way the run ends (a run that warned and then tripped the energy guard
+  /// recorded "unstable" without the warning).
+  void energy_warning(const EnergyWarning& warning) { energy_warning_ = warning; }
 
   /// The end of a run that returned: "completed" or "interrupted", with its results. Rank 0 writes.
   void end(const Solver& solver, const RunSummary& summary, const RunEnd& counts);
@@ -78,6 +83,7 @@ class RunRecord {
   Comm comm_;
   std::chrono::steady_clock::time_point started_;
   nlohmann::ordered_json record_;
+  std::optional<EnergyWarning> energy_warning_;
 };
 
 }  // namespace talus::app

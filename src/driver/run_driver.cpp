@@ -240,7 +240,8 @@ class RunLoop {
         frame_schedule_{scene_.output.frame_interval, progress_.next_frame},
         checkpoint_schedule_{scene_.output.checkpoint_interval, progress_.next_checkpoint},
         progress_line_(solver, options), signals_(options.handle_signals), deadline_(options.deadline),
-        heartbeat_(options.heartbeat), heartbeat_seconds_(options.progress_seconds),
+        heartbeat_(options.heartbeat), on_energy_warning_(options.on_energy_warning),
+        heartbeat_seconds_(options.progress_seconds),
         recording_(solver, options.recorder) {}
 
   RunSummary run();
@@ -312,6 +313,7 @@ class RunLoop {
   SignalCatcher signals_;
   std::optional<std::chrono::steady_clock::time_point> deadline_;
   std::function<void(const Solver&)> heartbeat_;
+  std::function<void(const EnergyWarning&)> on_energy_warning_;
   double heartbeat_seconds_;
   std::chrono::steady_clock::time_point last_heartbeat_ = std::chrono::steady_clock::now();
   /// What each rank saw after a step: a signal caught (its number), its deadline passed (1).
@@ -369,6 +371,7 @@ RunSummary RunLoop::run() {
 void RunLoop::start() {
   summary_.first_step = solver_.step_count();
   summary_.energy_warning = progress_.energy_warning;  // (a resumed run: warned in the part before)
+  if (summary_.energy_warning && on_energy_warning_) on_energy_warning_(*summary_.energy_warning);
   // (resumed in place from the folder's checkpoint.h5: it holds this state until the run writes
   // another; resumed from another file, checkpoint_earlier.h5 say, what checkpoint.h5 holds is not known)
   if (resumed_in_place_ && fs::exists(checkpoint_.path()) &&
@@ -511,6 +514,7 @@ void RunLoop::warn_of_energy_growth(const EnergyBudget& e) {
   const double share = energy_guard_.growth_share(e);
   if (!(share > factor)) return;
   summary_.energy_warning = EnergyWarning{solver_.step_count(), solver_.time(), share};
+  if (on_energy_warning_) on_energy_warning_(*summary_.energy_warning);
   const FastestParticle fastest = fastest_particle();  // (every rank: the same verdict)
   if (!comm_.root()) return;
   warn("{}: the total energy grew by {:.4g} J, {:.3g}% of the energy available (more than "

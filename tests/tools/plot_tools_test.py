@@ -626,7 +626,11 @@ class EnergyGuardDemo(unittest.TestCase):
         self.assertIn("t = 3.5 s; energy budget gap -", lines[3])
         self.assertTrue(os.path.isfile(os.path.join(runs, "run", "checkpoint_earlier.h5")))
         with open(os.path.join(runs, "run", "run.json")) as f:
-            self.assertEqual(json.load(f)["status"], "unstable")
+            stopped = json.load(f)
+        self.assertEqual(stopped["status"], "unstable")
+        # (the warning before the trip: a stopped run's record left it out before 2026-12-07)
+        self.assertGreater(stopped["end"]["energy_growth_warning"]["share_of_energy_available"], 0.1)
+        self.assertLess(stopped["end"]["energy_growth_warning"]["step"], stopped["end"]["step"])
         with open(os.path.join(runs, "resumed", "run.json")) as f:
             record = json.load(f)
         self.assertEqual(record["status"], "completed")

@@ -37,6 +37,10 @@ struct RunOptions {
   /// printed), and not after the last step: talus run updates its record (run.json) with the step
   /// reached, so that a killed run's record says how far it got.
   std::function<void(const Solver&)> heartbeat;
+  /// Called on every rank when the energy growth first passes guards.energy_warning_factor (and at
+  /// the start of a run resumed after it did): talus run keeps it in its record, which a run that
+  /// then stops on an instability writes without the run's summary.
+  std::function<void(const EnergyWarning&)> on_energy_warning;
   /// Continue a run from a checkpoint already restored into the solver (restore_checkpoint): keep
   /// its frames and history up to the checkpoint, drop what came later.
   const RunProgress* resume = nullptr;
