@@ -30,7 +30,8 @@ int logical_cpus();
 /// The threads of each rank of a command that runs kernels (run, check, bench; collective under
 /// mpirun): `threads` when given (--threads), else OMP_NUM_THREADS, else the CPUs this process may use;
 /// under mpirun, shared among the ranks on this host that may use the same CPUs, at least 1 (each
-/// rank took them all: 3 ranks on 2 CPUs ran 250 times slower than on one thread each). Sets
+/// rank took them all, and 3 ranks on 2 CPUs ran far slower than on one thread each: docs/architecture.md,
+/// "Distributed runs"). Sets
 /// OpenMP's thread count (set_threads) and returns it.
 int set_rank_threads(int threads, const Comm& world);
 /// On rank 0, the warning (without "talus: warning: ") when the threads of the ranks on a host

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # `mpirun -np N talus run` with no --threads: each rank takes the CPUs it may use shared among the
-# ranks on its host that may use them (each took them all: 3 ranks x 2 threads on 2 CPUs ran 250
-# times slower than with --threads 1), and a host whose ranks' threads exceed its logical CPUs is
+# ranks on its host that may use them (each took them all: 3 ranks x 2 threads on 2 CPUs, far
+# slower than with --threads 1; docs/architecture.md), and a host whose ranks' threads exceed its logical CPUs is
 # said once, by rank 0, in run and check. (ctest Mpi.DefaultThreadsShareTheHost)
 set -uo pipefail
 mpirun_cmd=$1; talus=$2; ranks=$3
