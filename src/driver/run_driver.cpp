@@ -531,11 +531,15 @@ void RunLoop::warn_of_energy_growth(const EnergyBudget& e) {
 // where the check first finds one (every rank says its own: the check is per rank, and a collective for
 // a warning was not worth it).
 void RunLoop::check_particles_and_dilation() {
+  if (dilation_warned_) {  // (said once: the volumes need not be compared again)
+    solver_.check_particles();
+    return;
+  }
   const std::string dilation = check_particle_fields_and_dilation(
       solver_.particles(), scene_, solver_.step_count() - 1, solver_.time() - solver_.last_dt());
-  if (dilation_warned_ || dilation.empty()) return;
+  if (dilation.empty()) return;
   dilation_warned_ = true;
-  fmt::print(stderr, "talus: warning: {}\n", dilation);
+  warn("{}", dilation);
 }
 
 bool RunLoop::take_snapshot() {
