@@ -259,14 +259,18 @@ RunOptions run_options(const RunCommandOptions& o, const std::string& dir, std::
 /// a collective: it names itself and ends the whole job with its exit code (MPI_Abort), so nothing
 /// hangs. The line goes out before the record is written: two ranks that failed in one step both
 /// wrote run.json first, and the first abort cut the other's line, so the log named one rank and
-/// the record another.
+/// the record another. An error the ranks agreed on (Comm::agree: a frame's piece or the checkpoint
+/// that could not be written) is rank 0's to record and to say, once; no rank aborts.
 RunSummary run_or_abort_rank(Solver& solver, const RunOptions& options, RunRecord& record, const Comm& world) {
   try {
     return run_scene(solver, options);
   } catch (const std::exception& e) {
     // (a talus::Error is said as an error, with its exit code; anything else is an internal error, 4, as main() says it)
     const Error* error = dynamic_cast<const Error*>(&e);
-    if (world.distributed()) {
+    // (every rank threw it together, rank 0's naming the rank: main() prints it on rank 0 and every
+    // rank exits with its code, no rank being left in a collective)
+    const bool agreed = error && error->agreed();
+    if (world.distributed() && !agreed) {
       // (the energy guard's breach is of the global ledger: no rank's own)
       if (dynamic_cast<const LedgerInstability*>(&e))
         fmt::print(stderr, "talus: error (energy guard, all ranks): {}\n", e.what());
@@ -279,7 +283,7 @@ RunSummary run_or_abort_rank(Solver& solver, const RunOptions& options, RunRecor
       record.end_with_error(solver, *error);
     else
       record.end_with_error(solver, e);
-    if (!world.distributed()) throw;
+    if (!world.distributed() || agreed) throw;
     world.abort(error ? error->exit_code() : 4);
   }
 }

@@ -156,6 +156,12 @@ void RunRecord::end(const Solver& solver, const RunSummary& summary, const RunEn
 }
 
 void RunRecord::end_with_error(const Solver& solver, const Error& error) {
+  if (error.agreed() && comm_.distributed()) {  // (every rank has it; rank 0's names the rank that failed)
+    if (!comm_.root()) return;
+    end_common(solver, error.kind() == Error::Kind::Instability ? "unstable" : "failed", error.what());
+    write_ignoring_errors();
+    return;
+  }
   end_after_error(solver, error.kind() == Error::Kind::Instability ? "unstable" : "failed", error.what());
 }
 
@@ -166,6 +172,10 @@ void RunRecord::end_with_error(const Solver& solver, const std::exception& error
 void RunRecord::end_after_error(const Solver& solver, std::string_view status, const std::string& message) {
   end_common(solver, status, message);
   if (comm_.distributed()) record_["end"]["rank"] = comm_.rank();
+  write_ignoring_errors();
+}
+
+void RunRecord::write_ignoring_errors() const {
   try {
     write();
   } catch (const Error&) {

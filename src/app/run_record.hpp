@@ -68,7 +68,8 @@ class RunRecord {
   /// The end of a run that returned: "completed" or "interrupted", with its results. Rank 0 writes.
   void end(const Solver& solver, const RunSummary& summary, const RunEnd& counts);
   /// The end of a run that an error stopped on this rank: "unstable" (an Instability) or "failed",
-  /// with the error's message and what this rank knows. Any rank may write it.
+  /// with the error's message and what this rank knows. Any rank may write it; one that every rank
+  /// threw together (Error::agreed) rank 0 alone writes, without "end.rank" (its message names the rank).
   void end_with_error(const Solver& solver, const Error& error);
   void end_with_error(const Solver& solver, const std::exception& error);
 
@@ -78,6 +79,7 @@ class RunRecord {
   void end_common(const Solver& solver, std::string_view status, const std::string& message);
   void end_after_error(const Solver& solver, std::string_view status, const std::string& message);
   void write() const;
+  void write_ignoring_errors() const;
 
   std::filesystem::path path_;
   Comm comm_;

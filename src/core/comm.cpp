@@ -118,7 +118,7 @@ void Comm::agree(const std::function<void()>& local) const {
               std::string(all.data() + at, n);
     at += n;
   }
-  throw Error(kind, root() ? first : failure.empty() ? std::string("another rank failed") : failure);
+  throw Error(kind, root() ? first : failure.empty() ? std::string("another rank failed") : failure).mark_agreed();
 }
 
 std::vector<unsigned char> Comm::gather_bytes(const void* data, std::size_t bytes, std::vector<std::int64_t>& counts) const {

@@ -476,17 +476,25 @@ void FrameSeries::list_finished_frame(Solver& solver) {
 
 void FrameSeries::finish_pending() {
   std::optional<PendingSummary> summary = std::exchange(pending_summary_, std::nullopt);
-  writer_.wait();
-  if (!summary) return;
-  comm_.barrier();  // every piece is on disk before the summary names it
-  const std::string name = frame_name(summary->index, true);
-  if (comm_.root()) {
-    std::vector<std::string> pieces;  // relative to frames/, where the summary is
-    for (int r = 0; r < comm_.size(); ++r)
-      pieces.push_back(fs::path(frame_piece_name(summary->index, r)).filename().string());
-    write_particles_pvtu((dir_ / name).string(), pieces, *summary->layout);
+  if (!summary) {
+    writer_.wait();
+    return;
   }
-  pvd_.add(summary->time, name);
+  // A distributed run's pieces: a piece that could not be written (a full disk, a quota) is said
+  // once, by rank 0, naming the rank, and every rank stops together. Each rank said it on its own
+  // line before, once per rank, and MPI_Abort cut the job. The agreement is also the barrier: every
+  // piece is on disk before the summary names it.
+  comm_.agree([&] { writer_.wait(); });
+  const std::string name = frame_name(summary->index, true);
+  comm_.agree([&] {  // (rank 0 writes the summary and the .pvd)
+    if (comm_.root()) {
+      std::vector<std::string> pieces;  // relative to frames/, where the summary is
+      for (int r = 0; r < comm_.size(); ++r)
+        pieces.push_back(fs::path(frame_piece_name(summary->index, r)).filename().string());
+      write_particles_pvtu((dir_ / name).string(), pieces, *summary->layout);
+    }
+    pvd_.add(summary->time, name);
+  });
 }
 
 bool FrameSeries::has_frame_of_step(std::int64_t step) const {
@@ -497,7 +505,8 @@ bool FrameSeries::has_frame_of_step(std::int64_t step) const {
 
 void CheckpointFile::write(Solver& solver, const RunProgress& progress) {
   ScopedPhase timer(solver.phase_times(), Phase::Output);
-  write_checkpoint(path_, solver, progress);
+  // (rank 0 writes a distributed run's: its failure stops every rank together, said once)
+  solver.comm().agree([&] { write_checkpoint(path_, solver, progress); });
 }
 
 }  // namespace talus

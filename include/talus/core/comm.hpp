@@ -50,7 +50,8 @@ class Comm {
 
   /// Runs `local`, work that may fail on one rank alone (its slab, its machine, its copy of a file),
   /// and agrees on the outcome: when it threw an Error on any rank, every rank throws one, and rank
-  /// 0's carries the first failure's message, naming the rank when it was not rank 0. Without this
+  /// 0's carries the first failure's message, naming the rank when it was not rank 0 (each marked
+  /// Error::agreed: rank 0 alone need say it, and no rank waits for another). Without this
   /// the ranks that went on waited in their next collective for the one that had stopped, forever.
   /// Collective; with one rank it only runs `local`.
   void agree(const std::function<void()>& local) const;

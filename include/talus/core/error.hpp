@@ -14,6 +14,14 @@ class Error : public std::runtime_error {
   Error(Kind kind, const std::string& message) : std::runtime_error(one_line(message)), kind_(kind) {}
   Kind kind() const { return kind_; }
   int exit_code() const { return kind_ == Kind::Instability ? 3 : 2; }
+  /// Thrown on every rank of a distributed run at once (Comm::agree), rank 0's naming the rank that
+  /// failed: rank 0 alone says it, and the job ends without MPI_Abort, no rank being left in a
+  /// collective. (A rank that fails alone names itself and ends the job: run_command.cpp.)
+  bool agreed() const { return agreed_; }
+  Error& mark_agreed() {
+    agreed_ = true;
+    return *this;
+  }
 
   /// Control characters (from keys or names in a scene) escaped, so a message is always one line,
   /// and bytes that are not UTF-8 (a scene saved in Latin-1) escaped, so a terminal shows them.
@@ -46,6 +54,7 @@ class Error : public std::runtime_error {
 
  private:
   Kind kind_;
+  bool agreed_ = false;
 };
 
 /// Bad scene, bad argument, value out of range: message names the key path and allowed range.
