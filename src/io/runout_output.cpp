@@ -71,8 +71,15 @@ std::optional<RunoutSample> parse_runout_csv_row(const std::string& row) {
 }
 
 std::string runout_result_json(const RunoutResult& r) {
-  // (17 digits, as runout.csv: the value read back is the one computed)
-  auto number = [](double v) { return fmt::format("{:.17g}", v); };
+  // (17 digits, as runout.csv: the value read back is the one computed; always a JSON number with a
+  // fraction or exponent, so that a typed reader gets a float in every run: "time": 2 was an integer
+  // where a run stopped earlier wrote a float; none (NaN) as null, which JSON has, not nan)
+  auto number = [](double v) {
+    if (!std::isfinite(v)) return std::string("null");
+    std::string text = fmt::format("{:.17g}", v);
+    if (text.find_first_of(".e") == std::string::npos) text += ".0";
+    return text;
+  };
   auto optional = [&](const std::optional<double>& v) { return v ? number(*v) : std::string("null"); };
   auto boolean = [](bool b) { return b ? "true" : "false"; };
   return fmt::format(
