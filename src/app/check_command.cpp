@@ -14,6 +14,7 @@
 
 #include <fmt/core.h>
 
+#include <cstdio>
 #include <optional>
 
 namespace talus::app {
@@ -68,7 +69,9 @@ void add_check_command(CLI::App& app) {
   check_range(cmd->add_option("--threads", *threads, "As talus run's: checked against the CPUs available"), 1, 4096);
   cmd->footer("The memory available is the smaller of MemAvailable and a cgroup's (container, batch job) limit; the "
               "environment variable TALUS_MEMORY_LIMIT (bytes, or with a K/M/G/T suffix) sets it instead, e.g. a "
-              "share of a node for one run. A scene that does not fit is refused (exit code 2), as talus run refuses it.");
+              "share of a node for one run. A scene that does not fit is refused (exit code 2), as talus run refuses it; so is an output folder "
+              "(--out, or runs/<scene name>) that talus run would refuse (an unfinished run's, a folder in place of "
+              "an output), after the summary.");
   cmd->callback([=]() {
     // Under mpirun every rank checks (an error is printed once, main.cpp); rank 0 alone prints.
     const Comm world = Comm::world();
@@ -97,16 +100,22 @@ void add_check_command(CLI::App& app) {
     const std::size_t warnings = print_warnings(scene, more);
     print_scene_summary(scene, memory, share, disk, dir);
     // (check said ok, and the run stopped at once: the default folder held this scene file, or
-    // could not be made here)
+    // could not be made here, or held an unfinished run. It then said ok with a note and exited 0,
+    // and a script that gated on check met run's exit code 2: the run's refusal is check's error.)
+    std::optional<std::string> run_would_stop;
     try {
       require_outputs_spare_inputs(dir, *scene_path, scene, "", "");
       require_no_folder_in_place_of_an_output(dir);
       check_writable_folder(dir, "output folder");
       require_no_unfinished_run(dir, false);
     } catch (const Error& e) {
-      fmt::print("note       talus run {} would stop: {}\n", out_dir->empty() ? "without --out" : "with this --out", e.what());
+      run_would_stop = fmt::format("talus run {} would stop: {}", out_dir->empty() ? "without --out" : "with this --out", e.what());
     }
     if (!world.distributed()) require_memory_fits(scene, memory, share);  // (under mpirun: checked above, on every rank)
+    if (run_would_stop) {
+      std::fflush(stdout);  // (the summary before the error line, in a log that holds both)
+      throw input_error(*run_would_stop);
+    }
     // (a bare "ok" last, on stdout, hid the warnings on stderr: it counts them)
     const std::string ranks = world.distributed() ? fmt::format("for {} ranks", world.size()) : "";
     const std::string warned =

@@ -325,8 +325,8 @@ void print_stop(const RunSummary& summary, std::chrono::steady_clock::time_point
                signal_name(summary.interrupted_signal), summary.steps, summary.time, summary.checkpoint_path);
   // (any rank count resumes it; the same one continues bit for bit)
   // (with the --threads it was started with: under mpirun the default is another count)
-  fmt::print("talus: resume with: {}talus run {} --restart {}{}\n",
-             world.distributed() ? fmt::format("mpirun -np {} ", world.size()) : "", shell_word(scene_path),
+  fmt::print("talus: resume with: {}{} run {} --restart {}{}\n",
+             world.distributed() ? fmt::format("mpirun -np {} ", world.size()) : "", program_word(), shell_word(scene_path),
              shell_word(summary.checkpoint_path), threads_option > 0 ? fmt::format(" --threads {}", threads_option) : "");
 }
 

@@ -1,5 +1,7 @@
 #include "run_folder.hpp"
 
+#include "commands.hpp"
+
 #include "host_info.hpp"
 
 #include "talus/core/error.hpp"
@@ -68,10 +70,11 @@ void require_no_unfinished_run(const fs::path& dir, bool overwrite) {
                                                               fs::is_regular_file(record.at(file).get<std::string>(), ec))
     scene = record.at(file).get<std::string>();
   throw input_error(fmt::format(
-      "output folder {} holds {}, whose {} (t = {}) a fresh run would delete; resume it with: talus run {} --restart {}; "
+      "output folder {} holds {}, whose {} (t = {}) a fresh run would delete; resume it with: {} run {} --restart {}; "
       "or give --overwrite to start afresh there",
       dir.string(), unfinished_run(status), checkpoint.filename().string(),
-      at ? fmt::format("{:.6g} s, step {}", at->first, at->second) : std::string("unreadable"), shell_word(scene),
+      at ? fmt::format("{:.6g} s, step {}", at->first, at->second) : std::string("unreadable"), program_word(),
+      shell_word(scene),
       shell_word(checkpoint.string())));
 }
 
@@ -165,6 +168,12 @@ std::string shell_word(const std::string& path) {
   std::string quoted = "'";
   for (char c : path) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
   return quoted + "'";
+}
+
+std::string program_word() {
+  const std::vector<std::string>& words = command_line();
+  if (words.empty() || words[0].find('/') == std::string::npos) return "talus";
+  return shell_word(words[0]);
 }
 
 }  // namespace talus::app

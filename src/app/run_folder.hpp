@@ -46,5 +46,9 @@ std::string run_help_footer();
 /// A path as a shell word: as it is when it holds only characters no shell reads specially, else in
 /// single quotes (a resume line is copied into a shell; a path with a space split in two there).
 std::string shell_word(const std::string& path);
+/// The program as a line to copy names it: the path it was started by when that is one
+/// (`build/talus`, as the README runs it), else `talus` (found on PATH). A resume line that said
+/// `talus run …` was "command not found" to a user who had started `build/talus`.
+std::string program_word();
 
 }  // namespace talus::app

@@ -281,20 +281,23 @@ TEST(Cli, CheckEstimatesTheFramesDiskUseAndRunWarnsWhenTheyMayNotFit) {
 }
 
 // check said ok where `talus run` then stopped at once: run from its own folder, the scene.json a
-// run wrote there would be replaced by the run's. It still says ok (the scene is valid), with a note.
+// run wrote there would be replaced by the run's. Then it said ok with a note, and exited 0, and a
+// script that gated on check met run's exit code 2: check now stops as run would, after its summary.
 TEST(Cli, CheckNotesADefaultFolderTheRunCouldNotUse) {
   const fs::path dir = temp_dir("default_folder");
   fs::create_directories(dir / "runs" / "elastic_block_slide");
   fs::copy_file(kInputs + "elastic_block_slide.json", dir / "runs" / "elastic_block_slide" / "scene.json");
   const Result inside = run_shell("cd " + dir.string() + " && " + TALUS_BINARY + " check runs/elastic_block_slide/scene.json 2>&1");
-  EXPECT_EQ(inside.exit_code, 0) << inside.output;
-  EXPECT_NE(inside.output.find("\nnote       talus run without --out would stop: output folder runs/elastic_block_slide: the "
-                               "run would replace the scene file runs/elastic_block_slide/scene.json"),
+  EXPECT_EQ(inside.exit_code, 2) << inside.output;
+  EXPECT_NE(inside.output.find("\ntalus: error: talus run without --out would stop: output folder runs/elastic_block_slide: "
+                               "the run would replace the scene file runs/elastic_block_slide/scene.json"),
             std::string::npos)
       << inside.output;
-  EXPECT_NE(inside.output.find("\nok\n"), std::string::npos) << inside.output;
+  EXPECT_NE(inside.output.find("particles"), std::string::npos) << inside.output;  // (the summary comes first)
+  EXPECT_EQ(inside.output.find("\nok"), std::string::npos) << inside.output;
   const Result elsewhere = run("check " + kInputs + "elastic_block_slide.json");
-  EXPECT_EQ(elsewhere.output.find("note "), std::string::npos) << elsewhere.output;
+  EXPECT_EQ(elsewhere.exit_code, 0) << elsewhere.output;
+  EXPECT_EQ(elsewhere.output.find("would stop"), std::string::npos) << elsewhere.output;
   fs::remove_all(dir);
 }
 
