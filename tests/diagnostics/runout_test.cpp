@@ -1,6 +1,7 @@
 // Runout diagnostics on synthetic particle sets: quantile front and tail that stray particles do not
 // move, centre of mass and its velocity along the bed, the deposit raster, the terrain's runout
 // plane, and the files the run driver writes.
+#include "../support/quiet_run.hpp"
 #include "../support/scratch_dir.hpp"
 #include "talus/core/error.hpp"
 #include "talus/diagnostics/runout.hpp"
@@ -445,10 +446,7 @@ TEST(RunoutOutput, RestartContinuesTheHistoryBitForBit) {
   Scene scene = parse_scene(kSlideScene, "slide");
   scene.output.checkpoint_interval = 0.012;  // one checkpoint, mid-run
   const test::ScratchDir dir("test_runout_restart");
-  RunOptions options;
-  options.out_dir = dir.path().string();
-  options.progress = false;
-  options.handle_signals = false;
+  RunOptions options = test::quiet_run_options(dir);
   RunSummary whole;
   {
     Solver solver(scene);
@@ -482,10 +480,7 @@ TEST(RunoutOutput, RestartAddsTheFrontsPlaceToAnOlderHistory) {
   Scene scene = parse_scene(kSlideScene, "slide");
   scene.output.checkpoint_interval = 0.012;  // one checkpoint, mid-run
   const test::ScratchDir dir("test_runout_restart_older");
-  RunOptions options;
-  options.out_dir = dir.path().string();
-  options.progress = false;
-  options.handle_signals = false;
+  RunOptions options = test::quiet_run_options(dir);
   {
     Solver solver(scene);
     run_scene(solver, options);
@@ -515,14 +510,11 @@ TEST(RunoutOutput, RestartAddsTheFrontsPlaceToAnOlderHistory) {
 TEST(RunoutOutput, TheResultSaysHowTheRunEndedAndTheStateItDescribes) {
   const Scene scene = parse_scene(kSlideScene, "slide");
   const test::ScratchDir dir("test_runout_status");
-  RunOptions options;
-  options.progress = false;
-  options.handle_signals = false;
   auto result_of = [](const fs::path& folder) {
     std::ifstream in(folder / "runout.json");
     return nlohmann::json::parse(in);
   };
-  options.out_dir = (dir / "whole").string();
+  RunOptions options = test::quiet_run_options(dir / "whole");
   RunSummary whole;
   {
     Solver solver(scene);
@@ -594,10 +586,7 @@ TEST(RunoutOutput, RestartIntoAnotherFolderMeasuresFromTheSameGate) {
   scene.output.checkpoint_interval = 0.012;  // one checkpoint, mid-run
   scene.runout.has_gate = false;             // the gate is the initial front
   const test::ScratchDir dir("test_runout_restart_elsewhere");
-  RunOptions options;
-  options.out_dir = (dir / "first").string();
-  options.progress = false;
-  options.handle_signals = false;
+  RunOptions options = test::quiet_run_options(dir / "first");
   {
     Solver solver(scene);
     run_scene(solver, options);
@@ -643,10 +632,7 @@ const char* kOutflowScene = R"({
 
 TEST(RunoutOutput, MassLeftThroughTheOpenFacesIsSaidAndTheFrontFlagged) {
   const test::ScratchDir dir("test_runout_outflow");
-  RunOptions options;
-  options.out_dir = (dir / "both").string();
-  options.progress = false;
-  options.handle_signals = false;
+  RunOptions options = test::quiet_run_options(dir / "both");
   auto result_of = [](const fs::path& folder) {
     std::ifstream in(folder / "runout.json");
     return nlohmann::json::parse(in);

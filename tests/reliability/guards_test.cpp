@@ -2,6 +2,7 @@
 // runs to its end with a physical check, or it stops with a one-line diagnosis after writing its
 // last good state); none crashes or writes a non-finite value.
 #include "../solver/scene_fixtures.hpp"
+#include "../support/quiet_run.hpp"
 #include "reliability_fixtures.hpp"
 #include "talus/core/error.hpp"
 #include "talus/io/checkpoint.hpp"
@@ -197,10 +198,7 @@ TEST(Guards, TheBudgetsGapDoesNotDependOnWhereTheOriginIs) {
       b.box_max[2] += lift;
     }
     const test::ScratchDir dir("rel_datum");
-    RunOptions options;
-    options.out_dir = dir.path().string();
-    options.progress = false;
-    options.handle_signals = false;
+    RunOptions options = test::quiet_run_options(dir);
     Solver solver(scene);
     const RunSummary summary = run_scene(solver, options);
     return summary;
@@ -234,10 +232,7 @@ struct HardCaseRun {
 /// output and, on failure, a checkpoint of the last good state that restarts.
 HardCaseRun run_hard_case(const Scene& scene, const std::string& name) {
   const test::ScratchDir dir("rel_" + name);
-  RunOptions options;
-  options.out_dir = dir.path().string();
-  options.progress = false;
-  options.handle_signals = false;
+  RunOptions options = test::quiet_run_options(dir);
   HardCaseRun run;
   Solver solver(scene);
   run.initial = solver.energies();
@@ -504,10 +499,7 @@ struct CapturedRun {
 };
 CapturedRun run_capturing_stderr(const Scene& scene, const std::string& name) {
   const test::ScratchDir dir("rel_" + name);
-  RunOptions options;
-  options.out_dir = dir.path().string();
-  options.progress = false;
-  options.handle_signals = false;
+  RunOptions options = test::quiet_run_options(dir);
   Solver solver(scene);
   testing::internal::CaptureStderr();
   CapturedRun run;
@@ -563,10 +555,7 @@ TEST(HardCases, TheEnergyGuardKeepsTheEarlierCheckpointToResumeWithASmallerStep)
   scene.guards.energy_growth_factor = 0.2;  // trips at t = 2.56 s (28.7% grown)
   scene.output.checkpoint_interval = 1.0;
   const test::ScratchDir dir("rel_earlier_checkpoint");
-  RunOptions options;
-  options.out_dir = dir.path().string();
-  options.progress = false;
-  options.handle_signals = false;
+  RunOptions options = test::quiet_run_options(dir);
   std::string diagnosis;
   {
     Solver solver(scene);
@@ -628,10 +617,7 @@ TEST(HardCases, TheEnergyWarningIsKeptAcrossARestart) {
   Scene scene = parse_scene(kKinkScene, "kink75");
   scene.output.checkpoint_interval = 2.6;  // after the warning at t = 2.56 s
   const test::ScratchDir dir("rel_warning_restart");
-  RunOptions options;
-  options.out_dir = dir.path().string();
-  options.progress = false;
-  options.handle_signals = false;
+  RunOptions options = test::quiet_run_options(dir);
   Solver first(scene);
   testing::internal::CaptureStderr();
   const RunSummary whole = run_scene(first, options);
