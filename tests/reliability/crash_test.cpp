@@ -53,14 +53,19 @@ int wait_for(pid_t pid) {
 
 int run_talus(const std::vector<std::string>& args) { return wait_for(spawn(args)); }
 
-/// `talus ARGS` (as a shell splits them), its standard output and error together.
-std::pair<int, std::string> run_captured(const std::string& args) {
-  FILE* pipe = popen((std::string(TALUS_BINARY) + " " + args + " 2>&1").c_str(), "r");
+/// The shell's `command`: its exit code and its standard output.
+std::pair<int, std::string> run_shell(const std::string& command) {
+  FILE* pipe = popen(command.c_str(), "r");
   std::string text;
   char buffer[4096];
   while (fgets(buffer, sizeof buffer, pipe)) text += buffer;
   const int status = pclose(pipe);
   return {WEXITSTATUS(status), text};
+}
+
+/// `talus ARGS` (as a shell splits them), its standard output and error together.
+std::pair<int, std::string> run_captured(const std::string& args) {
+  return run_shell(std::string(TALUS_BINARY) + " " + args + " 2>&1");
 }
 
 /// Runs the scene uninterrupted once per test binary: the reference output.
@@ -278,14 +283,9 @@ TEST(Crash, RestartRefusesAnotherSceneWithOneLineAndExitTwo) {
   ASSERT_TRUE(wait_for_file(ref.root / "cp" / "checkpoint.h5", pid, 60.0));
   kill(pid, SIGTERM);
   wait_for(pid);
-  const std::string command = std::string(TALUS_BINARY) + " run " + other.string() + " --restart " +
-                              (ref.root / "cp" / "checkpoint.h5").string() + " --out " + out.string() + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string text;
-  char buffer[4096];
-  while (fgets(buffer, sizeof buffer, pipe)) text += buffer;
-  const int status = pclose(pipe);
-  EXPECT_EQ(WEXITSTATUS(status), 2) << text;
+  const auto [code, text] = run_captured("run " + other.string() + " --restart " +
+                                         (ref.root / "cp" / "checkpoint.h5").string() + " --out " + out.string());
+  EXPECT_EQ(code, 2) << text;
   EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
   EXPECT_NE(text.find("belongs to another scene"), std::string::npos) << text;
   EXPECT_NE(text.find("/gravity"), std::string::npos) << text;
@@ -618,13 +618,9 @@ TEST(Crash, AnUnwritableFramesFolderExitsTwoWithOneLineBeforeAnyOutput) {
   fs::permissions(dir / "out" / "frames", fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
                                               fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
   const std::string as_user = ::geteuid() == 0 ? "setpriv --reuid=65534 --regid=65534 --clear-groups " : "";
-  FILE* pipe = popen((as_user + TALUS_BINARY + " run " + (dir / "s.json").string() + " --threads 1 --out " +
-                      (dir / "out").string() + " 2>&1").c_str(), "r");
-  std::string out;
-  char buffer[4096];
-  while (fgets(buffer, sizeof buffer, pipe)) out += buffer;
-  const int status = pclose(pipe);
-  EXPECT_EQ(WEXITSTATUS(status), 2) << out;
+  const auto [code, out] = run_shell(as_user + TALUS_BINARY + " run " + (dir / "s.json").string() + " --threads 1 --out " +
+                                     (dir / "out").string() + " 2>&1");
+  EXPECT_EQ(code, 2) << out;
   EXPECT_EQ(out, "talus: error: cannot write output folder " + (dir / "out" / "frames").string() + ": no write permission\n");
   EXPECT_EQ(std::distance(fs::directory_iterator(dir / "out"), fs::directory_iterator()), 1);  // frames alone
   fs::permissions(dir / "out" / "frames", fs::perms::owner_all);
