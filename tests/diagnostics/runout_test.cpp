@@ -382,6 +382,14 @@ std::string read_text(const fs::path& path) {
   return text.str();
 }
 
+/// `scene` resumed from `checkpoint` (read from `path`) and run to its end through the run driver.
+RunSummary run_resumed(const Scene& scene, const Checkpoint& checkpoint, const std::string& path, RunOptions options) {
+  Solver resumed(scene);
+  restore_checkpoint(resumed, checkpoint, path);
+  options.resume = &checkpoint.run;
+  return run_scene(resumed, options);
+}
+
 TEST(RunoutOutput, RunWritesRunoutHistoryAndDeposit) {
   Solver solver(parse_scene(kSlideScene, "slide"));
   const test::ScratchDir dir("test_runout_run");
@@ -458,10 +466,7 @@ TEST(RunoutOutput, RestartContinuesTheHistoryBitForBit) {
   const std::string checkpoint_path = (dir / "checkpoint.h5").string();
   const Checkpoint checkpoint = read_checkpoint(checkpoint_path);
   ASSERT_GT(checkpoint.solver.step, 0);
-  Solver resumed(scene);
-  restore_checkpoint(resumed, checkpoint, checkpoint_path);
-  options.resume = &checkpoint.run;
-  const RunSummary rest = run_scene(resumed, options);
+  const RunSummary rest = run_resumed(scene, checkpoint, checkpoint_path, options);
   // The series lists every frame again; this call wrote only those after the checkpoint (the run's
   // summary line said "(1 frames)").
   EXPECT_EQ(rest.frames_in_series, whole.frames);
@@ -497,10 +502,7 @@ TEST(RunoutOutput, RestartAddsTheFrontsPlaceToAnOlderHistory) {
   const std::string checkpoint_path = (dir / "checkpoint.h5").string();
   const Checkpoint checkpoint = read_checkpoint(checkpoint_path);
   ASSERT_GT(checkpoint.solver.step, 0);
-  Solver resumed(scene);
-  restore_checkpoint(resumed, checkpoint, checkpoint_path);
-  options.resume = &checkpoint.run;
-  run_scene(resumed, options);
+  run_resumed(scene, checkpoint, checkpoint_path, options);
   EXPECT_EQ(read_text(dir / "runout.csv"), reference);
 }
 
@@ -542,12 +544,7 @@ TEST(RunoutOutput, TheResultSaysHowTheRunEndedAndTheStateItDescribes) {
     EXPECT_FALSE(fs::exists(dir / "stopped" / "deposit.csv"));
     // resumed to the end: the uninterrupted run's result, to the bit
     const std::string checkpoint_path = (dir / "stopped" / "checkpoint.h5").string();
-    const Checkpoint checkpoint = read_checkpoint(checkpoint_path);
-    Solver resumed(scene);
-    restore_checkpoint(resumed, checkpoint, checkpoint_path);
-    options.resume = &checkpoint.run;
-    run_scene(resumed, options);
-    options.resume = nullptr;
+    run_resumed(scene, read_checkpoint(checkpoint_path), checkpoint_path, options);
     EXPECT_EQ(read_text(dir / "stopped" / "runout.json"), read_text(dir / "whole" / "runout.json"));
   }
   {
@@ -595,12 +592,9 @@ TEST(RunoutOutput, RestartIntoAnotherFolderMeasuresFromTheSameGate) {
   const std::string checkpoint_path = (dir / "first" / "checkpoint.h5").string();
   const Checkpoint checkpoint = read_checkpoint(checkpoint_path);
   ASSERT_GT(checkpoint.solver.step, 0);
-  Solver resumed(scene);
-  restore_checkpoint(resumed, checkpoint, checkpoint_path);
   options.out_dir = (dir / "second").string();
-  options.resume = &checkpoint.run;
   options.resume_dir = (dir / "first").string();
-  run_scene(resumed, options);
+  run_resumed(scene, checkpoint, checkpoint_path, options);
   // The same result, and the new history is the reference's rows after the checkpoint, under the header.
   EXPECT_EQ(read_text(dir / "second" / "runout.json"), read_text(dir / "first" / "runout.json"));
   const std::string rest = read_text(dir / "second" / "runout.csv");
