@@ -92,6 +92,14 @@ const Reference& reference() {
   return r;
 }
 
+/// A fresh copy of the reference's output folder: ref.root / `name`, an earlier copy replaced.
+fs::path fresh_copy_of_reference(const Reference& ref, const std::string& name) {
+  const fs::path copy = ref.root / name;
+  fs::remove_all(copy);
+  fs::copy(ref.out, copy, fs::copy_options::recursive);
+  return copy;
+}
+
 /// The output of a restarted run equals the uninterrupted one: every frame, the index and the
 /// energy history, byte for byte.
 void expect_same_output(const fs::path& out, const fs::path& ref) {
@@ -299,9 +307,7 @@ TEST(Crash, RestartRefusesAnotherSceneWithOneLineAndExitTwo) {
 // time and the command that resumes it, unless --overwrite says to start afresh.
 TEST(Crash, AFreshRunIntoAnUnfinishedRunsFolderIsRefusedUnlessOverwrite) {
   const Reference& ref = reference();
-  const fs::path out = ref.root / "unfinished";
-  fs::remove_all(out);
-  fs::copy(ref.out, out, fs::copy_options::recursive);
+  const fs::path out = fresh_copy_of_reference(ref, "unfinished");
   nlohmann::json record = read_record(out);
   record["status"] = "interrupted";
   std::ofstream(out / "run.json") << record.dump(2);
@@ -437,9 +443,7 @@ TEST(Crash, RestartIntoAnotherRunsFolderIsRefused) {
   EXPECT_EQ(test::read_text(other / "energy.csv"), test::read_text(ref.out / "energy.csv"));
   EXPECT_FALSE(fs::exists(other / "particles.pvd"));
   // Resuming from the scene.json a run wrote into its own folder is allowed: it is written back unchanged.
-  const fs::path own = ref.root / "own_scene";
-  fs::remove_all(own);
-  fs::copy(ref.out, own, fs::copy_options::recursive);
+  const fs::path own = fresh_copy_of_reference(ref, "own_scene");
   const auto [resumed, resumed_text] = run_captured("run " + (own / "scene.json").string() + " --restart " +
                                                     (own / "checkpoint.h5").string() + " --quiet --threads 1");
   EXPECT_EQ(resumed, 0) << resumed_text;
@@ -467,9 +471,7 @@ TEST(Crash, RestartIntoAnotherRunsFolderIsRefused) {
 // the run says so. (The old frames are made here by taking the names out of the headers.)
 TEST(Crash, ResumingASeriesOfFramesInTheOlderTensorOrderWarns) {
   const Reference& ref = reference();
-  const fs::path old = ref.root / "older_frames";
-  fs::remove_all(old);
-  fs::copy(ref.out, old, fs::copy_options::recursive);
+  const fs::path old = fresh_copy_of_reference(ref, "older_frames");
   const std::regex component_name(" ComponentName[0-5]=\"[a-z]+\"");
   for (const fs::path& frame : test::pvd_frames(old / "particles.pvd")) {
     const std::string text = test::read_text(frame);
@@ -495,9 +497,7 @@ TEST(Crash, ResumingASeriesOfFramesInTheOlderTensorOrderWarns) {
 // says so; the intact folder (above) gives no warning.
 TEST(Crash, ResumingADamagedOwnFolderSaysWhatItsOutputsLack) {
   const Reference& ref = reference();
-  const fs::path damaged = ref.root / "damaged_own";
-  fs::remove_all(damaged);
-  fs::copy(ref.out, damaged, fs::copy_options::recursive);
+  const fs::path damaged = fresh_copy_of_reference(ref, "damaged_own");
   const std::vector<fs::path> frames = test::pvd_frames(damaged / "particles.pvd");
   ASSERT_GE(frames.size(), 3u);
   fs::remove(frames[1]);
@@ -510,8 +510,7 @@ TEST(Crash, ResumingADamagedOwnFolderSaysWhatItsOutputsLack) {
   EXPECT_NE(text.find((damaged / "energy.csv").string() + " held no row up to the checkpoint's step "), std::string::npos)
       << text;
   // every frame gone, and the history: said too (the test was "a frame is kept", and this said nothing)
-  fs::remove_all(damaged);
-  fs::copy(ref.out, damaged, fs::copy_options::recursive);
+  fresh_copy_of_reference(ref, "damaged_own");
   fs::remove_all(damaged / "frames");
   fs::remove(damaged / "energy.csv");
   const auto [all_code, all_text] = run_captured("run " + (damaged / "scene.json").string() + " --restart " +
