@@ -79,8 +79,6 @@ TEST_F(CliErrors, BenchNumberOptionsRefuseNonFiniteValuesAndNonNumbersNamingTheR
   expect_error_line(run("bench --particles 1e6"), "--particles = 1e6 is not an integer; allowed [1000, 100000000]");
 }
 
-// The bench learned that it could not write its files only after it had run (minutes at 1e6
-// particles) and printed its results.
 // talus run --stop-after: a batch job's time limit as its users write one; anything else is refused
 // before the scene is read. (The forms accepted reach the scene, which is missing here.)
 TEST_F(CliErrors, StopAfterTakesTheDurationsOfABatchJobAndRefusesTheRest) {
@@ -98,6 +96,8 @@ TEST_F(CliErrors, StopAfterTakesTheDurationsOfABatchJobAndRefusesTheRest) {
                           " is longer than a year (8760h); give a shorter duration, or leave --stop-after out");
 }
 
+// The bench learned that it could not write its files only after it had run (minutes at 1e6
+// particles) and printed its results.
 TEST_F(CliErrors, BenchRefusesAnUnwritableOutputBeforeAnyWork) {
   const std::string bench = "bench --particles 1000 --threads 1 --steps 1 ";
   const std::string missing = (dir_ / "no_such_folder" / "b.json").string();
@@ -160,7 +160,6 @@ TEST_F(CliErrors, ParseErrorsAreOneLineWithWhereToReadMore) {
     EXPECT_FALSE(r.out.empty()) << args;
   }
 }
-
 
 const std::string kScene = std::string(TALUS_SOURCE_DIR) + "/inputs/elastic_block_slide.json";
 

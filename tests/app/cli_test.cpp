@@ -1,4 +1,5 @@
 // The talus program as a user meets it: exit codes, one-line errors, no half-written output.
+#include "../support/scratch_dir.hpp"
 #include "talus/core/comm.hpp"
 
 #include <gtest/gtest.h>
@@ -18,6 +19,7 @@ namespace cli_test {
 namespace {
 
 namespace fs = std::filesystem;
+using talus::test::ScratchDir;
 
 struct Result {
   int exit_code;
@@ -34,12 +36,6 @@ Result run_shell(const std::string& command) {
 }
 
 Result run(const std::string& args) { return run_shell(std::string(TALUS_BINARY) + " " + args + " 2>&1"); }
-
-fs::path temp_dir(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / ("talus_cli_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  return dir;
-}
 
 const std::string kInputs = std::string(TALUS_SOURCE_DIR) + "/inputs/";
 
@@ -79,7 +75,7 @@ TEST(Cli, HelpNamesExitCodesFilesAndTheMemoryLimit) {
 // `talus check` takes run's --out and --threads (swap `run` for `check` on a command line): the disk
 // line names that folder, and more threads than CPUs are warned about, as `talus run --threads` is.
 TEST(Cli, CheckTakesRunsOutAndThreads) {
-  const fs::path dir = temp_dir("check_out");
+  const ScratchDir dir("cli_check_out");
   const Result checked = run("check " + kInputs + "elastic_block_slide.json --out " + (dir / "mine").string() + " --threads 4096");
   EXPECT_EQ(checked.exit_code, 0) << checked.output;
   EXPECT_NE(checked.output.find("disk       "), std::string::npos) << checked.output;
@@ -103,14 +99,12 @@ TEST(Cli, VersionNamesTheCommitAndTheVectorPaths) {
   EXPECT_NE(version.output.find("(commit " + commit), std::string::npos) << version.output;
   EXPECT_NE(version.output.find("vector paths here: reference"), std::string::npos) << version.output;
 
-  const fs::path dir = temp_dir("version");
-  fs::create_directories(dir);
+  const ScratchDir dir("cli_version");
   const Result bench = run("bench --particles 1000 --steps 1 --json " + (dir / "bench.json").string());
   ASSERT_EQ(bench.exit_code, 0) << bench.output;
   const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "bench.json"));
   EXPECT_EQ(j.at("build").at("commit").get<std::string>().rfind(commit, 0), 0u) << j.at("build");
   EXPECT_EQ(j.at("build").at("vector_paths").at(0), "reference");
-  fs::remove_all(dir);
 }
 
 // Every scene under inputs/, its folders too (terrain/, benchmarks/; element_tests/ holds the specs of
@@ -129,8 +123,7 @@ TEST(Cli, CheckValidatesEveryShippedScene) {
 }
 
 TEST(Cli, BadSceneGivesOneLineExitTwoAndNoOutputFolder) {
-  const fs::path dir = temp_dir("bad");
-  fs::create_directories(dir);
+  const ScratchDir dir("cli_bad");
   const fs::path scene = dir / "bad.json";
   std::ifstream in(kInputs + "elastic_block_slide.json");
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -146,12 +139,10 @@ TEST(Cli, BadSceneGivesOneLineExitTwoAndNoOutputFolder) {
   EXPECT_NE(missing.output.find("cannot open scene file"), std::string::npos);
   const Result usage = run("run");
   EXPECT_EQ(usage.exit_code, 2);
-  fs::remove_all(dir);
 }
 
 TEST(Cli, CheckWarnsAboutAnMlsRadiusMeasuredUnstable) {
-  const fs::path dir = temp_dir("mls_radius");
-  fs::create_directories(dir);
+  const ScratchDir dir("cli_mls_radius");
   nlohmann::json scene = nlohmann::json::parse(std::ifstream(kInputs + "elastic_block_slide.json"));
   auto check_with_radius = [&](double radius) {
     scene["solver"]["smoothing"] = {{"basis", "linear"}, {"radius_factor", radius}};
@@ -165,15 +156,13 @@ TEST(Cli, CheckWarnsAboutAnMlsRadiusMeasuredUnstable) {
   const Result usual = check_with_radius(2.0);
   EXPECT_EQ(usual.exit_code, 0) << usual.output;
   EXPECT_EQ(usual.output.find("warning"), std::string::npos) << usual.output;
-  fs::remove_all(dir);
 }
 
 // A body the guard leaves unsmoothed in (nearly) every pass (one particle thick, with the quadratic
 // basis: A is singular at any radius) ends with a warning that smoothing had no effect, not with the
 // info line of a smoothed run; a block the linear basis fits keeps the info line.
 TEST(Cli, RunWarnsWhenTheMlsGuardLeftMostParticlesUnsmoothed) {
-  const fs::path dir = temp_dir("mls_unsmoothed");
-  fs::create_directories(dir);
+  const ScratchDir dir("cli_mls_unsmoothed");
   nlohmann::json scene = nlohmann::json::parse(std::ifstream(kInputs + "elastic_block_slide.json"));
   scene["time"]["end"] = 0.01;
   auto run_with = [&](const std::string& basis, double top, int per_cell) {
@@ -194,12 +183,10 @@ TEST(Cli, RunWarnsWhenTheMlsGuardLeftMostParticlesUnsmoothed) {
   EXPECT_EQ(block.exit_code, 0) << block.output;
   EXPECT_NE(block.output.find("talus: MLS smoothing: "), std::string::npos) << block.output;
   EXPECT_EQ(block.output.find("had no effect"), std::string::npos) << block.output;
-  fs::remove_all(dir);
 }
 
-/// The elastic block slide of inputs/, ended at 0.02 s, as `dir`/short.json (the folder made).
+/// The elastic block slide of inputs/, ended at 0.02 s, as `dir`/short.json.
 void write_short_block_slide(const fs::path& dir) {
-  fs::create_directories(dir);
   std::ifstream in(kInputs + "elastic_block_slide.json");
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   text.replace(text.find("\"end\": 1.0"), 10, "\"end\": 0.02");
@@ -207,7 +194,7 @@ void write_short_block_slide(const fs::path& dir) {
 }
 
 TEST(Cli, RunWritesAParaViewSeries) {
-  const fs::path dir = temp_dir("run");
+  const ScratchDir dir("cli_run");
   write_short_block_slide(dir);
   const Result r = run("run " + (dir / "short.json").string() + " --out " + (dir / "out").string() + " --threads 2 --quiet");
   EXPECT_EQ(r.exit_code, 0) << r.output;
@@ -215,13 +202,12 @@ TEST(Cli, RunWritesAParaViewSeries) {
   EXPECT_TRUE(fs::exists(dir / "out" / "particles.pvd"));
   EXPECT_TRUE(fs::exists(dir / "out" / "energy.csv"));
   EXPECT_TRUE(fs::exists(dir / "out" / "scene.json"));
-  fs::remove_all(dir);
 }
 
 // Into a file or pipe each progress line is a new line of the log: one every 30 s by default (it
 // was every 2 s, 1 800 lines an hour), and the last after the last step; --progress-every sets it.
 TEST(Cli, ProgressIntoALogComesEveryThirtySecondsUnlessAsked) {
-  const fs::path dir = temp_dir("progress");
+  const ScratchDir dir("cli_progress");
   write_short_block_slide(dir);
   const std::string args = "run " + (dir / "short.json").string() + " --out " + (dir / "out").string() + " --threads 1";
   const auto progress_lines = [](const std::string& output) {
@@ -235,7 +221,6 @@ TEST(Cli, ProgressIntoALogComesEveryThirtySecondsUnlessAsked) {
   EXPECT_NE(usual.output.find("  t = 0.02/0.02 s (100.0%)"), std::string::npos) << usual.output;  // the last step
   EXPECT_EQ(run(args + " --progress-every 0").output,
             "talus: error: --progress-every = 0 is outside [0.1, 86400]\n");
-  fs::remove_all(dir);
 }
 
 // The disk estimate (app/disk_estimate.hpp): `talus check` prints the frames' count and bound and
@@ -243,8 +228,7 @@ TEST(Cli, ProgressIntoALogComesEveryThirtySecondsUnlessAsked) {
 // `talus run` warns before it starts when they exceed the free space (here a frame every step of a
 // 1 s run, a billion frames of 1.5 MB: petabytes), then runs (--stop-after ends it at once).
 TEST(Cli, CheckEstimatesTheFramesDiskUseAndRunWarnsWhenTheyMayNotFit) {
-  const fs::path dir = temp_dir("disk");
-  fs::create_directories(dir);
+  const ScratchDir dir("cli_disk");
   std::ifstream in(kInputs + "elastic_block_slide.json");
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const std::string check = run("check " + kInputs + "elastic_block_slide.json").output;
@@ -277,17 +261,16 @@ TEST(Cli, CheckEstimatesTheFramesDiskUseAndRunWarnsWhenTheyMayNotFit) {
   EXPECT_EQ(c.exit_code, 0) << c.output;
   EXPECT_NE(c.output.find(warning), std::string::npos) << c.output;
   EXPECT_NE(c.output.find("\nok (1 warning above, on stderr)\n"), std::string::npos) << c.output;
-  fs::remove_all(dir);
 }
 
 // check said ok where `talus run` then stopped at once: run from its own folder, the scene.json a
 // run wrote there would be replaced by the run's. Then it said ok with a note, and exited 0, and a
 // script that gated on check met run's exit code 2: check now stops as run would, after its summary.
 TEST(Cli, CheckNotesADefaultFolderTheRunCouldNotUse) {
-  const fs::path dir = temp_dir("default_folder");
+  const ScratchDir dir("cli_default_folder");
   fs::create_directories(dir / "runs" / "elastic_block_slide");
   fs::copy_file(kInputs + "elastic_block_slide.json", dir / "runs" / "elastic_block_slide" / "scene.json");
-  const Result inside = run_shell("cd " + dir.string() + " && " + TALUS_BINARY + " check runs/elastic_block_slide/scene.json 2>&1");
+  const Result inside = run_shell("cd " + dir.path().string() + " && " + TALUS_BINARY + " check runs/elastic_block_slide/scene.json 2>&1");
   EXPECT_EQ(inside.exit_code, 2) << inside.output;
   EXPECT_NE(inside.output.find("\ntalus: error: talus run without --out would stop: output folder runs/elastic_block_slide: "
                                "the run would replace the scene file runs/elastic_block_slide/scene.json"),
@@ -298,13 +281,12 @@ TEST(Cli, CheckNotesADefaultFolderTheRunCouldNotUse) {
   const Result elsewhere = run("check " + kInputs + "elastic_block_slide.json");
   EXPECT_EQ(elsewhere.exit_code, 0) << elsewhere.output;
   EXPECT_EQ(elsewhere.output.find("would stop"), std::string::npos) << elsewhere.output;
-  fs::remove_all(dir);
 }
 
 // run.json (app/run_record.hpp): which build ran the scene, how, on what, and how it ended, each
 // field checked against what the run itself wrote or was given.
 TEST(Cli, RunRecordNamesTheBuildTheCommandAndTheEnd) {
-  const fs::path dir = temp_dir("run_record");
+  const ScratchDir dir("cli_run_record");
   write_short_block_slide(dir);
   const fs::path out = dir / "out";
   const Result r = run("run " + (dir / "short.json").string() + " --out " + out.string() +
@@ -378,12 +360,10 @@ TEST(Cli, RunRecordNamesTheBuildTheCommandAndTheEnd) {
   const nlohmann::json c = nlohmann::json::parse(std::ifstream(dir / "capped" / "run.json"));
   EXPECT_EQ(c.at("status"), "completed");
   EXPECT_EQ(c.at("message").get<std::string>().rfind("stopped at time.max_steps = 3, at t = ", 0), 0u) << c.at("message");
-  fs::remove_all(dir);
 }
 
 TEST(Cli, BenchWritesTheJsonContract) {
-  const fs::path dir = temp_dir("bench");
-  fs::create_directories(dir);
+  const ScratchDir dir("cli_bench");
   const fs::path json = dir / "bench.json";
   const Result r = run("bench --scene block --particles 2000 --shape linear --material elastic --mls off --threads 1 --steps 2 --json " +
                        json.string());
@@ -451,7 +431,6 @@ TEST(Cli, BenchWritesTheJsonContract) {
   const Result refused = run("bench --shape quintic");
   EXPECT_EQ(refused.exit_code, 2);
   EXPECT_NE(refused.output.find("--shape quintic"), std::string::npos);
-  fs::remove_all(dir);
 }
 
 
@@ -464,8 +443,7 @@ TEST(Cli, BenchWritesTheJsonContract) {
 TEST(Cli, BenchNotesAPassiveWaitPolicy) {
   const char* inherited = std::getenv("OMP_WAIT_POLICY");
   const std::string saved = inherited ? inherited : "";
-  const fs::path dir = temp_dir("wait_policy");
-  fs::create_directories(dir);
+  const ScratchDir dir("cli_wait_policy");
   const fs::path json = dir / "bench.json";
   ::setenv("OMP_WAIT_POLICY", "passive", 1);
   const Result passive = run("bench --particles 2000 --threads 2 --steps 1 --json " + json.string());
@@ -480,14 +458,12 @@ TEST(Cli, BenchNotesAPassiveWaitPolicy) {
   EXPECT_EQ(active.output.find(note), std::string::npos) << active.output;
   std::ifstream in(json);
   EXPECT_EQ(nlohmann::json::parse(in)["omp_wait_policy"], "passive");
-  fs::remove_all(dir);
 }
 
 TEST(Cli, BenchUnderMpirunReportsAllRanks) {
   if (!talus::mpi_built() || std::system("command -v mpirun > /dev/null 2>&1") != 0)
     GTEST_SKIP() << "no MPI build or no mpirun";
-  const fs::path dir = temp_dir("bench_mpi");
-  fs::create_directories(dir);
+  const ScratchDir dir("cli_bench_mpi");
   // (root in a container: Open MPI may run as root, and copies through /dev/shm without cross-memory attach)
   const std::string mpirun = "env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
                              "OMPI_MCA_btl_vader_single_copy_mechanism=none "
@@ -532,7 +508,6 @@ TEST(Cli, BenchUnderMpirunReportsAllRanks) {
   const std::size_t first = update.output.find(refusal);
   EXPECT_NE(first, std::string::npos) << update.output;
   EXPECT_EQ(update.output.find(refusal, first + 1), std::string::npos) << update.output;
-  fs::remove_all(dir);
 }
 
 
@@ -540,8 +515,7 @@ TEST(Cli, BenchUnderMpirunReportsAllRanks) {
 // colour pass lists each block once, and a run records every --record-interval-th step with the
 // run loop's own time.
 TEST(Cli, BenchAndRunRecordTheWorkDistribution) {
-  const fs::path dir = temp_dir("record");
-  fs::create_directories(dir);
+  const ScratchDir dir("cli_record");
   const fs::path bench_record = dir / "bench_record.json";
   const Result b = run("bench --particles 2000 --threads 1 --steps 1 --record-steps 2 --record-work " + bench_record.string());
   ASSERT_EQ(b.exit_code, 0) << b.output;
@@ -648,12 +622,12 @@ TEST(Cli, BenchAndRunRecordTheWorkDistribution) {
   ASSERT_EQ(f.exit_code, 0) << f.output;
   std::ifstream fin(run_record);
   EXPECT_EQ(nlohmann::json::parse(fin)["run_background_seconds"].get<double>(), 0.0);
-  fs::remove_all(dir);
 }
 
 // A scene with runout diagnostics ends with the runout distance and where its files are (issue 7).
 TEST(Cli, RunWithRunoutDiagnosticsPrintsTheRunoutAndItsFiles) {
-  const fs::path dir = temp_dir("runout");
+  const ScratchDir scratch("cli_runout");
+  const fs::path dir = scratch / "out";  // the run makes its folder
   const Result r = run("run " + kInputs + "benchmarks/sand_slide_incline.json --quiet --threads 2 --out " + dir.string());
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("talus: runout: front at s = "), std::string::npos) << r.output;
@@ -662,15 +636,13 @@ TEST(Cli, RunWithRunoutDiagnosticsPrintsTheRunoutAndItsFiles) {
   EXPECT_NE(r.output.find((dir / "runout.json").string()), std::string::npos) << r.output;
   for (const char* f : {"runout.csv", "runout.json", "deposit.csv", "particles.pvd"}) EXPECT_TRUE(fs::exists(dir / f)) << f;
   EXPECT_FALSE(fs::exists(dir / "terrain.vtu"));  // a flat grid has no terrain surface
-  fs::remove_all(dir);
 }
 
 // An open bed on a terrain grid: check and run warn before the start, and the runout's closing lines
 // say that the mass left through faces other than x+ (runout.json had outflow_mass_share 1 and
 // limited_by_outflow false, and the lines printed a front of a remnant as the runout).
 TEST(Cli, ASlideThroughAnOpenBedIsWarnedAboutBeforeAndAfterTheRun) {
-  const fs::path dir = temp_dir("open_bed");
-  fs::create_directories(dir);
+  const ScratchDir dir("cli_open_bed");
   nlohmann::json scene = nlohmann::json::parse(std::ifstream(kInputs + "terrain/incline30_coarse.json"));
   scene["boundaries"]["z-"] = "open";
   scene["time"]["end"] = 1.0;  // (every particle has left by about 0.45 s: the fall of the block's 1 m)
@@ -705,13 +677,11 @@ TEST(Cli, ASlideThroughAnOpenBedIsWarnedAboutBeforeAndAfterTheRun) {
   EXPECT_GT(by_face.at("z-").at("mass_kg").get<double>(), 0.0);
   // and names the bodies whose indices the frames' `body` array holds
   EXPECT_EQ(record.at("body_names"), nlohmann::json::array({"block"}));
-  fs::remove_all(dir);
 }
 
 TEST(Cli, RunOnManyThreadsSuggestsBlockBuffersForFewBlocksPerColourPass) {
   // the default flume at the start: 10 blocks a colour pass on average; 8 threads would want 16 or more
-  const fs::path dir = temp_dir("scatter_hint");
-  fs::create_directories(dir);
+  const ScratchDir dir("cli_scatter_hint");
   for (const char* name : {"denlinger_flume", "denlinger_flume_block_buffers"}) {
     std::ifstream in(kInputs + name + ".json");
     nlohmann::json scene = nlohmann::json::parse(in);
@@ -734,7 +704,6 @@ TEST(Cli, RunOnManyThreadsSuggestsBlockBuffersForFewBlocksPerColourPass) {
   const Result buffers = run_flume("denlinger_flume_block_buffers", 8);
   ASSERT_EQ(buffers.exit_code, 0) << buffers.output;
   EXPECT_EQ(buffers.output.find("blocks per colour pass"), std::string::npos) << buffers.output;
-  fs::remove_all(dir);
 }
 
 }  // namespace

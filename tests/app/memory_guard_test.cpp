@@ -1,6 +1,7 @@
 // The memory guard (solver/memory_estimate.hpp) as a user meets it: a scene that cannot fit stops at
 // once with one line and exit code 2, and the estimate `talus check` prints matches what a run
 // really holds at its peak.
+#include "../support/scratch_dir.hpp"
 #include "talus/particles/seeding.hpp"
 #include "talus/scene/scene_json.hpp"
 #include "talus/solver/memory_estimate.hpp"
@@ -22,6 +23,7 @@ namespace memory_guard_test {
 namespace {
 
 namespace fs = std::filesystem;
+using talus::test::ScratchDir;
 
 struct ProgramRun {
   int exit_code = -1;
@@ -57,13 +59,6 @@ ProgramRun run_talus(const std::vector<std::string>& args, const char* memory_li
   return r;
 }
 
-fs::path temp_dir(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / ("talus_memory_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
 /// A Drucker-Prager sand block on cpGIMP (the largest per-particle layout without MLS), cut off
 /// after two steps with a frame at the start and the end: its peak holds every array of a run.
 std::string sand_block(double edge, int particles_per_cell, double cell_size = 0.02) {
@@ -95,7 +90,7 @@ TEST(MemoryGuard, CountingMatchesSeedingForEveryShippedScene) {
 }
 
 TEST(MemoryGuard, EstimateMatchesThePeakResidentMemoryOfARun) {
-  const fs::path dir = temp_dir("peak");
+  const ScratchDir dir("memory_peak");
   // The same scene with a 4-particle block: the program, its libraries and the empty grid.
   std::ofstream(dir / "small.json") << sand_block(0.04, 1);
   std::ofstream(dir / "large.json") << sand_block(0.6, 3);
@@ -112,14 +107,13 @@ TEST(MemoryGuard, EstimateMatchesThePeakResidentMemoryOfARun) {
               base.peak_bytes / 1e6, measured / 1e6, estimated / 1e6, double(large.bytes_per_particle));
   // The model is meant to be within 25% of what a run holds (docs/reliability.md "Memory").
   EXPECT_NEAR(estimated / measured, 1.0, 0.25);
-  fs::remove_all(dir);
 }
 
 // A tiny body in a huge grid (a 1000 m flume at h = 0.01 m: 1e9 cells): the grid's bookkeeping, a
 // flag a tile in the grid and the sort and an index a colour block, is held over the whole grid
 // from the start. Without it the estimate was 0.69 of the measured difference (219 MB for 316 MB).
 TEST(MemoryGuard, EstimateCountsTheBookkeepingOfAHugeGrid) {
-  const fs::path dir = temp_dir("huge_grid");
+  const ScratchDir dir("memory_huge_grid");
   const auto scene = [](double length) {
     return R"({ "name": "g", "grid": { "origin": [0, 0, 0], "size": [)" + std::to_string(length) +
            R"(, 1.0, 1.0], "cell_size": 0.01 },
@@ -142,13 +136,12 @@ TEST(MemoryGuard, EstimateCountsTheBookkeepingOfAHugeGrid) {
   std::printf("peak RSS %.1f MB - %.1f MB = %.1f MB; estimated %.1f MB\n", full.peak_bytes / 1e6, base.peak_bytes / 1e6,
               measured / 1e6, estimated / 1e6);
   EXPECT_NEAR(estimated / measured, 1.0, 0.25);
-  fs::remove_all(dir);
 }
 
 // A start that fits, and a grid whose whole would not: `talus check` printed a plain "ok" beside
 // "up to 79.74 GB if the flow covers the whole grid; 19.98 GB available". It warns now, as the run does.
 TEST(MemoryGuard, AGridWhoseWholeWouldNotFitIsWarnedAbout) {
-  const fs::path dir = temp_dir("grid_bound");
+  const ScratchDir dir("memory_grid_bound");
   std::ofstream(dir / "long.json") << R"({ "name": "g", "grid": { "origin": [0, 0, 0], "size": [300, 1.0, 1.0], "cell_size": 0.01 },
       "time": { "end": 1.0, "max_steps": 2 },
       "materials": { "sand": { "model": "drucker_prager", "density": 1600, "young": 2e6, "poisson": 0.3,
@@ -169,11 +162,10 @@ TEST(MemoryGuard, AGridWhoseWholeWouldNotFitIsWarnedAbout) {
   const ProgramRun quiet = run_talus({"check", scene}, above.c_str());
   EXPECT_EQ(quiet.exit_code, 0) << quiet.output;
   EXPECT_EQ(quiet.output.find("memory: about"), std::string::npos) << quiet.output;
-  fs::remove_all(dir);
 }
 
 TEST(MemoryGuard, ASceneThatDoesNotFitStopsAtOnceWithOneLine) {
-  const fs::path dir = temp_dir("too_big");
+  const ScratchDir dir("memory_too_big");
   const fs::path out = dir / "out";
   const std::string scene = std::string(TALUS_SOURCE_DIR) + "/inputs/elastic_block_slide.json";
   const ProgramRun limited = run_talus({"run", scene, "--out", out.string()}, "1M");
@@ -198,7 +190,6 @@ TEST(MemoryGuard, ASceneThatDoesNotFitStopsAtOnceWithOneLine) {
   const ProgramRun bad = run_talus({"check", scene}, "lots");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.output.find("TALUS_MEMORY_LIMIT = \"lots\" is not a memory size"), std::string::npos) << bad.output;
-  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -1,6 +1,8 @@
 #pragma once
 // A test that runs the talus program itself: a fresh temporary folder per test, the program run with
 // its standard output and error captured separately, and small files written into the folder.
+#include "../support/scratch_dir.hpp"
+
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
@@ -28,16 +30,14 @@ inline std::string slurp(const fs::path& p) {
   return s.str();
 }
 
+/// The name of the running test, for its folder: <suite>_<test>.
+inline std::string current_test_label() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  return std::string(info->test_suite_name()) + "_" + info->name();
+}
+
 class ProgramTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("talus_" + std::string(info->test_suite_name()) + "_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
 
   /// Run `talus ARGS` (ARGS as a shell would split them).
   ProgramResult run(const std::string& args) const {
@@ -59,7 +59,8 @@ class ProgramTest : public ::testing::Test {
     return p;
   }
 
-  fs::path dir_;
+  ScratchDir scratch_{current_test_label()};
+  fs::path dir_ = scratch_.path();
 };
 
 }  // namespace talus::test

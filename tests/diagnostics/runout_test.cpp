@@ -1,6 +1,8 @@
 // Runout diagnostics on synthetic particle sets: quantile front and tail that stray particles do not
 // move, centre of mass and its velocity along the bed, the deposit raster, the terrain's runout
 // plane, and the files the run driver writes.
+#include "../support/quiet_run.hpp"
+#include "../support/scratch_dir.hpp"
 #include "talus/core/error.hpp"
 #include "talus/diagnostics/runout.hpp"
 #include "talus/io/checkpoint.hpp"
@@ -340,16 +342,9 @@ TEST(RunoutOutput, CsvRowRoundTrips) {
   EXPECT_FALSE(parse_runout_csv_row("1,2,3").has_value());
 }
 
-fs::path temp_dir(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / ("talus_test_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
 TEST(RunoutOutput, TerrainSurfaceReadsBackOnTheBed) {
   const TerrainProfile profile(flume_terrain(31.4, 0.2));
-  const fs::path dir = temp_dir("terrain");
+  const test::ScratchDir dir("test_terrain");
   const std::string path = (dir / "terrain.vtu").string();
   write_terrain_vtu(path, profile, -0.1, 2.4, -0.3, 0.3, 0.01);
   vtkNew<vtkXMLUnstructuredGridReader> reader;
@@ -367,7 +362,6 @@ TEST(RunoutOutput, TerrainSurfaceReadsBackOnTheBed) {
     EXPECT_DOUBLE_EQ(x[1], p % 2 == 0 ? -0.3 : 0.3);
   }
   EXPECT_NEAR(g->GetPointData()->GetArray("slope_angle")->GetTuple1(0), 31.4, 1e-9);
-  fs::remove_all(dir);
 }
 
 // A sand block sliding on a flat floor, gravity tilted 31.4 deg down +x.
@@ -388,11 +382,19 @@ std::string read_text(const fs::path& path) {
   return text.str();
 }
 
+/// `scene` resumed from `checkpoint` (read from `path`) and run to its end through the run driver.
+RunSummary run_resumed(const Scene& scene, const Checkpoint& checkpoint, const std::string& path, RunOptions options) {
+  Solver resumed(scene);
+  restore_checkpoint(resumed, checkpoint, path);
+  options.resume = &checkpoint.run;
+  return run_scene(resumed, options);
+}
+
 TEST(RunoutOutput, RunWritesRunoutHistoryAndDeposit) {
   Solver solver(parse_scene(kSlideScene, "slide"));
-  const fs::path dir = temp_dir("runout_run");
+  const test::ScratchDir dir("test_runout_run");
   RunOptions options;
-  options.out_dir = dir.string();
+  options.out_dir = dir.path().string();
   options.progress = false;
   const RunSummary summary = run_scene(solver, options);
   ASSERT_TRUE(summary.runout.has_value());
@@ -446,17 +448,13 @@ TEST(RunoutOutput, RunWritesRunoutHistoryAndDeposit) {
   double particle_volume = 0.0;
   for (double v : solver.particles().volume) particle_volume += v;
   EXPECT_NEAR(volume, particle_volume, 1e-6 * particle_volume);
-  fs::remove_all(dir);
 }
 
 TEST(RunoutOutput, RestartContinuesTheHistoryBitForBit) {
   Scene scene = parse_scene(kSlideScene, "slide");
   scene.output.checkpoint_interval = 0.012;  // one checkpoint, mid-run
-  const fs::path dir = temp_dir("runout_restart");
-  RunOptions options;
-  options.out_dir = dir.string();
-  options.progress = false;
-  options.handle_signals = false;
+  const test::ScratchDir dir("test_runout_restart");
+  RunOptions options = test::quiet_run_options(dir);
   RunSummary whole;
   {
     Solver solver(scene);
@@ -468,10 +466,7 @@ TEST(RunoutOutput, RestartContinuesTheHistoryBitForBit) {
   const std::string checkpoint_path = (dir / "checkpoint.h5").string();
   const Checkpoint checkpoint = read_checkpoint(checkpoint_path);
   ASSERT_GT(checkpoint.solver.step, 0);
-  Solver resumed(scene);
-  restore_checkpoint(resumed, checkpoint, checkpoint_path);
-  options.resume = &checkpoint.run;
-  const RunSummary rest = run_scene(resumed, options);
+  const RunSummary rest = run_resumed(scene, checkpoint, checkpoint_path, options);
   // The series lists every frame again; this call wrote only those after the checkpoint (the run's
   // summary line said "(1 frames)").
   EXPECT_EQ(rest.frames_in_series, whole.frames);
@@ -481,7 +476,6 @@ TEST(RunoutOutput, RestartContinuesTheHistoryBitForBit) {
   // the last row before the checkpoint), and the runout is measured from the same gate.
   EXPECT_EQ(read_text(dir / "runout.csv"), reference);
   EXPECT_EQ(read_text(dir / "runout.json"), reference_result);
-  fs::remove_all(dir);
 }
 
 // A folder written before runout.csv had front_x ... tail_z, resumed: the rows kept up to the
@@ -490,11 +484,8 @@ TEST(RunoutOutput, RestartContinuesTheHistoryBitForBit) {
 TEST(RunoutOutput, RestartAddsTheFrontsPlaceToAnOlderHistory) {
   Scene scene = parse_scene(kSlideScene, "slide");
   scene.output.checkpoint_interval = 0.012;  // one checkpoint, mid-run
-  const fs::path dir = temp_dir("runout_restart_older");
-  RunOptions options;
-  options.out_dir = dir.string();
-  options.progress = false;
-  options.handle_signals = false;
+  const test::ScratchDir dir("test_runout_restart_older");
+  RunOptions options = test::quiet_run_options(dir);
   {
     Solver solver(scene);
     run_scene(solver, options);
@@ -511,12 +502,8 @@ TEST(RunoutOutput, RestartAddsTheFrontsPlaceToAnOlderHistory) {
   const std::string checkpoint_path = (dir / "checkpoint.h5").string();
   const Checkpoint checkpoint = read_checkpoint(checkpoint_path);
   ASSERT_GT(checkpoint.solver.step, 0);
-  Solver resumed(scene);
-  restore_checkpoint(resumed, checkpoint, checkpoint_path);
-  options.resume = &checkpoint.run;
-  run_scene(resumed, options);
+  run_resumed(scene, checkpoint, checkpoint_path, options);
   EXPECT_EQ(read_text(dir / "runout.csv"), reference);
-  fs::remove_all(dir);
 }
 
 // runout.json says how the run ended and which state it describes: a run stopped between history
@@ -524,15 +511,12 @@ TEST(RunoutOutput, RestartAddsTheFrontsPlaceToAnOlderHistory) {
 // none; one stopped at time.max_steps is completed (as run.json says) with its deposit, but not final.
 TEST(RunoutOutput, TheResultSaysHowTheRunEndedAndTheStateItDescribes) {
   const Scene scene = parse_scene(kSlideScene, "slide");
-  const fs::path dir = temp_dir("runout_status");
-  RunOptions options;
-  options.progress = false;
-  options.handle_signals = false;
+  const test::ScratchDir dir("test_runout_status");
   auto result_of = [](const fs::path& folder) {
     std::ifstream in(folder / "runout.json");
     return nlohmann::json::parse(in);
   };
-  options.out_dir = (dir / "whole").string();
+  RunOptions options = test::quiet_run_options(dir / "whole");
   RunSummary whole;
   {
     Solver solver(scene);
@@ -560,12 +544,7 @@ TEST(RunoutOutput, TheResultSaysHowTheRunEndedAndTheStateItDescribes) {
     EXPECT_FALSE(fs::exists(dir / "stopped" / "deposit.csv"));
     // resumed to the end: the uninterrupted run's result, to the bit
     const std::string checkpoint_path = (dir / "stopped" / "checkpoint.h5").string();
-    const Checkpoint checkpoint = read_checkpoint(checkpoint_path);
-    Solver resumed(scene);
-    restore_checkpoint(resumed, checkpoint, checkpoint_path);
-    options.resume = &checkpoint.run;
-    run_scene(resumed, options);
-    options.resume = nullptr;
+    run_resumed(scene, read_checkpoint(checkpoint_path), checkpoint_path, options);
     EXPECT_EQ(read_text(dir / "stopped" / "runout.json"), read_text(dir / "whole" / "runout.json"));
   }
   {
@@ -594,7 +573,6 @@ TEST(RunoutOutput, TheResultSaysHowTheRunEndedAndTheStateItDescribes) {
     EXPECT_EQ(j.at("step").get<std::int64_t>(), 0);
     EXPECT_EQ(j.at("time").get<double>(), 0.0);
   }
-  fs::remove_all(dir);
 }
 
 // talus run --restart DIR/checkpoint.h5 --out OTHER: the rows before the checkpoint stay in DIR.
@@ -604,11 +582,8 @@ TEST(RunoutOutput, RestartIntoAnotherFolderMeasuresFromTheSameGate) {
   Scene scene = parse_scene(kSlideScene, "slide");
   scene.output.checkpoint_interval = 0.012;  // one checkpoint, mid-run
   scene.runout.has_gate = false;             // the gate is the initial front
-  const fs::path dir = temp_dir("runout_restart_elsewhere");
-  RunOptions options;
-  options.out_dir = (dir / "first").string();
-  options.progress = false;
-  options.handle_signals = false;
+  const test::ScratchDir dir("test_runout_restart_elsewhere");
+  RunOptions options = test::quiet_run_options(dir / "first");
   {
     Solver solver(scene);
     run_scene(solver, options);
@@ -617,12 +592,9 @@ TEST(RunoutOutput, RestartIntoAnotherFolderMeasuresFromTheSameGate) {
   const std::string checkpoint_path = (dir / "first" / "checkpoint.h5").string();
   const Checkpoint checkpoint = read_checkpoint(checkpoint_path);
   ASSERT_GT(checkpoint.solver.step, 0);
-  Solver resumed(scene);
-  restore_checkpoint(resumed, checkpoint, checkpoint_path);
   options.out_dir = (dir / "second").string();
-  options.resume = &checkpoint.run;
   options.resume_dir = (dir / "first").string();
-  run_scene(resumed, options);
+  run_resumed(scene, checkpoint, checkpoint_path, options);
   // The same result, and the new history is the reference's rows after the checkpoint, under the header.
   EXPECT_EQ(read_text(dir / "second" / "runout.json"), read_text(dir / "first" / "runout.json"));
   const std::string rest = read_text(dir / "second" / "runout.csv");
@@ -633,7 +605,6 @@ TEST(RunoutOutput, RestartIntoAnotherFolderMeasuresFromTheSameGate) {
   ASSERT_GE(reference.size(), rows.size());
   EXPECT_EQ(reference.substr(reference.size() - rows.size()), rows);
   EXPECT_EQ(read_text(dir / "first" / "runout.csv"), reference);  // the checkpoint's folder is read, not changed
-  fs::remove_all(dir);
 }
 
 // Mass that leaves through the open faces is not in the front and tail quantiles. A block thrown
@@ -654,11 +625,8 @@ const char* kOutflowScene = R"({
     "diagnostics": { "runout": { "gate_x": 0.1 } } })";
 
 TEST(RunoutOutput, MassLeftThroughTheOpenFacesIsSaidAndTheFrontFlagged) {
-  const fs::path dir = temp_dir("runout_outflow");
-  RunOptions options;
-  options.out_dir = (dir / "both").string();
-  options.progress = false;
-  options.handle_signals = false;
+  const test::ScratchDir dir("test_runout_outflow");
+  RunOptions options = test::quiet_run_options(dir / "both");
   auto result_of = [](const fs::path& folder) {
     std::ifstream in(folder / "runout.json");
     return nlohmann::json::parse(in);
@@ -715,7 +683,6 @@ TEST(RunoutOutput, MassLeftThroughTheOpenFacesIsSaidAndTheFrontFlagged) {
     EXPECT_FALSE(j.at("limited_by_outflow").get<bool>());
     EXPECT_FALSE(j.at("front_at_grid_end").get<bool>());
   }
-  fs::remove_all(dir);
 }
 
 TEST(RunoutSpec, BadDiagnosticsKeysAreRefusedNamingTheKey) {

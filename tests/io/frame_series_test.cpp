@@ -4,6 +4,7 @@
 // back as one data set; a resumed run keeps the frames of either kind its checkpoint lists and no
 // other; a write that fails in the background stops the run at the next complete().
 #include "../solver/scene_fixtures.hpp"
+#include "../support/scratch_dir.hpp"
 #include "talus/core/comm.hpp"
 #include "talus/core/error.hpp"
 #include "talus/driver/run_outputs.hpp"
@@ -22,6 +23,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -32,7 +34,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-using test::temp_dir;
+using test::ScratchDir;
 
 /// The names of the files in `dir`, sorted.
 std::vector<std::string> files_in(const fs::path& dir) {
@@ -91,7 +93,8 @@ TEST(FrameSeries, NamesFramesSummariesAndPieces) {
 TEST(FrameSeries, OneRankWritesVtuFramesAsWriteParticlesVtuDoes) {
   for (bool compress : {false, true}) {
     Solver solver(test::tumbling_block_scene(0.01));
-    const fs::path dir = temp_dir(compress ? "series_lz4" : "series_raw");
+    const ScratchDir scratch(compress ? "test_series_lz4" : "test_series_raw");
+    const fs::path dir = scratch / "out";  // prepare_output_folder makes it
     prepare_output_folder(dir, nullptr);
     RunProgress progress;
     FrameSeries frames(dir, compress, progress, Comm());
@@ -113,12 +116,11 @@ TEST(FrameSeries, OneRankWritesVtuFramesAsWriteParticlesVtuDoes) {
     EXPECT_EQ(files_in(dir / "frames"), (std::vector<std::string>{"particles_000000.vtu", "particles_000001.vtu"}));
     EXPECT_EQ(pvd_files(frames.pvd_path()),
               (std::vector<std::string>{"frames/particles_000000.vtu", "frames/particles_000001.vtu"}));
-    fs::remove_all(dir);
   }
 }
 
 TEST(FrameSeries, ResumeKeepsTheListedFramesOfEveryKindAndNoOther) {
-  const fs::path dir = temp_dir("resume_frames");
+  const ScratchDir dir("test_resume_frames");
   fs::create_directories(dir / "frames");
   // Frame 0 by one rank, frame 1 by two, frame 2 by three ranks, frame 3 by one; a killed writer's
   // temporary file; files of the user's (a .vtu among them: only talus's frame names are removed).
@@ -146,7 +148,8 @@ TEST(FrameSeries, ResumeKeepsTheListedFramesOfEveryKindAndNoOther) {
 
   // Resumed into another folder (--restart with --out), the series lists none of the checkpoint's
   // earlier frames, which are not there, and its own frames take the next indices.
-  const fs::path elsewhere = temp_dir("resume_elsewhere");
+  const ScratchDir elsewhere_scratch("test_resume_elsewhere");
+  const fs::path elsewhere = elsewhere_scratch / "out";  // prepare_output_folder makes it
   RunProgress resumed_elsewhere;  // the checkpoint's two frames (`resume` has the series' third by now)
   resumed_elsewhere.frame_times = {0.0, 0.1};
   resumed_elsewhere.frame_steps = {0, 10};
@@ -156,21 +159,19 @@ TEST(FrameSeries, ResumeKeepsTheListedFramesOfEveryKindAndNoOther) {
   EXPECT_EQ(other.write(solver), "frames/particles_000002.vtu");
   other.complete(solver);
   EXPECT_EQ(pvd_files(other.pvd_path()), (std::vector<std::string>{"frames/particles_000002.vtu"}));
-  fs::remove_all(elsewhere);
 
   // A fresh run removes every frame, summary and piece.
   prepare_output_folder(dir, nullptr);
   EXPECT_EQ(files_in(dir / "frames"), (std::vector<std::string>{"mesh.vtu", "notes.txt"}));  // the user's files stay
   EXPECT_FALSE(fs::exists(dir / "particles.pvd"));
-  fs::remove_all(dir);
 }
 
 /// The tumbling block's solver and a fresh output folder for one series (removed at the end).
 struct OneRankSeries {
-  explicit OneRankSeries(const char* name) : dir(temp_dir(name)) { prepare_output_folder(dir, nullptr); }
-  ~OneRankSeries() { fs::remove_all(dir); }
+  explicit OneRankSeries(const char* name) : scratch(std::string("test_") + name) { prepare_output_folder(dir, nullptr); }
   Solver solver{test::tumbling_block_scene(0.01)};
-  fs::path dir;
+  ScratchDir scratch;
+  fs::path dir = scratch / "out";  // prepare_output_folder makes it
   RunProgress progress;
 };
 
@@ -227,7 +228,10 @@ TEST(FrameSeries, EveryRanksParticlesReadBackAsOneFrame) {
   char** argv = nullptr;
   MpiSession mpi(argc, argv);
   const Comm comm = Comm::world();
-  const fs::path dir = comm.broadcast(temp_dir("ranks_frame").string());  // one folder for all ranks
+  // One folder for all ranks, rank 0's: made and removed by rank 0 alone.
+  std::optional<ScratchDir> scratch;
+  if (comm.root()) scratch.emplace("test_ranks_frame");
+  const fs::path dir = comm.broadcast(scratch ? (*scratch / "out").string() : std::string());
   Solver solver(test::tumbling_block_scene(0.01));
   for (int s = 0; s < 3; ++s) solver.step();
   const ParticleStore all = solver.particles();
@@ -278,8 +282,7 @@ TEST(FrameSeries, EveryRanksParticlesReadBackAsOneFrame) {
     EXPECT_EQ(ids, expected_ids);
     EXPECT_EQ(pvd_files(frames.pvd_path()), std::vector<std::string>{name});
   }
-  comm.barrier();  // every rank is done reading before rank 0 removes the folder
-  if (comm.root()) fs::remove_all(dir);
+  comm.barrier();  // every rank is done reading before rank 0 removes the folder (`scratch`, as it goes)
 }
 
 }  // namespace

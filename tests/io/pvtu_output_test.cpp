@@ -2,6 +2,7 @@
 // summary read back through VTK's parallel reader as one data set; the summary declares exactly
 // the arrays the pieces hold.
 #include "talus/io/vtu_writer.hpp"
+#include "../support/scratch_dir.hpp"
 #include "vtk_xml_headers.hpp"
 
 #include <gtest/gtest.h>
@@ -22,12 +23,6 @@ namespace pvtu_output_test {
 namespace {
 
 namespace fs = std::filesystem;
-
-fs::path temp_dir(const std::string& name) {  // made, not only named
-  const fs::path dir = test::temp_dir(name);
-  fs::create_directories(dir);
-  return dir;
-}
 
 /// n particles with ids first_id.., every field a different value (so a mixed-up piece shows).
 ParticleStore store_of(std::int64_t first_id, std::size_t n) {
@@ -61,15 +56,14 @@ std::vector<std::pair<std::string, int>> point_arrays(vtkUnstructuredGrid* grid)
 }
 
 struct Pieces {
-  fs::path dir;
+  test::ScratchDir dir;
   std::vector<ParticleStore> stores;
   std::vector<std::string> files;  // relative to dir
 };
 
 /// Three ranks' pieces, the middle rank empty, written raw or with LZ4.
 Pieces write_pieces(const std::string& name, bool compress) {
-  Pieces p;
-  p.dir = temp_dir(name);
+  Pieces p{test::ScratchDir("test_" + name), {}, {}};
   p.stores.push_back(store_of(0, 5));
   p.stores.push_back(ParticleStore{});
   p.stores.push_back(store_of(100, 7));
@@ -81,7 +75,7 @@ Pieces write_pieces(const std::string& name, bool compress) {
 }
 
 TEST(PvtuOutput, EmptyStoreWritesAValidPieceWithAllArrays) {
-  const fs::path dir = temp_dir("empty_piece");
+  const test::ScratchDir dir("test_empty_piece");
   const ParticleStore empty;
   const ParticleStore full = store_of(0, 4);
   write_particles_vtu((dir / "empty.vtu").string(), empty, false);
@@ -95,7 +89,6 @@ TEST(PvtuOutput, EmptyStoreWritesAValidPieceWithAllArrays) {
   // The same declarations, as text, as a piece with particles.
   EXPECT_EQ(test::array_declarations(test::xml_section(test::vtu_header(dir / "empty.vtu"), "PointData"), "DataArray"),
             test::array_declarations(test::xml_section(test::vtu_header(dir / "full.vtu"), "PointData"), "DataArray"));
-  fs::remove_all(dir);
 }
 
 TEST(PvtuOutput, SummaryDeclaresExactlyThePiecesArrays) {
@@ -131,7 +124,6 @@ TEST(PvtuOutput, SummaryDeclaresExactlyThePiecesArrays) {
   write_particles_pvtu((p.dir / "from_empty.pvtu").string(), p.files, ParticleStore{});
   EXPECT_EQ(test::file_bytes(p.dir / "from_empty.pvtu"), summary);
   for (const auto& entry : fs::directory_iterator(p.dir)) EXPECT_NE(entry.path().extension(), ".tmp");
-  fs::remove_all(p.dir);
 }
 
 TEST(PvtuOutput, PiecesReadBackAsOneDataSet) {
@@ -172,12 +164,11 @@ TEST(PvtuOutput, PiecesReadBackAsOneDataSet) {
       }
     }
     EXPECT_EQ(std::string(pd->GetArray("stress")->GetComponentName(vtk_symmetric_component(XY))), "xy");
-    fs::remove_all(p.dir);
   }
 }
 
 TEST(PvtuOutput, PvdIndexOfAnotherRankWritesNothing) {
-  const fs::path dir = temp_dir("pvd_flag");
+  const test::ScratchDir dir("test_pvd_flag");
   PvdIndex silent((dir / "silent.pvd").string(), false);
   PvdIndex index((dir / "index.pvd").string());
   for (PvdIndex* pvd : {&silent, &index}) {
@@ -192,7 +183,6 @@ TEST(PvtuOutput, PvdIndexOfAnotherRankWritesNothing) {
   ASSERT_EQ(data_sets.size(), 2u);
   EXPECT_EQ(data_sets[1].at("file"), "frames/particles_000001.pvtu");
   EXPECT_EQ(data_sets[1].at("timestep"), "0.5");
-  fs::remove_all(dir);
 }
 
 }  // namespace

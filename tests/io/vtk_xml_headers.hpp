@@ -3,7 +3,6 @@
 // (its header, before the appended binary data) and of a .pvtu, and the pieces a .pvtu lists.
 // The tests compare what the summary declares with what the pieces hold through these.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -14,14 +13,6 @@
 #include <vector>
 
 namespace talus::test {
-
-/// A fresh folder under the system's temporary directory, named for the test and the process.
-inline std::filesystem::path temp_dir(const std::string& name) {
-  std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("talus_test_" + name + "_" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  return dir;
-}
 
 /// The whole file as bytes.
 inline std::string file_bytes(const std::filesystem::path& path) {

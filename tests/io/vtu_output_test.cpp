@@ -1,6 +1,7 @@
 // A frame written by the solver's writer reads back through VTK's own reader with the right arrays,
 // and the run driver writes a .pvd index, the resolved scene and the energy history.
 #include "../solver/scene_fixtures.hpp"
+#include "../support/scratch_dir.hpp"
 #include "talus/driver/run_driver.hpp"
 #include "talus/driver/run_outputs.hpp"
 #include "talus/io/atomic_file.hpp"
@@ -32,7 +33,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-using test::temp_dir;
+using test::ScratchDir;
 
 /// run_scene on `scene` into `dir`, without a progress line.
 RunSummary run_quietly(const Scene& scene, const fs::path& dir) {
@@ -46,8 +47,7 @@ RunSummary run_quietly(const Scene& scene, const fs::path& dir) {
 TEST(VtuOutput, FrameReadsBackWithAllArrays) {
   Solver solver(test::tumbling_block_scene(0.01));
   while (!solver.finished()) solver.step();
-  const fs::path dir = temp_dir("vtu");
-  fs::create_directories(dir);
+  const ScratchDir dir("test_vtu");
   for (bool compress : {false, true}) {
     const std::string path = (dir / (compress ? "lz4.vtu" : "raw.vtu")).string();
     write_particles_vtu(path, solver.particles(), compress);
@@ -82,7 +82,6 @@ TEST(VtuOutput, FrameReadsBackWithAllArrays) {
     EXPECT_EQ(pd->GetArray("id")->GetTuple1(static_cast<vtkIdType>(p)), static_cast<double>(P.id[p]));
     EXPECT_DOUBLE_EQ(pd->GetArray("density")->GetTuple1(static_cast<vtkIdType>(p)), P.mass[p] / P.volume[p]);
   }
-  fs::remove_all(dir);
 }
 
 // Frames declare 8-byte array lengths: VTK 9.1 refuses a raw array over 4 GiB under its 4-byte
@@ -91,8 +90,7 @@ TEST(VtuOutput, FrameReadsBackWithAllArrays) {
 // suite, so the test reads the declaration that allows it.
 TEST(VtuOutput, FramesDeclareLengthsThatHoldArraysOverFourGiB) {
   Solver solver(test::tumbling_block_scene(0.01));
-  const fs::path dir = temp_dir("vtu_header");
-  fs::create_directories(dir);
+  const ScratchDir dir("test_vtu_header");
   for (bool compress : {false, true}) {
     const fs::path path = dir / (compress ? "lz4.vtu" : "raw.vtu");
     write_particles_vtu(path.string(), solver.particles(), compress, 0.0);
@@ -100,7 +98,6 @@ TEST(VtuOutput, FramesDeclareLengthsThatHoldArraysOverFourGiB) {
     ASSERT_EQ(file.size(), 1u) << path;
     EXPECT_EQ(file[0].at("header_type"), "UInt64") << path;
   }
-  fs::remove_all(dir);
 }
 
 // particle_frame_bytes, the disk-use estimate of `talus check` and `talus run`, against the files:
@@ -108,8 +105,7 @@ TEST(VtuOutput, FramesDeclareLengthsThatHoldArraysOverFourGiB) {
 // whatever its particle count; a compressed one no larger but for its block headers.
 TEST(VtuOutput, FrameBytesEstimateMatchesAFrame) {
   Solver solver(test::tumbling_block_scene(0.01));
-  const fs::path dir = temp_dir("vtu_bytes");
-  fs::create_directories(dir);
+  const ScratchDir dir("test_vtu_bytes");
   ParticleStore none;
   for (const ParticleStore* store : {&solver.particles(), static_cast<const ParticleStore*>(&none)}) {
     for (bool compress : {false, true}) {
@@ -124,13 +120,13 @@ TEST(VtuOutput, FrameBytesEstimateMatchesAFrame) {
         EXPECT_NEAR(actual, estimate, 64.0) << store->size() << " particles";
     }
   }
-  fs::remove_all(dir);
 }
 
 TEST(VtuOutput, RunWritesSeriesIndexSceneAndHistory) {
   Scene scene = test::tumbling_block_scene(0.02);
   scene.output.frame_interval = 0.005;
-  const fs::path dir = temp_dir("run");
+  const ScratchDir scratch("test_run");
+  const fs::path dir = scratch / "out";  // the run makes its folder
   const RunSummary summary = run_quietly(scene, dir);
   EXPECT_EQ(summary.frames, 5u);  // t = 0, 0.005, 0.01, 0.015, 0.02
   std::ifstream pvd(dir / "particles.pvd");
@@ -169,7 +165,6 @@ TEST(VtuOutput, RunWritesSeriesIndexSceneAndHistory) {
   EXPECT_EQ(rows, summary.steps + 1);
   // No temporary file is left behind.
   for (const auto& entry : fs::recursive_directory_iterator(dir)) EXPECT_NE(entry.path().extension(), ".tmp");
-  fs::remove_all(dir);
 }
 
 // frames_of_run (the disk estimate's frame count) against the frames runs write: intervals that
@@ -178,10 +173,10 @@ TEST(VtuOutput, FramesOfRunCountsTheFramesARunWrites) {
   for (const double interval : {0.005, 0.003, 0.02, 0.03, 0.0}) {
     Scene scene = test::tumbling_block_scene(0.02);
     scene.output.frame_interval = interval;
-    const fs::path dir = temp_dir("frames_of_run");
+    const ScratchDir scratch("test_frames_of_run");
+    const fs::path dir = scratch / "out";  // the run makes its folder
     const RunSummary summary = run_quietly(scene, dir);
     EXPECT_EQ(summary.frames, frames_of_run(scene)) << "frame_interval " << interval;
-    fs::remove_all(dir);
   }
   // A vanishing interval (allowed: a frame every step) is capped, not overflowed: by the interval at
   // 10^15, and by one frame a step at the steps estimated at the initial time step (end 1 s,
@@ -195,12 +190,12 @@ TEST(VtuOutput, FramesOfRunCountsTheFramesARunWrites) {
   // steady rate, so the steps are those estimated at the start).
   Scene short_interval = test::tumbling_block_scene(0.02);
   short_interval.output.frame_interval = 1e-9;
-  const fs::path dir = temp_dir("frames_of_run_steps");
+  const ScratchDir scratch("test_frames_of_run_steps");
+  const fs::path dir = scratch / "out";  // the run makes its folder
   const RunSummary summary = run_quietly(short_interval, dir);
   EXPECT_EQ(summary.frames, std::size_t(summary.steps) + 1);
   EXPECT_LT(frames_of_run(short_interval), frames_by_interval(short_interval));
   EXPECT_NEAR(double(frames_of_run(short_interval)), double(summary.frames), 0.02 * double(summary.frames));
-  fs::remove_all(dir);
 }
 
 // A whole-file write (the run's records, element-test's CSV) goes through a temporary file and a
@@ -208,8 +203,7 @@ TEST(VtuOutput, FramesOfRunCountsTheFramesARunWrites) {
 // FIFO or a device (`-o /dev/null`, `/dev/stdout`, as root) became a regular file. It writes
 // through those, and through a link replaces the file the link names.
 TEST(VtuOutput, WholeFileWritesKeepLinksAndWriteThroughPipesAndDevices) {
-  const fs::path dir = temp_dir("write_through");
-  fs::create_directories(dir);
+  const ScratchDir dir("test_write_through");
   const auto read = [](const fs::path& p) {
     std::ifstream in(p);
     return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -233,7 +227,6 @@ TEST(VtuOutput, WholeFileWritesKeepLinksAndWriteThroughPipesAndDevices) {
   write_file_atomically("/dev/null", "nothing\n");
   EXPECT_EQ(fs::status("/dev/null").type(), fs::file_type::character);
   for (const auto& entry : fs::directory_iterator(dir)) EXPECT_NE(entry.path().extension(), ".tmp");
-  fs::remove_all(dir);
 }
 
 }  // namespace

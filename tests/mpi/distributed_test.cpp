@@ -2,6 +2,7 @@
 // and 3 ranks (ctest Mpi.Ranks1..3). Every check is made on values that every rank holds alike
 // (sums over the ranks, gathered particles broadcast by id), so that a failing check fails on all
 // ranks together and no rank is left waiting in a collective.
+#include "../support/scratch_dir.hpp"
 #include "talus/core/comm.hpp"
 #include "talus/driver/run_driver.hpp"
 #include "talus/io/checkpoint.hpp"
@@ -25,6 +26,7 @@
 #include <filesystem>
 #include <map>
 #include <numeric>
+#include <optional>
 
 namespace talus {
 namespace {
@@ -158,22 +160,16 @@ std::pair<double, double> largest_difference(const State& a, const State& b) {
 }
 double relative(double a, double b) { return std::abs(a - b) / std::max(std::abs(b), 1e-300); }
 
-/// A folder every rank sees, fresh for the test, removed at the end.
+/// A folder every rank sees, fresh for the test, removed at the end: rank 0's scratch folder, named
+/// for the test and the world's size.
 struct SharedFolder {
+  std::optional<test::ScratchDir> scratch;  // rank 0's alone: it makes and removes the folder
   std::filesystem::path path;
   explicit SharedFolder(const std::string& name) {
-    std::string p;
-    if (world().root()) {
-      p = (std::filesystem::temp_directory_path() / fmt::format("talus_mpi_{}_{}_{}", name, world().size(), ::getpid())).string();
-      std::filesystem::remove_all(p);
-      std::filesystem::create_directories(p);
-    }
-    path = world().broadcast(p);
+    if (world().root()) scratch.emplace(fmt::format("mpi_{}_{}", name, world().size()));
+    path = world().broadcast(scratch ? scratch->path().string() : std::string());
   }
-  ~SharedFolder() {
-    world().barrier();
-    if (world().root()) std::filesystem::remove_all(path);
-  }
+  ~SharedFolder() { world().barrier(); }  // every rank is done with it before rank 0's scratch goes
 };
 
 // Comm::exchange sends a buffer in pieces of at most piece_bytes (MPI's counts are ints: a message of

@@ -63,7 +63,7 @@ Scene drucker_prager_scene() {
 }
 
 void check_restart_is_bit_identical(const Scene& scene, int total, const std::vector<int>& splits) {
-  const auto dir = test::temp_dir("bitident");
+  const test::ScratchDir dir("rel_bitident");
   Solver reference(scene);
   for (int i = 0; i < total; ++i) reference.step();
   for (int k : splits) {
@@ -81,7 +81,6 @@ void check_restart_is_bit_identical(const Scene& scene, int total, const std::ve
     for (int i = k; i < total; ++i) first.step();
     expect_identical(reference, first);
   }
-  test::fs::remove_all(dir);
 }
 
 /// The steps (counted from 0) of a `steps`-step run of the scene after which count(solver) grew.
@@ -192,7 +191,7 @@ TEST(Checkpoint, RestartIsBitIdenticalWithPeriodicWraps) {
 }
 
 TEST(Checkpoint, RecordsVersionSceneHashAndEveryParticleArray) {
-  const auto dir = test::temp_dir("layout");
+  const test::ScratchDir dir("rel_layout");
   Solver solver(drucker_prager_scene());
   for (int i = 0; i < 3; ++i) solver.step();
   const std::string path = (dir / "c.h5").string();
@@ -219,7 +218,6 @@ TEST(Checkpoint, RecordsVersionSceneHashAndEveryParticleArray) {
   EXPECT_EQ(c.double_arrays.size(), allocated);
   EXPECT_TRUE(c.double_arrays.count("plastic_strain"));
   EXPECT_TRUE(std::ranges::equal(c.id, solver.particles().id));
-  test::fs::remove_all(dir);
 }
 
 // The cost of a checkpoint of the shipped default scene (reported in docs/reliability.md).
@@ -253,7 +251,7 @@ TEST(Checkpoint, TheSceneFileNamesTheDefaultTensionCutoffWithTheSameHash) {
 }
 
 TEST(Checkpoint, DefaultSceneSizeAndWriteTime) {
-  const auto dir = test::temp_dir("size");
+  const test::ScratchDir dir("rel_size");
   Solver solver(read_scene_file(std::string(TALUS_SOURCE_DIR) + "/inputs/elastic_block_slide.json"));
   solver.step();
   const std::string path = (dir / "checkpoint.h5").string();
@@ -269,14 +267,13 @@ TEST(Checkpoint, DefaultSceneSizeAndWriteTime) {
   // The arrays dominate: no more than 10% overhead over the raw data.
   const double raw = solver.particles().size() * (8.0 * (c.double_arrays.size() + 1) + 2 + 12);
   EXPECT_LT(bytes, 1.1 * raw + 64 * 1024);
-  test::fs::remove_all(dir);
 }
 
 // The disk estimate counts a checkpoint as checkpoint_bytes_per_particle a particle (`talus check`'s
 // "disk" line): the file holds that, with a few kB of scene and attributes, for a plastic state with
 // its back stress, with and without cpGIMP's domains, and for an elastic scene.
 TEST(Checkpoint, SizePerParticleIsWhatTheDiskEstimateCounts) {
-  const auto dir = test::temp_dir("estimate");
+  const test::ScratchDir dir("rel_estimate");
   Scene cpgimp = drucker_prager_scene();
   cpgimp.shape = ShapeKind::CpGimp;
   const Scene elastic = read_scene_file(std::string(TALUS_SOURCE_DIR) + "/inputs/elastic_block_slide.json");
@@ -290,7 +287,6 @@ TEST(Checkpoint, SizePerParticleIsWhatTheDiskEstimateCounts) {
     EXPECT_GE(bytes, estimate) << scene.name << " " << to_string(scene.shape);
     EXPECT_LE(bytes, estimate + 32 * 1024) << scene.name << " " << to_string(scene.shape);
   }
-  test::fs::remove_all(dir);
 }
 
 Error::Kind restore_error(const Scene& scene, const std::string& path, std::string* message) {
@@ -306,7 +302,7 @@ Error::Kind restore_error(const Scene& scene, const std::string& path, std::stri
 }
 
 TEST(Checkpoint, RefusesAnotherSceneAnotherVersionAndBadFiles) {
-  const auto dir = test::temp_dir("refuse");
+  const test::ScratchDir dir("rel_refuse");
   const Scene scene = test::tumbling_block_scene(0.05);
   Solver solver(scene);
   solver.step();
@@ -333,7 +329,7 @@ TEST(Checkpoint, RefusesAnotherSceneAnotherVersionAndBadFiles) {
 
   EXPECT_EQ(restore_error(scene, (dir / "missing.h5").string(), &msg), Error::Kind::Input);
   EXPECT_NE(msg.find("cannot open checkpoint " + (dir / "missing.h5").string() + ": no such file"), std::string::npos) << msg;
-  EXPECT_EQ(restore_error(scene, dir.string(), &msg), Error::Kind::Input);
+  EXPECT_EQ(restore_error(scene, dir.path().string(), &msg), Error::Kind::Input);
   EXPECT_NE(msg.find(": it is a folder, not a file"), std::string::npos) << msg;
 
   // (said "is not readable: H5Fopen failed")
@@ -349,7 +345,6 @@ TEST(Checkpoint, RefusesAnotherSceneAnotherVersionAndBadFiles) {
   }
   EXPECT_EQ(restore_error(scene, path, &msg), Error::Kind::Input);
   EXPECT_NE(msg.find("written by talus 0.0.0"), std::string::npos) << msg;
-  test::fs::remove_all(dir);
 }
 
 // The keys a restart may change (time.end, time.courant, time.max_steps, guards.*) steer how the run
@@ -358,7 +353,7 @@ TEST(Checkpoint, RefusesAnotherSceneAnotherVersionAndBadFiles) {
 // extended. The restore takes them, restart_changes names each, and a time.end before the
 // checkpoint's time is refused.
 TEST(Checkpoint, ARestartMayChangeTheEndTheTimeStepAndTheGuards) {
-  const auto dir = test::temp_dir("changes");
+  const test::ScratchDir dir("rel_changes");
   const Scene scene = test::tumbling_block_scene(0.05);
   Solver solver(scene);
   solver.step();
@@ -400,13 +395,12 @@ TEST(Checkpoint, ARestartMayChangeTheEndTheTimeStepAndTheGuards) {
   too_few.max_steps = 1;  // the checkpoint is after step 2
   EXPECT_EQ(restore_error(too_few, path, &msg), Error::Kind::Input);
   EXPECT_NE(msg.find("time.max_steps = 1 is below the checkpoint's step, 2"), std::string::npos) << msg;
-  test::fs::remove_all(dir);
 }
 
 // How often checkpoints are written, and the scene's notes, may change too: a completed run without
 // periodic checkpoints could not be extended later, since the interval it needed was a change refused.
 TEST(Checkpoint, ARestartMayChangeTheCheckpointIntervalAndTheDescription) {
-  const auto dir = test::temp_dir("interval");
+  const test::ScratchDir dir("rel_interval");
   const Scene scene = test::tumbling_block_scene(0.05);
   Solver solver(scene);
   solver.step();
@@ -422,7 +416,6 @@ TEST(Checkpoint, ARestartMayChangeTheCheckpointIntervalAndTheDescription) {
   ASSERT_EQ(lines.size(), 2u);
   EXPECT_EQ(lines[0], "description: \"\" in the checkpoint's scene, \"extended\" here");
   EXPECT_EQ(lines[1], "output.checkpoint_interval: 0 in the checkpoint's scene, 0.01 here");
-  test::fs::remove_all(dir);
 }
 
 // A damaged or edited scalar is refused in one line: a time of NaN stepped forever without writing
@@ -430,7 +423,7 @@ TEST(Checkpoint, ARestartMayChangeTheCheckpointIntervalAndTheDescription) {
 // it as the last good state. A dataset whose header claims more values than the file holds is
 // refused before they are allocated (2e9 asked for 16 GB).
 TEST(Checkpoint, RefusesScalarsAndLengthsNoRunCouldHaveWritten) {
-  const auto dir = test::temp_dir("scalars");
+  const test::ScratchDir dir("rel_scalars");
   const Scene scene = test::tumbling_block_scene(0.05);
   Solver solver(scene);
   solver.step();
@@ -474,13 +467,12 @@ TEST(Checkpoint, RefusesScalarsAndLengthsNoRunCouldHaveWritten) {
     EXPECT_NE(msg.find(expected), std::string::npos) << path << ": " << msg;
     EXPECT_EQ(msg.find('\n'), std::string::npos);
   }
-  test::fs::remove_all(dir);
 }
 
 // An edited or damaged checkpoint whose particles no step could have left is refused in one line
 // (a position beyond the grid crashed the sort), before the run writes anything.
 TEST(Checkpoint, RefusesParticlesNoStepCouldHaveLeft) {
-  const auto dir = test::temp_dir("damaged");
+  const test::ScratchDir dir("rel_damaged");
   const Scene scene = test::tumbling_block_scene(0.05);
   Solver solver(scene);
   solver.step();
@@ -504,7 +496,6 @@ TEST(Checkpoint, RefusesParticlesNoStepCouldHaveLeft) {
   EXPECT_NE(refusal([](Checkpoint& c) { c.id[3] = c.id[4]; }).find("is saved twice"), std::string::npos);
   EXPECT_NE(refusal([](Checkpoint& c) { c.solver.sort_cell[0][3] = 100000; }).find("saved sort cell"), std::string::npos);
   EXPECT_EQ(refusal([](Checkpoint&) {}), "no error");
-  test::fs::remove_all(dir);
 }
 
 }  // namespace

@@ -53,14 +53,19 @@ int wait_for(pid_t pid) {
 
 int run_talus(const std::vector<std::string>& args) { return wait_for(spawn(args)); }
 
-/// `talus ARGS` (as a shell splits them), its standard output and error together.
-std::pair<int, std::string> run_captured(const std::string& args) {
-  FILE* pipe = popen((std::string(TALUS_BINARY) + " " + args + " 2>&1").c_str(), "r");
+/// The shell's `command`: its exit code and its standard output.
+std::pair<int, std::string> run_shell(const std::string& command) {
+  FILE* pipe = popen(command.c_str(), "r");
   std::string text;
   char buffer[4096];
   while (fgets(buffer, sizeof buffer, pipe)) text += buffer;
   const int status = pclose(pipe);
   return {WEXITSTATUS(status), text};
+}
+
+/// `talus ARGS` (as a shell splits them), its standard output and error together.
+std::pair<int, std::string> run_captured(const std::string& args) {
+  return run_shell(std::string(TALUS_BINARY) + " " + args + " 2>&1");
 }
 
 /// Runs the scene uninterrupted once per test binary: the reference output.
@@ -69,20 +74,13 @@ struct Reference {
   double seconds = 0.0;
 };
 
-/// Removes the reference's folder (and every test's output under it) when the test binary exits:
-/// each run of the tests would otherwise leave some 4 MB in the temporary folder.
-struct RemovedAtExit {
-  fs::path dir;
-  ~RemovedAtExit() {
-    std::error_code ignored;
-    fs::remove_all(dir, ignored);
-  }
-};
-
 const Reference& reference() {
+  // The reference's folder, and every test's output under it, goes when the test binary exits: each
+  // run of the tests would otherwise leave some 4 MB in the temporary folder.
+  static const test::ScratchDir root("rel_crash_ref");
   static const Reference r = [] {
     Reference ref;
-    ref.root = test::temp_dir("crash_ref");
+    ref.root = root.path();
     ref.scene = ref.root / "scene.json";
     std::ofstream(ref.scene) << test::small_slide_json(0.4, 0.02);
     ref.out = ref.root / "out";
@@ -91,8 +89,15 @@ const Reference& reference() {
     ref.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     return ref;
   }();
-  static const RemovedAtExit cleanup{r.root};
   return r;
+}
+
+/// A fresh copy of the reference's output folder: ref.root / `name`, an earlier copy replaced.
+fs::path fresh_copy_of_reference(const Reference& ref, const std::string& name) {
+  const fs::path copy = ref.root / name;
+  fs::remove_all(copy);
+  fs::copy(ref.out, copy, fs::copy_options::recursive);
+  return copy;
 }
 
 /// The output of a restarted run equals the uninterrupted one: every frame, the index and the
@@ -154,7 +159,7 @@ TEST(Crash, SigtermWritesACheckpointAndRestartMatchesAnUninterruptedRun) {
 // While a run goes on, its record says how far it got ("progress", at the progress lines' cadence
 // even with --quiet), so a killed run's record does too; the end replaces it.
 TEST(Crash, TheRecordOfARunningRunSaysHowFarItGot) {
-  const fs::path dir = test::temp_dir("heartbeat");
+  const test::ScratchDir dir("rel_heartbeat");
   std::ofstream(dir / "s.json") << test::small_slide_json(3.0, 0.0);
   const fs::path out = dir / "out";
   const pid_t pid = spawn({"run", (dir / "s.json").string(), "--out", out.string(), "--quiet", "--threads", "1",
@@ -177,14 +182,13 @@ TEST(Crash, TheRecordOfARunningRunSaysHowFarItGot) {
   const nlohmann::json killed = read_record(out);  // whole after the kill, and no earlier than what was seen
   EXPECT_EQ(killed.at("status"), "running");
   EXPECT_GE(killed.at("progress").at("step").get<std::int64_t>(), seen.at("progress").at("step").get<std::int64_t>());
-  fs::remove_all(dir);
 }
 
 // One run at a time in a folder (driver/folder_lock.hpp): a second run into the folder of one that
 // is running is refused with one line naming the holder, before it touches anything; once the
 // first has ended, however it ended, the folder is free again.
 TEST(Crash, ASecondRunIntoTheFolderOfARunningOneIsRefused) {
-  const fs::path dir = test::temp_dir("folder_lock");
+  const test::ScratchDir dir("rel_folder_lock");
   std::ofstream(dir / "s.json") << test::small_slide_json(3.0, 0.0);
   const fs::path out = dir / "out";
   const pid_t pid = spawn({"run", (dir / "s.json").string(), "--out", out.string(), "--quiet", "--threads", "1"});
@@ -208,7 +212,6 @@ TEST(Crash, ASecondRunIntoTheFolderOfARunningOneIsRefused) {
   const auto [again, again_text] = run_captured("run " + (dir / "s.json").string() + " --out " + out.string() +
                                                 " --quiet --threads 1 --stop-after 0.05s");
   EXPECT_TRUE(again == 75 || again == 0) << again_text;
-  fs::remove_all(dir);
 }
 
 // --stop-after (a batch job's time limit) stops as SIGTERM does, with exit code 75: the restart
@@ -289,14 +292,9 @@ TEST(Crash, RestartRefusesAnotherSceneWithOneLineAndExitTwo) {
   ASSERT_TRUE(wait_for_file(ref.root / "cp" / "checkpoint.h5", pid, 60.0));
   kill(pid, SIGTERM);
   wait_for(pid);
-  const std::string command = std::string(TALUS_BINARY) + " run " + other.string() + " --restart " +
-                              (ref.root / "cp" / "checkpoint.h5").string() + " --out " + out.string() + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string text;
-  char buffer[4096];
-  while (fgets(buffer, sizeof buffer, pipe)) text += buffer;
-  const int status = pclose(pipe);
-  EXPECT_EQ(WEXITSTATUS(status), 2) << text;
+  const auto [code, text] = run_captured("run " + other.string() + " --restart " +
+                                         (ref.root / "cp" / "checkpoint.h5").string() + " --out " + out.string());
+  EXPECT_EQ(code, 2) << text;
   EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;
   EXPECT_NE(text.find("belongs to another scene"), std::string::npos) << text;
   EXPECT_NE(text.find("/gravity"), std::string::npos) << text;
@@ -310,9 +308,7 @@ TEST(Crash, RestartRefusesAnotherSceneWithOneLineAndExitTwo) {
 // time and the command that resumes it, unless --overwrite says to start afresh.
 TEST(Crash, AFreshRunIntoAnUnfinishedRunsFolderIsRefusedUnlessOverwrite) {
   const Reference& ref = reference();
-  const fs::path out = ref.root / "unfinished";
-  fs::remove_all(out);
-  fs::copy(ref.out, out, fs::copy_options::recursive);
+  const fs::path out = fresh_copy_of_reference(ref, "unfinished");
   nlohmann::json record = read_record(out);
   record["status"] = "interrupted";
   std::ofstream(out / "run.json") << record.dump(2);
@@ -449,9 +445,7 @@ TEST(Crash, RestartIntoAnotherRunsFolderIsRefused) {
   EXPECT_EQ(test::read_text(other / "energy.csv"), test::read_text(ref.out / "energy.csv"));
   EXPECT_FALSE(fs::exists(other / "particles.pvd"));
   // Resuming from the scene.json a run wrote into its own folder is allowed: it is written back unchanged.
-  const fs::path own = ref.root / "own_scene";
-  fs::remove_all(own);
-  fs::copy(ref.out, own, fs::copy_options::recursive);
+  const fs::path own = fresh_copy_of_reference(ref, "own_scene");
   const auto [resumed, resumed_text] = run_captured("run " + (own / "scene.json").string() + " --restart " +
                                                     (own / "checkpoint.h5").string() + " --quiet --threads 1");
   EXPECT_EQ(resumed, 0) << resumed_text;
@@ -479,9 +473,7 @@ TEST(Crash, RestartIntoAnotherRunsFolderIsRefused) {
 // the run says so. (The old frames are made here by taking the names out of the headers.)
 TEST(Crash, ResumingASeriesOfFramesInTheOlderTensorOrderWarns) {
   const Reference& ref = reference();
-  const fs::path old = ref.root / "older_frames";
-  fs::remove_all(old);
-  fs::copy(ref.out, old, fs::copy_options::recursive);
+  const fs::path old = fresh_copy_of_reference(ref, "older_frames");
   const std::regex component_name(" ComponentName[0-5]=\"[a-z]+\"");
   for (const fs::path& frame : test::pvd_frames(old / "particles.pvd")) {
     const std::string text = test::read_text(frame);
@@ -507,9 +499,7 @@ TEST(Crash, ResumingASeriesOfFramesInTheOlderTensorOrderWarns) {
 // says so; the intact folder (above) gives no warning.
 TEST(Crash, ResumingADamagedOwnFolderSaysWhatItsOutputsLack) {
   const Reference& ref = reference();
-  const fs::path damaged = ref.root / "damaged_own";
-  fs::remove_all(damaged);
-  fs::copy(ref.out, damaged, fs::copy_options::recursive);
+  const fs::path damaged = fresh_copy_of_reference(ref, "damaged_own");
   const std::vector<fs::path> frames = test::pvd_frames(damaged / "particles.pvd");
   ASSERT_GE(frames.size(), 3u);
   fs::remove(frames[1]);
@@ -522,8 +512,7 @@ TEST(Crash, ResumingADamagedOwnFolderSaysWhatItsOutputsLack) {
   EXPECT_NE(text.find((damaged / "energy.csv").string() + " held no row up to the checkpoint's step "), std::string::npos)
       << text;
   // every frame gone, and the history: said too (the test was "a frame is kept", and this said nothing)
-  fs::remove_all(damaged);
-  fs::copy(ref.out, damaged, fs::copy_options::recursive);
+  fresh_copy_of_reference(ref, "damaged_own");
   fs::remove_all(damaged / "frames");
   fs::remove(damaged / "energy.csv");
   const auto [all_code, all_text] = run_captured("run " + (damaged / "scene.json").string() + " --restart " +
@@ -539,7 +528,7 @@ TEST(Crash, ResumingADamagedOwnFolderSaysWhatItsOutputsLack) {
 // B and warned that the series had gaps. The checkpoint now says where each frame was written: no
 // warning while they are there, and the folder they are missing from when they are not.
 TEST(Crash, ResumingAgainInTheFolderOfAResumeElsewhereFindsTheEarlierFrames) {
-  const fs::path root = test::temp_dir("resume_twice");
+  const test::ScratchDir root("rel_resume_twice");
   std::ofstream(root / "scene.json") << test::small_slide_json(0.1, 0.02);
   const std::string scene = (root / "scene.json").string();
   // A: stopped after its first step (frame 0 only); B: the rest, with periodic checkpoints
@@ -568,7 +557,6 @@ TEST(Crash, ResumingAgainInTheFolderOfAResumeElsewhereFindsTheEarlierFrames) {
                                       b.run.frame_times.size(), (root / "a" / "frames").string())),
             std::string::npos)
       << gap_text;
-  fs::remove_all(root);
 }
 
 // Without diagnostics.runout.gate_x the runout is measured from the initial front, runout.csv's
@@ -607,7 +595,7 @@ TEST(Crash, ResumingWithoutTheRunoutRowsFromTheStartKeepsTheGate) {
 // An output folder whose frames/ is a file: one line naming frames/, exit 2, nothing else written
 // (the folder is prepared before the run starts, so under mpirun every rank stops alike, said once).
 TEST(Crash, AnOutputFolderWhoseFramesIsAFileExitsTwoWithOneLine) {
-  const fs::path dir = test::temp_dir("frames_file");
+  const test::ScratchDir dir("rel_frames_file");
   std::ofstream(dir / "s.json") << test::small_slide_json(0.05, 0.0);
   fs::create_directories(dir / "out");
   std::ofstream(dir / "out" / "frames") << "not a folder";
@@ -615,14 +603,13 @@ TEST(Crash, AnOutputFolderWhoseFramesIsAFileExitsTwoWithOneLine) {
   EXPECT_EQ(code, 2) << out;
   EXPECT_EQ(out, "talus: error: cannot create output folder " + (dir / "out" / "frames").string() + ": Not a directory\n");
   EXPECT_EQ(std::distance(fs::directory_iterator(dir / "out"), fs::directory_iterator()), 1);  // the file alone
-  fs::remove_all(dir);
 }
 
 // A frames folder without write permission: VTK printed twenty lines at the first frame, after
 // scene.json and energy.csv were started. Root writes there all the same, so as root the run goes
 // through setpriv as the user nobody.
 TEST(Crash, AnUnwritableFramesFolderExitsTwoWithOneLineBeforeAnyOutput) {
-  const fs::path dir = test::temp_dir("frames_locked");
+  const test::ScratchDir dir("rel_frames_locked");
   std::ofstream(dir / "s.json") << test::small_slide_json(0.05, 0.0);
   fs::create_directories(dir / "out" / "frames");
   const auto all = fs::perms::owner_all | fs::perms::group_all | fs::perms::others_all;
@@ -632,21 +619,16 @@ TEST(Crash, AnUnwritableFramesFolderExitsTwoWithOneLineBeforeAnyOutput) {
   fs::permissions(dir / "out" / "frames", fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
                                               fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
   const std::string as_user = ::geteuid() == 0 ? "setpriv --reuid=65534 --regid=65534 --clear-groups " : "";
-  FILE* pipe = popen((as_user + TALUS_BINARY + " run " + (dir / "s.json").string() + " --threads 1 --out " +
-                      (dir / "out").string() + " 2>&1").c_str(), "r");
-  std::string out;
-  char buffer[4096];
-  while (fgets(buffer, sizeof buffer, pipe)) out += buffer;
-  const int status = pclose(pipe);
-  EXPECT_EQ(WEXITSTATUS(status), 2) << out;
+  const auto [code, out] = run_shell(as_user + TALUS_BINARY + " run " + (dir / "s.json").string() + " --threads 1 --out " +
+                                     (dir / "out").string() + " 2>&1");
+  EXPECT_EQ(code, 2) << out;
   EXPECT_EQ(out, "talus: error: cannot write output folder " + (dir / "out" / "frames").string() + ": no write permission\n");
   EXPECT_EQ(std::distance(fs::directory_iterator(dir / "out"), fs::directory_iterator()), 1);  // frames alone
   fs::permissions(dir / "out" / "frames", fs::perms::owner_all);
-  fs::remove_all(dir);
 }
 
 TEST(Crash, BadSceneExitsTwoWithOneLineAndWritesNothing) {
-  const fs::path dir = test::temp_dir("badscene");
+  const test::ScratchDir dir("rel_badscene");
   std::string text = test::small_slide_json();
   const std::string courant = "\"courant\": 0.3";
   text.replace(text.find(courant), courant.size(), "\"courant\": 1e999");
@@ -661,18 +643,17 @@ TEST(Crash, BadSceneExitsTwoWithOneLineAndWritesNothing) {
   EXPECT_EQ(code2, 2) << out2;
   EXPECT_NE(out2.find("cannot open checkpoint"), std::string::npos) << out2;
   EXPECT_FALSE(fs::exists(dir / "out"));
-  fs::remove_all(dir);
 }
 
 // A run never replaces its own inputs: the scene in the folder it writes to (the run writes its
 // resolved scene.json there), or the work record written over the scene or over one of the run's files.
 TEST(Crash, ARunThatWouldReplaceItsOwnInputsExitsTwoAndTouchesNothing) {
-  const fs::path dir = test::temp_dir("own_inputs");
+  const test::ScratchDir dir("rel_own_inputs");
   const std::string text = test::small_slide_json(0.02, 0.0);
   std::ofstream(dir / "scene.json") << text;
   const std::string scene = (dir / "scene.json").string();
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {"run " + scene + " --out " + dir.string(), "would replace the scene file"},
+      {"run " + scene + " --out " + dir.path().string(), "would replace the scene file"},
       {"run " + scene + " --out " + (dir / "." / "").string(), "would replace the scene file"},
       {"run " + scene + " --out " + (dir / "out").string() + " --record-work " + scene, "that is the scene file"},
       {"run " + scene + " --out " + (dir / "out").string() + " --record-work " + (dir / "out" / "energy.csv").string(),
@@ -691,13 +672,12 @@ TEST(Crash, ARunThatWouldReplaceItsOwnInputsExitsTwoAndTouchesNothing) {
     EXPECT_FALSE(fs::exists(dir / "out")) << args;
     EXPECT_FALSE(fs::exists(dir / "frames")) << args;
   }
-  fs::remove_all(dir);
 }
 
 // An output that cannot be written is refused before the solver is built: one line, no banner
 // (the folder under a file failed only once the run started; the work record after the whole run).
 TEST(Crash, UnwritableOutputsAreRefusedBeforeAnyWork) {
-  const fs::path dir = test::temp_dir("unwritable");
+  const test::ScratchDir dir("rel_unwritable");
   std::ofstream(dir / "s.json") << test::small_slide_json(0.02, 0.0);
   std::ofstream(dir / "a_file") << "x";
   const std::string scene = (dir / "s.json").string();
@@ -705,7 +685,7 @@ TEST(Crash, UnwritableOutputsAreRefusedBeforeAnyWork) {
       {"--out " + (dir / "a_file" / "out").string(), "is a file, not a folder"},
       {"--out " + (dir / "out").string() + " --record-work " + (dir / "none" / "r.json").string(),
        "--record-work " + (dir / "none" / "r.json").string() + ": cannot write there: the folder"},
-      {"--out " + (dir / "out").string() + " --record-work " + dir.string(), "is a folder, not a file"},
+      {"--out " + (dir / "out").string() + " --record-work " + dir.path().string(), "is a folder, not a file"},
       {"--out ''", "--out is empty"},  // an unset shell variable: it fell back to runs/<name>
       // a link to nothing: "cannot create output folder: File exists"
       {"--out " + (dir / "dangling").string(), "is a link to " + (dir / "gone").string() + ", which does not exist"},
@@ -730,11 +710,10 @@ TEST(Crash, UnwritableOutputsAreRefusedBeforeAnyWork) {
   EXPECT_FALSE(fs::exists(dir / "out" / "frames"));
   EXPECT_FALSE(fs::exists(dir / "out" / "energy.csv"));
   EXPECT_TRUE(fs::exists(dir / "out" / "particles.pvd" / "kept"));
-  fs::remove_all(dir);
 }
 
 TEST(Crash, InstabilityExitsThreeWithOneLineAndTheLastGoodState) {
-  const fs::path dir = test::temp_dir("unstable");
+  const test::ScratchDir dir("rel_unstable");
   // A strong pull along x speeds the block up until it moves more than the guard allows in a step
   // (0.3 v / (c + v) of a cell, c = 36.7 m/s: past 0.08 near 13 m/s, after some 190 steps): a CFL breach.
   std::ofstream(dir / "s.json") << test::small_slide_json(
@@ -752,13 +731,12 @@ TEST(Crash, InstabilityExitsThreeWithOneLineAndTheLastGoodState) {
   EXPECT_EQ(record.at("status"), "unstable");
   EXPECT_EQ("talus: error: " + record.at("message").get<std::string>(), error);
   EXPECT_GT(record.at("end").at("step").get<std::int64_t>(), 0);
-  fs::remove_all(dir);
 }
 
 // Without snapshots (guards.snapshot_interval 0) there is no last good state to write; the line said
 // nothing of one, nor that the periodic checkpoint written earlier is still in the folder to resume from.
 TEST(Crash, InstabilityWithoutSnapshotsNamesThePeriodicCheckpointLeft) {
-  const fs::path dir = test::temp_dir("unstable_no_snapshot");
+  const test::ScratchDir dir("rel_unstable_no_snapshot");
   const auto error_line = [&](double checkpoint_interval, const std::string& out_name) {
     std::ofstream(dir / "s.json") << test::small_slide_json(
         0.5, checkpoint_interval,
@@ -781,7 +759,6 @@ TEST(Crash, InstabilityWithoutSnapshotsNamesThePeriodicCheckpointLeft) {
   EXPECT_NE(without.find("| no last good state kept (guards.snapshot_interval = 0)"), std::string::npos) << without;
   EXPECT_EQ(without.find("checkpoint"), std::string::npos) << without;
   EXPECT_FALSE(fs::exists(dir / "without" / "checkpoint.h5"));
-  fs::remove_all(dir);
 }
 
 // A frame that cannot be written mid-run (its folder replaced by a file, as a full or vanished disk
@@ -789,7 +766,7 @@ TEST(Crash, InstabilityWithoutSnapshotsNamesThePeriodicCheckpointLeft) {
 // nothing of VTK's own report (some twenty lines before 2026-12-06); the banner comes first in a log
 // of both streams; run.json says "failed" with the same message.
 TEST(Crash, AFrameThatCannotBeWrittenEndsTheRunWithOneLineAndTheRecordSaysFailed) {
-  const fs::path dir = test::temp_dir("frame_fails");
+  const test::ScratchDir dir("rel_frame_fails");
   std::ofstream(dir / "s.json") << test::small_slide_json(3.0, 0.0);
   const fs::path out = dir / "out", log = dir / "log.txt";
   const pid_t pid = spawn({"run", (dir / "s.json").string(), "--out", out.string(), "--quiet", "--threads", "1"}, log);
@@ -811,13 +788,12 @@ TEST(Crash, AFrameThatCannotBeWrittenEndsTheRunWithOneLineAndTheRecordSaysFailed
   const nlohmann::json record = read_record(out);
   EXPECT_EQ(record.at("status"), "failed");
   EXPECT_EQ("talus: error: " + record.at("message").get<std::string>(), lines[1]);
-  fs::remove_all(dir);
 }
 
 // Every particle leaves through the open faces: nothing is left to move, so the run ends there, as a
 // run that reached its end (exit 0, the last frame empty, the energy budget closed by the outflow).
 TEST(Crash, ARunWhoseParticlesAllLeaveEndsWhenTheLastOneLeaves) {
-  const fs::path dir = test::temp_dir("all_left");
+  const test::ScratchDir dir("rel_all_left");
   std::string text = test::small_slide_json(0.5, 0.0);
   const std::string top = "\"z+\": \"open\"";
   text.replace(text.find(top), top.size(), top + ", \"x+\": \"open\"");
@@ -835,7 +811,6 @@ TEST(Crash, ARunWhoseParticlesAllLeaveEndsWhenTheLastOneLeaves) {
   EXPECT_GT(test::read_frame_checked(frames.front(), &problem), 0) << problem;
   EXPECT_EQ(test::read_frame_checked(frames.back(), &problem), 0) << problem;
   EXPECT_FALSE(fs::exists(dir / "out" / "checkpoint.h5"));  // a finished run, as one that reached its end time
-  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // runs to its end with a physical check, or it stops with a one-line diagnosis after writing its
 // last good state); none crashes or writes a non-finite value.
 #include "../solver/scene_fixtures.hpp"
+#include "../support/quiet_run.hpp"
 #include "reliability_fixtures.hpp"
 #include "talus/core/error.hpp"
 #include "talus/io/checkpoint.hpp"
@@ -196,14 +197,10 @@ TEST(Guards, TheBudgetsGapDoesNotDependOnWhereTheOriginIs) {
       b.box_min[2] += lift;
       b.box_max[2] += lift;
     }
-    const fs::path dir = test::temp_dir("datum");
-    RunOptions options;
-    options.out_dir = dir.string();
-    options.progress = false;
-    options.handle_signals = false;
+    const test::ScratchDir dir("rel_datum");
+    RunOptions options = test::quiet_run_options(dir);
     Solver solver(scene);
     const RunSummary summary = run_scene(solver, options);
-    fs::remove_all(dir);
     return summary;
   };
   for (const bool falls_out : {false, true}) {
@@ -234,11 +231,8 @@ struct HardCaseRun {
 /// Runs a scene through the run driver, after checking that the folder holds only readable, finite
 /// output and, on failure, a checkpoint of the last good state that restarts.
 HardCaseRun run_hard_case(const Scene& scene, const std::string& name) {
-  const fs::path dir = test::temp_dir(name);
-  RunOptions options;
-  options.out_dir = dir.string();
-  options.progress = false;
-  options.handle_signals = false;
+  const test::ScratchDir dir("rel_" + name);
+  RunOptions options = test::quiet_run_options(dir);
   HardCaseRun run;
   Solver solver(scene);
   run.initial = solver.energies();
@@ -260,7 +254,6 @@ HardCaseRun run_hard_case(const Scene& scene, const std::string& name) {
     EXPECT_NO_THROW(restore_checkpoint(again, read_checkpoint(cp), cp));
     EXPECT_LT(again.step_count(), 1000000);
   }
-  fs::remove_all(dir);
   return run;
 }
 
@@ -505,17 +498,13 @@ struct CapturedRun {
   std::string err;
 };
 CapturedRun run_capturing_stderr(const Scene& scene, const std::string& name) {
-  const fs::path dir = test::temp_dir(name);
-  RunOptions options;
-  options.out_dir = dir.string();
-  options.progress = false;
-  options.handle_signals = false;
+  const test::ScratchDir dir("rel_" + name);
+  RunOptions options = test::quiet_run_options(dir);
   Solver solver(scene);
   testing::internal::CaptureStderr();
   CapturedRun run;
   run.summary = run_scene(solver, options);
   run.err = testing::internal::GetCapturedStderr();
-  fs::remove_all(dir);
   return run;
 }
 
@@ -565,11 +554,8 @@ TEST(HardCases, TheEnergyGuardKeepsTheEarlierCheckpointToResumeWithASmallerStep)
   scene.end_time = 3.0;
   scene.guards.energy_growth_factor = 0.2;  // trips at t = 2.56 s (28.7% grown)
   scene.output.checkpoint_interval = 1.0;
-  const fs::path dir = test::temp_dir("earlier_checkpoint");
-  RunOptions options;
-  options.out_dir = dir.string();
-  options.progress = false;
-  options.handle_signals = false;
+  const test::ScratchDir dir("rel_earlier_checkpoint");
+  RunOptions options = test::quiet_run_options(dir);
   std::string diagnosis;
   {
     Solver solver(scene);
@@ -617,13 +603,12 @@ TEST(HardCases, TheEnergyGuardKeepsTheEarlierCheckpointToResumeWithASmallerStep)
   RunOptions again = options;
   again.out_dir = (dir / "resumed").string();
   again.resume = &kept.run;
-  again.resume_dir = dir.string();
+  again.resume_dir = dir.path().string();
   testing::internal::CaptureStderr();
   const RunSummary summary = run_scene(resumed, again);
   testing::internal::GetCapturedStderr();
   EXPECT_NEAR(summary.time, 3.0, 1e-12);
   EXPECT_LT(summary.energy_budget_gap(), 0.05);  // measured -0.019 (to 3.5 s) by talus run
-  fs::remove_all(dir);
 }
 
 // A run resumed after its energy warning neither warns again nor records a later step as the first:
@@ -631,11 +616,8 @@ TEST(HardCases, TheEnergyGuardKeepsTheEarlierCheckpointToResumeWithASmallerStep)
 TEST(HardCases, TheEnergyWarningIsKeptAcrossARestart) {
   Scene scene = parse_scene(kKinkScene, "kink75");
   scene.output.checkpoint_interval = 2.6;  // after the warning at t = 2.56 s
-  const fs::path dir = test::temp_dir("warning_restart");
-  RunOptions options;
-  options.out_dir = dir.string();
-  options.progress = false;
-  options.handle_signals = false;
+  const test::ScratchDir dir("rel_warning_restart");
+  RunOptions options = test::quiet_run_options(dir);
   Solver first(scene);
   testing::internal::CaptureStderr();
   const RunSummary whole = run_scene(first, options);
@@ -654,7 +636,6 @@ TEST(HardCases, TheEnergyWarningIsKeptAcrossARestart) {
   testing::internal::CaptureStderr();
   const RunSummary rest = run_scene(resumed, again);
   const std::string err = testing::internal::GetCapturedStderr();
-  fs::remove_all(dir);
   EXPECT_EQ(err.find("talus: warning: after step "), std::string::npos) << err;
   ASSERT_TRUE(rest.energy_warning);
   EXPECT_EQ(rest.energy_warning->step, whole.energy_warning->step);

@@ -1,6 +1,7 @@
 #pragma once
-// Shared helpers of the reliability tests: small scenes, temporary folders, and a check that a run
-// folder holds only complete, readable, finite output.
+// Shared helpers of the reliability tests: small scenes, temporary folders (ScratchDir), and a check
+// that a run folder holds only complete, readable, finite output.
+#include "../support/scratch_dir.hpp"
 #include "talus/scene/scene_json.hpp"
 
 #include <fmt/core.h>
@@ -19,19 +20,11 @@
 #include <regex>
 #include <sstream>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 namespace talus::test {
 
 namespace fs = std::filesystem;
-
-inline fs::path temp_dir(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / ("talus_rel_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
 
 inline std::string read_text(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);

@@ -33,14 +33,6 @@ MlsSettings cell_settings(MlsBasis basis, double radius_factor) {
   return s;
 }
 
-double worst_relative_change(const Cloud& c) {
-  double worst = 0.0;
-  for (int k = 0; k < 6; ++k)
-    for (std::size_t p = 0; p < c.particles.size(); ++p)
-      worst = std::max(worst, std::abs(c.out[k][p] - c.in[k][p]) / std::abs(c.in[k][p]));
-  return worst;
-}
-
 // A fit with a complete polynomial basis reproduces every field in its span, wherever it is centred.
 TEST(MlsCellFit, PolynomialFieldsInTheBasisAreReproduced) {
   for (bool quadratic : {false, true}) {
@@ -119,14 +111,7 @@ TEST(MlsCellFit, MatchesBruteForceEvaluationAtTheCellCentres) {
 
 TEST(MlsCellFit, GuardAndBodyMaskAsForTheParticleFit) {
   // Too few neighbours for 4 terms: kept and counted.
-  Cloud sparse;
-  sparse.geometry.h = 1.0;
-  sparse.geometry.cells = {10, 10, 10};
-  sparse.particles.add(0, Vec3(2.2, 2.2, 2.2), Vec3::Zero(), 1.0, 1.0, 0);
-  sparse.particles.add(1, Vec3(7.2, 7.2, 7.2), Vec3::Zero(), 1.0, 1.0, 0);
-  sparse.particles.add(2, Vec3(7.6, 7.2, 7.2), Vec3::Zero(), 1.0, 1.0, 0);
-  sparse.finish();
-  sparse.set_field([](int k, const double* x) { return k + x[0]; });
+  Cloud sparse = sparse_cloud();
   const MlsStrainSmoother linear(cell_settings(MlsBasis::Linear, 2.0), 1.0);
   MlsCounts n = linear.smooth(sparse.particles, sparse.sort, sparse.geometry, sparse.inputs(), sparse.outputs(), {1});
   EXPECT_EQ(n.unsmoothed, 3u);

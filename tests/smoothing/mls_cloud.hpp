@@ -5,7 +5,9 @@
 #include "talus/particles/cell_sort.hpp"
 #include "talus/particles/particle_store.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <functional>
 #include <random>
 #include <vector>
@@ -97,6 +99,20 @@ inline Cloud two_body_cloud() {
   return c;
 }
 
+/// A lone particle and a pair (cell size 1, 10 x 10 x 10 cells), sorted, with the field k + x:
+/// too few neighbours anywhere for the 4 terms of the linear basis.
+inline Cloud sparse_cloud() {
+  Cloud c;
+  c.geometry.h = 1.0;
+  c.geometry.cells = {10, 10, 10};
+  c.particles.add(0, Vec3(2.2, 2.2, 2.2), Vec3::Zero(), 1.0, 1.0, 0);
+  c.particles.add(1, Vec3(7.2, 7.2, 7.2), Vec3::Zero(), 1.0, 1.0, 0);
+  c.particles.add(2, Vec3(7.6, 7.2, 7.2), Vec3::Zero(), 1.0, 1.0, 0);
+  c.finish();
+  c.set_field([](int k, const double* x) { return k + x[0]; });
+  return c;
+}
+
 inline Cloud box_cloud(int per_axis, double jitter, unsigned seed = 1) {
   Cloud c;
   c.geometry.h = 1.0;
@@ -109,6 +125,15 @@ inline Cloud box_cloud(int per_axis, double jitter, unsigned seed = 1) {
 inline double linear_field(int c, const double* x) { return 1e-3 * (1.0 + c) + 2e-4 * x[0] - 3e-4 * x[1] + (1e-4 * c) * x[2]; }
 inline double quadratic_field(int c, const double* x) {
   return linear_field(c, x) + 5e-5 * x[0] * x[0] - 4e-5 * x[1] * x[2] + 3e-5 * (c + 1) * x[2] * x[2] + 1e-5 * x[0] * x[1];
+}
+
+/// The largest relative change |out - in| / |in| over every particle and component.
+inline double worst_relative_change(const Cloud& c) {
+  double worst = 0.0;
+  for (int k = 0; k < 6; ++k)
+    for (std::size_t p = 0; p < c.particles.size(); ++p)
+      worst = std::max(worst, std::abs(c.out[k][p] - c.in[k][p]) / std::abs(c.in[k][p]));
+  return worst;
 }
 
 }  // namespace talus::mls_test

@@ -56,15 +56,6 @@ MlsCounts smooth_field(Cloud& c, MlsBasis basis) {
   return MlsStrainSmoother(s, 1.0).smooth(c.particles, c.sort, c.geometry, c.inputs(), c.outputs(), {1});
 }
 
-/// The largest relative change |out - in| / |in| over every particle and component.
-double worst_relative_change(const Cloud& c) {
-  double worst = 0.0;
-  for (int k = 0; k < 6; ++k)
-    for (std::size_t p = 0; p < c.particles.size(); ++p)
-      worst = std::max(worst, std::abs(c.out[k][p] - c.in[k][p]) / std::abs(c.in[k][p]));
-  return worst;
-}
-
 // Exactness: an MLS fit with a complete polynomial basis reproduces every field in its span.
 TEST(MlsStrainSmoother, LinearFieldReproducedByEveryBasis) {
   Cloud c = box_cloud(12, 0.3);
@@ -203,14 +194,7 @@ TEST(MlsStrainSmoother, AStaleSortWithItsDriftFindsEveryNeighbour) {
 
 TEST(MlsStrainSmoother, GuardLeavesSparseOrDegenerateNeighbourhoodsAloneAndCountsThem) {
   // A lone particle and a pair: too few neighbours for 4 terms.
-  Cloud c;
-  c.geometry.h = 1.0;
-  c.geometry.cells = {10, 10, 10};
-  c.particles.add(0, Vec3(2.2, 2.2, 2.2), Vec3::Zero(), 1.0, 1.0, 0);
-  c.particles.add(1, Vec3(7.2, 7.2, 7.2), Vec3::Zero(), 1.0, 1.0, 0);
-  c.particles.add(2, Vec3(7.6, 7.2, 7.2), Vec3::Zero(), 1.0, 1.0, 0);
-  c.finish();
-  c.set_field([](int k, const double* x) { return k + x[0]; });
+  Cloud c = sparse_cloud();
   const MlsStrainSmoother linear(MlsSettings{}, 1.0);
   MlsCounts n = linear.smooth(c.particles, c.sort, c.geometry, c.inputs(), c.outputs(), {1});
   EXPECT_EQ(n.unsmoothed, 3u);
