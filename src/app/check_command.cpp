@@ -67,6 +67,9 @@ void add_check_command(CLI::App& app) {
                                                   "the disk estimate and the folder's checks are of it"),
                "give a folder, or leave --out out for runs/<scene name>");
   check_range(cmd->add_option("--threads", *threads, "As talus run's: checked against the CPUs available"), 1, 4096);
+  auto overwrite = std::make_shared<bool>(false);
+  cmd->add_flag("--overwrite", *overwrite,
+                "As talus run's: an unfinished run in the output folder is then no reason for the run to stop");
   cmd->footer("The memory available is the smaller of MemAvailable and a cgroup's (container, batch job) limit; the "
               "environment variable TALUS_MEMORY_LIMIT (bytes, or with a K/M/G/T suffix) sets it instead, e.g. a "
               "share of a node for one run. A scene that does not fit is refused (exit code 2), as talus run refuses it; so is an output folder "
@@ -107,7 +110,7 @@ void add_check_command(CLI::App& app) {
       require_outputs_spare_inputs(dir, *scene_path, scene, "", "");
       require_no_folder_in_place_of_an_output(dir);
       check_writable_folder(dir, "output folder");
-      require_no_unfinished_run(dir, false);
+      require_no_unfinished_run(dir, *overwrite);
     } catch (const Error& e) {
       run_would_stop = fmt::format("talus run {} would stop: {}", out_dir->empty() ? "without --out" : "with this --out", e.what());
     }

@@ -331,6 +331,10 @@ TEST(Crash, AFreshRunIntoAnUnfinishedRunsFolderIsRefusedUnlessOverwrite) {
   EXPECT_NE(check_text.find("talus: error: talus run with this --out would stop: output folder " + out.string() +
                             " holds an interrupted run"),
             std::string::npos) << check_text;
+  // and with --overwrite, as the run then starts, it says ok
+  const auto [overwriting, overwriting_text] = run_captured("check " + ref.scene.string() + " --out " + out.string() + " --overwrite");
+  EXPECT_EQ(overwriting, 0) << overwriting_text;
+  EXPECT_EQ(overwriting_text.find("would stop"), std::string::npos) << overwriting_text;
   // --overwrite goes with a fresh run only
   const auto [both, both_text] = run_captured("run " + ref.scene.string() + " --out " + out.string() + " --overwrite --restart " +
                                               (out / "checkpoint.h5").string());
