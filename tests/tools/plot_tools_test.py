@@ -5,6 +5,7 @@ generator's refusals and the column collapse's initial half-width.
 
     python3 tests/tools/plot_tools_test.py TALUS      (ctest: Tools.PlotsShowWhatTheRunsDid)
 """
+import csv
 import json
 import os
 import shutil
@@ -637,6 +638,47 @@ class EnergyGuardDemo(unittest.TestCase):
         self.assertLess(abs(record["end"]["energy_budget_gap"]), 0.05)
         self.assertNotIn("energy_growth_warning", record["end"])
         self.assertEqual(os.listdir(out), ["energy_guard_kink.png"])
+
+
+class DilationStudy(unittest.TestCase):
+    """tools/dilation_study.py on the shipped inputs/column_collapse_2d_unbounded_dilation.json, cut at
+    0.16 s (docs/reliability.md, "Unbounded dilation"): without the separation rule the run warns once,
+    where the frames' largest V/V0 passes 10, and with the rule it does not (the tool checks both)."""
+
+    def setUp(self):
+        self.work = tempfile.mkdtemp(prefix="talus_dilation_")
+
+    def tearDown(self):
+        shutil.rmtree(self.work, ignore_errors=True)
+
+    def test_bad_arguments_are_refused_in_one_line_before_any_run(self):
+        runs = os.path.join(self.work, "runs")
+        for args, text in ((["--end", "0.01"], "--end 0.01: give 0.05 or more"),
+                           (["--threads", "0"], "--threads 0: give 1 or more")):
+            code, out, err = tool("dilation_study.py", "--talus", TALUS, "--runs", runs, "--out", self.work, *args)
+            self.assertEqual((code, out), (2, ""), err)
+            self.assertEqual(len(err.strip().splitlines()), 1, err)
+            self.assertIn(text, err)
+        self.assertFalse(os.path.exists(runs))
+
+    def test_the_run_without_the_rule_warns_once_where_it_passes_ten_times_its_volume(self):
+        runs, out = os.path.join(self.work, "runs"), os.path.join(self.work, "out")
+        code, stdout, err = tool("dilation_study.py", "--talus", TALUS, "--runs", runs, "--out", out, "--end", "0.16")
+        self.assertEqual(code, 0, stdout + err)
+        # measured (2026-12-07): warned in step 2634, t = 0.125 s, particle 1524
+        self.assertIn("separation rule off (0): ", stdout)
+        self.assertIn("1 dilation warning(s)", stdout)
+        self.assertIn("  warned in step ", stdout)
+        self.assertIn("separation rule at 1.5 (default): ", stdout)
+        self.assertIn("0 dilation warning(s)", stdout)
+        self.assertEqual(sorted(os.listdir(out)), ["unbounded_dilation.csv", "unbounded_dilation.png"])
+        with open(os.path.join(out, "unbounded_dilation.csv")) as f:
+            rows = list(csv.DictReader(f))
+        last_off = [r for r in rows if r["separation_volume_ratio"] == "0.0"][-1]
+        last_on = [r for r in rows if r["separation_volume_ratio"] == "1.5"][-1]
+        self.assertGreater(float(last_off["largest_V_over_V0"]), 10.0)
+        self.assertLess(float(last_on["largest_V_over_V0"]), 10.0)
+        self.assertLess(float(last_off["dt"]), float(last_on["dt"]))
 
 
 class ElementTestPlots(unittest.TestCase):
