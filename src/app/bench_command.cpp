@@ -727,8 +727,9 @@ void run_bench(const BenchOptions& o) {
     run_update_bench(o);
     return;
   }
-  // (under mpirun: the default shared among a host's ranks; a host with more threads than CPUs is said once)
-  if (const auto oversubscribed = host_oversubscription(world, set_rank_threads(o.threads, world)))
+  // (under mpirun: the default shared among a host's ranks; threads beyond the CPUs are said once, as by
+  // run and check; each rate line below notes it too)
+  if (const auto oversubscribed = oversubscription_warning(world, o.threads, set_rank_threads(o.threads, world)))
     warn("{}", *oversubscribed);
   phase_clock() = o.cpu_time ? PhaseClock::ProcessCpu : PhaseClock::Wall;
   // What the process holds before the scene exists (the program and its libraries, ~25 MB): the

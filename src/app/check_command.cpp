@@ -84,7 +84,8 @@ void add_check_command(CLI::App& app) {
     const MachineShare share = machine_share(world, "");  // (collective)
     // the threads a run would take by default (under mpirun: shared among a host's ranks), and a host
     // they would oversubscribe (OMP_NUM_THREADS beyond its CPUs), said with the scene's warnings
-    const std::optional<std::string> oversubscribed = host_oversubscription(world, set_rank_threads(*threads, world));
+    const std::optional<std::string> oversubscribed =
+        oversubscription_warning(world, *threads, set_rank_threads(*threads, world));
     const MemoryEstimate memory = estimate_memory(scene);
     // every rank checks its machine, as `talus run` does (rank 0 alone said ok where a rank's
     // smaller machine then refused the run); the refusal comes after the summary on one rank
@@ -97,8 +98,6 @@ void add_check_command(CLI::App& app) {
     std::vector<std::string> more;
     if (const auto w = disk_warning(disk, dir)) more.push_back(*w);
     if (const auto w = memory_bound_warning(memory, share)) more.push_back(*w);
-    if (!world.distributed())  // (under mpirun: the host's count, below)
-      for (const std::string& w : threads_warning(*threads)) more.push_back(w);
     if (oversubscribed) more.push_back(*oversubscribed);
     const std::size_t warnings = print_warnings(scene, more);
     print_scene_summary(scene, memory, share, disk, dir);

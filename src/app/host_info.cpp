@@ -74,6 +74,9 @@ int set_rank_threads(int threads, const Comm& world) {
   return omp_get_max_threads();
 }
 
+namespace {
+
+/// oversubscription_warning under mpirun: the threads of each host's ranks against its logical CPUs.
 std::optional<std::string> host_oversubscription(const Comm& world, int threads) {
   struct Load {
     std::uint64_t host;
@@ -104,6 +107,20 @@ std::optional<std::string> host_oversubscription(const Comm& world, int threads)
                        loads[r].cpus == 1 ? "" : "s", fit, ranks > loads[r].cpus ? " and fewer ranks on that host" : "");
   }
   return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<std::string> oversubscription_warning(const Comm& world, int threads_option, int threads) {
+  if (world.distributed()) return host_oversubscription(world, threads);
+  const auto over = oversubscription(threads);
+  if (!over) return std::nullopt;
+  const int cpus = cpus_allowed();
+  const std::string given = threads_option > 0 ? fmt::format("--threads {}", threads_option)
+                                               : fmt::format("OMP_NUM_THREADS={}", threads);
+  return fmt::format("{}: {}: the threads take turns on the CPUs and wait for each other at every barrier, so the "
+                     "run is slower than on {} threads; give --threads {} or fewer",
+                     given, *over, cpus, cpus);
 }
 
 nlohmann::ordered_json host_json() {

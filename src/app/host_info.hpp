@@ -34,11 +34,13 @@ int logical_cpus();
 /// "Distributed runs"). Sets
 /// OpenMP's thread count (set_threads) and returns it.
 int set_rank_threads(int threads, const Comm& world);
-/// On rank 0, the warning (without "talus: warning: ") when the threads of the ranks on a host
-/// (`threads` each, every rank's own) exceed its logical CPUs: each thread then waits for a CPU and
-/// the run is slower, not faster. Under mpirun (collective); nullopt on one process (which the bench's
-/// note and the run's own line judge against its own CPUs), on the other ranks, and when no host is.
-std::optional<std::string> host_oversubscription(const Comm& world, int threads);
+/// On rank 0, the warning (without "talus: warning: ") that `run`, `check` and `bench` give when the
+/// threads would oversubscribe the CPUs: each thread then waits for a CPU and the run is slower, not
+/// faster. One process: `threads` (set_rank_threads's) against the CPUs it may use, naming where the
+/// count came from (`threads_option`, --threads, or OMP_NUM_THREADS: the latter was not warned about).
+/// Under mpirun (collective): the threads of the ranks on each host (every rank's own) against its
+/// logical CPUs. nullopt on the other ranks and when nothing is oversubscribed.
+std::optional<std::string> oversubscription_warning(const Comm& world, int threads_option, int threads);
 
 /// The host as a figure's record names it (run.json and the bench's JSON): name, CPU model, logical
 /// CPUs online, and those this process may run on.

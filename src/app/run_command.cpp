@@ -207,8 +207,7 @@ void claim_output_folder(const std::string& dir, const Comm& world, std::optiona
 /// the notes and warnings on it.
 void print_start_banner(const Solver& solver, std::int64_t particles, const MemoryEstimate& memory,
                         const MachineShare& share, const std::string& dir, const std::string& restart,
-                        const Resumed* resumed, const std::optional<std::string>& oversubscribed,
-                        const Comm& world) {
+                        const Resumed* resumed, const Comm& world) {
   if (resumed && world.root()) {
     if (const auto line = restart_changes_line(resumed->changed)) fmt::print("{}\n", *line);
     fmt::print("talus: restart from {} at step {}, t = {:.6g} s\n", restart, solver.step_count(), solver.time());
@@ -224,7 +223,6 @@ void print_start_banner(const Solver& solver, std::int64_t particles, const Memo
                                                  format_bytes(double(bytes_on_this_machine(solver.scene(), memory, share))))
                                    : "",
                dir);
-  if (world.root() && oversubscribed) warn("{}", *oversubscribed);
   if (world.root() && !world.distributed())
     if (const auto hint = scatter_hint(solver.scene(), solver.cell_sort(), threads)) fmt::print("{}\n", *hint);
   if (world.root())  // (the same line as `talus check`'s, app/disk_estimate.hpp)
@@ -439,12 +437,12 @@ void run_command(const RunCommandOptions& o, const std::string& isa) {
   // Under mpirun: every rank reads the scene and builds its slab of the solver; rank 0 speaks.
   const Comm world = Comm::world();
   const int threads = set_rank_threads(o.threads, world);  // (collective)
-  const std::optional<std::string> oversubscribed = host_oversubscription(world, threads);  // (collective)
+  const std::optional<std::string> oversubscribed = oversubscription_warning(world, o.threads, threads);  // (collective)
   select_isa_option(isa);
   if (world.distributed() && !o.record_path.empty())
     throw input_error("--record-work: the work recorder times one rank's threads; run it without mpirun");
   Scene scene = read_scene_file(o.scene_path);  // validated before anything is written
-  if (world.root()) print_warnings(scene, world.distributed() ? std::vector<std::string>{} : threads_warning(o.threads));
+  if (world.root()) print_warnings(scene, oversubscribed ? std::vector<std::string>{*oversubscribed} : std::vector<std::string>{});
   const MemoryEstimate memory = estimate_memory(scene);
   // a scene that cannot fit stops here, before anything is allocated (each rank checks its own
   // machine; one that refuses stops every rank)
@@ -469,7 +467,7 @@ void run_command(const RunCommandOptions& o, const std::string& isa) {
   prepare_output_folder(dir, resume, world);
   const DistributionStats start = solver.distribution();
   print_start_banner(solver, start.particles, memory, share, dir, o.restart, resumed ? &*resumed : nullptr,
-                     oversubscribed, world);
+                     world);
   RunOptions options = run_options(o, dir, started, resume);
   std::unique_ptr<WorkRecorder> recorder;
   if (!o.record_path.empty()) {

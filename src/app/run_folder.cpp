@@ -133,14 +133,6 @@ std::optional<std::string> restart_changes_line(const std::vector<std::string>& 
                      steps_change ? " (another time.courant: other time steps, other results than without the change)" : "");
 }
 
-std::vector<std::string> threads_warning(int threads) {
-  const auto over = threads > 0 ? oversubscription(threads) : std::nullopt;
-  if (!over) return {};
-  return {fmt::format("--threads {}: {}: the threads take turns on the CPUs and wait for each other at every "
-                     "barrier, so the run is slower than on {} threads; give --threads {} or fewer",
-                     threads, *over, cpus_allowed(), cpus_allowed())};
-}
-
 std::string run_help_footer() {
   return "Files written in the output folder (README.md, \"What a run writes\"):\n"
          "  particles.pvd, frames/particles_NNNNNN.vtu (.pvtu and one piece per rank under mpirun)  the ParaView series\n"

@@ -36,9 +36,7 @@ std::optional<std::string> older_checkpoint_note(const std::filesystem::path& di
 /// printed once the restart is accepted (before its refusal, it read as if the run had started).
 std::optional<std::string> restart_changes_line(const std::vector<std::string>& changed);
 
-/// `talus run --threads N` (`threads`, 0 when not given) with more threads than this process has
-/// CPUs: the warning (one line), or none.
-std::vector<std::string> threads_warning(int threads);
+
 
 /// What `talus run --help` says after the options: the files a run writes and its exit codes.
 std::string run_help_footer();

@@ -85,6 +85,11 @@ TEST(Cli, CheckTakesRunsOutAndThreads) {
   EXPECT_FALSE(fs::exists(dir / "mine"));
   const Result plain = run("check " + kInputs + "elastic_block_slide.json --threads 1");
   EXPECT_EQ(plain.output.find("oversubscribed"), std::string::npos) << plain.output;
+  // so too threads that OMP_NUM_THREADS asks for (they were not warned about before 2026-12-07)
+  const Result env = run_shell("OMP_NUM_THREADS=4096 " + std::string(TALUS_BINARY) + " check " + kInputs +
+                               "elastic_block_slide.json 2>&1");
+  EXPECT_EQ(env.exit_code, 0) << env.output;
+  EXPECT_NE(env.output.find("talus: warning: OMP_NUM_THREADS=4096: 4096 threads on the"), std::string::npos) << env.output;
 }
 
 // --version names the build (app/build_info.cpp): the commit of the source tree it was built from,
