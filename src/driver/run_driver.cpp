@@ -431,14 +431,14 @@ void RunLoop::start() {
   take_snapshot();
 }
 
-// The terrain surface, once, over the grid's x and y range (ParaView shows it with the particles).
+// The bed the particles slide on, once, over the grid's x and y range (ParaView shows it with the particles).
 void RunLoop::write_terrain() {
   const FlumeCoordinates bed = flume_coordinates_of(scene_);
   if (bed.flat()) return;
   const GridGeometry& g = scene_.grid;
   summary_.terrain_path = (dir_ / "terrain.vtu").string();
   write_terrain_vtu(summary_.terrain_path, bed.profile(), g.origin[0], g.origin[0] + g.cells[0] * g.h, g.origin[1],
-                    g.origin[1] + g.cells[1] * g.h, 0.25 * g.h);
+                    g.origin[1] + g.cells[1] * g.h, 0.25 * g.h, g.h, g.origin[2]);
 }
 
 bool RunLoop::step_and_write() {

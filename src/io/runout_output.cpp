@@ -1,6 +1,7 @@
 #include "talus/io/runout_output.hpp"
 
 #include "talus/core/error.hpp"
+#include "talus/grid/terrain.hpp"
 #include "talus/io/atomic_file.hpp"
 #include "talus/io/vtu_writer.hpp"
 
@@ -108,27 +109,33 @@ void write_deposit_csv(const std::string& path, const DepositRaster& raster, con
 }
 
 void write_terrain_vtu(const std::string& path, const TerrainProfile& profile, double x0, double x1, double y0,
-                       double y1, double max_segment) {
-  // Sample x uniformly, plus the kinks, so the strip follows the bed's corners exactly.
+                       double y1, double max_segment, double column_spacing, double bed_w) {
+  // The bed the particles meet, not the profile: at a convex crest or a kink between node columns the
+  // profile drawn before lay up to 2 cm above the bed, and resting sand looked sunk into it (a user's
+  // hunt, 2026-12-07). Sampled uniformly and at every node column, where the bed bends.
+  const int columns = static_cast<int>(std::lround((x1 - x0) / column_spacing)) + 1;
+  const ProfileTerrain bed(profile, x0, column_spacing, 0, columns);
   std::vector<double> xs;
   const int segments = std::max(1, static_cast<int>(std::ceil((x1 - x0) / max_segment)));
   for (int i = 0; i <= segments; ++i) xs.push_back(x0 + (x1 - x0) * i / segments);
-  for (double k : profile.kinks())
-    if (k > x0 && k < x1) xs.push_back(k);
+  for (int i = 0; i < columns; ++i) xs.push_back(x0 + i * column_spacing);
   std::sort(xs.begin(), xs.end());
-  xs.erase(std::unique(xs.begin(), xs.end()), xs.end());
+  xs.erase(std::unique(xs.begin(), xs.end(), [&](double a, double b) { return b - a < 1e-9 * column_spacing; }),
+           xs.end());
 
   const auto n = static_cast<vtkIdType>(xs.size());
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
   points->SetNumberOfPoints(2 * n);
-  vtkNew<vtkDoubleArray> arc, angle;
+  vtkNew<vtkDoubleArray> arc, angle, above;
   arc->SetName("arc_length");
   arc->SetNumberOfTuples(2 * n);
   angle->SetName("slope_angle");
   angle->SetNumberOfTuples(2 * n);
+  above->SetName("profile_above_bed");
+  above->SetNumberOfTuples(2 * n);
   for (vtkIdType i = 0; i < n; ++i) {
-    const double x = xs[i], z = profile.height(x);
+    const double x = xs[i], z = bed.height(x) + bed_w;
     const double s = profile.arc_length(x);
     // positive where the bed descends in +x (+ 0.0: a flat bed read "-0" in ParaView's range)
     const double deg = std::atan(-profile.slope(x)) * 180.0 / M_PI + 0.0;
@@ -136,6 +143,7 @@ void write_terrain_vtu(const std::string& path, const TerrainProfile& profile, d
       points->SetPoint(2 * i + side, x, side == 0 ? y0 : y1, z);
       arc->SetValue(2 * i + side, s);
       angle->SetValue(2 * i + side, deg);
+      above->SetValue(2 * i + side, profile.height(x) - z);
     }
   }
   vtkNew<vtkCellArray> cells;
@@ -148,6 +156,7 @@ void write_terrain_vtu(const std::string& path, const TerrainProfile& profile, d
   grid->SetCells(VTK_QUAD, cells);
   grid->GetPointData()->AddArray(arc);
   grid->GetPointData()->AddArray(angle);
+  grid->GetPointData()->AddArray(above);
   write_vtu_atomically(grid, path, false, "terrain surface");
 }
 

@@ -81,7 +81,7 @@ Table<SceneDraft> make_terrain_table() {
       custom<SceneDraft>(
           "radii", "[r per point]", "all 0", "≥ 0, one per point; transitions must fit on their segments",
           "radius of the circular transition at each interior point (0: sharp kink; end points ignored). The grid's "
-          "bed is the profile sampled at the node columns: a transition departs from it by ≤ h²/8r; a sharp kink "
+          "bed is the profile sampled at the node columns: a transition departs from it by ≤ h²/(8r cos³θ) along the vertical, θ the steepest slope on the arc (h²/8r where it is gentle); a sharp kink "
           "between node columns is cut by a chord, so put kinks on node columns or use r ≥ 2h (`run` and `check` warn "
           "where a vertex with r < 2h lies between node columns and the chord passes more than h/16 from it)",
           {{"type", "array"}, {"items", {{"type", "number"}, {"minimum", 0}}}},

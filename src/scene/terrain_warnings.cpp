@@ -95,12 +95,12 @@ std::vector<std::string> terrain_warnings(const GridGeometry& grid, double coura
         "measure s along the whole profile",
         step_point));
   // w is measured from the profile and the bed is the z- face at w = origin[2]: any other origin
-  // moves the bed off the profile, while terrain.vtu draws the profile (particles sat 0.16 m below
-  // the drawn bed with origin[2] = -0.5).
+  // moves the bed off the profile (particles sat 0.16 m below the profile with origin[2] = -0.5;
+  // terrain.vtu draws the bed where it is, since 2026-12-07).
   if (grid.origin[2] != 0.0)
     warnings.push_back(fmt::format(
         "grid.origin[2] = {} on a terrain grid: the bed (the z- face, w = origin[2]) lies {} m {} the profile of "
-        "grid.terrain.points, which terrain.vtu draws; give the bed's heights in the points and origin[2] = 0",
+        "grid.terrain.points; give the bed's heights in the points and origin[2] = 0",
         grid.origin[2], std::abs(grid.origin[2]), grid.origin[2] < 0.0 ? "below" : "above"));
   // Outside its points the profile continues its end segments straight: a grid beyond them (an origin
   // in other coordinates than the points', a profile cut short) got a bed nobody gave, without a word.

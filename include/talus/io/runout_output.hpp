@@ -31,9 +31,14 @@ std::string runout_result_json(const RunoutResult& result);
 /// s,y,x,thickness: one row per raster cell (cell centres), s fastest-varying last (rows of constant s).
 void write_deposit_csv(const std::string& path, const DepositRaster& raster, const FlumeCoordinates& coordinates);
 
-/// The terrain surface as a strip of quads over [y0, y1] (VTK_QUAD cells in a .vtu), sampled in x at
-/// spacing <= max_segment and at every kink, with point arrays "arc_length" (s) and "slope_angle" [deg].
+/// The bed the particles slide on as a strip of quads over [y0, y1] (VTK_QUAD cells in a .vtu): the
+/// profile sampled at the grid's node columns x0 + i column_spacing, straight between them, raised by
+/// bed_w (the z- face's w, grid.origin[2]), as the terrain-following grid makes it (grid/terrain.hpp).
+/// Sampled in x at spacing <= max_segment and at every node column, with point arrays "arc_length"
+/// (the profile's s, the runout's coordinate), "slope_angle" [deg] (the profile's) and
+/// "profile_above_bed" [m] (the profile's height over the drawn bed: where a transition or a kink
+/// between node columns departs from it: up to h^2/(8 r cos^3 theta) on an arc, docs/theory.md).
 void write_terrain_vtu(const std::string& path, const TerrainProfile& profile, double x0, double x1, double y0,
-                       double y1, double max_segment);
+                       double y1, double max_segment, double column_spacing, double bed_w);
 
 }  // namespace talus
