@@ -6,6 +6,7 @@
 #include "talus/core/comm.hpp"
 #include "talus/grid/grid.hpp"
 #include "talus/grid/tile_exchange.hpp"
+#include "talus/grid/tile_stages.hpp"
 #include "talus/solver/body_materials.hpp"
 #include "talus/solver/energy_budget.hpp"
 #include "talus/solver/grid_update.hpp"
@@ -193,6 +194,23 @@ class Solver {
   void step_with_shape(double dt);
   template <class Shape, class Terrain>
   void step_with(double dt);
+  // step_with's phases, in their order (solver.cpp says what each does).
+  struct StepContext;     // what the phases of a step share: dt, gravity, the recorder, the tiles
+  struct ScatteredNodes;  // what P2G hands the grid update
+  void sort_if_due();
+  StepContext step_context(double dt, double stress_dt, const Vec3& gravity);
+  template <class Shape, class Terrain>
+  ScatteredNodes scatter_phase(const StepContext& step);
+  template <class Shape, class Terrain>
+  ScatteredNodes scatter_stress_first_phase(const StepContext& step);
+  void grid_phase(const StepContext& step, ScatteredNodes& p2g, bool remap);
+  template <class Shape, class Terrain>
+  TileStages gather_phase(const StepContext& step, bool remap);
+  void take_gather_result(const GatherResult& r);
+  const NodeVectors& remap_phase(const StepContext& step, TileStages& remap_stages);
+  void move_phase(const StepContext& step);
+  TileStages after_scatter(const StepContext& step, const char* name, ScatteredFields fields, bool clear_first = false);
+  void clear_grid(const StepContext& step);
   template <class Shape, class Terrain>
   void update_stress(const NodeVectors& node_velocity, double dt, bool move);
   template <class Shape, class Terrain>
