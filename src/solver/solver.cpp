@@ -988,21 +988,26 @@ void Solver::report_bad_particle(long long index, std::string_view what) const {
 
 // ---- checkpoint/restart (docs/reliability.md) ----------------------------------------------------
 
+template <class Self, class State, class F>
+void Solver::for_each_counter(Self& solver, State& s, F f) {
+  f(solver.time_, s.time);
+  f(solver.step_, s.step);
+  f(solver.last_dt_, s.last_dt);
+  f(solver.work_, s.work);
+  f(solver.gap_, s.gap);
+  f(solver.outflow_mass_, s.outflow_mass);
+  f(solver.outflow_faces_, s.outflow_faces);
+  f(solver.outflow_particles_, s.outflow_particles);
+  f(solver.steps_since_sort_, s.steps_since_sort);
+  f(solver.sorts_, s.sorts);
+  f(solver.needs_sort_, s.needs_sort);
+  f(solver.periodic_gravity_shift_, s.periodic_gravity_shift);
+  f(solver.sort_drift_, s.sort_drift);
+}
+
 SolverState Solver::state() const {
   SolverState s;
-  s.time = time_;
-  s.step = step_;
-  s.last_dt = last_dt_;
-  s.work = work_;
-  s.gap = gap_;
-  s.outflow_mass = outflow_mass_;
-  s.outflow_faces = outflow_faces_;
-  s.outflow_particles = outflow_particles_;
-  s.steps_since_sort = steps_since_sort_;
-  s.sorts = sorts_;
-  s.needs_sort = needs_sort_;
-  s.periodic_gravity_shift = periodic_gravity_shift_;
-  s.sort_drift = sort_drift_;
+  for_each_counter(*this, s, [](const auto& member, auto& saved) { saved = member; });
   if (!mls_weights_.empty())  // a view (SolverState::mls_weights)
     s.mls_weights = std::shared_ptr<const MlsStoredWeights>(std::shared_ptr<const MlsStoredWeights>(), &mls_weights_);
   s.mls_strain_since_fit = mls_strain_since_fit_;
@@ -1097,19 +1102,7 @@ void Solver::restore(ParticleStore particles, const SolverState& s, RestoreSort 
 }
 
 void Solver::restore_counters(const SolverState& s) {
-  time_ = s.time;
-  step_ = s.step;
-  last_dt_ = s.last_dt;
-  work_ = s.work;
-  gap_ = s.gap;
-  outflow_mass_ = s.outflow_mass;
-  outflow_faces_ = s.outflow_faces;
-  outflow_particles_ = s.outflow_particles;
-  steps_since_sort_ = s.steps_since_sort;
-  sorts_ = s.sorts;
-  needs_sort_ = s.needs_sort;
-  periodic_gravity_shift_ = s.periodic_gravity_shift;
-  sort_drift_ = s.sort_drift;
+  for_each_counter(*this, s, [](auto& member, const auto& saved) { member = saved; });
   if (!s.mls_weights || s.mls_weights->particle_count() != particles_.size())
     mls_weights_.clear();
   else if (s.mls_weights.get() != &mls_weights_)

@@ -34,6 +34,9 @@ namespace talus {
 
 /// Everything besides the particle arrays that the next step depends on: what a checkpoint saves
 /// with the particles so that a restored solver continues bit for bit (docs/reliability.md).
+/// A new scalar: one line in Solver::for_each_counter (state() and restore() copy through it) and
+/// its attribute in io/checkpoint.cpp (written, read, and in for_each_rank_scalar or
+/// for_each_rank_integer when each rank keeps its own).
 struct SolverState {
   double time = 0.0;
   std::int64_t step = 0;
@@ -259,6 +262,10 @@ class Solver {
   void sort_particles_recorded();
   /// restore(): the time, the counters and the accumulated ledger.
   void restore_counters(const SolverState& s);
+  /// The scalars of SolverState beside the members that hold them, one line each: f(member, saved)
+  /// for each pair, so that state() and restore_counters() copy the same list, one way each.
+  template <class Self, class State, class F>
+  static void for_each_counter(Self& solver, State& s, F f);
   /// Distributed runs: move the slab bounds if the work is out of balance, and send every particle
   /// to the rank owning its cell (collective, at a sort).
   void redistribute();
