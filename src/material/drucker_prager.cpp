@@ -73,10 +73,10 @@ void DruckerPrager::cone_coefficients(ConeFit cone, double angle_deg, double coh
 DruckerPrager::DruckerPrager(const DruckerPragerParameters& parameters, std::string_view key_prefix)
     : parameters_(parameters) {
   validate(parameters_, key_prefix);
-  const double e = parameters_.young, nu = parameters_.poisson;
-  shear_ = e / (2.0 * (1.0 + nu));
-  bulk_ = e / (3.0 * (1.0 - 2.0 * nu));
-  lame_ = bulk_ - 2.0 * shear_ / 3.0;
+  const ElasticModuli moduli = parameters_.moduli();
+  shear_ = moduli.shear();
+  bulk_ = moduli.bulk();
+  lame_ = moduli.lame_from_bulk();
   cone_coefficients(parameters_.cone, parameters_.friction_angle_deg, parameters_.cohesion, alpha_,
                     k0_);  // Abe, Johansson & Konagai 2005, eq. 23: alpha from phi
   double unused = 0.0;

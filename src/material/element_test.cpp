@@ -61,8 +61,8 @@ Control control_for(const ElementTestSpec& spec) {
 /// The held strain increments that keep the held stresses where they are if the increment is
 /// elastic (isotropic: sigma = lambda tr(eps) I + 2 G eps, tensor shears), given the driven one.
 SmallVector elastic_held_strains(const Control& control, const Sym6& d_eps, const DruckerPragerParameters& material) {
-  const double e = material.young, nu = material.poisson;
-  const double shear = e / (2.0 * (1.0 + nu)), lame = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+  const ElasticModuli moduli = material.moduli();
+  const double shear = moduli.shear(), lame = moduli.lame();
   const auto stiffness = [&](int i, int j) {  // d sigma_i / d eps_j
     return (i < 3 && j < 3 ? lame : 0.0) + (i == j ? 2.0 * shear : 0.0);
   };

@@ -36,10 +36,10 @@ void validate(const MuIParameters& p, std::string_view prefix) {
 
 MuI::MuI(const MuIParameters& parameters, std::string_view key_prefix) : parameters_(parameters) {
   validate(parameters_, key_prefix);
-  const double e = parameters_.young, nu = parameters_.poisson;
-  shear_ = e / (2.0 * (1.0 + nu));
-  bulk_ = e / (3.0 * (1.0 - 2.0 * nu));
-  lame_ = bulk_ - 2.0 * shear_ / 3.0;
+  const ElasticModuli moduli = parameters_.moduli();
+  shear_ = moduli.shear();
+  bulk_ = moduli.bulk();
+  lame_ = moduli.lame_from_bulk();
   delta_mu_ = parameters_.mu_2 - parameters_.mu_s;
   rate_constant_ = parameters_.grain_diameter * std::sqrt(parameters_.grain_density) / shear_;
 }

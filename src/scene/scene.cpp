@@ -31,12 +31,6 @@ int colour_block_edge(const Scene& scene) {
   return CellSort::block_edge(reach.low, reach.high, scene.block_cells);
 }
 
-double MaterialSpec::bulk_modulus() const {
-  return elastic.young / (3.0 * (1.0 - 2.0 * elastic.poisson));
-}
-double MaterialSpec::shear_modulus() const { return elastic.young / (2.0 * (1.0 + elastic.poisson)); }
-double MaterialSpec::p_wave_modulus() const { return bulk_modulus() + 4.0 / 3.0 * shear_modulus(); }
-
 double Scene::initial_time_step() const {
   double max_rate = 0.0;
   for (const BodySpec& body : bodies) max_rate = std::max(max_rate, wave_speed(body) + body.velocity.norm());
@@ -45,7 +39,7 @@ double Scene::initial_time_step() const {
 
 double Scene::wave_speed(const BodySpec& body) const {
   const MaterialSpec& m = materials[body.material];
-  return std::sqrt(m.p_wave_modulus() / m.density);
+  return std::sqrt(m.elastic.p_wave() / m.density);
 }
 
 const char* to_string(SchemeKind scheme) {

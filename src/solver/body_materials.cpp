@@ -61,8 +61,8 @@ BodyMaterials::BodyMaterials(const Scene& scene, ParticleStore& particles) {
     const MaterialSpec& m = scene.materials[b.material];
     Body body;
     body.model = m.model;
-    body.elastic = LinearElastic::from_young_poisson(m.elastic.young, m.elastic.poisson);
-    body.p_wave_modulus = m.p_wave_modulus();
+    body.elastic = LinearElastic::from_moduli(m.elastic);
+    body.p_wave_modulus = m.elastic.p_wave();
     if (m.model == MaterialModel::DruckerPrager) {
       const std::string prefix = "materials." + m.name + ".";
       body.plastic.emplace_back(m.drucker_prager, prefix);

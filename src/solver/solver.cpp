@@ -489,17 +489,61 @@ void Solver::step_with_shape(double dt) {
   }
 }
 
+// What the phases of one step share (Solver::step_with): fixed once the sort has run, since the
+// active tiles and the block buffers follow the sort. It lives on step_with's stack.
+struct Solver::StepContext {
+  double dt;
+  double stress_dt;          // the scheme's share of dt for each stress update (scheme.hpp)
+  Vec3 gravity;              // at the middle of the step (gravity_at: ramped)
+  WorkRecorder* rec;         // the recorder when this step is recorded, else null
+  ColourPassTiming* timing;  // the colour passes' per-block timing, when recorded
+  std::size_t tiles;         // the active tiles
+  BlockBuffers* buffers;     // solver.scatter = "block_buffers", else null
+  // The grid is cleared before the first scatter of the step. With block buffers the scatter
+  // writes only the boxes, so the clear can wait for the box sum, tile by tile, in its loop.
+  bool clear_in_box_sum;
+};
+
+// What P2G hands the grid update: the node work queued after its last scatter (run in the grid
+// phase's parallel region), and what that scatter wrote, which the grid update's ghost fold moves.
+struct Solver::ScatteredNodes {
+  TileStages stages;
+  ScatteredFields folded;
+};
+
 // One explicit step, in the order MUSL runs it (Edo & Matsubara 2015, eq. 47-56); the scheme's row
-// (solver/scheme.hpp) says which phases run and with what share of dt.
+// (solver/scheme.hpp) says which phases run and with what share of dt. Each phase is a member
+// function below, in this order.
 template <class Shape, class Terrain>
 void Solver::step_with(double dt) {
   const SchemeSteps scheme = scheme_steps(scene_.scheme);
-  const double stress_dt = scheme.stress_dt_share * dt;
   const Vec3 gravity = gravity_at(time_ + 0.5 * dt);
-  // 1. sort: when a particle has drifted beyond its block's slack, and every sort_interval steps
-  //    to keep the memory order close to the cell order. With MLS smoothing also when some particle
-  //    may have moved a quarter of a cell since the sort (mls_needs_sort).
-  // (recorded as its parallel loops, a static region, and its serial bookkeeping over the blocks)
+  sort_if_due();  // 1. sort
+  const StepContext step = step_context(dt, scheme.stress_dt_share * dt, gravity);
+  // 2. P2G: nodal mass, momentum and internal force. USF / USAVG update the stress in between,
+  //    from the start-of-step nodal velocities (walls applied), before scattering the force.
+  ScatteredNodes p2g = scheme.stress_first ? scatter_stress_first_phase<Shape, Terrain>(step)
+                                           : scatter_phase<Shape, Terrain>(step);
+  grid_phase(step, p2g, scheme.remap);  // 3. grid
+  // 4. G2P, with the remap's scatter in the same pass (MUSL, USAVG)
+  TileStages remap_stages = gather_phase<Shape, Terrain>(step, scheme.remap);
+  // 5. remap (MUSL, USAVG): the velocities the strain is computed from, else v^L
+  const NodeVectors node_velocity =
+      scheme.remap ? remap_phase(step, remap_stages) : grid_.lagrangian_velocity();
+  // 6. strain (and its MLS smoothing when enabled) and stress, then move the particles (USF: only
+  //    move them).
+  if (scheme.stress_last)
+    update_stress<Shape, Terrain>(node_velocity, step.stress_dt, true);
+  else
+    move_phase(step);
+}
+
+// 1. sort: when a particle has drifted beyond its block's slack, and every sort_interval steps
+//    to keep the memory order close to the cell order. With MLS smoothing also when some particle
+//    may have moved a quarter of a cell since the sort (mls_needs_sort). On several ranks every rank
+//    sorts when one must (collective_sort_, from step()'s sync), and the shared tiles are found again.
+// (recorded as its parallel loops, a static region, and its serial bookkeeping over the blocks)
+void Solver::sort_if_due() {
   const bool sort_now = comm_.distributed()
                             ? collective_sort_
                             : mls_needs_sort() || needs_sort_ || steps_since_sort_ >= scene_.sort_interval;
@@ -512,137 +556,159 @@ void Solver::step_with(double dt) {
     tiles_changed_ = false;
   }
   ++steps_since_sort_;
-  WorkRecorder* const rec = recording();
-  ColourPassTiming* const timing = rec ? &pass_timing_ : nullptr;
-  const std::size_t tiles = grid_.active_tiles().size();
-  BlockBuffers* const buffers = block_buffers();
-  // After a scatter: its record, and the stages of the node work that follows it, which the caller
-  // adds to and runs in one parallel region (run_stages). With block buffers the first stage is
-  // the sum of the boxes into the grid; on several ranks that sum runs on its own, so that the
-  // nodes the ranks share are summed across them (sum_shared_nodes) before the stages read them.
-  // `clear_first`: the box sum zeroes each tile before its sums (the step's grid clear, folded in).
-  auto after_scatter = [&](const char* name, ScatteredFields fields, bool clear_first = false) {
-    if (rec) rec->add_colour_passes(name, pass_timing_, sort_, buffers != nullptr);
-    TileStages stages(tiles);
-    if (buffers) buffers->add_sum_stage(stages, grid_, fields, clear_first);
-    if (comm_.distributed()) {
-      run_stages(rec, (std::string(name) + " box sum").c_str(), tiles, stages);
-      stages = TileStages(tiles);
-      sum_shared_nodes(fields);
-    }
-    return stages;
-  };
-  // The grid is cleared before the first scatter of the step. With block buffers the scatter
-  // writes only the boxes, so the clear can wait for the box sum, tile by tile, in its loop.
-  const bool clear_in_box_sum = buffers && buffers->covers_active_tiles();
-  auto clear_grid = [&] {
-    if (!clear_in_box_sum) recorded(rec, RegionSchedule::Static, "grid clear", tiles, 1, [&] { grid_.clear_active(); });
-  };
+}
 
-  // 2. P2G: nodal mass, momentum and internal force. USF / USAVG update the stress in between,
-  //    from the start-of-step nodal velocities (walls applied), before scattering the force.
-  //    The node work after each scatter (the box sum, the ghost fold, the velocities and the
-  //    mirror) runs as the stages of one parallel region, timed in the grid phase.
-  TileStages grid_stages(tiles);
-  ScatteredFields folded;  // what the grid update's ghost fold moves: what the last scatter wrote
-  if (!scheme.stress_first) {
-    {
-      ScopedPhase timer(times_, Phase::P2G);
-      clear_grid();
-      scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentumForce, timing, buffers);
-      folded = {.mass = true, .momentum = true, .force = true};
-      grid_stages = after_scatter("p2g", folded, clear_in_box_sum);
-    }
-  } else {
-    TileStages start_stages(tiles);
-    {
-      ScopedPhase timer(times_, Phase::P2G);
-      clear_grid();
-      scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentum, timing, buffers);
-      start_stages = after_scatter("p2g mass momentum", {.mass = true, .momentum = true}, clear_in_box_sum);
-    }
-    {
-      ScopedPhase timer(times_, Phase::Grid);
-      add_start_velocities(start_stages, grid_, walls_, ghosts_, gravity, mass_floor_);
-      run_stages(rec, "start velocities", tiles, start_stages);
-    }
-    update_stress<Shape, Terrain>(grid_.start_velocity(), stress_dt, false);
-    ScopedPhase timer(times_, Phase::P2G);
-    scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Force, timing, buffers);
-    folded = {.force = true};
-    grid_stages = after_scatter("p2g force", folded);
+Solver::StepContext Solver::step_context(double dt, double stress_dt, const Vec3& gravity) {
+  WorkRecorder* const rec = recording();
+  BlockBuffers* const buffers = block_buffers();
+  return {.dt = dt,
+          .stress_dt = stress_dt,
+          .gravity = gravity,
+          .rec = rec,
+          .timing = rec ? &pass_timing_ : nullptr,
+          .tiles = grid_.active_tiles().size(),
+          .buffers = buffers,
+          .clear_in_box_sum = buffers && buffers->covers_active_tiles()};
+}
+
+// After a scatter: its record, and the stages of the node work that follows it, which the caller
+// adds to and runs in one parallel region (run_stages). With block buffers the first stage is
+// the sum of the boxes into the grid; on several ranks that sum runs on its own, so that the
+// nodes the ranks share are summed across them (sum_shared_nodes) before the stages read them.
+// `clear_first`: the box sum zeroes each tile before its sums (the step's grid clear, folded in).
+TileStages Solver::after_scatter(const StepContext& step, const char* name, ScatteredFields fields,
+                                 bool clear_first) {
+  if (step.rec) step.rec->add_colour_passes(name, pass_timing_, sort_, step.buffers != nullptr);
+  TileStages stages(step.tiles);
+  if (step.buffers) step.buffers->add_sum_stage(stages, grid_, fields, clear_first);
+  if (comm_.distributed()) {
+    run_stages(step.rec, (std::string(name) + " box sum").c_str(), step.tiles, stages);
+    stages = TileStages(step.tiles);
+    sum_shared_nodes(fields);
   }
-  // 3. grid: velocities, accelerations with gravity, walls.
-  // With a remap the grid update leaves the momentum at zero (ghost nodes included, and the
-  // mirror leaves it so) for the remap's scatter: one pass over the active tiles instead of two.
-  const bool remap = scheme.remap;
+  return stages;
+}
+
+// The grid is cleared before the first scatter of the step (or in the box sum: StepContext).
+void Solver::clear_grid(const StepContext& step) {
+  if (!step.clear_in_box_sum)
+    recorded(step.rec, RegionSchedule::Static, "grid clear", step.tiles, 1, [&] { grid_.clear_active(); });
+}
+
+// 2. P2G (MUSL, USL): nodal mass, momentum and internal force in one scatter. The node work after
+//    it (the box sum, the ghost fold, the velocities and the mirror) runs as the stages of one
+//    parallel region, timed in the grid phase.
+template <class Shape, class Terrain>
+Solver::ScatteredNodes Solver::scatter_phase(const StepContext& step) {
+  ScopedPhase timer(times_, Phase::P2G);
+  clear_grid(step);
+  scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentumForce, step.timing,
+                                  step.buffers);
+  const ScatteredFields folded{.mass = true, .momentum = true, .force = true};
+  return {after_scatter(step, "p2g", folded, step.clear_in_box_sum), folded};
+}
+
+// 2. P2G (USF, USAVG): mass and momentum, the start-of-step nodal velocities (walls applied), the
+//    stress update from them, then the internal force from the updated stress.
+template <class Shape, class Terrain>
+Solver::ScatteredNodes Solver::scatter_stress_first_phase(const StepContext& step) {
+  TileStages start_stages(step.tiles);
+  {
+    ScopedPhase timer(times_, Phase::P2G);
+    clear_grid(step);
+    scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::MassMomentum, step.timing, step.buffers);
+    start_stages = after_scatter(step, "p2g mass momentum", {.mass = true, .momentum = true}, step.clear_in_box_sum);
+  }
   {
     ScopedPhase timer(times_, Phase::Grid);
-    const bool gap_terms = scene_.output.energy_gap_terms;
-    add_grid_update(grid_stages, grid_, walls_, ghosts_, folded, gravity, dt, mass_floor_, remap, tile_work_,
-                    gap_terms ? &tile_gap_ : nullptr);
-    run_stages(rec, "grid update", tiles, grid_stages);
-    work_.friction_work += counted_work(tile_work_, exchange_.counted());
-    if (gap_terms) add_tile_gap_terms();
+    add_start_velocities(start_stages, grid_, walls_, ghosts_, step.gravity, mass_floor_);
+    run_stages(step.rec, "start velocities", step.tiles, start_stages);
   }
-  // 4. G2P: particle velocities and this step's displacement. MUSL and USAVG scatter the new
-  //    momentum for the remap in the same pass (the weights are those of x_p^k in both).
-  TileStages remap_stages(tiles);
-  {
-    ScopedPhase timer(times_, Phase::G2P);
-    GatherOptions options = gather_limits_;
-    options.dt = dt;
-    options.pic_fraction = scene_.pic_fraction;
-    options.remap = remap;
-    if (options.pic_fraction > 0.0) block_damping_.assign(sort_.block_count(), 0.0);
-    if (scene_.output.energy_gap_terms) {
-      block_increment_kinetic_.assign(sort_.block_count(), 0.0);
-      options.block_increment_kinetic = &block_increment_kinetic_;
-    }
-    const GatherResult r =
-        gather_from_grid<Shape, Terrain>(particles_, sort_, grid_, displacement(), block_damping_, options, timing,
-                                         remap ? buffers : nullptr);
-    if (remap)
-      remap_stages = after_scatter("g2p", {.momentum = true});
-    else if (rec)
-      rec->add_colour_passes("g2p", pass_timing_, sort_, true);
-    if (options.pic_fraction > 0.0)
-      for (double d : block_damping_) work_.damping += d;  // in block order: thread-independent
-    if (options.block_increment_kinetic)
-      for (double k : block_increment_kinetic_) gap_.transfer_loss -= k;  // in block order
-    if (r.nonfinite >= 0) report_bad_particle(r.nonfinite, "velocity is not finite");
-    if (r.outside >= 0) {
-      // (the position alone is the one before the step, still inside: where this step takes it says why)
-      const auto q = static_cast<std::size_t>(r.outside);
-      const std::array<std::span<double>, 3> dx = displacement();
-      report_bad_particle(r.outside, fmt::format("left the grid (this step moves it to ({:.6g}, {:.6g}, {:.6g}) m)",
-                                                 particles_.x[0][q] + dx[0][q], particles_.x[1][q] + dx[1][q],
-                                                 particles_.x[2][q] + dx[2][q]));
-    }
-    needs_sort_ = r.needs_sort;
-    // Counted before the move, so the drift the smoother allows for already holds this step's
-    // (larger than needed until the move; never smaller).
-    sort_drift_ += std::sqrt(r.max_displacement2);
-    large_displacement_ = r.large_displacement;
-    crosses_open_face_ = r.crosses_open_face;
+  update_stress<Shape, Terrain>(grid_.start_velocity(), step.stress_dt, false);
+  ScopedPhase timer(times_, Phase::P2G);
+  scatter_to_grid<Shape, Terrain>(particles_, sort_, grid_, ScatterFields::Force, step.timing, step.buffers);
+  const ScatteredFields folded{.force = true};
+  return {after_scatter(step, "p2g force", folded), folded};
+}
+
+// 3. grid: velocities, accelerations with gravity, walls; the stages P2G queued run first, in the
+// same parallel region. With a remap the grid update leaves the momentum at zero (ghost nodes
+// included, and the mirror leaves it so) for the remap's scatter: one pass over the active tiles
+// instead of two.
+void Solver::grid_phase(const StepContext& step, ScatteredNodes& p2g, bool remap) {
+  ScopedPhase timer(times_, Phase::Grid);
+  const bool gap_terms = scene_.output.energy_gap_terms;
+  add_grid_update(p2g.stages, grid_, walls_, ghosts_, p2g.folded, step.gravity, step.dt, mass_floor_, remap,
+                  tile_work_, gap_terms ? &tile_gap_ : nullptr);
+  run_stages(step.rec, "grid update", step.tiles, p2g.stages);
+  work_.friction_work += counted_work(tile_work_, exchange_.counted());
+  if (gap_terms) add_tile_gap_terms();
+}
+
+// 4. G2P: particle velocities and this step's displacement. MUSL and USAVG scatter the new
+//    momentum for the remap in the same pass (the weights are those of x_p^k in both); the node
+//    work after that scatter is returned for the remap (none without one).
+template <class Shape, class Terrain>
+TileStages Solver::gather_phase(const StepContext& step, bool remap) {
+  TileStages remap_stages(step.tiles);
+  ScopedPhase timer(times_, Phase::G2P);
+  GatherOptions options = gather_limits_;
+  options.dt = step.dt;
+  options.pic_fraction = scene_.pic_fraction;
+  options.remap = remap;
+  if (options.pic_fraction > 0.0) block_damping_.assign(sort_.block_count(), 0.0);
+  if (scene_.output.energy_gap_terms) {
+    block_increment_kinetic_.assign(sort_.block_count(), 0.0);
+    options.block_increment_kinetic = &block_increment_kinetic_;
   }
-  // 5. remap (MUSL): v_i^{k+1} = sum m_p v_p N_i / m_i, with the walls (Edo & Matsubara 2015, eq. 52); the
-  //    momentum was scattered in the G2P pass.
-  NodeVectors node_velocity = grid_.lagrangian_velocity();
-  if (remap) {
-    ScopedPhase timer(times_, Phase::Remap);
-    add_velocities_from_momentum(remap_stages, grid_, walls_, ghosts_, gravity, mass_floor_);
-    run_stages(rec, "remap grid", tiles, remap_stages);
-    node_velocity = grid_.velocity();
+  const GatherResult r =
+      gather_from_grid<Shape, Terrain>(particles_, sort_, grid_, displacement(), block_damping_, options, step.timing,
+                                       remap ? step.buffers : nullptr);
+  if (remap)
+    remap_stages = after_scatter(step, "g2p", {.momentum = true});
+  else if (step.rec)
+    step.rec->add_colour_passes("g2p", pass_timing_, sort_, true);
+  if (options.pic_fraction > 0.0)
+    for (double d : block_damping_) work_.damping += d;  // in block order: thread-independent
+  if (options.block_increment_kinetic)
+    for (double k : block_increment_kinetic_) gap_.transfer_loss -= k;  // in block order
+  take_gather_result(r);
+  return remap_stages;
+}
+
+// What G2P found: a bad particle stops the step; the flags for the next sort, the MLS drift, the
+// CFL guard and the outflow are kept.
+void Solver::take_gather_result(const GatherResult& r) {
+  if (r.nonfinite >= 0) report_bad_particle(r.nonfinite, "velocity is not finite");
+  if (r.outside >= 0) {
+    // (the position alone is the one before the step, still inside: where this step takes it says why)
+    const auto q = static_cast<std::size_t>(r.outside);
+    const std::array<std::span<double>, 3> dx = displacement();
+    report_bad_particle(r.outside, fmt::format("left the grid (this step moves it to ({:.6g}, {:.6g}, {:.6g}) m)",
+                                               particles_.x[0][q] + dx[0][q], particles_.x[1][q] + dx[1][q],
+                                               particles_.x[2][q] + dx[2][q]));
   }
-  // 6. strain (and its MLS smoothing when enabled) and stress, then move the particles (USF: only
-  //    move them).
-  if (scheme.stress_last) {
-    update_stress<Shape, Terrain>(node_velocity, stress_dt, true);
-  } else {
-    ScopedPhase timer(times_, Phase::Stress);
-    recorded(rec, RegionSchedule::Static, "move", particles_.size(), 1, [&] { move_particles(); });
-  }
+  needs_sort_ = r.needs_sort;
+  // Counted before the move, so the drift the smoother allows for already holds this step's
+  // (larger than needed until the move; never smaller).
+  sort_drift_ += std::sqrt(r.max_displacement2);
+  large_displacement_ = r.large_displacement;
+  crosses_open_face_ = r.crosses_open_face;
+}
+
+// 5. remap (MUSL): v_i^{k+1} = sum m_p v_p N_i / m_i, with the walls (Edo & Matsubara 2015, eq. 52); the
+//    momentum was scattered in the G2P pass. Returns the remapped velocities.
+const NodeVectors& Solver::remap_phase(const StepContext& step, TileStages& remap_stages) {
+  ScopedPhase timer(times_, Phase::Remap);
+  add_velocities_from_momentum(remap_stages, grid_, walls_, ghosts_, step.gravity, mass_floor_);
+  run_stages(step.rec, "remap grid", step.tiles, remap_stages);
+  return grid_.velocity();
+}
+
+// 6. (USF) no stress update at the end of the step: only the move, x_p += the step's displacement.
+void Solver::move_phase(const StepContext& step) {
+  ScopedPhase timer(times_, Phase::Stress);
+  recorded(step.rec, RegionSchedule::Static, "move", particles_.size(), 1, [&] { move_particles(); });
 }
 
 void Solver::check_particles() const { check_particle_fields(particles_, scene_, step_ - 1, time_ - last_dt_); }
@@ -922,21 +988,26 @@ void Solver::report_bad_particle(long long index, std::string_view what) const {
 
 // ---- checkpoint/restart (docs/reliability.md) ----------------------------------------------------
 
+template <class Self, class State, class F>
+void Solver::for_each_counter(Self& solver, State& s, F f) {
+  f(solver.time_, s.time);
+  f(solver.step_, s.step);
+  f(solver.last_dt_, s.last_dt);
+  f(solver.work_, s.work);
+  f(solver.gap_, s.gap);
+  f(solver.outflow_mass_, s.outflow_mass);
+  f(solver.outflow_faces_, s.outflow_faces);
+  f(solver.outflow_particles_, s.outflow_particles);
+  f(solver.steps_since_sort_, s.steps_since_sort);
+  f(solver.sorts_, s.sorts);
+  f(solver.needs_sort_, s.needs_sort);
+  f(solver.periodic_gravity_shift_, s.periodic_gravity_shift);
+  f(solver.sort_drift_, s.sort_drift);
+}
+
 SolverState Solver::state() const {
   SolverState s;
-  s.time = time_;
-  s.step = step_;
-  s.last_dt = last_dt_;
-  s.work = work_;
-  s.gap = gap_;
-  s.outflow_mass = outflow_mass_;
-  s.outflow_faces = outflow_faces_;
-  s.outflow_particles = outflow_particles_;
-  s.steps_since_sort = steps_since_sort_;
-  s.sorts = sorts_;
-  s.needs_sort = needs_sort_;
-  s.periodic_gravity_shift = periodic_gravity_shift_;
-  s.sort_drift = sort_drift_;
+  for_each_counter(*this, s, [](const auto& member, auto& saved) { saved = member; });
   if (!mls_weights_.empty())  // a view (SolverState::mls_weights)
     s.mls_weights = std::shared_ptr<const MlsStoredWeights>(std::shared_ptr<const MlsStoredWeights>(), &mls_weights_);
   s.mls_strain_since_fit = mls_strain_since_fit_;
@@ -1031,19 +1102,7 @@ void Solver::restore(ParticleStore particles, const SolverState& s, RestoreSort 
 }
 
 void Solver::restore_counters(const SolverState& s) {
-  time_ = s.time;
-  step_ = s.step;
-  last_dt_ = s.last_dt;
-  work_ = s.work;
-  gap_ = s.gap;
-  outflow_mass_ = s.outflow_mass;
-  outflow_faces_ = s.outflow_faces;
-  outflow_particles_ = s.outflow_particles;
-  steps_since_sort_ = s.steps_since_sort;
-  sorts_ = s.sorts;
-  needs_sort_ = s.needs_sort;
-  periodic_gravity_shift_ = s.periodic_gravity_shift;
-  sort_drift_ = s.sort_drift;
+  for_each_counter(*this, s, [](auto& member, const auto& saved) { member = saved; });
   if (!s.mls_weights || s.mls_weights->particle_count() != particles_.size())
     mls_weights_.clear();
   else if (s.mls_weights.get() != &mls_weights_)

@@ -31,6 +31,7 @@
 //    `state.reset()` (or `state = DruckerPragerState{}`); nothing else is kept anywhere.
 #include "talus/core/tensor.hpp"
 #include "talus/core/types.hpp"
+#include "talus/material/elastic_moduli.hpp"
 
 #include <cmath>
 #include <limits>
@@ -73,6 +74,8 @@ struct DruckerPragerParameters {
   /// hardening parameter" 0.8; read as Chen & Mizuno's M (the isotropic share, seed ref. 4),
   /// that is kinematic_fraction = 1 - M = 0.2. With H = 0 (as in Table 2) it has no effect.
   double kinematic_fraction = 0.0;
+  /// E and nu, for the moduli the model derives from them (elastic_moduli.hpp).
+  ElasticModuli moduli() const { return {young, poisson}; }
   /// Largest admissible mean stress p = I1/3 [Pa] (tension positive), >= 0. The default, +inf,
   /// means "at the apex": the cone's apex I1 = k/alpha is the only tension limit. A finite value
   /// below the apex caps the cone with the plane I1 = 3 tension_cutoff.

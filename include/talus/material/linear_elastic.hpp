@@ -3,6 +3,7 @@
 // lambda tr(d_eps) I + 2 G d_eps (Edo & Matsubara 2015, eq. 34). The Jaumann rotation of the stress
 // is the material pass's, before this update (tensor.hpp, rotate_objectively: Hughes-Winget).
 #include "talus/core/tensor.hpp"
+#include "talus/material/elastic_moduli.hpp"
 
 namespace talus {
 
@@ -10,10 +11,10 @@ struct LinearElastic {
   double lambda = 0.0;  // Lame's first parameter
   double shear = 0.0;   // G
 
-  static LinearElastic from_young_poisson(double young, double poisson) {
+  static LinearElastic from_moduli(const ElasticModuli& moduli) {
     LinearElastic m;
-    m.shear = young / (2.0 * (1.0 + poisson));
-    m.lambda = young * poisson / ((1.0 + poisson) * (1.0 - 2.0 * poisson));
+    m.shear = moduli.shear();
+    m.lambda = moduli.lame();
     return m;
   }
   double bulk() const { return lambda + 2.0 / 3.0 * shear; }

@@ -23,6 +23,7 @@
 // update() allocates nothing, makes no virtual call and has no iteration: three square roots and
 // three divisions on the flowing path, one square root on the elastic path.
 #include "talus/core/types.hpp"
+#include "talus/material/elastic_moduli.hpp"
 
 #include <cmath>
 #include <numbers>
@@ -41,6 +42,8 @@ struct MuIParameters {
   double i0 = 0.279;                      ///< I0 > 0
   double grain_diameter = 0.53e-3;        ///< d > 0 [m]
   double grain_density = 2450.0;          ///< rho_s > 0 [kg/m^3]
+  /// E and nu, for the moduli the model derives from them (elastic_moduli.hpp).
+  ElasticModuli moduli() const { return {young, poisson}; }
 };
 
 struct MuIResult {

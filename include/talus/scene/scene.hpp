@@ -7,6 +7,7 @@
 #include "talus/core/types.hpp"
 #include "talus/grid/grid.hpp"
 #include "talus/material/drucker_prager.hpp"
+#include "talus/material/elastic_moduli.hpp"
 #include "talus/material/mu_i.hpp"
 #include "talus/particles/body_spec.hpp"
 #include "talus/particles/particle_store.hpp"
@@ -29,11 +30,6 @@ enum class SchemeKind { Musl, Usl, Usf, Usavg };
 /// the boxes (fewer, larger parallel loops for small scenes on many threads; round-off differs).
 enum class ScatterOrder { ColourPasses, BlockBuffers };
 
-struct LinearElasticParameters {
-  double young = 0.0;    // E [Pa]
-  double poisson = 0.0;  // nu [-]
-};
-
 enum class MaterialModel { LinearElastic, DruckerPrager, MuI };
 
 /// What a runout scene does with Drucker-Prager particles beyond the constitutive law itself
@@ -54,14 +50,10 @@ struct MaterialSpec {
   std::string name;
   MaterialModel model = MaterialModel::LinearElastic;
   double density = 0.0;  // initial density [kg/m^3]
-  LinearElasticParameters elastic;  // for Drucker-Prager: the elastic part (same E, nu)
+  ElasticModuli elastic;  // E and nu; for Drucker-Prager and mu(I): the elastic part (the same E, nu)
   DruckerPragerParameters drucker_prager;  // MaterialModel::DruckerPrager only (E, nu copied in)
   MuIParameters mu_i;                      // MaterialModel::MuI only (E, nu copied in)
   GranularOptions granular;                // DruckerPrager (all of it) and MuI (separation only)
-  /// P-wave (constrained) modulus M = K + 4G/3, which sets the wave speed c = sqrt(M / rho).
-  double p_wave_modulus() const;
-  double bulk_modulus() const;
-  double shear_modulus() const;
 };
 
 struct OutputSpec {

@@ -6,6 +6,7 @@
 #include "talus/core/comm.hpp"
 #include "talus/grid/grid.hpp"
 #include "talus/grid/tile_exchange.hpp"
+#include "talus/grid/tile_stages.hpp"
 #include "talus/solver/body_materials.hpp"
 #include "talus/solver/energy_budget.hpp"
 #include "talus/solver/grid_update.hpp"
@@ -33,6 +34,9 @@ namespace talus {
 
 /// Everything besides the particle arrays that the next step depends on: what a checkpoint saves
 /// with the particles so that a restored solver continues bit for bit (docs/reliability.md).
+/// A new scalar: one line in Solver::for_each_counter (state() and restore() copy through it) and
+/// its attribute in io/checkpoint.cpp (written, read, and in for_each_rank_scalar or
+/// for_each_rank_integer when each rank keeps its own).
 struct SolverState {
   double time = 0.0;
   std::int64_t step = 0;
@@ -193,6 +197,23 @@ class Solver {
   void step_with_shape(double dt);
   template <class Shape, class Terrain>
   void step_with(double dt);
+  // step_with's phases, in their order (solver.cpp says what each does).
+  struct StepContext;     // what the phases of a step share: dt, gravity, the recorder, the tiles
+  struct ScatteredNodes;  // what P2G hands the grid update
+  void sort_if_due();
+  StepContext step_context(double dt, double stress_dt, const Vec3& gravity);
+  template <class Shape, class Terrain>
+  ScatteredNodes scatter_phase(const StepContext& step);
+  template <class Shape, class Terrain>
+  ScatteredNodes scatter_stress_first_phase(const StepContext& step);
+  void grid_phase(const StepContext& step, ScatteredNodes& p2g, bool remap);
+  template <class Shape, class Terrain>
+  TileStages gather_phase(const StepContext& step, bool remap);
+  void take_gather_result(const GatherResult& r);
+  const NodeVectors& remap_phase(const StepContext& step, TileStages& remap_stages);
+  void move_phase(const StepContext& step);
+  TileStages after_scatter(const StepContext& step, const char* name, ScatteredFields fields, bool clear_first = false);
+  void clear_grid(const StepContext& step);
   template <class Shape, class Terrain>
   void update_stress(const NodeVectors& node_velocity, double dt, bool move);
   template <class Shape, class Terrain>
@@ -241,6 +262,10 @@ class Solver {
   void sort_particles_recorded();
   /// restore(): the time, the counters and the accumulated ledger.
   void restore_counters(const SolverState& s);
+  /// The scalars of SolverState beside the members that hold them, one line each: f(member, saved)
+  /// for each pair, so that state() and restore_counters() copy the same list, one way each.
+  template <class Self, class State, class F>
+  static void for_each_counter(Self& solver, State& s, F f);
   /// Distributed runs: move the slab bounds if the work is out of balance, and send every particle
   /// to the rank owning its cell (collective, at a sort).
   void redistribute();
