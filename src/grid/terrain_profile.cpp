@@ -70,11 +70,25 @@ TerrainProfile::TerrainProfile(const TerrainSpec& spec) : spec_(spec) {
   for (std::size_t i = 1; i < n; ++i) {
     // the segment from vertex i-1 to i must hold the end of the transition at i-1 and the start of
     // the one at i
-    if (a[i][0] < b[i - 1][0] - 1e-12 * (1.0 + std::abs(P[i][0])))
+    if (a[i][0] < b[i - 1][0] - 1e-12 * (1.0 + std::abs(P[i][0]))) {
+      // Each transition takes its tangent length r tan(|turn|/2) of the segment: say how long the
+      // segment is, what the transitions ask of it, and the largest radius each may have with the
+      // other's as given (the message named both points, one of them with no transition, and no range).
+      const double length = std::hypot(P[i][0] - P[i - 1][0], P[i][1] - P[i - 1][1]);
+      std::string takes, allowed;
+      for (const std::size_t k : {i - 1, i}) {
+        if (tangent[k] <= 0.0) continue;
+        const double other = k == i ? tangent[i - 1] : tangent[i];
+        takes += fmt::format("{}radii[{}] = {} takes {:.4g} m", takes.empty() ? "" : ", ", k, radius(k), tangent[k]);
+        allowed += fmt::format("{}radii[{}] <= {:.4g}", allowed.empty() ? "" : " or ",
+                               k, std::max(0.0, length - other) / std::tan(0.5 * std::abs(turn[k])));
+      }
       throw input_error(fmt::format(
-          "radii: the transitions at points {} and {} overlap (or do not fit on the segment between "
-          "them): reduce the radii",
-          i - 1, i));
+          "radii: the transitions do not fit on the {:.4g} m segment from point {} to point {} ({}): allowed "
+          "{}{}",
+          length, i - 1, i, takes, allowed,
+          tangent[i - 1] > 0.0 && tangent[i] > 0.0 ? " (each with the other's as given)" : ""));
+    }
   }
 
   // Pieces: line to A, arc A..B, line to the next A, ...

@@ -92,6 +92,33 @@ TEST(TerrainProfile, RefusesProfilesThatAreNotAGraph) {
   EXPECT_THROW(TerrainProfile{spec}, Error);
 }
 
+// A transition too long for its segment is refused with the segment's length, what it takes, and the
+// largest radius that fits (it named the points, one without a transition, and no range).
+TEST(TerrainProfile, ATransitionTooLongForItsSegmentNamesTheLargestRadius) {
+  TerrainSpec spec;
+  spec.points = {{0.0, 1.0}, {1.0, 0.0}, {1.2, 0.0}, {3.0, 1.0}};
+  spec.radii = {0.0, 5.0, 0.0, 0.0};  // a 45-degree turn: tangent length 5 tan(22.5 deg) = 2.07 m; the first segment is 1.41 m
+  try {
+    TerrainProfile{spec};
+    FAIL() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "radii: the transitions do not fit on the 1.414 m segment from point 0 to point 1 (radii[1] = 5 takes "
+              "2.071 m): allowed radii[1] <= 3.414");
+  }
+  spec.radii = {0.0, 0.4828, 0.0, 0.0};  // what the 0.2 m segment after it allows (0.2 / tan 22.5 deg), to 4 digits: fits
+  EXPECT_NO_THROW(TerrainProfile{spec});
+  spec.radii = {0.0, 0.3, 0.3, 0.0};  // two transitions on the 0.2 m segment: 0.124 + 0.078 m; each bound with the other's as given
+  try {
+    TerrainProfile{spec};
+    FAIL() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("allowed radii[1] <= "), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(" or radii[2] <= "), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("(each with the other's as given)"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace terrain_profile_test
 }  // namespace talus
