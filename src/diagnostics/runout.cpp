@@ -134,6 +134,14 @@ RunoutGrid runout_grid_of(const Scene& scene) {
   return RunoutGrid{g.origin[0], g.origin[0] + g.cells[0] * g.h, g.h};
 }
 
+std::optional<double> runout_plane_x(const RunoutSpec& spec, const FlumeCoordinates& coordinates, const RunoutGrid& grid) {
+  if (spec.has_runout_plane) return spec.runout_plane_x;
+  // The default is left out when it lies outside the grid, as a runout_plane_x there is refused (a
+  // grid cut short of the terrain's last transition was "3.1 m short of the runout plane").
+  if (const auto start = coordinates.last_segment_start(); start && *start >= grid.x0 && *start <= grid.x1) return start;
+  return std::nullopt;
+}
+
 RunoutMonitor::RunoutMonitor(const RunoutSpec& spec, FlumeCoordinates coordinates, RunoutGrid grid)
     : spec_(spec), coordinates_(std::move(coordinates)), grid_(grid) {}
 
@@ -182,14 +190,7 @@ RunoutResult RunoutMonitor::result(const RunoutSample* now) const {
   r.gate_s = spec_.has_gate ? coordinates_.s(spec_.gate_x) : first_->front;
   r.from_gate = r.front - r.gate_s;
   r.front_at_grid_end = coordinates_.x_at(r.front) >= grid_.x1 - grid_.h;
-  // The default is left out when it lies outside the grid, as a runout_plane_x there is refused (a
-  // grid cut short of the terrain's last transition was "3.1 m short of the runout plane").
-  std::optional<double> plane_x;
-  if (spec_.has_runout_plane)
-    plane_x = spec_.runout_plane_x;
-  else if (const auto start = coordinates_.last_segment_start(); start && *start >= grid_.x0 && *start <= grid_.x1)
-    plane_x = start;
-  if (plane_x) {
+  if (const std::optional<double> plane_x = runout_plane_x(spec_, coordinates_, grid_)) {
     r.runout_plane_s = coordinates_.s(*plane_x);
     r.beyond_runout_plane = r.front - *r.runout_plane_s;
   }

@@ -268,6 +268,22 @@ TEST(Cli, CheckEstimatesTheFramesDiskUseAndRunWarnsWhenTheyMayNotFit) {
   EXPECT_NE(c.output.find("\nok (1 warning above, on stderr)\n"), std::string::npos) << c.output;
 }
 
+// check says where the runout will be measured from: the gate and the runout plane as the run resolves
+// them (a default plane at a measured profile's last vertex showed only in the run's closing line)
+TEST(Cli, CheckSaysWhereTheRunoutIsMeasuredFrom) {
+  const Result flume = run("check " + kInputs + "denlinger_flume.json");
+  EXPECT_EQ(flume.exit_code, 0) << flume.output;
+  EXPECT_NE(flume.output.find("\nrunout     measured along the terrain's arc length s; gate x = 0 m (s = 0.351473 m); "
+                              "runout plane from x = 1.12846 m (s = 1.66108 m)\n"),
+            std::string::npos)
+      << flume.output;
+  const Result flat = run("check " + kInputs + "benchmarks/sand_slide_incline.json");
+  EXPECT_NE(flat.output.find("\nrunout     measured along x; "), std::string::npos) << flat.output;
+  EXPECT_NE(flat.output.find("no runout plane (a flat grid: give runout_plane_x for one)"), std::string::npos) << flat.output;
+  const Result none = run("check " + kInputs + "elastic_block_slide.json");  // (no diagnostics.runout)
+  EXPECT_EQ(none.output.find("\nrunout "), std::string::npos) << none.output;
+}
+
 // check said ok where `talus run` then stopped at once: run from its own folder, the scene.json a
 // run wrote there would be replaced by the run's. Then it said ok with a note, and exited 0, and a
 // script that gated on check met run's exit code 2: check now stops as run would, after its summary.

@@ -116,6 +116,11 @@ struct RunoutGrid {
 };
 RunoutGrid runout_grid_of(const Scene& scene);
 
+/// x where the runout plane starts: runout_plane_x when given, else where the terrain's last straight
+/// segment starts when that lies in the grid, else none (no plane: the runout is reported without one).
+/// RunoutMonitor::result and `talus check`'s runout line use it.
+std::optional<double> runout_plane_x(const RunoutSpec& spec, const FlumeCoordinates& coordinates, const RunoutGrid& grid);
+
 /// Samples the run on the history schedule and keeps the first and the previous sample (the
 /// reference front and the front velocity).
 class RunoutMonitor {
