@@ -91,12 +91,38 @@ void add_check_command(CLI::App& app) {
   auto overwrite = std::make_shared<bool>(false);
   cmd->add_flag("--overwrite", *overwrite,
                 "As talus run's: an unfinished run in the output folder is then no reason for the run to stop");
+  // Run's options that change nothing check reports, taken (and their values checked as run checks
+  // them) so that a run's whole command line checks as it is: a script that swapped `run` for `check`
+  // in a line with --quiet met "talus check has no option --quiet" (a user's hunt). --restart is not
+  // taken: check does not check a checkpoint, and its folder rules differ.
+  auto isa = std::make_shared<std::string>();
+  add_isa_option(cmd, isa);
+  // (CLI11 writes the values into these: the callback holds them, as it holds the options it reads)
+  struct RunOnly {
+    bool quiet = false, foreground_frames = false;
+    double progress_every = 0.0, stop_after = 0.0;
+    std::string record_work;
+    int record_interval = 1;
+  };
+  auto run_only = std::make_shared<RunOnly>();
+  const char* group = "run's options (checked, then ignored: they change nothing check reports)";
+  cmd->add_flag("--quiet", run_only->quiet, "As talus run's")->group(group);
+  cmd->add_flag("--foreground-frames", run_only->foreground_frames, "As talus run's")->group(group);
+  check_range(cmd->add_option("--progress-every", run_only->progress_every, "As talus run's"), 0.1, 86400.0)->group(group);
+  check_duration(cmd->add_option("--stop-after", run_only->stop_after, "As talus run's"))->group(group);
+  CLI::Option* record_work = refuse_empty(cmd->add_option("--record-work", run_only->record_work, "As talus run's"),
+                                          "give a file, or leave --record-work out")
+                                 ->group(group);
+  check_range(cmd->add_option("--record-interval", run_only->record_interval, "As talus run's"), 1, 1000000)
+      ->needs(record_work)
+      ->group(group);
   cmd->footer("The memory available is the smaller of MemAvailable and a cgroup's (container, batch job) limit; the "
               "environment variable TALUS_MEMORY_LIMIT (bytes, or with a K/M/G/T suffix) sets it instead, e.g. a "
               "share of a node for one run. A scene that does not fit is refused (exit code 2), as talus run refuses it; so is an output folder "
               "(--out, or runs/<scene name>) that talus run would refuse (an unfinished run's, a folder in place of "
               "an output), after the summary.");
-  cmd->callback([=]() {
+  cmd->callback([=, kept = run_only]() {
+    select_isa_option(*isa);  // (an --isa this CPU lacks is refused as run refuses it)
     // Under mpirun every rank checks (an error is printed once, main.cpp); rank 0 alone prints.
     const Comm world = Comm::world();
     const Scene scene = read_scene_file(*scene_path);

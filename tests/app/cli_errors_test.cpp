@@ -135,7 +135,7 @@ TEST_F(CliErrors, ParseErrorsAreOneLineWithWhereToReadMore) {
   expect_error_line(run("run"), "scene is required (see talus run --help)");
   expect_error_line(run("bench --bogus"), "talus bench has no option --bogus (see talus bench --help)");
   // an unknown option before the scene: CLI11 listed the scene as unexpected too
-  expect_error_line(run("check --progress-every 1 scene.json"), "talus check has no option --progress-every (see talus check --help)");
+  expect_error_line(run("check --restart a.h5 scene.json"), "talus check has no option --restart (see talus check --help)");
   // an option before the command: CLI11 listed its words backwards ("not expected: 2 --threads"), or
   // reported a later error ("scene is required")
   expect_error_line(run("--threads 2 run scene.json"),
@@ -143,7 +143,9 @@ TEST_F(CliErrors, ParseErrorsAreOneLineWithWhereToReadMore) {
   expect_error_line(run("--threads=2 bench"), "--threads goes after the command: talus bench --threads ... (see talus bench --help)");
   // (check takes run's --threads, to be swapped for run on a command line)
   expect_error_line(run("--threads 1 check scene.json"), "--threads goes after the command: talus check --threads ... (see talus check --help)");
-  expect_error_line(run("--quiet check scene.json"), "talus check has no option --quiet (see talus check --help)");
+  // (and run's --quiet, which check takes so that a run's line checks as it is)
+  expect_error_line(run("--quiet check scene.json"), "--quiet goes after the command: talus check --quiet ... (see talus check --help)");
+  expect_error_line(run("--restart a.h5 check scene.json"), "talus check has no option --restart (see talus check --help)");
   expect_error_line(run("--bogus check"), "talus check has no option --bogus (see talus check --help)");
   expect_error_line(run("dem-springs --E 1 --G 1 --nu 0 --packing hex"),
                     "--E excludes --G (see talus dem-springs --help)");
@@ -169,8 +171,12 @@ const std::string kScene = std::string(TALUS_SOURCE_DIR) + "/inputs/elastic_bloc
 TEST_F(CliErrors, EnvironmentVariablesAreCheckedAndTheOptionsOverrideThem) {
   const ProgramResult version = run_with_env("TALUS_ISA", "bogus", "--version");
   EXPECT_EQ(version.exit_code, 0) << version.err;
+  // check refuses it as the run would (it said ok, and the run then stopped); its --isa overrides it
   const ProgramResult check = run_with_env("TALUS_ISA", "bogus", "check " + kScene);
-  EXPECT_EQ(check.exit_code, 0) << check.err;  // check runs no kernel
+  EXPECT_EQ(check.exit_code, 2) << check.err;
+  EXPECT_EQ(check.err.rfind("talus: error: TALUS_ISA = 'bogus' is not a vector path this CPU and build run (unknown", 0), 0u) << check.err;
+  const ProgramResult check_isa = run_with_env("TALUS_ISA", "bogus", "check " + kScene + " --isa reference");
+  EXPECT_EQ(check_isa.exit_code, 0) << check_isa.err;
   const ProgramResult bad_isa = run_with_env("TALUS_ISA", "bogus", "run " + kScene + " --out " + (dir_ / "a").string());
   EXPECT_EQ(bad_isa.exit_code, 2);
   EXPECT_EQ(bad_isa.err.rfind("talus: error: TALUS_ISA = 'bogus' is not a vector path this CPU and build run (unknown", 0), 0u) << bad_isa.err;

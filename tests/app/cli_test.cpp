@@ -268,6 +268,26 @@ TEST(Cli, CheckEstimatesTheFramesDiskUseAndRunWarnsWhenTheyMayNotFit) {
   EXPECT_NE(c.output.find("\nok (1 warning above, on stderr)\n"), std::string::npos) << c.output;
 }
 
+// A run's whole command line checks as it is, `run` swapped for `check`: run's own options are taken,
+// their values checked as run checks them (`talus check … --quiet` was "no option --quiet": a user's
+// hunt); --restart is not (check does not check a checkpoint).
+TEST(Cli, CheckTakesARunsWholeCommandLine) {
+  const ScratchDir dir("cli_check_run_line");
+  const std::string line = kInputs + "elastic_block_slide.json --out " + (dir / "out").string() +
+                           " --threads 1 --quiet --foreground-frames --progress-every 5 --stop-after 3h50m --isa "
+                           "reference --record-work " + (dir / "work.json").string() + " --record-interval 3 --overwrite";
+  const Result checked = run("check " + line);
+  EXPECT_EQ(checked.exit_code, 0) << checked.output;
+  EXPECT_NE(checked.output.find("\nok"), std::string::npos) << checked.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  EXPECT_FALSE(fs::exists(dir / "work.json"));
+  const Result bad = run("check " + kInputs + "elastic_block_slide.json --stop-after 1x");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--stop-after = 1x is not a positive duration"), std::string::npos) << bad.output;
+  const Result restart = run("check " + kInputs + "elastic_block_slide.json --restart a.h5");
+  EXPECT_EQ(restart.exit_code, 2) << restart.output;
+}
+
 // check says where the runout will be measured from: the gate and the runout plane as the run resolves
 // them (a default plane at a measured profile's last vertex showed only in the run's closing line)
 TEST(Cli, CheckSaysWhereTheRunoutIsMeasuredFrom) {
