@@ -105,7 +105,7 @@ void add_check_command(CLI::App& app) {
     int record_interval = 1;
   };
   auto run_only = std::make_shared<RunOnly>();
-  const char* group = "run's options (checked, then ignored: they change nothing check reports)";
+  const char* group = "run's options (their values checked as run checks them; --record-work against the run's files)";
   cmd->add_flag("--quiet", run_only->quiet, "As talus run's")->group(group);
   cmd->add_flag("--foreground-frames", run_only->foreground_frames, "As talus run's")->group(group);
   check_range(cmd->add_option("--progress-every", run_only->progress_every, "As talus run's"), 0.1, 86400.0)->group(group);
@@ -121,7 +121,7 @@ void add_check_command(CLI::App& app) {
               "share of a node for one run. A scene that does not fit is refused (exit code 2), as talus run refuses it; so is an output folder "
               "(--out, or runs/<scene name>) that talus run would refuse (an unfinished run's, a folder in place of "
               "an output), after the summary.");
-  cmd->callback([=, kept = run_only]() {
+  cmd->callback([=]() {
     select_isa_option(*isa);  // (an --isa this CPU lacks is refused as run refuses it)
     // Under mpirun every rank checks (an error is printed once, main.cpp); rank 0 alone prints.
     const Comm world = Comm::world();
@@ -153,7 +153,7 @@ void add_check_command(CLI::App& app) {
     // and a script that gated on check met run's exit code 2: the run's refusal is check's error.)
     std::optional<std::string> run_would_stop;
     try {
-      require_outputs_spare_inputs(dir, *scene_path, scene, "", "");
+      require_outputs_spare_inputs(dir, *scene_path, scene, "", run_only->record_work);
       require_no_folder_in_place_of_an_output(dir);
       check_writable_folder(dir, "output folder");
       require_no_unfinished_run(dir, *overwrite);

@@ -156,26 +156,20 @@ void RunRecord::end(const Solver& solver, const RunSummary& summary, const RunEn
 }
 
 void RunRecord::end_with_error(const Solver& solver, const Error& error) {
-  if (error.agreed() && comm_.distributed()) {  // (every rank has it; rank 0's names the rank that failed)
-    if (!comm_.root()) return;
-    end_common(solver, error.kind() == Error::Kind::Instability ? "unstable" : "failed", error.what());
-    write_ignoring_errors();
-    return;
-  }
-  end_after_error(solver, error.kind() == Error::Kind::Instability ? "unstable" : "failed", error.what());
+  // (one every rank has: rank 0 records it, and its message names the rank that failed)
+  if (error.agreed() && comm_.distributed() && !comm_.root()) return;
+  end_after_error(solver, error.kind() == Error::Kind::Instability ? "unstable" : "failed", error.what(),
+                  !error.agreed());
 }
 
 void RunRecord::end_with_error(const Solver& solver, const std::exception& error) {
-  end_after_error(solver, "failed", fmt::format("internal error: {}", error.what()));
+  end_after_error(solver, "failed", fmt::format("internal error: {}", error.what()), true);
 }
 
-void RunRecord::end_after_error(const Solver& solver, std::string_view status, const std::string& message) {
+void RunRecord::end_after_error(const Solver& solver, std::string_view status, const std::string& message,
+                                bool this_ranks) {
   end_common(solver, status, message);
-  if (comm_.distributed()) record_["end"]["rank"] = comm_.rank();
-  write_ignoring_errors();
-}
-
-void RunRecord::write_ignoring_errors() const {
+  if (comm_.distributed() && this_ranks) record_["end"]["rank"] = comm_.rank();
   try {
     write();
   } catch (const Error&) {

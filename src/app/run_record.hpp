@@ -77,9 +77,9 @@ class RunRecord {
 
  private:
   void end_common(const Solver& solver, std::string_view status, const std::string& message);
-  void end_after_error(const Solver& solver, std::string_view status, const std::string& message);
+  /// `this_ranks`: the error is this rank's alone ("end.rank" names it), not one every rank threw.
+  void end_after_error(const Solver& solver, std::string_view status, const std::string& message, bool this_ranks);
   void write() const;
-  void write_ignoring_errors() const;
 
   std::filesystem::path path_;
   Comm comm_;

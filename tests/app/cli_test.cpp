@@ -286,6 +286,11 @@ TEST(Cli, CheckTakesARunsWholeCommandLine) {
   EXPECT_NE(bad.output.find("--stop-after = 1x is not a positive duration"), std::string::npos) << bad.output;
   const Result restart = run("check " + kInputs + "elastic_block_slide.json --restart a.h5");
   EXPECT_EQ(restart.exit_code, 2) << restart.output;
+  // a --record-work that run would refuse (the scene file itself), check refuses too
+  const Result record = run("check " + kInputs + "elastic_block_slide.json --out " + (dir / "out").string() +
+                            " --record-work " + kInputs + "elastic_block_slide.json");
+  EXPECT_EQ(record.exit_code, 2) << record.output;
+  EXPECT_NE(record.output.find("would stop: --record-work "), std::string::npos) << record.output;
 }
 
 // check says where the runout will be measured from: the gate and the runout plane as the run resolves
